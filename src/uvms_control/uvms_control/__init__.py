@@ -1,0 +1,1 @@
+"""uvms_control package."""
