@@ -57,7 +57,7 @@ def test_message_definition_delimits_dependencies_as_rosbag2() -> None:
 
 @pytest.mark.parametrize('path', UVMS_MSG_FILES, ids=lambda p: p.stem)
 def test_message_definition_parses_back_to_the_registered_fields(path: Path) -> None:
-    """rosbags' parser, given the concatenated text, yields the fields of the type."""
+    """The rosbags .msg parser, given the concatenated text, yields the fields of the type."""
     type_name = f'uvms_msgs/msg/{path.stem}'
     parsed = get_types_from_msg(message_definition(type_name), type_name)
     assert parsed[type_name] == uvms_typestore().fielddefs[type_name]
