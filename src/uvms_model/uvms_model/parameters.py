@@ -1,0 +1,593 @@
+"""UVMS parameters: the paper's values (sec. 5.1) and documented choices for every gap it leaves.
+
+Each group is a frozen dataclass whose fields carry a description with the unit and the valid
+range; ``PARAMETER_SPECS`` lists them under flat dotted names (``vehicle.mass_kg``) with
+ROS-parameter-typed defaults, and ``config/robot.yaml`` holds the same values as a ROS 2
+parameter file. ``docs/model.md`` gives the source or the reason of every value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+from uvms_model.errors import ParameterError
+
+ParameterValue = float | int | bool | str | list[float] | list[str]
+"""A value a ROS 2 parameter can hold, as used here."""
+
+
+class ParameterSpec(NamedTuple):
+    """One parameter: flat dotted name, default, description with unit, and valid range."""
+
+    name: str
+    default: ParameterValue
+    description: str
+    min_value: float | None
+    max_value: float | None
+
+
+def _param(
+    default: Any,
+    description: str,
+    min_value: float | None = None,
+    max_value: float | None = None,
+    *,
+    length: int | None = None,
+    multiple_of: int | None = None,
+) -> Any:
+    """Build a dataclass field carrying the description, range and list length of a parameter.
+
+    Args:
+        default: Default value (float, int, bool, str, or a tuple of floats or strings).
+        description: What the parameter is, with its unit.
+        min_value: Inclusive lower bound (of every element for lists); None for no bound.
+        max_value: Inclusive upper bound (of every element for lists); None for no bound.
+        length: Required list length; None for scalars or lists of free length.
+        multiple_of: For lists of free length, the length must be a positive multiple of it.
+
+    Returns:
+        A ``dataclasses.field`` with the metadata ``_validate_field`` reads.
+    """
+    return field(
+        default=default,
+        metadata={
+            'description': description,
+            'min': min_value,
+            'max': max_value,
+            'length': length,
+            'multiple_of': multiple_of,
+        },
+    )
+
+
+def _kind(default: Any) -> str:
+    """ROS parameter kind of a default value: bool, int, float, str, float_list or str_list."""
+    if isinstance(default, bool):
+        return 'bool'
+    if isinstance(default, int):
+        return 'int'
+    if isinstance(default, float):
+        return 'float'
+    if isinstance(default, str):
+        return 'str'
+    if isinstance(default, tuple) and default and isinstance(default[0], str):
+        return 'str_list'
+    return 'float_list'
+
+
+def _is_real(value: object) -> bool:
+    """True for int and float values (and numpy scalars), False for bool and anything else."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _range_text(lo: float | None, hi: float | None) -> str:
+    """Human-readable inclusive range ``[lo, hi]``."""
+    lo_text = '-inf' if lo is None else repr(lo)
+    hi_text = 'inf' if hi is None else repr(hi)
+    return f'[{lo_text}, {hi_text}]'
+
+
+def _coerce(name: str, kind: str, value: object) -> Any:
+    """Convert a ROS-typed value to the dataclass field type, or raise naming the parameter."""
+    if kind == 'bool':
+        if not isinstance(value, bool):
+            raise ParameterError(f'{name} = {value!r} must be a bool')
+        return value
+    if kind == 'int':
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ParameterError(f'{name} = {value!r} must be an int')
+        return int(value)
+    if kind == 'float':
+        if not _is_real(value):
+            raise ParameterError(f'{name} = {value!r} must be a number')
+        return float(value)  # type: ignore[arg-type]
+    if kind == 'str':
+        if not isinstance(value, str):
+            raise ParameterError(f'{name} = {value!r} must be a string')
+        return value
+    if isinstance(value, (str, bytes)) or not hasattr(value, '__iter__'):
+        raise ParameterError(f'{name} = {value!r} must be a list')
+    items = list(value)  # type: ignore[call-overload, unused-ignore]
+    if kind == 'str_list':
+        if not all(isinstance(item, str) for item in items):
+            raise ParameterError(f'{name} = {value!r} must be a list of strings')
+        return tuple(items)
+    if not all(_is_real(item) for item in items):
+        raise ParameterError(f'{name} = {value!r} must be a list of numbers')
+    return tuple(float(item) for item in items)
+
+
+def _validate_field(name: str, value: Any, metadata: Mapping[str, Any]) -> None:
+    """Check finiteness, list length and range of one field value; raise ParameterError."""
+    lo, hi = metadata['min'], metadata['max']
+    length, multiple_of = metadata['length'], metadata['multiple_of']
+    if isinstance(value, tuple):
+        if length is not None and len(value) != length:
+            raise ParameterError(
+                f'{name} has {len(value)} elements, expected {length}: {list(value)!r}'
+            )
+        if multiple_of is not None and (not value or len(value) % multiple_of != 0):
+            raise ParameterError(
+                f'{name} has {len(value)} elements, expected a positive multiple of '
+                f'{multiple_of}: {list(value)!r}'
+            )
+        numbers = [item for item in value if not isinstance(item, str)]
+    elif isinstance(value, (bool, str)):
+        numbers = []
+    else:
+        numbers = [value]
+    for number in numbers:
+        if not math.isfinite(number):
+            raise ParameterError(f'{name} = {value!r} must be finite')
+        if (lo is not None and number < lo) or (hi is not None and number > hi):
+            raise ParameterError(
+                f'{name} = {value!r} is out of range {_range_text(lo, hi)}'
+            )
+
+
+class _Group:
+    """Mixin: validate every field of a parameter group against its metadata after init."""
+
+    _group: str = ''
+
+    def __post_init__(self) -> None:
+        for item in dataclasses.fields(self):  # type: ignore[arg-type]
+            _validate_field(f'{self._group}.{item.name}', getattr(self, item.name), item.metadata)
+        self._check()
+
+    def _check(self) -> None:
+        """Cross-field checks of the group; overridden where needed."""
+
+
+@dataclass(frozen=True)
+class VehicleParameters(_Group):
+    """Vehicle hull: a prolate spheroid (paper sec. 5.1: 1.0 m long, 0.5 m high and wide)."""
+
+    _group = 'vehicle'
+
+    mass_kg: float = _param(530.0, 'Vehicle mass without the arm (kg); paper sec. 5.1.', 1e-3, 1e6)
+    length_m: float = _param(
+        1.0, 'Hull length 2a of the prolate spheroid (m); paper sec. 5.1.', 1e-2, 100.0
+    )
+    diameter_m: float = _param(
+        0.5, 'Hull diameter 2b (height = width) of the spheroid (m); paper sec. 5.1.', 1e-2, 100.0
+    )
+    inertia_kg_m2: tuple[float, ...] = _param(
+        (13.25, 33.125, 33.125),
+        'Principal moments of inertia Ixx, Iyy, Izz about the centre of gravity in '
+        'base_link_frd axes (kg m^2); default: uniform solid ellipsoid, m (b^2 + c^2) / 5.',
+        1e-6,
+        1e6,
+        length=3,
+    )
+    center_of_gravity_m: tuple[float, ...] = _param(
+        (0.0, 0.0, 0.05),
+        'Centre of gravity in base_link_frd, from the hull centre (m); default 0.05 m below '
+        'the centre of buoyancy for roll and pitch stability (paper: not given).',
+        -100.0,
+        100.0,
+        length=3,
+    )
+    center_of_buoyancy_m: tuple[float, ...] = _param(
+        (0.0, 0.0, 0.0),
+        'Centre of buoyancy of the hull in base_link_frd (m); default: hull centre.',
+        -100.0,
+        100.0,
+        length=3,
+    )
+    buoyancy_ratio: float = _param(
+        1.0,
+        'Total buoyancy of the UVMS (hull + links) over its total weight; 1 = neutral. The '
+        "hull displacement is set to meet it (the paper's solid ellipsoid would give 0.26).",
+        0.0,
+        10.0,
+    )
+    linear_drag_translation_n_s_m: float = _param(
+        0.0, 'Linear drag of the hull in surge, sway, heave (N s/m); paper sec. 5.1.', 0.0, 1e7
+    )
+    linear_drag_rotation_n_m_s: float = _param(
+        0.81, 'Linear drag of the hull in roll, pitch, yaw (N m s/rad); paper sec. 5.1.', 0.0, 1e7
+    )
+    drag_coefficient_translation: float = _param(
+        1.05,
+        'Quadratic drag coefficient C_D of the hull in translation (-), with the projected '
+        'areas pi b^2 (surge) and pi a b (sway, heave); paper sec. 5.1.',
+        0.0,
+        100.0,
+    )
+    drag_coefficient_rotation: float = _param(
+        1.0,
+        'Quadratic drag coefficient C_D of the hull in rotation (-), applied by cross-flow '
+        'strips over the hull silhouette; paper sec. 5.1.',
+        0.0,
+        100.0,
+    )
+
+    def _check(self) -> None:
+        if self.length_m <= self.diameter_m:
+            raise ParameterError(
+                f'vehicle.length_m = {self.length_m!r} must exceed vehicle.diameter_m = '
+                f'{self.diameter_m!r}: the hull is a prolate spheroid'
+            )
+        ixx, iyy, izz = self.inertia_kg_m2
+        if ixx + iyy < izz or iyy + izz < ixx or izz + ixx < iyy:
+            raise ParameterError(
+                f'vehicle.inertia_kg_m2 = {list(self.inertia_kg_m2)!r} violates the triangle '
+                'inequality of principal moments of inertia'
+            )
+
+
+@dataclass(frozen=True)
+class ArmParameters(_Group):
+    """Three-link arm of cylinders (paper sec. 5.1); mount point and joint axes are choices."""
+
+    _group = 'arm'
+
+    joint_names: tuple[str, ...] = _param(
+        ('joint_1', 'joint_2', 'joint_3'), 'Names of the arm joints, base to tip.', length=3
+    )
+    mount_position_m: tuple[float, ...] = _param(
+        (0.5, 0.0, 0.0),
+        "Position of joint 1 in base_link_frd (m); default: the hull's nose, on its axis.",
+        -100.0,
+        100.0,
+        length=3,
+    )
+    joint_axes: tuple[float, ...] = _param(
+        (0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0),
+        'Unit axis of each joint (flat, 3 per joint) in its parent link frame, which at q = 0 '
+        'is aligned with base_link_frd (-); default: z (yaw), y, y.',
+        -1.0,
+        1.0,
+        length=9,
+    )
+    link_lengths_m: tuple[float, ...] = _param(
+        (0.5, 0.5, 0.5),
+        "Link lengths along each link's x axis (m); paper sec. 5.1.",
+        1e-3,
+        100.0,
+        length=3,
+    )
+    link_radii_m: tuple[float, ...] = _param(
+        (0.05, 0.04, 0.035), 'Radii of the cylindrical links (m); paper sec. 5.1.', 1e-4, 10.0,
+        length=3,
+    )
+    link_masses_kg: tuple[float, ...] = _param(
+        (10.0, 8.0, 5.0), 'Link masses (kg), uniform solid cylinders; paper sec. 5.1.', 1e-3,
+        1e5, length=3,
+    )
+    drag_coefficient: float = _param(
+        1.1,
+        'Cross-flow drag coefficient C_D of the links (-), applied by strips '
+        'dF = -1/2 rho C_D (2 r) |v_n| v_n dx; paper sec. 5.1.',
+        0.0,
+        100.0,
+    )
+
+    def _check(self) -> None:
+        for j in range(3):
+            axis = self.joint_axes[3 * j : 3 * j + 3]
+            norm = math.sqrt(sum(a * a for a in axis))
+            if abs(norm - 1.0) > 1e-3:
+                raise ParameterError(
+                    f'arm.joint_axes: axis of joint {j + 1} = {list(axis)!r} has norm '
+                    f'{norm:.6g}, expected a unit vector'
+                )
+        if len(set(self.joint_names)) != 3 or not all(self.joint_names):
+            raise ParameterError(
+                f'arm.joint_names = {list(self.joint_names)!r} must be three distinct names'
+            )
+
+
+@dataclass(frozen=True)
+class HydrodynamicsParameters(_Group):
+    """Water, gravity and switches of the hydrodynamic effects (off: rigid bodies in vacuum)."""
+
+    _group = 'hydrodynamics'
+
+    water_density_kg_m3: float = _param(1025.0, 'Sea water density rho (kg/m^3).', 0.0, 2000.0)
+    gravity_m_s2: float = _param(
+        9.81, 'Gravitational acceleration g (m/s^2), +z of map_ned.', 0.0, 100.0
+    )
+    added_mass_enabled: bool = _param(True, 'Include added mass and its Coriolis terms.')
+    drag_enabled: bool = _param(True, 'Include linear and quadratic drag of hull and links.')
+    buoyancy_enabled: bool = _param(True, 'Include buoyancy of hull and links.')
+    drag_strips_per_link: int = _param(
+        8,
+        'Gauss-Legendre strips per link for the cross-flow drag integral (-).',
+        1,
+        200,
+    )
+
+
+_DEFAULT_THRUSTER_POSITIONS = (
+    # Horizontal, vectored at 45 deg at the corners (front right, front left, rear right,
+    # rear left), then vertical (same order).
+    0.35, 0.25, 0.0,
+    0.35, -0.25, 0.0,
+    -0.35, 0.25, 0.0,
+    -0.35, -0.25, 0.0,
+    0.25, 0.3, 0.0,
+    0.25, -0.3, 0.0,
+    -0.25, 0.3, 0.0,
+    -0.25, -0.3, 0.0,
+)  # fmt: skip
+_S45 = math.sqrt(0.5)
+_DEFAULT_THRUSTER_DIRECTIONS = (
+    _S45, -_S45, 0.0,
+    _S45, _S45, 0.0,
+    _S45, _S45, 0.0,
+    _S45, -_S45, 0.0,
+    0.0, 0.0, 1.0,
+    0.0, 0.0, 1.0,
+    0.0, 0.0, 1.0,
+    0.0, 0.0, 1.0,
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ThrusterParameters(_Group):
+    """Thruster layout for the configuration matrix E (paper eq. 9); the paper gives none."""
+
+    _group = 'thrusters'
+
+    positions_m: tuple[float, ...] = _param(
+        _DEFAULT_THRUSTER_POSITIONS,
+        'Thruster positions in base_link_frd (m), flat x, y, z per thruster; default: 4 '
+        'horizontal vectored thrusters at the corners, 4 vertical ones.',
+        -100.0,
+        100.0,
+        multiple_of=3,
+    )
+    directions: tuple[float, ...] = _param(
+        _DEFAULT_THRUSTER_DIRECTIONS,
+        'Unit thrust direction of each thruster in base_link_frd (-), flat, 3 per thruster; '
+        'positive thrust pushes the vehicle along it.',
+        -1.0,
+        1.0,
+        multiple_of=3,
+    )
+    max_thrust_n: tuple[float, ...] = _param(
+        (200.0,) * 8,
+        'Maximum thrust magnitude of each thruster (N).',
+        0.0,
+        1e6,
+    )
+
+    def _check(self) -> None:
+        count = len(self.positions_m) // 3
+        if count < 6:
+            raise ParameterError(
+                f'thrusters.positions_m describes {count} thrusters, expected at least 6 '
+                '(paper sec. 3.3: p >= 6)'
+            )
+        if len(self.directions) != len(self.positions_m):
+            raise ParameterError(
+                f'thrusters.directions has {len(self.directions)} elements, expected '
+                f'{len(self.positions_m)} (3 per thruster, as thrusters.positions_m)'
+            )
+        if len(self.max_thrust_n) != count:
+            raise ParameterError(
+                f'thrusters.max_thrust_n has {len(self.max_thrust_n)} elements, expected '
+                f'{count} (one per thruster)'
+            )
+        for i in range(count):
+            d = self.directions[3 * i : 3 * i + 3]
+            norm = math.sqrt(sum(a * a for a in d))
+            if abs(norm - 1.0) > 1e-3:
+                raise ParameterError(
+                    f'thrusters.directions: direction of thruster {i} = {list(d)!r} has norm '
+                    f'{norm:.6g}, expected a unit vector'
+                )
+
+
+@dataclass(frozen=True)
+class SensorParameters(_Group):
+    """Wrist force/torque sensor (JR3-like, paper sec. 5.2 Case II; DESIGN.md)."""
+
+    _group = 'sensor'
+
+    force_range_n: tuple[float, ...] = _param(
+        (400.0, 400.0, 400.0),
+        'Full-scale force range per sensor axis (N); 400 N leaves room for the 150 N '
+        'set-point along any sensor axis.',
+        1e-3,
+        1e7,
+        length=3,
+    )
+    torque_range_n_m: tuple[float, ...] = _param(
+        (40.0, 40.0, 40.0), 'Full-scale torque range per sensor axis (N m).', 1e-3, 1e7,
+        length=3,
+    )
+    noise_fraction: float = _param(
+        0.0,
+        "Gaussian noise standard deviation as a fraction of each axis' range (-); Case II of "
+        'the paper uses 0.001 (JR3: 0.1 % of range).',
+        0.0,
+        1.0,
+    )
+    cutoff_hz: float = _param(
+        0.0, 'First-order low-pass cut-off of the output (Hz); 0 disables the filter.', 0.0,
+        1e6,
+    )
+    seed: int = _param(0, 'Seed of the noise generator (-).', 0, 2**31 - 1)
+
+
+@dataclass(frozen=True)
+class ContactParameters(_Group):
+    """Wall normal to map_ned x (paper sec. 5.1 and 5.2)."""
+
+    _group = 'contact'
+
+    wall_position_m: float = _param(
+        1.7771, 'Initial wall position along map_ned x (m); paper sec. 5.1.', -1e4, 1e4
+    )
+    stiffness_n_m: float = _param(
+        1e4, 'Wall stiffness K_e (N/m); paper Case I: 1e4 and 1e5.', 1.0, 1e10
+    )
+    damping_n_s_m: float = _param(
+        0.0, "Wall damping (N s/m); the paper's wall is a pure spring.", 0.0, 1e8
+    )
+    wall_speed_m_s: float = _param(
+        0.0,
+        'Speed of the wall along +x of map_ned after the first contact (m/s); paper Case '
+        'III: 0.05.',
+        -100.0,
+        100.0,
+    )
+
+
+_INTEGRATORS = ('rk4', 'semi_implicit_euler')
+
+
+@dataclass(frozen=True)
+class IntegrationParameters(_Group):
+    """Fixed-step integrator of (q, w)."""
+
+    _group = 'integration'
+
+    method: str = _param('rk4', "Integrator: 'rk4' or 'semi_implicit_euler'.")
+
+    def _check(self) -> None:
+        if self.method not in _INTEGRATORS:
+            raise ParameterError(
+                f'integration.method = {self.method!r} must be one of {list(_INTEGRATORS)!r}'
+            )
+
+
+_GROUPS: dict[str, type[_Group]] = {
+    'vehicle': VehicleParameters,
+    'arm': ArmParameters,
+    'hydrodynamics': HydrodynamicsParameters,
+    'thrusters': ThrusterParameters,
+    'sensor': SensorParameters,
+    'contact': ContactParameters,
+    'integration': IntegrationParameters,
+}
+
+
+def _to_ros(value: Any) -> ParameterValue:
+    """Convert a field value to its ROS parameter type (tuples become lists)."""
+    if isinstance(value, tuple):
+        return list(value)
+    return value  # type: ignore[no-any-return]
+
+
+@dataclass(frozen=True)
+class UvmsParameters:
+    """All parameters of the UVMS model, grouped as in ``config/robot.yaml``."""
+
+    vehicle: VehicleParameters = field(default_factory=VehicleParameters)
+    arm: ArmParameters = field(default_factory=ArmParameters)
+    hydrodynamics: HydrodynamicsParameters = field(default_factory=HydrodynamicsParameters)
+    thrusters: ThrusterParameters = field(default_factory=ThrusterParameters)
+    sensor: SensorParameters = field(default_factory=SensorParameters)
+    contact: ContactParameters = field(default_factory=ContactParameters)
+    integration: IntegrationParameters = field(default_factory=IntegrationParameters)
+
+    @classmethod
+    def from_flat_dict(cls, values: Mapping[str, object]) -> UvmsParameters:
+        """Build parameters from flat dotted names; names not given keep their defaults.
+
+        Args:
+            values: Mapping such as ``{'vehicle.mass_kg': 530.0, 'arm.link_lengths_m':
+                [0.5, 0.5, 0.5]}``, with ROS parameter types (lists for arrays).
+
+        Returns:
+            The validated parameters.
+
+        Raises:
+            ParameterError: For an unknown name, a wrong type or list length, or a value out
+                of range; the message names the parameter and the valid range.
+        """
+        grouped: dict[str, dict[str, Any]] = {group: {} for group in _GROUPS}
+        kinds = {spec.name: _kind(_field_default(spec.name)) for spec in PARAMETER_SPECS}
+        for name, value in values.items():
+            if name not in kinds:
+                raise ParameterError(
+                    f'unknown parameter {name!r}; known: {sorted(kinds)!r}'
+                )
+            group, key = name.split('.', 1)
+            grouped[group][key] = _coerce(name, kinds[name], value)
+        groups: dict[str, Any] = {
+            group: _GROUPS[group](**kwargs) for group, kwargs in grouped.items()
+        }
+        return cls(**groups)
+
+    def to_flat_dict(self) -> dict[str, ParameterValue]:
+        """Flat dotted names to ROS-typed values; the inverse of ``from_flat_dict``."""
+        flat: dict[str, ParameterValue] = {}
+        for group in _GROUPS:
+            params = getattr(self, group)
+            for item in dataclasses.fields(params):
+                flat[f'{group}.{item.name}'] = _to_ros(getattr(params, item.name))
+        return flat
+
+    def updated(self, values: Mapping[str, object]) -> UvmsParameters:
+        """Copy with the given flat dotted names changed (validated as ``from_flat_dict``)."""
+        return UvmsParameters.from_flat_dict({**self.to_flat_dict(), **values})
+
+    def without_hydrodynamics(self) -> UvmsParameters:
+        """Copy with added mass, drag and buoyancy off: rigid bodies under gravity only."""
+        return self.updated(
+            {
+                'hydrodynamics.added_mass_enabled': False,
+                'hydrodynamics.drag_enabled': False,
+                'hydrodynamics.buoyancy_enabled': False,
+            }
+        )
+
+
+def _field_default(name: str) -> Any:
+    """Default value of the field behind a flat dotted name."""
+    group, key = name.split('.', 1)
+    for item in dataclasses.fields(_GROUPS[group]):  # type: ignore[arg-type]
+        if item.name == key:
+            return item.default
+    raise ParameterError(f'unknown parameter {name!r}')  # pragma: no cover
+
+
+def _build_specs() -> list[ParameterSpec]:
+    """List every parameter with its ROS-typed default, description and range."""
+    specs = []
+    for group, cls in _GROUPS.items():
+        for item in dataclasses.fields(cls):  # type: ignore[arg-type]
+            specs.append(
+                ParameterSpec(
+                    name=f'{group}.{item.name}',
+                    default=_to_ros(item.default),
+                    description=item.metadata['description'],
+                    min_value=item.metadata['min'],
+                    max_value=item.metadata['max'],
+                )
+            )
+    return specs
+
+
+PARAMETER_SPECS: list[ParameterSpec] = _build_specs()
+"""Every model parameter as (name, default, description, min, max), for ROS declarations."""
