@@ -1,0 +1,116 @@
+"""Tests of `uvms report` (uvms_bringup.report): rows, values, formats and errors."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import pytest
+from uvms_bringup.report import main
+
+
+def run_report(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """Run the CLI; returns (status, stdout, stderr)."""
+    status = main(list(argv))
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def csv_rows(text: str) -> dict[str, dict[str, str]]:
+    """CSV report rows by run name."""
+    return {row['run']: row for row in csv.DictReader(io.StringIO(text))}
+
+
+def test_csv_report_has_one_row_per_run_named_by_scenario_or_stem(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path, free_motion_recording: Path
+) -> None:
+    """Two recordings give two rows: the scenario name and the file stem."""
+    status, out, _ = run_report(
+        capsys, str(contact_recording), str(free_motion_recording), '--format', 'csv'
+    )
+    assert status == 0
+    assert list(csv_rows(out)) == ['case1_synthetic', 'free_motion_run']
+
+
+def test_csv_report_values_match_the_known_contact_run(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path
+) -> None:
+    """Values appear in the units the column names state (N, s, %, mm, deg)."""
+    _, out, _ = run_report(capsys, str(contact_recording), '--format', 'csv')
+    row = csv_rows(out)['case1_synthetic']
+    assert float(row['desired_force_N']) == pytest.approx(150.0)
+    assert float(row['peak_force_N']) == pytest.approx(180.0)
+    assert float(row['overshoot_percent']) == pytest.approx(20.0)
+    assert float(row['first_contact_s']) == pytest.approx(2.0)
+    assert float(row['settling_time_s']) == pytest.approx(0.3773, abs=0.002)
+    assert float(row['max_error_y_contact_mm']) == pytest.approx(1.0)
+    assert float(row['max_error_z_mm']) == pytest.approx(3.0)
+    assert float(row['vehicle_displacement_mm']) == pytest.approx(5.0)
+    assert float(row['vehicle_rotation_deg']) == pytest.approx(1.14592, abs=1e-4)
+    assert row['force_source'] == 'contact'
+
+
+def test_free_motion_row_reports_force_metrics_as_not_applicable(
+    capsys: pytest.CaptureFixture[str], free_motion_recording: Path
+) -> None:
+    """Force metrics read n/a; the tracking error is a number."""
+    _, out, _ = run_report(capsys, str(free_motion_recording), '--format', 'csv')
+    row = csv_rows(out)['free_motion_run']
+    for key in ('peak_force_N', 'overshoot_percent', 'settling_time_s', 'first_contact_s'):
+        assert row[key] == 'n/a', key
+    assert float(row['tracking_error_mm']) == pytest.approx(0.7071, abs=1e-4)
+
+
+def test_text_report_shows_units_and_a_row_per_run(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path
+) -> None:
+    """The default table has unit lines and the run's values with fixed decimals."""
+    status, out, _ = run_report(capsys, str(contact_recording))
+    assert status == 0
+    lines = out.splitlines()
+    assert any('[N]' in line and '[mm]' in line and '[deg]' in line for line in lines)
+    row = next(line for line in lines if line.startswith('case1_synthetic'))
+    assert row.split()[1:4] == ['150.0', '2.000', '1']
+
+
+def test_markdown_report_is_a_table_with_aligned_columns(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path
+) -> None:
+    """Header, separator and one row, all with the same number of cells."""
+    _, out, _ = run_report(capsys, str(contact_recording), '--format', 'markdown')
+    table = [line for line in out.splitlines() if line.startswith('|')]
+    assert len(table) == 3
+    assert len({line.count(' | ') for line in table}) == 1
+    assert table[2].startswith('| case1_synthetic | 150.0 |')
+
+
+def test_missing_file_fails_with_a_message_and_no_traceback(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """Exit status 1 and one line on stderr naming the file."""
+    status, out, err = run_report(capsys, str(tmp_path / 'absent.mcap'))
+    assert status == 1
+    assert out == ''
+    assert 'absent.mcap' in err and 'Traceback' not in err
+
+
+def test_corrupt_file_fails_but_readable_runs_are_still_reported(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path, tmp_path: Path
+) -> None:
+    """A garbage file makes the status 1; the good recording still gets its row."""
+    bad = tmp_path / 'garbage.mcap'
+    bad.write_bytes(b'\x00' * 64)
+    status, out, err = run_report(capsys, str(bad), str(contact_recording), '--format', 'csv')
+    assert status == 1
+    assert 'garbage.mcap' in err and 'Traceback' not in err
+    assert list(csv_rows(out)) == ['case1_synthetic']
+
+
+def test_unknown_format_is_a_usage_error(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path
+) -> None:
+    """Argparse rejects the format with status 2 instead of raising SystemExit."""
+    status, _, err = run_report(capsys, str(contact_recording), '--format', 'html')
+    assert status == 2
+    assert 'html' in err
