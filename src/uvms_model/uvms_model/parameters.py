@@ -15,6 +15,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
+import numpy as np
+
 from uvms_model.errors import ParameterError
 
 ParameterValue = float | int | bool | str | list[float] | list[str]
@@ -404,6 +406,15 @@ class ThrusterParameters(_Group):
                     f'thrusters.directions: direction of thruster {i} = {list(d)!r} has norm '
                     f'{norm:.6g}, expected a unit vector'
                 )
+        positions = np.reshape(self.positions_m, (count, 3))
+        directions = np.reshape(self.directions, (count, 3))
+        wrenches = np.vstack((directions.T, np.cross(positions, directions).T))
+        rank = int(np.linalg.matrix_rank(wrenches))
+        if rank < 6:
+            raise ParameterError(
+                f'thrusters.positions_m and thrusters.directions give thrust wrenches of rank '
+                f'{rank}, expected 6: the configuration matrix E (paper eq. 9) needs full row rank'
+            )
 
 
 @dataclass(frozen=True)
