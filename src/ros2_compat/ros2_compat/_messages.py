@@ -70,9 +70,7 @@ PRIMITIVES: dict[str, Primitive] = {
     'int64': Primitive('int64', 'int', 'q', 8, 'q', 'int64', _INT_BOUNDS[64]),
     'uint64': Primitive('uint64', 'int', 'Q', 8, 'Q', 'uint64', _UINT_BOUNDS[64]),
     'float32': Primitive('float', 'float', 'f', 4, 'f', 'float32', (3.402823466e38, 0.0)),
-    'float64': Primitive(
-        'double', 'float', 'd', 8, 'd', 'float64', (1.7976931348623157e308, 0.0)
-    ),
+    'float64': Primitive('double', 'float', 'd', 8, 'd', 'float64', (1.7976931348623157e308, 0.0)),
 }
 
 
@@ -103,8 +101,10 @@ class FieldSpec:
     @property
     def numeric_elements(self) -> bool:
         """Tell whether an array/sequence holds numbers (array.array / numpy storage)."""
-        return self.kind in {'array', 'sequence'} and self.base is not None and (
-            PRIMITIVES.get(self.base, _STRING_PRIMITIVE).typecode is not None
+        return (
+            self.kind in {'array', 'sequence'}
+            and self.base is not None
+            and (PRIMITIVES.get(self.base, _STRING_PRIMITIVE).typecode is not None)
         )
 
 
@@ -353,7 +353,7 @@ class _ClassSource:
             ref, short = self.element_python_type(spec)
             checks.append(
                 f'assert isinstance(value, {ref}), '
-                f'"The \'{name}\' field must be a sub message of type \'{short}\'"'
+                f"\"The '{name}' field must be a sub message of type '{short}'\""
             )
         elif spec.kind == 'base':
             checks.extend(self.scalar_checks(spec, prim))
@@ -381,18 +381,16 @@ class _ClassSource:
                     f'"The \'{name}\' field must be string value "'
                     f" 'not longer than {spec.string_bound}'"
                 ]
-            return [
-                f'assert isinstance(value, str), "The \'{name}\' field must be of type \'str\'"'
-            ]
+            return [f"assert isinstance(value, str), \"The '{name}' field must be of type 'str'\""]
         assert prim is not None
         if spec.base == 'byte':
             return [
                 f'assert (isinstance(value, (bytes, bytearray)) and len(value) == 1), '
-                f'"The \'{name}\' field must be of type \'bytes\' or \'ByteString\' with length 1"'
+                f"\"The '{name}' field must be of type 'bytes' or 'ByteString' with length 1\""
             ]
         checks = [
             f'assert isinstance(value, {prim.python}), '
-            f'"The \'{name}\' field must be of type \'{prim.python}\'"'
+            f"\"The '{name}' field must be of type '{prim.python}'\""
         ]
         if prim.python == 'float':
             assert prim.bounds is not None
@@ -421,8 +419,8 @@ class _ClassSource:
                 lines += [
                     '            if isinstance(value, _np.ndarray):',
                     f'                assert value.dtype == _np.{prim.dtype}, '
-                    f'"The \'{name}\' numpy.ndarray() must have the dtype of '
-                    f'\'numpy.{prim.dtype}\'"',
+                    f"\"The '{name}' numpy.ndarray() must have the dtype of "
+                    f"'numpy.{prim.dtype}'\"",
                     f'                assert value.size == {spec.size}, '
                     f'"The \'{name}\' numpy.ndarray() must have a size of {spec.size}"',
                     f'                self._{name} = value',
@@ -432,8 +430,8 @@ class _ClassSource:
                 lines += [
                     '            if isinstance(value, _array):',
                     f"                assert value.typecode == '{prim.typecode}', "
-                    f'"The \'{name}\' array.array() must have the type code of '
-                    f'\'{prim.typecode}\'"',
+                    f"\"The '{name}' array.array() must have the type code of "
+                    f"'{prim.typecode}'\"",
                 ]
                 if spec.size:
                     lines.append(
@@ -621,7 +619,7 @@ class _ClassSource:
             lines += ['', *self.setter(spec)]
             lines.append(
                 f"    {spec.name} = property(_attrgetter('_{spec.name}'), _set_{spec.name}, "
-                f"None, \"Message field '{spec.name}'.\")"
+                f'None, "Message field \'{spec.name}\'.")'
             )
             lines.append(f'    del _set_{spec.name}')
         lines += ['', '', *self.fast_deepcopy_lines()]

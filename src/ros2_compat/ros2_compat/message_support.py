@@ -220,4 +220,3 @@ def provided_message_types() -> list[str]:
     """Return every 'pkg/msg/Type' the compat runtime provides, sorted."""
     store = uvms_typestore()
     return sorted(name for name in store.fielddefs if name.split('/', 1)[0] in MESSAGE_PACKAGES)
-
