@@ -69,8 +69,10 @@ def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
 def _motion_cross(v: FloatArray, m: FloatArray) -> FloatArray:
     """Spatial motion cross product v x m of (..., 6) twists [linear; angular]."""
     return np.concatenate(
-        (_cross(v[..., 3:], m[..., :3]) + _cross(v[..., :3], m[..., 3:]),
-         _cross(v[..., 3:], m[..., 3:])),
+        (
+            _cross(v[..., 3:], m[..., :3]) + _cross(v[..., :3], m[..., 3:]),
+            _cross(v[..., 3:], m[..., 3:]),
+        ),
         axis=-1,
     )
 
@@ -78,8 +80,10 @@ def _motion_cross(v: FloatArray, m: FloatArray) -> FloatArray:
 def _force_cross(v: FloatArray, f: FloatArray) -> FloatArray:
     """Spatial force cross product v x* f of a (..., 6) twist and wrench [linear; angular]."""
     return np.concatenate(
-        (_cross(v[..., 3:], f[..., :3]),
-         _cross(v[..., 3:], f[..., 3:]) + _cross(v[..., :3], f[..., :3])),
+        (
+            _cross(v[..., 3:], f[..., :3]),
+            _cross(v[..., 3:], f[..., 3:]) + _cross(v[..., :3], f[..., :3]),
+        ),
         axis=-1,
     )
 
@@ -293,9 +297,7 @@ class UvmsModel:
         s5 = math.sin(theta)
         t5 = s5 / c5
         phi_dot, theta_dot = float(eta_dot[0]), float(eta_dot[1])
-        d_phi = np.array(
-            [[0.0, c4 * t5, -s4 * t5], [0.0, -s4, -c4], [0.0, c4 / c5, -s4 / c5]]
-        )
+        d_phi = np.array([[0.0, c4 * t5, -s4 * t5], [0.0, -s4, -c4], [0.0, c4 / c5, -s4 / c5]])
         d_theta = np.array(
             [
                 [0.0, s4 / c5**2, c4 / c5**2],
@@ -340,9 +342,7 @@ class UvmsModel:
 
     # ------------------------------------------------------------------ dynamics
 
-    def _link_twists(
-        self, arm: _ArmKinematics, w: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
+    def _link_twists(self, arm: _ArmKinematics, w: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Twists V (4, 6) and velocity-product accelerations (4, 6) of the 4 bodies."""
         s = arm.subspaces
         qd = w[6:]
@@ -387,9 +387,10 @@ class UvmsModel:
             )
             first_moments = np.empty((4, 3))
             first_moments[0] = self._first_moment_vehicle
-            first_moments[1:] = self._wet_mass[1:, None] * arm.origins + (
-                arm.rotations @ self._first_moment_links_local[:, :, None]
-            )[:, :, 0]
+            first_moments[1:] = (
+                self._wet_mass[1:, None] * arm.origins
+                + (arm.rotations @ self._first_moment_links_local[:, :, None])[:, :, 0]
+            )
             wrenches[:, :3] = self._wet_mass[:, None] * g_body
             wrenches[:, 3:] = _cross(first_moments, g_body[None, :])
         if self._drag_enabled:

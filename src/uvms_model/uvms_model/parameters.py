@@ -147,9 +147,7 @@ def _validate_field(name: str, value: Any, metadata: Mapping[str, Any]) -> None:
         if not math.isfinite(number):
             raise ParameterError(f'{name} = {value!r} must be finite')
         if (lo is not None and number < lo) or (hi is not None and number > hi):
-            raise ParameterError(
-                f'{name} = {value!r} is out of range {_range_text(lo, hi)}'
-            )
+            raise ParameterError(f'{name} = {value!r} is out of range {_range_text(lo, hi)}')
 
 
 class _Group:
@@ -276,12 +274,18 @@ class ArmParameters(_Group):
         length=3,
     )
     link_radii_m: tuple[float, ...] = _param(
-        (0.05, 0.04, 0.035), 'Radii of the cylindrical links (m); paper sec. 5.1.', 1e-4, 10.0,
+        (0.05, 0.04, 0.035),
+        'Radii of the cylindrical links (m); paper sec. 5.1.',
+        1e-4,
+        10.0,
         length=3,
     )
     link_masses_kg: tuple[float, ...] = _param(
-        (10.0, 8.0, 5.0), 'Link masses (kg), uniform solid cylinders; paper sec. 5.1.', 1e-3,
-        1e5, length=3,
+        (10.0, 8.0, 5.0),
+        'Link masses (kg), uniform solid cylinders; paper sec. 5.1.',
+        1e-3,
+        1e5,
+        length=3,
     )
     drag_coefficient: float = _param(
         1.1,
@@ -432,7 +436,10 @@ class SensorParameters(_Group):
         length=3,
     )
     torque_range_n_m: tuple[float, ...] = _param(
-        (40.0, 40.0, 40.0), 'Full-scale torque range per sensor axis (N m).', 1e-3, 1e7,
+        (40.0, 40.0, 40.0),
+        'Full-scale torque range per sensor axis (N m).',
+        1e-3,
+        1e7,
         length=3,
     )
     noise_fraction: float = _param(
@@ -443,7 +450,9 @@ class SensorParameters(_Group):
         1.0,
     )
     cutoff_hz: float = _param(
-        0.0, 'First-order low-pass cut-off of the output (Hz); 0 disables the filter.', 0.0,
+        0.0,
+        'First-order low-pass cut-off of the output (Hz); 0 disables the filter.',
+        0.0,
         1e6,
     )
     seed: int = _param(0, 'Seed of the noise generator (-).', 0, 2**31 - 1)
@@ -540,9 +549,7 @@ class UvmsParameters:
         kinds = {spec.name: _kind(_field_default(spec.name)) for spec in PARAMETER_SPECS}
         for name, value in values.items():
             if name not in kinds:
-                raise ParameterError(
-                    f'unknown parameter {name!r}; known: {sorted(kinds)!r}'
-                )
+                raise ParameterError(f'unknown parameter {name!r}; known: {sorted(kinds)!r}')
             group, key = name.split('.', 1)
             grouped[group][key] = _coerce(name, kinds[name], value)
         groups: dict[str, Any] = {
