@@ -13,13 +13,24 @@ so that pushing towards the desired force is positive.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
+
+from uvms_bringup.recording import (
+    RUN_METADATA_NAME,
+    RecordedMessage,
+    RecordingError,
+    open_recording,
+)
+from uvms_bringup.typestore import uvms_typestore
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
@@ -191,6 +202,7 @@ class Run:
         thrusters: /uvms/thrusters/state.
         metadata: The recording's metadata records, by record name.
         time_origin_ns: Stamp (or log time) of t = 0 (ns).
+        problem: What was lost if the recording was cut short, else None.
     """
 
     name: str
@@ -202,6 +214,7 @@ class Run:
     thrusters: ThrusterSeries | None = None
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     time_origin_ns: int = 0
+    problem: str | None = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -343,7 +356,8 @@ def rotation_angle_from(quaternion_0: FloatArray, quaternion: FloatArray) -> Flo
     q = np.asarray(quaternion, dtype=np.float64).reshape(-1, 4)
     q0 = q0 / np.linalg.norm(q0)
     q = q / np.linalg.norm(q, axis=1, keepdims=True)
-    return 2.0 * np.arccos(np.clip(np.abs(q @ q0), 0.0, 1.0))
+    angle: FloatArray = 2.0 * np.arccos(np.clip(np.abs(q @ q0), 0.0, 1.0))
+    return angle
 
 
 def max_norm_from_start(position: FloatArray) -> float:
@@ -665,6 +679,7 @@ def run_from_messages(
     time_source: Literal['header', 'log'] = 'header',
     path: Path | None = None,
     metadata: dict[str, dict[str, str]] | None = None,
+    problem: str | None = None,
 ) -> Run:
     """Build a Run from decoded messages ``(topic, log_time_ns, msg)`` of the analysis topics.
 
@@ -680,11 +695,17 @@ def run_from_messages(
     series: dict[str, Any] = {}
     for topic, items in per_topic.items():
         items.sort(key=lambda item: item[0])
-        t = (np.array([ns for ns, _ in items], dtype=np.int64) - origin_ns) * 1e-9
+        offsets_ns = np.array([ns for ns, _ in items], dtype=np.int64) - origin_ns
+        t = offsets_ns.astype(np.float64) * 1e-9
         attribute, builder = _SERIES_BUILDERS[topic]
         series[attribute] = builder(t, [msg for _, msg in items])
     return Run(
-        name=name, path=path, metadata=dict(metadata or {}), time_origin_ns=origin_ns, **series
+        name=name,
+        path=path,
+        metadata=dict(metadata or {}),
+        time_origin_ns=origin_ns,
+        problem=problem,
+        **series,
     )
 
 
@@ -695,98 +716,55 @@ def run_from_messages(
 
 def run_name(path: Path, metadata: dict[str, dict[str, str]]) -> str:
     """Run name: the 'scenario' entry of the 'uvms' metadata record, else the file stem."""
-    scenario = metadata.get('uvms', {}).get('scenario', '').strip()
+    scenario = metadata.get(RUN_METADATA_NAME, {}).get('scenario', '').strip()
     return scenario or path.stem
 
 
 def load_run(path: str | Path, time_source: Literal['header', 'log'] = 'header') -> Run:
-    """Read a recording (MCAP) into a Run of numpy series.
+    """Read a recording (MCAP, ros2 profile) into a Run of numpy series.
+
+    A file cut short by a crash is read up to its last complete chunk; ``Run.problem`` then
+    says what was lost.
+
+    Args:
+        path: The recording.
+        time_source: 'header' (message header stamps, default) or 'log' (MCAP log times).
 
     Raises:
-        AnalysisError: The file is missing, not an MCAP recording, or holds no messages.
+        AnalysisError: The file is missing, not a ROS 2 MCAP recording, damaged, or holds
+            none of the analysis topics.
     """
     path = Path(path)
     if not path.is_file():
         raise AnalysisError(f'{path}: no such file')
     try:
-        metadata = read_metadata(path)
-        run = run_from_messages(
-            run_name(path, metadata),
-            _decoded_messages(path, ANALYSIS_TOPICS),
-            time_source=time_source,
-            path=path,
-            metadata=metadata,
-        )
-    except AnalysisError as exc:
-        raise AnalysisError(f'{path}: {exc}') from exc
-    # Anything the MCAP or CDR readers raise means the same to the user: unreadable file.
-    except Exception as exc:
-        raise AnalysisError(f'{path}: not a readable MCAP recording ({exc})') from exc
-    if all(getattr(run, attribute) is None for attribute, _ in _SERIES_BUILDERS.values()):
+        recording = open_recording(path)
+        typestore = uvms_typestore()
+        messages = [
+            (message.topic, message.log_time_ns, _decode(typestore, message))
+            for message in recording.messages(ANALYSIS_TOPICS)
+        ]
+    except RecordingError as exc:
+        raise AnalysisError(str(exc)) from exc
+    if not messages:
         topics = ', '.join(ANALYSIS_TOPICS)
         raise AnalysisError(f'{path}: the recording holds none of the topics {topics}')
-    return run
+    return run_from_messages(
+        run_name(path, recording.metadata),
+        messages,
+        time_source=time_source,
+        path=path,
+        metadata=recording.metadata,
+        problem=recording.problem,
+    )
 
 
-def read_metadata(path: Path) -> dict[str, dict[str, str]]:
-    """Metadata records of an MCAP file by name; a file cut short yields those before the cut."""
-    from mcap.records import Metadata
-    from mcap.stream_reader import StreamReader
-
-    metadata: dict[str, dict[str, str]] = {}
-    with path.open('rb') as stream:
-        for record in _tolerant(StreamReader(stream).records):
-            if isinstance(record, Metadata):
-                metadata[record.name] = dict(record.metadata)
-    return metadata
-
-
-def _tolerant(records: Iterator[Any]) -> Iterator[Any]:
-    """Yield records until the stream ends or breaks off (a recording cut short by a crash)."""
-    from mcap.exceptions import McapError
-
-    count = 0
+def _decode(typestore: Typestore, message: RecordedMessage) -> Any:
+    """Deserialize one recorded message, naming topic and type if its bytes do not fit."""
     try:
-        for record in records:
-            count += 1
-            yield record
-    except (McapError, EOFError, ValueError, OSError, IndexError) as exc:
-        # A broken magic or header means the file is no MCAP at all; later it is a cut.
-        if count == 0:
-            raise AnalysisError(f'not an MCAP file ({exc})') from exc
-
-
-def _decoded_messages(path: Path, topics: Sequence[str]) -> Iterator[tuple[str, int, Any]]:
-    """Decoded messages ``(topic, log_time_ns, msg)`` of the given topics, in log-time order."""
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-
-    typestore = get_typestore(Stores.ROS2_JAZZY)
-    schemas: dict[int, Schema] = {}
-    channels: dict[int, Channel] = {}
-    messages: list[tuple[str, int, str, bytes]] = []
-    with path.open('rb') as stream:
-        for record in _tolerant(StreamReader(stream).records):
-            if isinstance(record, Schema):
-                schemas[record.id] = record
-            elif isinstance(record, Channel):
-                channels[record.id] = record
-            elif isinstance(record, Message):
-                channel = channels.get(record.channel_id)
-                if channel is None or channel.topic not in topics:
-                    continue
-                schema = schemas[channel.schema_id]
-                type_name = _full_type_name(schema.name)
-                if type_name not in typestore.fielddefs:
-                    typestore.register(get_types_from_msg(schema.data.decode(), type_name))
-                messages.append((channel.topic, record.log_time, type_name, record.data))
-    messages.sort(key=lambda item: item[1])
-    for topic, log_time, type_name, data in messages:
-        yield topic, log_time, typestore.deserialize_cdr(data, type_name)
-
-
-def _full_type_name(name: str) -> str:
-    """'pkg/Type' or 'pkg/msg/Type' as 'pkg/msg/Type'."""
-    parts = name.split('/')
-    return f'{parts[0]}/msg/{parts[-1]}' if len(parts) == 2 else name
+        return typestore.deserialize_cdr(message.data, message.type_name)
+    # rosbags raises assorted errors (struct, index, key, its own) on bytes that do not fit.
+    except Exception as exc:
+        raise RecordingError(
+            f'a message on {message.topic} cannot be decoded as {message.type_name} ({exc})'
+        ) from exc

@@ -39,7 +39,7 @@ from uvms_bringup.analysis import (
 )
 
 if TYPE_CHECKING:
-    from uvms_control.core.fuzzy_switch import FuzzySwitch
+    from uvms_control.core.fuzzy_switch import FuzzySwitch, Trapezoid
 
 #: Size (in) and resolution (dpi) of single-panel figures: 960 x 600 px.
 FIGSIZE = (8.0, 5.0)
@@ -47,7 +47,6 @@ FIGSIZE_TALL = (8.0, 8.5)
 DPI = 120
 
 AXIS_COLORS = ('tab:red', 'tab:green', 'tab:blue')
-CONTACT_SHADE = {'color': 'tab:orange', 'alpha': 0.12, 'linewidth': 0}
 
 
 class PlotError(Exception):
@@ -67,7 +66,12 @@ def _shade_contact(ax: Axes, run: Run, label: bool = True) -> None:
     for i, (start, stop) in enumerate(contact_intervals(force.in_contact)):
         end = force.t[min(stop, force.t.size - 1)]
         ax.axvspan(
-            force.t[start], end, label='in contact' if label and i == 0 else None, **CONTACT_SHADE
+            force.t[start],
+            end,
+            color='tab:orange',
+            alpha=0.12,
+            linewidth=0,
+            label='in contact' if label and i == 0 else None,
         )
 
 
@@ -80,14 +84,11 @@ def figure_trajectory(run: Run) -> Figure | None:
     if run.controller is not None:
         X_d = run.controller.X_d
         ax.plot(X_d[:, 0], X_d[:, 2], '--', color='0.4', label='desired $X_d$')
-    t, X = (
-        (run.ee_pose.t, run.ee_pose.position)
-        if run.ee_pose
-        else (
-            run.controller.t,  # type: ignore[union-attr]
-            run.controller.X,  # type: ignore[union-attr]
-        )
-    )
+    if run.ee_pose is not None:
+        t, X = run.ee_pose.t, run.ee_pose.position
+    else:
+        assert run.controller is not None
+        t, X = run.controller.t, run.controller.X
     ax.plot(X[:, 0], X[:, 2], color='tab:blue', linewidth=1.8, label='actual $X$')
     ax.plot(X[0, 0], X[0, 2], 'o', color='tab:blue', label=f'start (t = {t[0]:.1f} s)')
     if run.contact is not None and run.contact.t.size:
@@ -206,12 +207,12 @@ def figure_force_response(run: Run) -> Figure | None:
         )
     ]
     ax.text(
-        0.01,
-        0.98,
+        0.99,
+        0.5,
         '\n'.join(lines),
         transform=ax.transAxes,
-        va='top',
-        ha='left',
+        va='center',
+        ha='right',
         fontsize='small',
         bbox={'boxstyle': 'round', 'facecolor': 'white', 'alpha': 0.85},
     )
@@ -350,7 +351,10 @@ def plot_recording(path: str | Path, out_dir: str | Path) -> list[Path]:
     Raises:
         AnalysisError: The recording cannot be read.
     """
-    return plot_run(load_run(path), out_dir)
+    run = load_run(path)
+    if run.problem is not None:
+        print(f'uvms plot: warning: {run.problem}', file=sys.stderr)
+    return plot_run(run, out_dir)
 
 
 # --------------------------------------------------------------------------------------------
@@ -365,14 +369,9 @@ def _default_switch() -> FuzzySwitch:
     return FuzzySwitch()
 
 
-def _span(sets: Sequence[object], lo: float, hi: float) -> tuple[float, float]:
+def _span(sets: Sequence[Trapezoid], lo: float, hi: float) -> tuple[float, float]:
     """Plot range covering the finite corners of membership functions, at least [lo, hi]."""
-    corners = [
-        value
-        for s in sets
-        for value in (s.a, s.b, s.c, s.d)  # type: ignore[attr-defined]
-        if math.isfinite(value)
-    ]
+    corners = [value for s in sets for value in (s.a, s.b, s.c, s.d) if math.isfinite(value)]
     low, high = min([lo, *corners]), max([hi, *corners])
     pad = 0.1 * (high - low)
     return low - pad, high + pad

@@ -147,7 +147,7 @@ def format_report(runs: Sequence[RunMetrics], fmt: str = 'text') -> str:
     if fmt != 'text':
         raise ValueError(f'unknown report format {fmt!r}; expected one of {", ".join(FORMATS)}')
     heading_lines = max(column.label.count('\n') + 1 for column in COLUMNS)
-    headings = [
+    heading_cells = [
         [
             *([''] * (heading_lines - column.label.count('\n') - 1)),
             *column.label.split('\n'),
@@ -157,7 +157,7 @@ def format_report(runs: Sequence[RunMetrics], fmt: str = 'text') -> str:
     ]
     widths = [
         max(*(len(text) for text in heading), *(len(row[i]) for row in rows))
-        for i, heading in enumerate(headings)
+        for i, heading in enumerate(heading_cells)
     ]
 
     def line(cells: Sequence[str]) -> str:
@@ -166,7 +166,7 @@ def format_report(runs: Sequence[RunMetrics], fmt: str = 'text') -> str:
         return '  '.join([first, *rest]).rstrip()
 
     table = [
-        *(line([heading[k] for heading in headings]) for k in range(heading_lines + 1)),
+        *(line([heading[k] for heading in heading_cells]) for k in range(heading_lines + 1)),
         line(['-' * width for width in widths]),
         *(line(row) for row in rows),
     ]
@@ -212,10 +212,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     failed = False
     for path in args.recordings:
         try:
-            metrics.append(compute_metrics(load_run(path), args.force_source))
+            run = load_run(path)
         except AnalysisError as exc:
             print(f'uvms report: error: {exc}', file=sys.stderr)
             failed = True
+            continue
+        if run.problem is not None:
+            print(f'uvms report: warning: {run.problem}', file=sys.stderr)
+        metrics.append(compute_metrics(run, args.force_source))
     if metrics:
         sys.stdout.write(format_report(metrics, args.format))
     return 1 if failed else 0

@@ -8,11 +8,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from mcap.writer import CompressionType, Writer
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-from rosbags.typesys.store import Typestore
-
-MSG_DIR = Path(__file__).resolve().parents[3] / 'src' / 'uvms_msgs' / 'msg'
+from uvms_bringup.recording import McapRecorder, run_metadata
+from uvms_bringup.typestore import uvms_typestore
 
 #: Sample period of every synthetic topic (s).
 DT = 0.002
@@ -45,16 +42,6 @@ ERROR_CONTACT = np.array([0.02, 0.001, -0.002])
 # Known vehicle motion: linear drift to DRIFT_END (m) and a yaw bump of YAW_MAX (rad).
 DRIFT_END = np.array([0.003, 0.0, -0.004])
 YAW_MAX = 0.02
-
-
-def uvms_typestore() -> Typestore:
-    """Jazzy types plus uvms_msgs, from the package's .msg files."""
-    typestore = get_typestore(Stores.ROS2_JAZZY)
-    for msg_file in sorted(MSG_DIR.glob('*.msg')):
-        typestore.register(
-            get_types_from_msg(msg_file.read_text(), f'uvms_msgs/msg/{msg_file.stem}')
-        )
-    return typestore
 
 
 @dataclass(frozen=True)
@@ -138,55 +125,34 @@ def _signals(
     )
 
 
-class RecordingWriter:
-    """Writes rosbags-serialized messages into a ros2-profile MCAP file."""
-
-    def __init__(self, path: Path, typestore: Typestore) -> None:
-        self._stream = path.open('wb')
-        self._writer = Writer(self._stream, compression=CompressionType.ZSTD)
-        self._writer.start(profile='ros2', library='uvms-test')
-        self._typestore = typestore
-        self._schemas: dict[str, int] = {}
-        self._channels: dict[str, int] = {}
-
-    def write(self, topic: str, msg: Any, log_time_ns: int) -> None:
-        """Serialize one message and write it on its topic."""
-        type_name = msg.__msgtype__
-        if type_name not in self._schemas:
-            text, _ = self._typestore.generate_msgdef(type_name, ros_version=2)
-            self._schemas[type_name] = self._writer.register_schema(
-                type_name, 'ros2msg', text.encode()
-            )
-        if topic not in self._channels:
-            self._channels[topic] = self._writer.register_channel(
-                topic, 'cdr', self._schemas[type_name], {'offered_qos_profiles': ''}
-            )
-        data = self._typestore.serialize_cdr(msg, type_name)
-        self._writer.add_message(self._channels[topic], log_time_ns, bytes(data), log_time_ns)
-
-    def metadata(self, name: str, data: dict[str, str]) -> None:
-        """Write a metadata record."""
-        self._writer.add_metadata(name, data)
-
-    def close(self) -> None:
-        """Finish the file."""
-        self._writer.finish()
-        self._stream.close()
+TOPIC_TYPES = {
+    '/uvms/contact': 'uvms_msgs/msg/ContactState',
+    '/uvms/controller/state': 'uvms_msgs/msg/ControllerState',
+    '/uvms/odometry': 'nav_msgs/msg/Odometry',
+    '/uvms/ee_pose': 'geometry_msgs/msg/PoseStamped',
+    '/uvms/thrusters/state': 'uvms_msgs/msg/ThrusterState',
+}
 
 
 def write_signals(
     path: Path, signals: Signals, scenario: str | None = None, thrusters: bool = True
 ) -> Path:
-    """Write a synthetic run as the graph would record it; returns the path."""
+    """Write a synthetic run with the stack's recorder, as the graph would; returns the path."""
     ts = uvms_typestore()
     T = ts.types
     Time, Header = T['builtin_interfaces/msg/Time'], T['std_msgs/msg/Header']
     Vector3, Point = T['geometry_msgs/msg/Vector3'], T['geometry_msgs/msg/Point']
     Quaternion = T['geometry_msgs/msg/Quaternion']
     Pose, Twist = T['geometry_msgs/msg/Pose'], T['geometry_msgs/msg/Twist']
-    writer = RecordingWriter(path, ts)
-    if scenario is not None:
-        writer.metadata('uvms', {'scenario': scenario, 'seed': '0'})
+    metadata = None if scenario is None else run_metadata(scenario, 0, '{}')
+    recorder = McapRecorder(path, metadata=metadata)
+    for topic, type_name in TOPIC_TYPES.items():
+        if thrusters or topic != '/uvms/thrusters/state':
+            recorder.add_topic(topic, type_name)
+
+    def write(topic: str, msg: Any, log_time_ns: int) -> None:
+        recorder.write(topic, bytes(ts.serialize_cdr(msg, msg.__msgtype__)), log_time_ns)
+
     zero = Vector3(x=0.0, y=0.0, z=0.0)
     for i, t in enumerate(signals.t):
         stamp_ns = round((T0 + t) * 1e9)
@@ -196,7 +162,7 @@ def write_signals(
         )
         force = Vector3(x=float(signals.force_x[i]), y=0.0, z=0.0)
         X, X_d = signals.X[i], signals.X_d[i]
-        writer.write(
+        write(
             '/uvms/contact',
             T['uvms_msgs/msg/ContactState'](
                 header=header,
@@ -208,7 +174,7 @@ def write_signals(
             ),
             log_ns,
         )
-        writer.write(
+        write(
             '/uvms/controller/state',
             T['uvms_msgs/msg/ControllerState'](
                 header=header,
@@ -230,7 +196,7 @@ def write_signals(
         p = signals.vehicle_position[i]
         yaw = float(signals.vehicle_yaw[i])
         orientation = Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))
-        writer.write(
+        write(
             '/uvms/odometry',
             T['nav_msgs/msg/Odometry'](
                 header=header,
@@ -248,7 +214,7 @@ def write_signals(
             ),
             log_ns + 2000,
         )
-        writer.write(
+        write(
             '/uvms/ee_pose',
             T['geometry_msgs/msg/PoseStamped'](
                 header=header,
@@ -261,7 +227,7 @@ def write_signals(
         )
         if thrusters:
             thrust = 10.0 * np.sin(t + np.arange(N_THRUSTERS))
-            writer.write(
+            write(
                 '/uvms/thrusters/state',
                 T['uvms_msgs/msg/ThrusterState'](
                     header=header,
@@ -275,5 +241,5 @@ def write_signals(
                 ),
                 log_ns + 4000,
             )
-    writer.close()
+    recorder.close()
     return path

@@ -331,6 +331,16 @@ def test_truncated_recording_loads_the_messages_before_the_cut(
     np.testing.assert_array_equal(run.controller.X, full.controller.X[: run.controller.t.size])
 
 
+def test_truncated_recording_says_what_was_lost(contact_recording: Path, tmp_path: Path) -> None:
+    """Run.problem of a cut file names it; a complete file has none."""
+    data = contact_recording.read_bytes()
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(data[: len(data) // 2])
+    problem = load_run(cut).problem
+    assert problem is not None and 'cut.mcap' in problem
+    assert load_run(contact_recording).problem is None
+
+
 def test_file_that_is_not_mcap_raises_analysis_error(tmp_path: Path) -> None:
     """Garbage is reported as an unreadable recording, naming the file."""
     bad = tmp_path / 'bad.mcap'

@@ -114,3 +114,16 @@ def test_unknown_format_is_a_usage_error(
     status, _, err = run_report(capsys, str(contact_recording), '--format', 'html')
     assert status == 2
     assert 'html' in err
+
+
+def test_truncated_recording_is_reported_with_a_warning(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path, tmp_path: Path
+) -> None:
+    """A file cut short still gets its row (status 0), and stderr says it was cut short."""
+    cut = tmp_path / 'cut.mcap'
+    data = contact_recording.read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    status, out, err = run_report(capsys, str(cut), '--format', 'csv')
+    assert status == 0
+    assert list(csv_rows(out)) == ['case1_synthetic']
+    assert 'warning' in err and 'cut short' in err
