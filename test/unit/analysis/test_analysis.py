@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -182,6 +183,29 @@ def test_force_source_controller_uses_the_measured_force() -> None:
     run = make_run(t, np.where(in_contact, F_D, 0.0), in_contact, offset=5.0)
     assert compute_metrics(run, 'contact').peak_force == pytest.approx(F_D)
     assert compute_metrics(run, 'controller').peak_force == pytest.approx(F_D + 5.0)
+
+
+def test_without_ground_truth_contact_is_measured_force_above_threshold() -> None:
+    """With no /uvms/contact, F_e,x > 1 N marks contact and the measured force is used."""
+    t = np.arange(0.0, 3.0, 1e-3)
+    in_contact = t >= 1.5
+    run = replace(make_run(t, np.where(in_contact, F_D, 0.0), in_contact), contact=None)
+    metrics = compute_metrics(run)
+    assert metrics.force_source == 'controller'
+    assert metrics.first_contact_time == pytest.approx(1.5)
+
+
+def test_negative_set_point_is_measured_in_its_own_direction() -> None:
+    """F_d,x = -150 N with F_e,x reaching -180 N is a 20 % overshoot, not a negative one."""
+    t = np.arange(0.0, 3.0, 1e-3)
+    in_contact = t >= 1.0
+    run = make_run(t, np.where(in_contact, -F_D, 0.0), in_contact)
+    assert run.contact is not None and run.controller is not None
+    run.contact.force[np.isclose(t, 1.1), 0] = -F_PEAK
+    run = replace(run, controller=replace(run.controller, F_d=-run.controller.F_d))
+    metrics = compute_metrics(run)
+    assert metrics.desired_force == pytest.approx(-F_D)
+    assert metrics.overshoot == pytest.approx(20.0)
 
 
 def test_hold_returns_the_latest_sample_at_or_before_each_query() -> None:
