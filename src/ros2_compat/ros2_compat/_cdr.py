@@ -60,7 +60,7 @@ def _array_le_bytes(values: array.array[Any]) -> bytes:
 
 def _fix_ndarray(value: Any, dtype: str, size: int, name: str) -> np.ndarray[Any, Any]:
     """Return a fixed-size array field as a little-endian numpy array of its exact length."""
-    result = np.asarray(value, dtype=np.dtype(dtype).newbyteorder('<'))
+    result = np.asarray(value, dtype=np.dtype(dtype).newbyteorder('<')).reshape(-1)
     if result.shape != (size,):
         msg = f"field '{name}' must hold {size} values, not {result.size}"
         raise CdrError(msg)

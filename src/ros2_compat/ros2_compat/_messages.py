@@ -266,6 +266,15 @@ def _slow_deepcopy(msg: Any, memo: dict[int, Any] | None) -> Any:
     return new
 
 
+def _unpickle(typename: str, state: tuple[Any, ...]) -> Any:
+    """Rebuild a pickled message (classes live in generated modules pickle cannot import)."""
+    cls = get_class(typename)
+    msg = object.__new__(cls)
+    for slot, value in zip(cls.__slots__, state, strict=True):
+        object.__setattr__(msg, slot, value)
+    return msg
+
+
 _HELPERS: dict[str, object] = {
     '_array': array.array,
     '_np': np,
@@ -279,6 +288,7 @@ _HELPERS: dict[str, object] = {
     '_new': object.__new__,
     '_repr': _repr,
     '_slow_deepcopy': _slow_deepcopy,
+    '_unpickle': _unpickle,
     '_Meta': MessageMeta,
     '_CHECK_DEFAULT': CHECK_FIELDS_DEFAULT,
 }
@@ -439,6 +449,22 @@ class _ClassSource:
                         f'"The \'{name}\' array.array() must have a size <= {spec.size}"'
                     )
                 lines += [f'                self._{name} = value', '                return']
+                # Compat leniency: Jazzy's default (unchecked) setter takes numpy arrays,
+                # so the checked compat default does too (rosidl's checked one would not).
+                kinds = 'fiu' if prim.python == 'float' else 'iub'
+                lines.append(
+                    '            if isinstance(value, _np.ndarray) and value.ndim == 1 '
+                    f"and value.dtype.kind in '{kinds}':"
+                )
+                if spec.size:
+                    lines.append(
+                        f'                assert len(value) <= {spec.size}, '
+                        f'"The \'{name}\' numpy.ndarray() must have a size <= {spec.size}"'
+                    )
+                lines += [
+                    f"                self._{name} = _as_array('{prim.typecode}', value)",
+                    '                return',
+                ]
         ref, short = self.element_python_type(spec)
         conditions = [
             '((isinstance(value, _Sequence) or isinstance(value, _Set) or '
@@ -606,6 +632,10 @@ class _ClassSource:
                 lines.append(f'    {spec.name.upper()}__DEFAULT = {spec.default!r}')
         lines += ['', *self.init_lines(), '', *self.eq_lines(), '']
         lines += [
+            '    def __reduce__(self):',
+            '        return (_unpickle, (self._TYPE_NAME, '
+            'tuple([getattr(self, slot) for slot in self.__slots__])))',
+            '',
             '    def __repr__(self):',
             '        return _repr(self)',
             '',

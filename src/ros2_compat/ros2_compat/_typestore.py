@@ -60,14 +60,28 @@ class InterfaceNotFoundError(FileNotFoundError):
     """The uvms_msgs .msg files are neither installed nor in the source tree."""
 
 
+def _ament_msg_dir() -> Path | None:
+    """Return share/uvms_msgs/msg of a sourced ROS 2 workspace, if there is one."""
+    try:
+        from ament_index_python.packages import get_package_share_directory
+    except ImportError:
+        return None
+    try:
+        return Path(get_package_share_directory('uvms_msgs')) / 'msg'
+    except (LookupError, OSError, ValueError):
+        return None
+
+
 def uvms_msgs_dir() -> Path:
     """Return the directory holding the uvms_msgs .msg files.
 
+    Looked up in an installed wheel, the source tree, then a sourced ROS 2 workspace.
+
     Raises:
-        InterfaceNotFoundError: Neither the installed copy nor the source tree has them.
+        InterfaceNotFoundError: None of them has the files.
     """
-    for candidate in UVMS_MSGS_DIRS:
-        if candidate.is_dir() and any(candidate.glob('*.msg')):
+    for candidate in (*UVMS_MSGS_DIRS, _ament_msg_dir()):
+        if candidate is not None and candidate.is_dir() and any(candidate.glob('*.msg')):
             return candidate
     tried = ', '.join(str(path) for path in UVMS_MSGS_DIRS)
     msg = f'uvms_msgs .msg files not found (looked in {tried})'

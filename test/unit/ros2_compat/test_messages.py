@@ -11,6 +11,7 @@ from __future__ import annotations
 import array
 import copy
 import os
+import pickle
 import re
 import subprocess
 import sys
@@ -297,11 +298,23 @@ def test_float64_sequence_setter_rejects_wrong_typecode() -> None:
         msg.position = array.array('f', [1.0])
 
 
-def test_float64_sequence_setter_rejects_numpy_when_checked() -> None:
-    """The checked setter wants a Sequence: numpy arrays are not (use the constructor)."""
+def test_float64_sequence_setter_takes_numpy_like_jazzy_default() -> None:
+    """Deliberate leniency: Jazzy's default setter takes numpy, so the checked compat one does.
+
+    (rosidl's checked setter would reject a numpy array: it is no collections.abc.Sequence.)
+    """
+    msg = JointState(check_fields=True)
+    msg.position = np.array([1.0, 2.0])
+    msg.velocity = np.array([3, 4])
+    assert msg.position == array.array('d', [1.0, 2.0])
+    assert msg.velocity == array.array('d', [3.0, 4.0])
+
+
+def test_float64_sequence_setter_rejects_numpy_of_strings() -> None:
+    """A numpy array of non-numbers is still rejected when fields are checked."""
     msg = JointState(check_fields=True)
     with pytest.raises(AssertionError, match="The 'position' field must be a set or sequence"):
-        msg.position = np.zeros(3)
+        msg.position = np.array(['a', 'b'])
 
 
 def test_float64_sequence_setter_takes_numpy_without_checks() -> None:
@@ -415,6 +428,13 @@ def test_deepcopy_is_independent_and_equal() -> None:
     assert msg.pose.pose.position.x == 0.0
     assert joints.position[0] == 1.0
     assert joints.name == ['a']
+
+
+def test_messages_pickle_and_unpickle_equal() -> None:
+    """Messages pickle (for multiprocessing and caches) and come back equal."""
+    msg = Odometry(child_frame_id='base_link_frd')
+    msg.pose.covariance[0] = 1.0
+    assert pickle.loads(pickle.dumps(msg)) == msg
 
 
 def test_shallow_copy_shares_nested_messages() -> None:

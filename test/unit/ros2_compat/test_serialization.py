@@ -150,3 +150,13 @@ def test_unserializable_field_value_raises_with_the_type_name() -> None:
     msg = int32_cls(data='seven', check_fields=False)
     with pytest.raises(ValueError, match='std_msgs/msg/Int32'):
         serialize_message(msg)
+
+
+def test_covariance_matrix_serializes_row_major() -> None:
+    """A (6, 6) covariance (size 36 passes rosidl's check) is written as 36 row-major values."""
+    pose_cls = get_message_class('geometry_msgs/msg/PoseWithCovariance')
+    matrix = np.arange(36.0).reshape(6, 6)
+    as_matrix = pose_cls(check_fields=True)
+    as_matrix.covariance = matrix
+    flat = pose_cls(covariance=matrix.ravel())
+    assert serialize_message(as_matrix) == serialize_message(flat)
