@@ -1,0 +1,149 @@
+"""What the graph is made of, shared by the in-process runner and the ROS 2 launch file.
+
+Pure Python (no rclpy, no launch): which nodes run, from which package and executable,
+with which parameter files and which per-mode parameters. ``uvms_bringup.graph`` builds
+the nodes in one process from it; ``launch/uvms.launch.py`` starts them as processes.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from dataclasses import dataclass
+from pathlib import Path
+
+from uvms_bringup.scenario import ParameterValue, Scenario
+
+#: Namespace of the robot's nodes and topics (``/clock``, ``/tf`` stay global).
+DEFAULT_NAMESPACE = 'uvms'
+
+#: Execution modes of the graph.
+MODES = ('lockstep', 'realtime')
+
+#: Controller parameter selecting what triggers a control step, per graph mode.
+CONTROLLER_TRIGGER_PARAMETER = 'trigger'
+CONTROLLER_TRIGGER = {'lockstep': 'lockstep', 'realtime': 'timer'}
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """One node of the graph.
+
+    Attributes:
+        name: Node name (also the scenario section of its overrides).
+        package: ROS package of the executable.
+        executable: Console script that ``ros2 run`` starts.
+        module: Python module holding the node class and ``main``.
+        class_name: Node class in that module.
+        parameter_files: Files of ``config/`` loaded with ``--params-file``, in order.
+        uses_sim_time: Whether the node runs on ``/clock`` (all but the clock source).
+    """
+
+    name: str
+    package: str
+    executable: str
+    module: str
+    class_name: str
+    parameter_files: tuple[str, ...]
+    uses_sim_time: bool = True
+
+
+SIMULATOR = NodeSpec(
+    'simulator', 'uvms_sim', 'simulator', 'uvms_sim.simulator_node', 'SimulatorNode',
+    ('robot.yaml',), uses_sim_time=False,
+)
+CONTROLLER = NodeSpec(
+    'controller', 'uvms_control', 'controller', 'uvms_control.controller_node',
+    'ControllerNode', ('robot.yaml', 'controller.yaml'),
+)
+THRUSTER_ALLOCATOR = NodeSpec(
+    'thruster_allocator', 'uvms_control', 'thruster_allocator',
+    'uvms_control.thruster_allocator_node', 'ThrusterAllocatorNode',
+    ('robot.yaml', 'controller.yaml'),
+)
+RECORDER = NodeSpec(
+    'recorder', 'uvms_bringup', 'recorder', 'uvms_bringup.recorder_node', 'RecorderNode', (),
+)
+
+#: The nodes that always run, in start order; the recorder joins when there is an output.
+CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR)
+
+
+def graph_nodes(record: bool) -> tuple[NodeSpec, ...]:
+    """The nodes of a run, with the recorder when it records."""
+    return (*CORE_NODES, RECORDER) if record else CORE_NODES
+
+
+def node_parameters(
+    spec: NodeSpec,
+    scenario: Scenario | None,
+    mode: str,
+    duration_s: float | None = None,
+    output_path: str | None = None,
+) -> dict[str, ParameterValue]:
+    """Parameters of one node beyond its parameter files: scenario overrides and mode.
+
+    Args:
+        spec: The node.
+        scenario: The scenario, or None for the defaults of the parameter files.
+        mode: ``lockstep`` or ``realtime``.
+        duration_s: Simulated time after which the simulator stops stepping; None or 0 runs
+            forever.
+        output_path: MCAP file of the recorder.
+
+    Returns:
+        Parameter name to value; later entries win over the parameter files.
+    """
+    if mode not in MODES:
+        msg = f'mode must be one of {", ".join(MODES)}, got {mode!r}'
+        raise ValueError(msg)
+    values: dict[str, ParameterValue] = {}
+    if scenario is not None:
+        values.update(scenario.node_overrides(spec.name))
+    if spec.uses_sim_time:
+        values['use_sim_time'] = True
+    if spec is SIMULATOR:
+        values['mode'] = mode
+        values['duration_s'] = float(duration_s or 0.0)
+    elif spec is CONTROLLER:
+        values[CONTROLLER_TRIGGER_PARAMETER] = CONTROLLER_TRIGGER[mode]
+    elif spec is RECORDER and output_path is not None:
+        values['output_path'] = output_path
+    return values
+
+
+def config_dir() -> Path:
+    """Directory of the parameter files (robot.yaml, controller.yaml, scenarios/).
+
+    Looked up in this order: the copy a wheel install bundles (``uvms_bringup/_config``),
+    the source checkout (``config/`` at the repository top), the ROS 2 share directory
+    (``share/uvms_bringup/config`` after ``colcon build``).
+
+    Raises:
+        FileNotFoundError: None of them holds ``robot.yaml``.
+    """
+    here = Path(__file__).resolve().parent
+    candidates = [here / '_config', here.parents[2] / 'config']
+    if importlib.util.find_spec('ament_index_python') is not None:
+        from ament_index_python.packages import (  # only on ROS 2 installs
+            PackageNotFoundError,
+            get_package_share_directory,
+        )
+
+        try:
+            candidates.append(Path(get_package_share_directory('uvms_bringup')) / 'config')
+        except PackageNotFoundError:
+            pass
+    for candidate in candidates:
+        if (candidate / 'robot.yaml').is_file():
+            return candidate
+    msg = 'no parameter directory with robot.yaml in ' + ', '.join(map(str, candidates))
+    raise FileNotFoundError(msg)
+
+
+def resolve_scenario_path(name_or_path: str, directory: Path | None = None) -> Path:
+    """A scenario given as a file path, or as a name of ``config/scenarios/NAME.yaml``."""
+    path = Path(name_or_path)
+    if path.suffix in ('.yaml', '.yml') or path.exists():
+        return path
+    base = directory if directory is not None else config_dir()
+    return base / 'scenarios' / f'{name_or_path}.yaml'

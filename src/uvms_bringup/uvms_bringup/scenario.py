@@ -1,0 +1,272 @@
+"""Scenario files: one YAML file per experiment, checked before anything runs.
+
+A scenario file (``config/scenarios/NAME.yaml``) names the experiment, its duration and
+random seed, and overrides ROS parameters of the nodes of the graph::
+
+    name: case1_ke1e4                 # str, required
+    description: Case I, K_e = 1e4    # str, required
+    paper: Section 5.3.1, Fig. 8      # str, optional: where the paper shows it
+    duration_s: 20.0                  # number > 0, required: simulated seconds
+    seed: 1                           # int >= 0, optional (0): sensor noise seed (sensor.seed)
+    simulator:                        # mapping, optional: simulator parameters
+      contact:
+        stiffness_n_m: 1.0e+4         # nested mappings are dotted names: contact.stiffness_n_m
+    controller: {...}                 # mapping, optional: controller parameters
+    thruster_allocator: {...}         # mapping, optional: thruster allocator parameters
+    recorder: {...}                   # mapping, optional: recorder parameters
+
+Parameter values are booleans, integers, floats, strings or non-empty lists of one of
+them, as in a ROS 2 parameter file. Whether each overridden name is a parameter the node
+declares, with that type, is checked when the graph is built (``uvms_bringup.graph``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, TypeAlias
+
+import yaml
+
+#: A ROS 2 parameter value as a scenario may give it.
+ParameterValue: TypeAlias = (
+    bool | int | float | str | list[bool] | list[int] | list[float] | list[str]
+)
+
+#: Nodes of the graph whose parameters a scenario may override.
+NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder')
+
+_REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
+_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0'}
+_KNOWN_KEYS = (*_REQUIRED, *_OPTIONAL, *NODE_SECTIONS)
+_NAME_SEGMENT = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
+_MAX_SEED = 2**31 - 1
+
+
+class ScenarioError(ValueError):
+    """A scenario file cannot be read or does not follow the schema."""
+
+
+class _Loader(yaml.SafeLoader):
+    """YAML loader that reads ``1e4`` as a float, as ROS 2 parameter files do (YAML 1.2)."""
+
+
+_Loader.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+        |\.[0-9_]+(?:[eE][-+][0-9]+)?
+        |[-+]?\.(?:inf|Inf|INF)
+        |\.(?:nan|NaN|NAN))$""",
+        re.VERBOSE,
+    ),
+    list('-+0123456789.'),
+)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario.
+
+    Attributes:
+        path: File the scenario was read from.
+        name: Short identifier, e.g. ``case1_ke1e4``.
+        description: One or two sentences on what the scenario shows.
+        duration_s: Simulated duration of a run (s).
+        seed: Seed of the simulator's random numbers (sensor noise).
+        paper: Where the paper shows this experiment, if it does.
+        overrides: Per node name, flat dotted parameter names and their values.
+    """
+
+    path: Path
+    name: str
+    description: str
+    duration_s: float
+    seed: int = 0
+    paper: str | None = None
+    overrides: Mapping[str, Mapping[str, ParameterValue]] = field(default_factory=dict)
+
+    def node_overrides(self, node: str) -> dict[str, ParameterValue]:
+        """Parameter overrides of one node, the seed included for the simulator."""
+        values = dict(self.overrides.get(node, {}))
+        if node == 'simulator':
+            values['sensor.seed'] = self.seed
+        return values
+
+    def with_changes(self, duration_s: float | None = None, seed: int | None = None) -> Scenario:
+        """Copy with the duration or seed replaced (command-line options)."""
+        if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0.0):
+            msg = f'duration must be a positive number of seconds, got {duration_s}'
+            raise ScenarioError(msg)
+        if seed is not None and not 0 <= seed <= _MAX_SEED:
+            msg = f'seed must be an integer in [0, {_MAX_SEED}], got {seed}'
+            raise ScenarioError(msg)
+        return replace(
+            self,
+            duration_s=self.duration_s if duration_s is None else float(duration_s),
+            seed=self.seed if seed is None else seed,
+        )
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file.
+
+    Args:
+        path: The YAML file.
+
+    Returns:
+        The scenario.
+
+    Raises:
+        ScenarioError: The file is missing, is not YAML, has an unknown key, misses a
+            required field or holds a value of the wrong type; the message names the file,
+            the key and the expected type.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding='utf-8')
+    except OSError as exc:
+        msg = f'{path}: cannot read the scenario file: {exc.strerror or exc}'
+        raise ScenarioError(msg) from exc
+    try:
+        data = yaml.load(text, Loader=_Loader)  # a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        msg = f'{path}: not valid YAML: {exc}'
+        raise ScenarioError(msg) from exc
+    return parse_scenario(data, path)
+
+
+def parse_scenario(data: Any, path: Path) -> Scenario:
+    """Validate the parsed YAML document of a scenario file.
+
+    Args:
+        data: The document as ``yaml.safe_load`` returns it.
+        path: File it came from, for the error messages.
+
+    Returns:
+        The scenario.
+
+    Raises:
+        ScenarioError: See ``load_scenario``.
+    """
+    if not isinstance(data, dict):
+        msg = f'{path}: expected a mapping of scenario keys, got {_kind(data)}'
+        raise ScenarioError(msg)
+    for key in data:
+        if key not in _KNOWN_KEYS:
+            msg = (
+                f'{path}: unknown key {key!r}; a scenario has the keys '
+                f'{", ".join(_KNOWN_KEYS)}'
+            )
+            raise ScenarioError(msg)
+    for key, expected in _REQUIRED.items():
+        if key not in data:
+            msg = f'{path}: missing required key {key!r} (expected a {expected})'
+            raise ScenarioError(msg)
+    name = _string(data, 'name', path)
+    description = _string(data, 'description', path)
+    paper = _string(data, 'paper', path) if 'paper' in data else None
+    duration = data['duration_s']
+    if isinstance(duration, bool) or not isinstance(duration, int | float):
+        raise ScenarioError(_type_error(path, 'duration_s', 'number (float, s)', duration))
+    if not (math.isfinite(duration) and duration > 0.0):
+        msg = f"{path}: key 'duration_s': expected a positive number of seconds, got {duration}"
+        raise ScenarioError(msg)
+    seed = data.get('seed', 0)
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise ScenarioError(_type_error(path, 'seed', 'int >= 0', seed))
+    if not 0 <= seed <= _MAX_SEED:
+        msg = f"{path}: key 'seed': expected an int in [0, {_MAX_SEED}], got {seed}"
+        raise ScenarioError(msg)
+    overrides: dict[str, dict[str, ParameterValue]] = {}
+    for node in NODE_SECTIONS:
+        if node not in data or data[node] is None:
+            continue
+        section = data[node]
+        if not isinstance(section, dict):
+            raise ScenarioError(_type_error(path, node, 'mapping of parameters', section))
+        flat: dict[str, ParameterValue] = {}
+        _flatten(section, node, '', flat, path)
+        overrides[node] = flat
+    return Scenario(
+        path=path,
+        name=name,
+        description=description,
+        duration_s=float(duration),
+        seed=seed,
+        paper=paper,
+        overrides=overrides,
+    )
+
+
+def _flatten(
+    section: dict[Any, Any],
+    node: str,
+    prefix: str,
+    out: dict[str, ParameterValue],
+    path: Path,
+) -> None:
+    """Flatten nested parameter mappings into dotted names, checking every value."""
+    for raw_key, value in section.items():
+        key_path = f'{node}.{prefix}{raw_key}'
+        if not isinstance(raw_key, str) or not _NAME_SEGMENT.match(raw_key):
+            msg = (
+                f'{path}: key {key_path!r}: a parameter name is letters, digits and '
+                'underscores, not starting with a digit'
+            )
+            raise ScenarioError(msg)
+        name = f'{prefix}{raw_key}'
+        if isinstance(value, dict):
+            _flatten(value, node, f'{name}.', out, path)
+        else:
+            out[name] = _parameter_value(value, key_path, path)
+
+
+def _parameter_value(value: Any, key_path: str, path: Path) -> ParameterValue:
+    """Check that a value is a ROS 2 parameter value (scalar or homogeneous list)."""
+    expected = 'bool, int, float, str or a non-empty list of one of them'
+    if isinstance(value, bool | int | float | str):
+        return value
+    if isinstance(value, list) and value:
+        if all(isinstance(item, bool) for item in value):
+            return list(value)
+        if all(isinstance(item, int) and not isinstance(item, bool) for item in value):
+            return list(value)
+        if all(isinstance(item, int | float) and not isinstance(item, bool) for item in value):
+            return [float(item) for item in value]
+        if all(isinstance(item, str) for item in value):
+            return list(value)
+        msg = f'{path}: key {key_path!r}: expected a list of one type ({expected}), got {value}'
+        raise ScenarioError(msg)
+    raise ScenarioError(_type_error(path, key_path, expected, value))
+
+
+def _string(data: dict[str, Any], key: str, path: Path) -> str:
+    """Read a string field."""
+    value = data[key]
+    if not isinstance(value, str):
+        raise ScenarioError(_type_error(path, key, 'str', value))
+    return value
+
+
+def _type_error(path: Path, key: str, expected: str, value: Any) -> str:
+    """Message for a value of the wrong type."""
+    return f'{path}: key {key!r}: expected {expected}, got {_kind(value)} {value!r}'
+
+
+def _kind(value: Any) -> str:
+    """Human name of a YAML value's type."""
+    if value is None:
+        return 'null'
+    return {
+        bool: 'bool',
+        int: 'int',
+        float: 'float',
+        str: 'str',
+        list: 'list',
+        dict: 'mapping',
+    }.get(type(value), type(value).__name__)

@@ -1,0 +1,254 @@
+"""Simulator parameters: names, defaults, units, valid ranges, and their validation.
+
+The robot's own parameters (model, wall contact, wrist sensor, integrator) are
+``uvms_model.PARAMETER_SPECS``, shared with the controller through ``config/robot.yaml``;
+these are the simulator's. Pure Python: the node turns each ``ParameterSpec`` into a ROS
+parameter with a descriptor, reads the values back, and hands them to
+``SimulatorSettings.from_values``, which checks every value against its range before
+anything is built.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from uvms_sim.errors import SimParameterError
+
+Value = bool | int | float | str | list[float]
+
+MODES = ('lockstep', 'realtime')
+INITIAL_ARM_SOURCES = ('joint_positions', 'ee_position')
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One simulator parameter.
+
+    Attributes:
+        name: Dotted ROS parameter name.
+        default: Default value; its Python type is the parameter type.
+        description: What it is, with its unit.
+        min_value: Smallest valid value (numbers and number arrays), inclusive.
+        max_value: Largest valid value, inclusive.
+        choices: Valid values of a string parameter.
+        length: Required length of an array parameter.
+    """
+
+    name: str
+    default: Value
+    description: str
+    min_value: float | None = None
+    max_value: float | None = None
+    choices: tuple[str, ...] = ()
+    length: int | None = None
+
+    def range_text(self) -> str:
+        """The valid range as a user reads it."""
+        if self.choices:
+            return 'one of ' + ', '.join(repr(c) for c in self.choices)
+        if self.min_value is not None and self.max_value is not None:
+            text = f'[{self.min_value:g}, {self.max_value:g}]'
+            return f'{self.length} values in {text}' if self.length else text
+        return 'any value'
+
+
+SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
+    ParameterSpec(
+        'mode', 'lockstep',
+        "Execution mode: 'lockstep' steps only when the actuator command for the published "
+        "state arrived (deterministic); 'realtime' steps on a wall-clock timer.",
+        choices=MODES,
+    ),
+    ParameterSpec(
+        'physics_rate_hz', 1000.0,
+        'Integration rate of the plant (Hz); the fixed step is its inverse.',
+        1.0, 100000.0,
+    ),
+    ParameterSpec(
+        'publish_rate_hz', 500.0,
+        'Rate of the sensor topics and /clock, the control rate (Hz); must divide '
+        'physics_rate_hz.',
+        1.0, 100000.0,
+    ),
+    ParameterSpec(
+        'tf_rate_hz', 50.0,
+        'Rate of /tf (Hz), rounded to a whole number of sensor publications; 0 disables '
+        '/tf and /tf_static.',
+        0.0, 100000.0,
+    ),
+    ParameterSpec(
+        'lockstep_timeout_s', 1.0,
+        'Lockstep: wall-clock time to wait for the actuator command of the published state '
+        'before stepping with the last command anyway (s).',
+        0.001, 3600.0,
+    ),
+    ParameterSpec(
+        'watchdog_timeout_s', 0.1,
+        'Age in simulated time above which an actuator command is stale and thrusters and '
+        'motors are set to zero (s).',
+        0.0001, 3600.0,
+    ),
+    ParameterSpec(
+        'duration_s', 0.0,
+        'Simulated time after which the simulator stops stepping (s); 0 runs forever.',
+        0.0, 1.0e7,
+    ),
+    ParameterSpec(
+        'wall_enabled', True,
+        'Whether the wall of the contact.* parameters exists (false: free motion).',
+    ),
+    ParameterSpec(
+        'initial.vehicle_pose', [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        'Initial vehicle pose in map_ned: x, y, z (m), roll, pitch, yaw (rad).',
+        -1000.0, 1000.0, length=6,
+    ),
+    ParameterSpec(
+        'initial.arm', 'ee_position',
+        "Initial arm configuration from 'joint_positions' or by inverse kinematics from "
+        "'ee_position'.",
+        choices=INITIAL_ARM_SOURCES,
+    ),
+    ParameterSpec(
+        'initial.joint_positions', [0.0, 0.4, -0.8],
+        'Initial arm joint angles (rad) when initial.arm is joint_positions; otherwise the '
+        'starting guess of the inverse kinematics (it picks the elbow branch).',
+        -2.0 * math.pi, 2.0 * math.pi, length=3,
+    ),
+    ParameterSpec(
+        'initial.ee_position', [1.7, 0.0, 0.0],
+        'Initial end-effector position in map_ned (m), used when initial.arm is ee_position.',
+        -1000.0, 1000.0, length=3,
+    ),
+)
+
+SPECS_BY_NAME: dict[str, ParameterSpec] = {spec.name: spec for spec in SIMULATOR_PARAMETERS}
+
+
+@dataclass(frozen=True)
+class SimulatorSettings:
+    """Validated simulator parameters, in the units the plant and node use."""
+
+    mode: str
+    physics_dt_ns: int
+    steps_per_publish: int
+    publishes_per_tf: int
+    lockstep_timeout_s: float
+    watchdog_timeout_ns: int
+    duration_ns: int
+    wall_enabled: bool
+    vehicle_pose: np.ndarray
+    arm_from_ee_position: bool
+    joint_positions: np.ndarray
+    ee_position: np.ndarray
+
+    @property
+    def physics_dt_s(self) -> float:
+        """Fixed integration step (s)."""
+        return self.physics_dt_ns * 1e-9
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any]) -> SimulatorSettings:
+        """Check every value against its spec and derive the settings.
+
+        Args:
+            values: Parameter name to value, for every name of ``SIMULATOR_PARAMETERS``.
+
+        Raises:
+            SimParameterError: A value is out of range, of the wrong type, or the rates do
+                not fit together; the message names the parameter, value and valid range.
+        """
+        checked = {spec.name: validate_value(spec, values[spec.name])
+                   for spec in SIMULATOR_PARAMETERS}
+        physics_hz = float(checked['physics_rate_hz'])
+        publish_hz = float(checked['publish_rate_hz'])
+        ratio = physics_hz / publish_hz
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            msg = (
+                f"parameter 'publish_rate_hz' = {publish_hz:g}: must divide "
+                f"physics_rate_hz = {physics_hz:g} into a whole number of steps "
+                f'(valid: {physics_hz:g} / n for n = 1, 2, ...)'
+            )
+            raise SimParameterError(msg)
+        dt_ns = round(1e9 / physics_hz)
+        if abs(dt_ns - 1e9 / physics_hz) > 1e-6:
+            msg = (
+                f"parameter 'physics_rate_hz' = {physics_hz:g}: the step must be a whole "
+                'number of nanoseconds (e.g. 1000, 2000, 500 Hz)'
+            )
+            raise SimParameterError(msg)
+        tf_hz = float(checked['tf_rate_hz'])
+        if tf_hz > publish_hz:
+            msg = (
+                f"parameter 'tf_rate_hz' = {tf_hz:g} out of range [0, {publish_hz:g}] "
+                '(at most publish_rate_hz)'
+            )
+            raise SimParameterError(msg)
+        return cls(
+            mode=str(checked['mode']),
+            physics_dt_ns=dt_ns,
+            steps_per_publish=round(ratio),
+            publishes_per_tf=max(1, round(publish_hz / tf_hz)) if tf_hz > 0.0 else 0,
+            lockstep_timeout_s=float(checked['lockstep_timeout_s']),
+            watchdog_timeout_ns=round(float(checked['watchdog_timeout_s']) * 1e9),
+            duration_ns=round(float(checked['duration_s']) * 1e9),
+            wall_enabled=bool(checked['wall_enabled']),
+            vehicle_pose=np.array(checked['initial.vehicle_pose'], dtype=float),
+            arm_from_ee_position=checked['initial.arm'] == 'ee_position',
+            joint_positions=np.array(checked['initial.joint_positions'], dtype=float),
+            ee_position=np.array(checked['initial.ee_position'], dtype=float),
+        )
+
+
+def validate_value(spec: ParameterSpec, value: Any) -> Value:
+    """Check one value against its spec.
+
+    Returns:
+        The value, floats for float parameters, a list of floats for arrays.
+
+    Raises:
+        SimParameterError: Naming the parameter, the value and the valid range.
+    """
+    default = spec.default
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise SimParameterError(_message(spec, value, 'expected a bool'))
+        return value
+    if isinstance(default, str):
+        if not isinstance(value, str) or (spec.choices and value not in spec.choices):
+            raise SimParameterError(_message(spec, value, 'invalid value'))
+        return value
+    if isinstance(default, list):
+        if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray):
+            raise SimParameterError(_message(spec, value, 'expected an array of numbers'))
+        items = [float(v) for v in value]
+        if spec.length is not None and len(items) != spec.length:
+            raise SimParameterError(_message(spec, list(items), 'wrong length'))
+        for item in items:
+            _check_number(spec, item, items)
+        return items
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise SimParameterError(_message(spec, value, 'expected a number'))
+    if isinstance(default, int) and not isinstance(value, int):
+        raise SimParameterError(_message(spec, value, 'expected an integer'))
+    _check_number(spec, float(value), value)
+    return value if isinstance(default, int) else float(value)
+
+
+def _check_number(spec: ParameterSpec, number: float, shown: Any) -> None:
+    """Check finiteness and range of one number."""
+    if not math.isfinite(number):
+        raise SimParameterError(_message(spec, shown, 'not a finite number'))
+    if spec.min_value is not None and number < spec.min_value:
+        raise SimParameterError(_message(spec, shown, 'out of range'))
+    if spec.max_value is not None and number > spec.max_value:
+        raise SimParameterError(_message(spec, shown, 'out of range'))
+
+
+def _message(spec: ParameterSpec, value: Any, problem: str) -> str:
+    """Error message naming the parameter, the value and the valid range."""
+    return f'parameter {spec.name!r} = {value!r}: {problem}; valid: {spec.range_text()}'

@@ -1,0 +1,304 @@
+"""The simulated robot: UVMS dynamics, the wall it touches and the wrist sensor that feels it.
+
+Pure numpy and uvms_model. One fixed step integrates (q, w) of eq. 8 with the generalized
+body forces tau_b = E [thrusts; joint torques] (eq. 9) and the contact: the end effector
+exerts F_e on the wall, so the wall pushes back on it with -F_e (paper sec. 5.1). Simulated
+time is kept in integer nanoseconds, so stamps are exact and runs repeat bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NoReturn
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from uvms_model.contact import ContactState, WallContact
+from uvms_model.sensors import ForceTorqueSensor, contact_wrench_in_sensor_frame
+from uvms_model.thrusters import configuration_matrix
+
+from uvms_model import (
+    ModelError,
+    SingularAttitudeError,
+    UnreachableError,
+    UvmsModel,
+    UvmsParameters,
+)
+from uvms_sim.errors import CommandError, DivergenceError, SimParameterError, SimulationError
+
+FloatArray = NDArray[np.float64]
+
+_NO_CONTACT = ContactState(False, np.zeros(3), 0.0, math.nan, 0.0)
+
+
+@dataclass(frozen=True)
+class DivergenceLimits:
+    """Bounds beyond which the state is taken as diverged and the simulation stops.
+
+    They sit far above anything a 530 kg vehicle with a 1.5 m arm reaches under its
+    thrusters, and far below where a numerical blow-up ends, so a blow-up is caught early.
+
+    Attributes:
+        max_distance_m: Vehicle distance from the map_ned origin (m).
+        max_linear_speed_m_s: Vehicle speed |[u, v, w]| (m/s).
+        max_angular_rate_rad_s: Vehicle body rate |[p, q, r]| (rad/s).
+        max_joint_rate_rad_s: Each arm joint rate (rad/s).
+    """
+
+    max_distance_m: float = 1.0e4
+    max_linear_speed_m_s: float = 20.0
+    max_angular_rate_rad_s: float = 20.0
+    max_joint_rate_rad_s: float = 50.0
+
+
+def initial_coordinates(
+    model: UvmsModel,
+    vehicle_pose: ArrayLike,
+    joint_positions: ArrayLike,
+    ee_position: ArrayLike | None = None,
+) -> FloatArray:
+    """Generalized coordinates q (9,) of the start, optionally by inverse kinematics.
+
+    Args:
+        model: The UVMS model.
+        vehicle_pose: x, y, z (m) in map_ned and roll, pitch, yaw (rad), shape (6,).
+        joint_positions: Arm joint angles (rad) (3,); with ``ee_position``, the starting guess
+            of the inverse kinematics (it selects the elbow branch).
+        ee_position: End-effector position in map_ned (m) (3,) to start at, or None.
+
+    Raises:
+        SimParameterError: The end-effector position is out of reach, naming it.
+    """
+    pose = np.asarray(vehicle_pose, dtype=float)
+    arm = np.asarray(joint_positions, dtype=float)
+    if ee_position is not None:
+        try:
+            arm = model.joint_positions_for_ee_position(pose, ee_position, arm)
+        except UnreachableError as exc:
+            msg = (
+                f"parameter 'initial.ee_position' = {list(np.asarray(ee_position, float))}: "
+                f'out of reach from initial.vehicle_pose = {pose.tolist()} ({exc})'
+            )
+            raise SimParameterError(msg) from exc
+    return np.concatenate((pose, arm))
+
+
+class Plant:
+    """UVMS plant with wall contact, wrist force/torque sensor and actuator mapping.
+
+    Args:
+        params: Robot parameters (model, ``contact.*``, ``sensor.*``, ``thrusters.*``,
+            ``integration.method``).
+        q0: Initial generalized coordinates (9,).
+        dt_ns: Fixed integration step (ns).
+        wall_enabled: Whether the wall exists.
+        limits: Divergence bounds.
+
+    Example:
+        >>> plant = Plant(UvmsParameters(), np.zeros(9))  # doctest: +SKIP
+        >>> plant.step(np.zeros(plant.n_thrusters), np.zeros(3))  # doctest: +SKIP
+        >>> plant.t_ns  # doctest: +SKIP
+        1000000
+    """
+
+    def __init__(
+        self,
+        params: UvmsParameters,
+        q0: ArrayLike,
+        dt_ns: int = 1_000_000,
+        wall_enabled: bool = True,
+        limits: DivergenceLimits | None = None,
+    ) -> None:
+        if dt_ns <= 0:
+            msg = f'dt_ns must be a positive number of nanoseconds, got {dt_ns}'
+            raise SimParameterError(msg)
+        self.model = UvmsModel(params)
+        self.joint_names: tuple[str, ...] = self.model.joint_names
+        self.n_joints = self.model.n_joints
+        self._e = configuration_matrix(params.thrusters, self.n_joints)
+        self.n_thrusters = self._e.shape[1] - self.n_joints
+        self._wall = WallContact(params.contact) if wall_enabled else None
+        self._damped_wall = params.contact.damping_n_s_m > 0.0
+        self._sensor = ForceTorqueSensor(params.sensor)
+        self._limits = limits if limits is not None else DivergenceLimits()
+        self._dt_ns = int(dt_ns)
+        self._dt_s = dt_ns * 1e-9
+        self._t_ns = 0
+        self._last_reading_ns: int | None = None
+        self._q = np.array(q0, dtype=float)
+        self._w = np.zeros(self.model.n_dof)
+        self._thrusts = np.zeros(self.n_thrusters)
+        self._joint_torques = np.zeros(self.n_joints)
+        self._failure: SimulationError | None = None
+        self._contact_cache: tuple[int, ContactState] | None = None
+        self._check_state('initial state')
+
+    @property
+    def t_ns(self) -> int:
+        """Simulated time (ns)."""
+        return self._t_ns
+
+    @property
+    def dt_ns(self) -> int:
+        """Fixed integration step (ns)."""
+        return self._dt_ns
+
+    @property
+    def q(self) -> FloatArray:
+        """Generalized coordinates (9,): vehicle position and Euler angles, joint angles."""
+        return self._q.copy()
+
+    @property
+    def w(self) -> FloatArray:
+        """Quasi-velocities (9,): body linear and angular velocity, joint rates."""
+        return self._w.copy()
+
+    @property
+    def joint_torques(self) -> FloatArray:
+        """Arm motor torques applied during the last step (N*m)."""
+        return self._joint_torques.copy()
+
+    @property
+    def thrusts(self) -> FloatArray:
+        """Thrusts applied during the last step (N)."""
+        return self._thrusts.copy()
+
+    def tau_body(self, thrusts: ArrayLike, joint_torques: ArrayLike) -> FloatArray:
+        """Generalized body forces tau_b = E [thrusts; joint torques] (eq. 9)."""
+        result: FloatArray = self._e @ np.concatenate(
+            (np.asarray(thrusts, dtype=float), np.asarray(joint_torques, dtype=float))
+        )
+        return result
+
+    def contact(self) -> ContactState:
+        """Contact ground truth at the current state (no contact without a wall)."""
+        if self._wall is None:
+            return _NO_CONTACT
+        if self._contact_cache is None or self._contact_cache[0] != self._t_ns:
+            t_s = self._t_ns * 1e-9
+            state = self._wall.evaluate(t_s, self.model.ee_position(self._q), self._ee_velocity())
+            self._contact_cache = (self._t_ns, state)
+        return self._contact_cache[1]
+
+    def read_wrench_sensor(self) -> tuple[FloatArray, FloatArray]:
+        """One reading of the wrist sensor: (force N, torque N*m) in ft_sensor_link.
+
+        The sensor feels F_e, the force the end effector exerts on the wall, with noise,
+        saturation and the optional low-pass of ``sensor.*``. Each call draws new noise.
+        """
+        rot_ned_from_sensor = self.model.ee_rotation(self._q)
+        force, torque = contact_wrench_in_sensor_frame(
+            rot_ned_from_sensor, self.contact().force_ned
+        )
+        dt = self._dt_s
+        if self._last_reading_ns is not None and self._t_ns > self._last_reading_ns:
+            dt = (self._t_ns - self._last_reading_ns) * 1e-9
+        self._last_reading_ns = self._t_ns
+        return self._sensor.measure(force, torque, dt)
+
+    def frame_poses(self) -> dict[str, tuple[FloatArray, FloatArray]]:
+        """Poses of the robot's frames in map_ned: {frame: (p_ned, rot_ned_from_frame)}."""
+        return self.model.frame_poses(self._q)
+
+    def step(self, thrusts: ArrayLike, joint_torques: ArrayLike) -> None:
+        """Advance the plant by one fixed step with the given actuator outputs held.
+
+        Args:
+            thrusts: Thrust of each thruster (N), shape (p,).
+            joint_torques: Arm motor torques (N*m), shape (3,).
+
+        Raises:
+            CommandError: Wrong size or non-finite actuator outputs; nothing is integrated.
+            DivergenceError: The step would leave a finite, bounded state; the state stays
+                at the last valid one and every later step raises too.
+            SimulationError: The plant already stopped after a divergence.
+        """
+        if self._failure is not None:
+            msg = f'the simulation stopped at t = {self._t_ns * 1e-9:.3f} s: {self._failure}'
+            raise SimulationError(msg)
+        thrusts = _actuator_vector('thrusts', thrusts, self.n_thrusters, 'N')
+        joint_torques = _actuator_vector('joint_torques', joint_torques, self.n_joints, 'N*m')
+        tau_b = self.tau_body(thrusts, joint_torques)
+        t_s = self._t_ns * 1e-9
+        f_on_ee = None
+        if self._wall is not None:
+            contact = self._wall.update(
+                t_s, self.model.ee_position(self._q), self._ee_velocity()
+            )
+            if contact.in_contact:
+                f_on_ee = -contact.force_ned
+        try:
+            q, w = self.model.step(self._q, self._w, tau_b, f_on_ee, self._dt_s)
+        except SingularAttitudeError as exc:
+            self._fail(DivergenceError(
+                f'the vehicle pitch reached the Euler-angle singularity (+-90 deg) at '
+                f't = {t_s:.3f} s: {exc}'
+            ))
+        except ModelError as exc:
+            self._fail(DivergenceError(
+                f'the state became non-finite in the step from t = {t_s:.3f} s: {exc}'
+            ))
+        previous = (self._q, self._w)
+        self._q, self._w = q, w
+        try:
+            self._check_state(f'the step from t = {t_s:.3f} s')
+        except DivergenceError as exc:
+            self._q, self._w = previous
+            self._fail(exc)
+        self._thrusts = thrusts
+        self._joint_torques = joint_torques
+        self._t_ns += self._dt_ns
+
+    def _fail(self, error: SimulationError) -> NoReturn:
+        """Remember the failure and raise it."""
+        self._failure = error
+        raise error
+
+    def _ee_velocity(self) -> FloatArray | None:
+        """End-effector velocity in map_ned (m/s), only when the wall damping needs it."""
+        if not self._damped_wall:
+            return None
+        q_dot = self.model.velocity_transform(self._q) @ self._w
+        result: FloatArray = self.model.ee_jacobian(self._q) @ q_dot
+        return result
+
+    def _check_state(self, where: str) -> None:
+        """Raise DivergenceError if the state is non-finite or out of its bounds."""
+        q, w, lim = self._q, self._w, self._limits
+        names = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', 'joint 1', 'joint 2', 'joint 3')
+        for label, vector in (('q', q), ('w', w)):
+            bad = np.flatnonzero(~np.isfinite(vector))
+            if bad.size:
+                i = int(bad[0])
+                msg = f'{where}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
+                raise DivergenceError(msg)
+        checks = (
+            ('vehicle distance from the map_ned origin', float(np.linalg.norm(q[:3])),
+             lim.max_distance_m, 'm'),
+            ('vehicle speed |[u, v, w]|', float(np.linalg.norm(w[:3])),
+             lim.max_linear_speed_m_s, 'm/s'),
+            ('vehicle angular rate |[p, q, r]|', float(np.linalg.norm(w[3:6])),
+             lim.max_angular_rate_rad_s, 'rad/s'),
+            ('largest arm joint rate', float(np.max(np.abs(w[6:]))),
+             lim.max_joint_rate_rad_s, 'rad/s'),
+        )
+        for label, value, limit, unit in checks:
+            if value > limit:
+                msg = (
+                    f'{where}: the state diverged: {label} = {value:.4g} {unit} exceeds '
+                    f'{limit:g} {unit}'
+                )
+                raise DivergenceError(msg)
+
+
+def _actuator_vector(name: str, value: ArrayLike, size: int, unit: str) -> FloatArray:
+    """Check size and finiteness of an actuator output vector."""
+    array = np.asarray(value, dtype=float)
+    if array.shape != (size,):
+        msg = f'{name} must have {size} values ({unit}), got shape {array.shape}'
+        raise CommandError(msg)
+    if not np.isfinite(array).all():
+        msg = f'{name} must be finite ({unit}), got {array.tolist()}'
+        raise CommandError(msg)
+    return array
