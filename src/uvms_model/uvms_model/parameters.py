@@ -324,7 +324,7 @@ class HydrodynamicsParameters(_Group):
     drag_enabled: bool = _param(True, 'Include linear and quadratic drag of hull and links.')
     buoyancy_enabled: bool = _param(True, 'Include buoyancy of hull and links.')
     drag_strips_per_link: int = _param(
-        8,
+        12,
         'Gauss-Legendre strips per link for the cross-flow drag integral (-).',
         1,
         200,

@@ -1,0 +1,148 @@
+"""Parameters of uvms_model: paper defaults, flat names, validation and config/robot.yaml."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from uvms_model.thrusters import ThrusterLayout
+
+from uvms_model import PARAMETER_SPECS, ParameterError, UvmsModel, UvmsParameters
+
+ROBOT_YAML = Path(__file__).resolve().parents[3] / 'config' / 'robot.yaml'
+
+
+def _flatten(tree: dict[str, object], prefix: str = '') -> dict[str, object]:
+    flat: dict[str, object] = {}
+    for key, value in tree.items():
+        name = f'{prefix}{key}'
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f'{name}.'))
+        else:
+            flat[name] = value
+    return flat
+
+
+def test_defaults_are_the_papers_uvms() -> None:
+    """Sec. 5.1: 530 kg, 1.0 x 0.5 m hull, links 0.5 m, radii 5/4/3.5 cm, masses 10/8/5 kg."""
+    p = UvmsParameters()
+    assert (p.vehicle.mass_kg, p.vehicle.length_m, p.vehicle.diameter_m) == (530.0, 1.0, 0.5)
+    assert p.arm.link_lengths_m == (0.5, 0.5, 0.5)
+    assert p.arm.link_radii_m == (0.05, 0.04, 0.035)
+    assert p.arm.link_masses_kg == (10.0, 8.0, 5.0)
+    assert (p.vehicle.linear_drag_translation_n_s_m, p.vehicle.linear_drag_rotation_n_m_s) == (
+        0.0,
+        0.81,
+    )
+    assert (p.vehicle.drag_coefficient_translation, p.vehicle.drag_coefficient_rotation) == (
+        1.05,
+        1.0,
+    )
+    assert p.arm.drag_coefficient == 1.1
+    assert p.contact.wall_position_m == 1.7771
+    assert p.hydrodynamics.water_density_kg_m3 == 1025.0
+
+
+def test_flat_dict_round_trips() -> None:
+    """from_flat_dict(to_flat_dict()) rebuilds the same parameters."""
+    p = UvmsParameters().updated({'contact.stiffness_n_m': 1e5, 'sensor.noise_fraction': 0.001})
+    assert UvmsParameters.from_flat_dict(p.to_flat_dict()) == p
+
+
+def test_specs_list_every_parameter_with_ros_types_and_units() -> None:
+    """PARAMETER_SPECS names equal the flat names; defaults ROS-typed; numbers carry a unit."""
+    flat = UvmsParameters().to_flat_dict()
+    assert [spec.name for spec in PARAMETER_SPECS] == list(flat)
+    for name, default, description, lo, hi in PARAMETER_SPECS:
+        assert default == flat[name]
+        assert isinstance(default, (bool, int, float, str, list))
+        if isinstance(default, list):
+            assert all(isinstance(x, float) for x in default) or all(
+                isinstance(x, str) for x in default
+            )
+        assert description.strip(), name
+        if isinstance(default, (int, float)) and not isinstance(default, bool):
+            assert '(' in description, f'{name}: unit missing'
+        if lo is not None and hi is not None:
+            assert lo <= hi
+
+
+def test_integers_are_accepted_for_float_parameters() -> None:
+    """A YAML integer (530) is a valid float parameter."""
+    assert UvmsParameters.from_flat_dict({'vehicle.mass_kg': 530}).vehicle.mass_kg == 530.0
+
+
+def test_unknown_parameter_is_rejected_by_name() -> None:
+    """An unknown dotted name raises ParameterError naming it."""
+    with pytest.raises(ParameterError, match=r'vehicle\.masss_kg'):
+        UvmsParameters.from_flat_dict({'vehicle.masss_kg': 1.0})
+
+
+@pytest.mark.parametrize(
+    ('name', 'value', 'pattern'),
+    [
+        ('vehicle.mass_kg', -1.0, r'vehicle\.mass_kg = -1\.0 is out of range \[0\.001'),
+        ('contact.stiffness_n_m', 0.0, r'contact\.stiffness_n_m = 0\.0 is out of range'),
+        ('contact.stiffness_n_m', -1e4, r'contact\.stiffness_n_m'),
+        ('arm.link_masses_kg', [10.0, -8.0, 5.0], r'arm\.link_masses_kg'),
+        ('arm.link_lengths_m', [0.5, 0.5], r'arm\.link_lengths_m has 2 elements, expected 3'),
+        ('thrusters.max_thrust_n', [200.0] * 7, r'thrusters\.max_thrust_n has 7 elements'),
+        ('thrusters.positions_m', [0.0] * 10, r'thrusters\.positions_m has 10 elements'),
+        ('vehicle.mass_kg', float('nan'), r'vehicle\.mass_kg = nan must be finite'),
+        ('vehicle.mass_kg', 'heavy', r'vehicle\.mass_kg'),
+        ('hydrodynamics.drag_enabled', 1, r'hydrodynamics\.drag_enabled = 1 must be a bool'),
+        ('arm.joint_axes', [0.0, 0.0, 2.0, 0, 1, 0, 0, 1, 0], r'arm\.joint_axes'),
+        ('vehicle.length_m', 0.4, r'vehicle\.length_m = 0\.4 must exceed vehicle\.diameter_m'),
+        ('integration.method', 'euler', r'integration\.method'),
+    ],
+)
+def test_invalid_parameter_raises_a_value_error_naming_it(
+    name: str, value: object, pattern: str
+) -> None:
+    """Bad values raise ParameterError (a ValueError) naming the parameter and the problem."""
+    with pytest.raises(ValueError, match=pattern):
+        UvmsParameters.from_flat_dict({name: value})
+
+
+def test_thrusters_that_cannot_roll_are_rejected() -> None:
+    """All thrusters in one plane and direction give E rank < 9: ParameterError."""
+    positions = [float(v) for i in range(8) for v in (0.1 * i, 0.0, 0.0)]
+    directions = [1.0, 0.0, 0.0] * 8
+    with pytest.raises(ParameterError, match='rank'):
+        UvmsParameters.from_flat_dict(
+            {'thrusters.positions_m': positions, 'thrusters.directions': directions}
+        )
+
+
+def test_robot_yaml_is_a_ros2_parameter_file_with_the_default_values() -> None:
+    """config/robot.yaml (/**: ros__parameters:) holds every parameter, equal to the defaults."""
+    tree = yaml.safe_load(ROBOT_YAML.read_text())
+    flat = _flatten(tree['/**']['ros__parameters'])
+    assert set(flat) == {spec.name for spec in PARAMETER_SPECS}
+    loaded = UvmsParameters.from_flat_dict(flat)
+    assert loaded == UvmsParameters()
+
+
+def test_robot_yaml_documents_every_parameter_in_a_comment() -> None:
+    """Each parameter line of config/robot.yaml carries a '#' comment (source or reason)."""
+    for line in ROBOT_YAML.read_text().splitlines():
+        stripped = line.strip()
+        if stripped and not stripped.startswith('#') and not stripped.endswith(':'):
+            assert '#' in stripped, line
+
+
+def test_default_thruster_layout_has_eight_thrusters_within_limits() -> None:
+    """Default: 8 thrusters, 200 N each, unit directions."""
+    layout = ThrusterLayout.from_parameters(UvmsParameters().thrusters)
+    assert layout.count == 8
+    np.testing.assert_allclose(np.linalg.norm(layout.directions, axis=1), 1.0)
+
+
+def test_buoyancy_ratio_sets_total_buoyancy_over_weight() -> None:
+    """Hull displacement + link displacement = ratio x total mass (553 kg)."""
+    for ratio in (1.0, 1.02):
+        model = UvmsModel(UvmsParameters().updated({'vehicle.buoyancy_ratio': ratio}))
+        links = 1025.0 * np.pi * (0.05**2 + 0.04**2 + 0.035**2) * 0.5
+        assert model.hull_displaced_mass_kg + links == pytest.approx(ratio * 553.0, rel=1e-12)
