@@ -19,7 +19,8 @@ from typing import Any
 
 from rosbags.typesys import TypesysError
 
-from ros2_compat import PROVIDED_PACKAGES, rclpy_is_compat
+from ros2_compat import PROVIDED_PACKAGES, _cdr, _messages, rclpy_is_compat
+from ros2_compat._messages import MessageMeta
 from ros2_compat._typestore import MESSAGE_PACKAGES, uvms_typestore
 
 __all__ = [
@@ -57,18 +58,11 @@ def normalize_type_name(name: str) -> str:
     return f'{match.group(1)}/msg/{match.group(3)}'
 
 
-def _compat_classes() -> Any:
-    """Return the compat class registry module (imported only when needed)."""
-    from ros2_compat import _messages
-
-    return _messages
-
-
 def is_message_class(obj: object) -> bool:
     """Tell whether obj is a ROS 2 message class (compat or rosidl-generated)."""
     if not isinstance(obj, type):
         return False
-    if type(obj).__module__ == 'ros2_compat._messages':
+    if type(obj) is MessageMeta:
         return True
     return (
         hasattr(type(obj), '_TYPE_SUPPORT')
@@ -122,7 +116,7 @@ def get_message_class(name: str) -> type:
             return cls
     elif pkg in PROVIDED_PACKAGES and _compat_is_the_runtime():
         try:
-            cls = _compat_classes().get_class(typename)
+            cls = _messages.get_class(typename)
         except KeyError:
             pass
         else:
@@ -134,8 +128,11 @@ def get_message_class(name: str) -> type:
 
 def copy_message(msg: Any) -> Any:
     """Return a deep copy of a message (generated fast path for compat messages)."""
-    if type(type(msg)).__module__ == 'ros2_compat._messages':
-        return _compat_classes().fast_deepcopy(msg)
+    if type(type(msg)) is MessageMeta:
+        try:
+            return msg._fast_deepcopy(msg)
+        except Exception:
+            return _messages.fast_deepcopy(msg)
     return copy.deepcopy(msg)
 
 
@@ -147,9 +144,7 @@ def serialize(msg: Any) -> bytes:
         ros2_compat._cdr.CdrError: A field of a compat message holds a value its type
             cannot take.
     """
-    if type(type(msg)).__module__ == 'ros2_compat._messages':
-        from ros2_compat import _cdr
-
+    if type(type(msg)) is MessageMeta:
         return _cdr.serialize(msg)
     if not is_message_class(type(msg)):
         text = f'{msg!r} is not a ROS 2 message'
@@ -166,9 +161,7 @@ def deserialize(data: bytes | bytearray | memoryview, cls: type) -> Any:
         TypeError: cls is not a message class.
         ros2_compat._cdr.CdrError: The data does not encode a compat message of cls.
     """
-    if type(cls).__module__ == 'ros2_compat._messages':
-        from ros2_compat import _cdr
-
+    if type(cls) is MessageMeta:
         return _cdr.deserialize(data, cls)
     if not is_message_class(cls):
         text = f'{cls!r} is not a ROS 2 message class'
