@@ -1,0 +1,243 @@
+"""The ``simulator`` node: integrates the UVMS plant and publishes its state and ``/clock``.
+
+Lockstep (default): publish the state of step k stamped t_k, wait for the actuator command
+stamped t_k, then integrate to the next publication; deterministic. Real time: a wall timer
+integrates one step per period on the latest command. The node is the clock source, so it
+keeps its own simulated time and never runs on ``use_sim_time``.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import rclpy
+from geometry_msgs.msg import PoseStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from tf2_msgs.msg import TFMessage
+
+from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters
+from uvms_msgs.msg import ActuatorCommand, ContactState
+from uvms_sim import conversions
+from uvms_sim.errors import CommandError, SimParameterError, SimulationError
+from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings
+from uvms_sim.plant import Plant, initial_coordinates
+
+
+class SimulatorNode(Node):
+    """Simulated UVMS: actuator commands in, sensor topics, ``/clock`` and ``/tf`` out."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('simulator', **kwargs)
+        if self.get_parameter('use_sim_time').value:
+            msg = ("parameter 'use_sim_time' = True: the simulator publishes /clock and keeps "
+                   'its own simulated time; valid: False')
+            raise SimParameterError(msg)
+        robot = {s.name: self._declare(s.name, s.default, s.description, s.min_value,
+                                       s.max_value) for s in PARAMETER_SPECS}
+        values = {s.name: self._declare(s.name, s.default, s.description, s.min_value,
+                                        s.max_value, s.choices) for s in SIMULATOR_PARAMETERS}
+        try:
+            params = UvmsParameters.from_flat_dict(robot)
+        except ModelError as exc:
+            raise SimParameterError(f'invalid robot parameter: {exc}') from exc
+        self._settings = cfg = SimulatorSettings.from_values(values)
+        plant = Plant(params, [0.0] * 9, cfg.physics_dt_ns, cfg.wall_enabled)
+        q0 = initial_coordinates(plant.model, cfg.vehicle_pose, cfg.joint_positions,
+                                 cfg.ee_position if cfg.arm_from_ee_position else None)
+        self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled)
+
+        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        self._clock_pub = self.create_publisher(Clock, '/clock', reliable)
+        self._joint_pub = self.create_publisher(JointState, 'joint_states', reliable)
+        self._odom_pub = self.create_publisher(Odometry, 'odometry', reliable)
+        self._wrench_pub = self.create_publisher(WrenchStamped, 'wrench', reliable)
+        self._ee_pub = self.create_publisher(PoseStamped, 'ee_pose', reliable)
+        self._contact_pub = self.create_publisher(ContactState, 'contact', reliable)
+        self._tf_pub = self._static_tf_pub = None
+        if cfg.publishes_per_tf:
+            self._tf_pub = self.create_publisher(TFMessage, '/tf', QoSProfile(depth=100))
+            self._static_tf_pub = self.create_publisher(TFMessage, '/tf_static', QoSProfile(
+                depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+            self._static_tf_pub.publish(
+                conversions.static_tf_message(0, self._plant.frame_poses()))
+        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
+
+        self._command: tuple[int, Any, Any] | None = None
+        self._stale = False
+        self._published = 0
+        self._awaiting_since: Any = None
+        self._finished = False
+        self.timeouts = 0
+        if cfg.mode == 'lockstep':
+            self._kick = self.create_timer(1e-3, self._on_kick)
+            period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
+            self.create_timer(period, self._on_lockstep_timer)
+        else:
+            self.create_timer(cfg.physics_dt_s, self._on_realtime_tick)
+        self.get_logger().info(
+            f'{cfg.mode} simulation at {1e9 / cfg.physics_dt_ns:g} Hz, state published every '
+            f'{cfg.steps_per_publish} steps, wall {"on" if cfg.wall_enabled else "off"}')
+
+    @property
+    def sim_time_ns(self) -> int:
+        """Simulated time of the plant (ns)."""
+        return self._plant.t_ns
+
+    @property
+    def finished(self) -> bool:
+        """True once ``duration_s`` is reached and the last state has been answered."""
+        return self._finished
+
+    def _declare(self, name: str, default: Any, description: str, lo: float | None,
+                 hi: float | None, choices: tuple[str, ...] = ()) -> Any:
+        """Declare a read-only parameter with its range, and return its value."""
+        descriptor = ParameterDescriptor(description=description, read_only=True)
+        if choices:
+            descriptor.additional_constraints = 'one of: ' + ', '.join(choices)
+        elif lo is not None and hi is not None and not isinstance(default, bool | list | str):
+            if isinstance(default, int):
+                descriptor.integer_range = [IntegerRange(from_value=int(lo), to_value=int(hi),
+                                                         step=1)]
+            else:
+                descriptor.floating_point_range = [FloatingPointRange(
+                    from_value=float(lo), to_value=float(hi), step=0.0)]
+        elif lo is not None or hi is not None:
+            descriptor.additional_constraints = f'each value in [{lo}, {hi}]'
+        try:
+            return self.declare_parameter(name, default, descriptor).value
+        except ParameterException as exc:
+            raise SimParameterError(f'invalid parameter {name!r}: {exc}') from exc
+
+    def _on_command(self, msg: ActuatorCommand) -> None:
+        """Keep a valid command; in lockstep, step once the one for the current state is in."""
+        try:
+            command = conversions.actuator_command_arrays(
+                msg, self._plant.n_thrusters, self._plant.joint_names)
+        except CommandError as exc:
+            self.get_logger().error(f'rejected actuator command: {exc}',
+                                    throttle_duration_sec=1.0)
+            return
+        self._command = command
+        if self._awaiting_since is not None and command[0] == self._plant.t_ns:
+            self._answered()
+
+    def _on_kick(self) -> None:
+        """Lockstep start: publish the initial state once the executor runs."""
+        self.destroy_timer(self._kick)
+        self._publish_state()
+
+    def _on_lockstep_timer(self) -> None:
+        """Lockstep timeout: re-offer the state before any command, else step on the last."""
+        if self._awaiting_since is None:
+            return
+        waited_s = (self.get_clock().now() - self._awaiting_since).nanoseconds * 1e-9
+        if waited_s < self._settings.lockstep_timeout_s:
+            return
+        if self._command is None:
+            self.get_logger().info('waiting for the first actuator command',
+                                   throttle_duration_sec=5.0)
+            self._publish_state()
+            return
+        self.timeouts += 1
+        self.get_logger().warn(
+            f'no actuator command stamped t = {self._plant.t_ns * 1e-9:.3f} s after '
+            f'{waited_s:.2f} s: stepping with the last command', throttle_duration_sec=5.0)
+        self._answered()
+
+    def _on_realtime_tick(self) -> None:
+        """Real time: one step per timer period on the latest command."""
+        if self._finished:
+            return
+        if self._plant.t_ns % (self._plant.dt_ns * self._settings.steps_per_publish) == 0:
+            self._publish_state()
+            if self._finished:
+                return
+        self._step()
+
+    def _answered(self) -> None:
+        """Lockstep: the published state is answered; integrate to the next one, or finish."""
+        self._awaiting_since = None
+        if self._at_end():
+            self._finished = True
+            return
+        for _ in range(self._settings.steps_per_publish):
+            self._step()
+        self._publish_state()
+
+    def _at_end(self) -> bool:
+        """True once the simulated time reached ``duration_s`` (never when it is 0)."""
+        duration_ns = self._settings.duration_ns
+        return duration_ns > 0 and self._plant.t_ns >= duration_ns
+
+    def _step(self) -> None:
+        """One plant step with the command, or zeros when there is none or it is stale."""
+        thrusts, torques = [0.0] * self._plant.n_thrusters, [0.0] * self._plant.n_joints
+        if self._command is not None:
+            age_ns = self._plant.t_ns - self._command[0]
+            stale = age_ns > self._settings.watchdog_timeout_ns
+            if stale and not self._stale:
+                self.get_logger().warn(
+                    f'actuator command is {age_ns * 1e-9:.3f} s old (limit '
+                    f'{self._settings.watchdog_timeout_ns * 1e-9:g} s): thrusters and motors '
+                    'set to zero')
+            elif self._stale and not stale:
+                self.get_logger().info('fresh actuator commands: thrusters and motors resumed')
+            self._stale = stale
+            if not stale:
+                thrusts, torques = self._command[1], self._command[2]
+        try:
+            self._plant.step(thrusts, torques)
+        except SimulationError as exc:
+            self.get_logger().fatal(f'simulation stopped: {exc}')
+            raise
+
+    def _publish_state(self) -> None:
+        """Publish /clock, the sensor topics and, when due, /tf, all stamped t_k."""
+        plant, t_ns = self._plant, self._plant.t_ns
+        q, w = plant.q, plant.w
+        self._clock_pub.publish(conversions.clock_message(t_ns))
+        self._joint_pub.publish(conversions.joint_state_message(
+            t_ns, plant.joint_names, q[6:], w[6:], plant.joint_torques))
+        self._odom_pub.publish(conversions.odometry_message(t_ns, q[:6], w[:6]))
+        force, torque = plant.read_wrench_sensor()
+        self._wrench_pub.publish(conversions.wrench_message(t_ns, force, torque))
+        poses = plant.frame_poses()
+        self._ee_pub.publish(conversions.pose_message(t_ns, *poses['ee_link']))
+        self._contact_pub.publish(conversions.contact_message(t_ns, plant.contact()))
+        if self._tf_pub is not None and self._published % self._settings.publishes_per_tf == 0:
+            self._tf_pub.publish(conversions.tf_message(t_ns, poses))
+        self._published += 1
+        if self._settings.mode == 'lockstep':
+            self._awaiting_since = self.get_clock().now()
+        elif self._at_end():
+            self._finished = True
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the simulator node until shutdown."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SimulatorNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (SimParameterError, SimulationError) as exc:
+        rclpy.logging.get_logger('simulator').fatal(str(exc))
+        sys.exit(1)
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()
