@@ -19,9 +19,9 @@ DEFAULT_NAMESPACE = 'uvms'
 #: Execution modes of the graph.
 MODES = ('lockstep', 'realtime')
 
-#: Controller parameter selecting what triggers a control step, per graph mode.
-CONTROLLER_TRIGGER_PARAMETER = 'trigger'
-CONTROLLER_TRIGGER = {'lockstep': 'lockstep', 'realtime': 'timer'}
+#: Parameter of the controller and the allocator selecting what triggers a step, per mode.
+TRIGGER_PARAMETER = 'trigger_mode'
+TRIGGER = {'lockstep': 'lockstep', 'realtime': 'timer'}
 
 
 @dataclass(frozen=True)
@@ -104,8 +104,8 @@ def node_parameters(
     if spec is SIMULATOR:
         values['mode'] = mode
         values['duration_s'] = float(duration_s or 0.0)
-    elif spec is CONTROLLER:
-        values[CONTROLLER_TRIGGER_PARAMETER] = CONTROLLER_TRIGGER[mode]
+    elif spec in (CONTROLLER, THRUSTER_ALLOCATOR):
+        values[TRIGGER_PARAMETER] = TRIGGER[mode]
     elif spec is RECORDER and output_path is not None:
         values['output_path'] = output_path
     return values

@@ -120,7 +120,7 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         -2.0 * math.pi, 2.0 * math.pi, length=3,
     ),
     ParameterSpec(
-        'initial.ee_position', [1.7, 0.0, 0.0],
+        'initial.ee_position', [1.7, 0.0, -0.1],
         'Initial end-effector position in map_ned (m), used when initial.arm is ee_position.',
         -1000.0, 1000.0, length=3,
     ),

@@ -1,0 +1,236 @@
+"""The ``uvms`` command: run scenarios, launch the graph, replay, plot, report, doctor.
+
+Exit status: 0 success, 1 the run or the tool failed, 2 bad usage or a bad scenario file,
+130 interrupted (Ctrl-C). User errors are one line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import math
+import shutil
+import subprocess
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+EXIT_OK = 0
+EXIT_FAILURE = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+#: Subcommands handed over whole to another module's ``main(argv) -> int``.
+DELEGATED = {
+    'replay': ('uvms_bringup.replay', 'publish a recording back onto its topics, or re-run '
+                                      'the controller on it'),
+    'plot': ('uvms_bringup.plots', "draw the paper's figures from a recording (PNG)"),
+    'report': ('uvms_bringup.report', 'print the metrics of recordings'),
+    'doctor': ('uvms_bringup.doctor', 'show the active ROS 2 runtime and check the messages'),
+}
+
+
+def _activate_runtime() -> None:
+    """Make ``import rclpy`` work: a sourced ROS 2 wins, else the bundled ros2_compat."""
+    try:
+        import ros2_compat
+    except ImportError:  # a ROS 2 install without the compat runtime
+        return
+    ros2_compat.activate()
+
+
+def _runtime_is_compat() -> bool:
+    """True when rclpy resolves to the bundled compat runtime (no ROS 2 sourced)."""
+    try:
+        import ros2_compat
+    except ImportError:
+        return False
+    return ros2_compat.rclpy_is_compat()
+
+
+def _positive_seconds(text: str) -> float:
+    """Argparse type: a finite number of seconds > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number of seconds, got {text!r}') from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f'expected a number of seconds > 0, got {text!r}')
+    return value
+
+
+def _seed(text: str) -> int:
+    """Argparse type: an integer seed in [0, 2^31 - 1]."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
+    if not 0 <= value <= 2**31 - 1:
+        raise argparse.ArgumentTypeError(f'expected an integer in [0, 2147483647], got {value}')
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``uvms``."""
+    parser = argparse.ArgumentParser(
+        prog='uvms',
+        description='UVMS unified force control stack: run the node graph on a scenario, '
+                    'launch it in real time, and analyse recordings.',
+    )
+    sub = parser.add_subparsers(dest='command', metavar='COMMAND')
+    run = sub.add_parser(
+        'run', help='run a scenario in lockstep (deterministic, as fast as possible)',
+        description='Run the whole graph (simulator, controller, thruster allocator, '
+                    'recorder) in one process, in lockstep on simulated time.')
+    run.add_argument('scenario', metavar='SCENARIO.yaml',
+                     help='scenario file, or a name of config/scenarios/NAME.yaml')
+    run.add_argument('--duration', type=_positive_seconds, metavar='S',
+                     help="simulated seconds to run (default: the scenario's duration_s)")
+    run.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
+    run.add_argument('--seed', type=_seed, metavar='N',
+                     help="sensor noise seed (default: the scenario's)")
+    run.add_argument('--quiet', '-q', action='store_true',
+                     help='no progress bar, only warnings and errors')
+    launch = sub.add_parser(
+        'launch', help='run the graph in real time until Ctrl-C (or --duration)',
+        description='Run the graph on wall-clock timers. With ROS 2 sourced this starts the '
+                    'nodes as processes (ros2 launch uvms_bringup uvms.launch.py); without, '
+                    'in this process on the bundled runtime.')
+    launch.add_argument('scenario', metavar='SCENARIO.yaml', nargs='?',
+                        help='scenario file or name (default: the parameter files only)')
+    launch.add_argument('--duration', type=_positive_seconds, metavar='S',
+                        help='stop after this many simulated seconds (default: run until Ctrl-C)')
+    launch.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
+    launch.add_argument('--mode', choices=('realtime', 'lockstep'), default='realtime',
+                        help='execution mode (default: realtime)')
+    launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
+    for name, (_, help_text) in DELEGATED.items():
+        sub.add_parser(name, help=help_text, add_help=False)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``uvms``; returns the exit status."""
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    _activate_runtime()
+    if args_list and args_list[0] in DELEGATED:
+        module = importlib.import_module(DELEGATED[args_list[0]][0])
+        try:
+            return int(module.main(args_list[1:]) or 0)
+        except KeyboardInterrupt:
+            return EXIT_INTERRUPTED
+    parser = build_parser()
+    try:
+        args = parser.parse_args(args_list)
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    try:
+        if args.command == 'run':
+            return _run(args)
+        return _launch(args)
+    except KeyboardInterrupt:
+        print('uvms: interrupted', file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _error(command: str, message: str) -> None:
+    """One-line error on stderr."""
+    print(f'uvms {command}: error: {message}', file=sys.stderr)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """``uvms run``: lockstep run of a scenario."""
+    return _run_in_process(args, 'lockstep', progress=not args.quiet)
+
+
+def _launch(args: argparse.Namespace) -> int:
+    """``uvms launch``: real-time graph, as processes on ROS 2, else in this process."""
+    if not _runtime_is_compat():
+        return _ros2_launch(args)
+    return _run_in_process(args, args.mode, progress=False)
+
+
+def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
+    """Build and run the graph in this process; report the outcome."""
+    from uvms_bringup.graph import GraphError, build_graph, run_graph
+    from uvms_bringup.launch_helpers import resolve_scenario_path
+    from uvms_bringup.progress import ProgressBar
+    from uvms_bringup.scenario import ScenarioError, load_scenario
+
+    command = args.command
+    scenario = None
+    try:
+        if args.scenario is not None:
+            scenario = load_scenario(resolve_scenario_path(args.scenario))
+            scenario = scenario.with_changes(duration_s=args.duration,
+                                             seed=getattr(args, 'seed', None))
+        duration = args.duration if scenario is None else scenario.duration_s
+        if command == 'launch' and args.duration is None:
+            duration = 0.0
+        if args.quiet:
+            _quiet_logs()
+        graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration)
+    except (ScenarioError, FileNotFoundError) as exc:
+        _error(command, str(exc))
+        return EXIT_USAGE
+    except GraphError as exc:
+        _error(command, str(exc))
+        return EXIT_FAILURE
+    bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
+    if command == 'launch' and not args.quiet:
+        print(f'uvms launch: {mode} graph running in this process; Ctrl-C stops it',
+              file=sys.stderr)
+    try:
+        result = run_graph(graph, progress=bar)
+    except GraphError as exc:
+        _error(command, str(exc))
+        if args.output:
+            print(f'uvms {command}: the recording {args.output} holds the run up to the error',
+                  file=sys.stderr)
+        return EXIT_FAILURE
+    summary = (f'simulated {result.sim_time_s:.2f} s in {result.wall_time_s:.2f} s wall '
+               f'({result.real_time_factor:.2f}x real time)')
+    if result.lockstep_timeouts:
+        summary += f', {result.lockstep_timeouts} lockstep timeouts'
+    if result.output_path is not None:
+        summary += f'; recorded {result.output_path}'
+    if not args.quiet:
+        print(f'uvms {command}: {summary}', file=sys.stderr)
+    return EXIT_INTERRUPTED if result.interrupted else EXIT_OK
+
+
+def _quiet_logs() -> None:
+    """Show only warnings and errors of the nodes."""
+    import rclpy.logging
+
+    rclpy.logging.set_logger_level('uvms', rclpy.logging.LoggingSeverity.WARN)
+
+
+def _ros2_launch(args: argparse.Namespace) -> int:
+    """Start the graph as ROS 2 processes through ``ros2 launch``."""
+    ros2 = shutil.which('ros2')
+    if ros2 is None:
+        _error('launch', 'ROS 2 rclpy is active but the ros2 command is not on PATH; '
+                         'source your ROS 2 Jazzy setup.bash')
+        return EXIT_FAILURE
+    command = [ros2, 'launch', 'uvms_bringup', 'uvms.launch.py', f'mode:={args.mode}']
+    if args.scenario is not None:
+        scenario = args.scenario
+        if Path(scenario).exists():
+            scenario = str(Path(scenario).resolve())
+        command.append(f'scenario:={scenario}')
+    if args.duration is not None:
+        command.append(f'duration:={args.duration}')
+    if args.output is not None:
+        command.append(f'output_path:={Path(args.output).resolve()}')
+    try:
+        return subprocess.call(command)
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+
+
+if __name__ == '__main__':
+    sys.exit(main())

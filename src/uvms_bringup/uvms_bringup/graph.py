@@ -1,0 +1,358 @@
+"""The whole node graph in one process: build it from the parameter files and run it.
+
+``run_graph`` builds simulator, controller, thruster allocator (and recorder when there is
+an output file) in the namespace ``/uvms``, each from its ROS 2 parameter files
+(``--params-file``) plus the scenario's overrides (``parameter_overrides``), exactly as a
+launch file would configure separate processes. Lockstep runs spin a
+SingleThreadedExecutor until the simulator has reached the scenario's duration in
+simulated time; real-time runs spin a MultiThreadedExecutor on wall-clock timers until the
+duration or Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import rclpy
+import yaml
+from rclpy.context import Context
+from rclpy.executors import (
+    ExternalShutdownException,
+    MultiThreadedExecutor,
+    SingleThreadedExecutor,
+)
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from uvms_bringup.launch_helpers import (
+    DEFAULT_NAMESPACE,
+    RECORDER,
+    SIMULATOR,
+    NodeSpec,
+    config_dir,
+    graph_nodes,
+    node_parameters,
+)
+from uvms_bringup.progress import ProgressBar
+from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
+
+#: Longest wall-clock wait for any callback before the lockstep loop checks on the graph (s).
+_SPIN_TIMEOUT_S = 0.5
+#: Wall-clock time given to the last messages to reach the recorder after the run (s).
+_DRAIN_S = 0.1
+
+
+class GraphError(RuntimeError):
+    """The graph cannot be built or stopped with an error; the message names the node."""
+
+
+@dataclass
+class RunResult:
+    """Outcome of a run.
+
+    Attributes:
+        sim_time_s: Simulated time reached (s).
+        wall_time_s: Wall-clock time of the run, start-up excluded (s).
+        output_path: MCAP file written, if any.
+        lockstep_timeouts: Steps the simulator took without the command of its step.
+        interrupted: True if Ctrl-C stopped the run.
+    """
+
+    sim_time_s: float
+    wall_time_s: float
+    output_path: Path | None = None
+    lockstep_timeouts: int = 0
+    interrupted: bool = False
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.sim_time_s / self.wall_time_s if self.wall_time_s > 0.0 else float('inf')
+
+
+@dataclass
+class Graph:
+    """The nodes of one run, built but not spinning.
+
+    Attributes:
+        context: The rclpy context the nodes live in.
+        nodes: Node name to node, in start order.
+        mode: ``lockstep`` or ``realtime``.
+        duration_s: Simulated duration (s); 0 runs until stopped.
+    """
+
+    context: Context
+    nodes: dict[str, Node] = field(default_factory=dict)
+    mode: str = 'lockstep'
+    duration_s: float = 0.0
+
+    @property
+    def simulator(self) -> Any:
+        """The simulator node (``uvms_sim.simulator_node.SimulatorNode``)."""
+        return self.nodes[SIMULATOR.name]
+
+    def destroy(self) -> None:
+        """Destroy every node (the recorder closes its file) and shut the context down."""
+        errors = []
+        for node in reversed(list(self.nodes.values())):
+            try:
+                node.destroy_node()
+            except Exception as exc:
+                errors.append(f'{node.get_name()}: {exc}')
+        self.nodes.clear()
+        rclpy.try_shutdown(context=self.context)
+        if errors:
+            raise GraphError('while shutting the graph down: ' + '; '.join(errors))
+
+
+def build_graph(
+    scenario: Scenario | None,
+    mode: str = 'lockstep',
+    *,
+    output_path: str | Path | None = None,
+    duration_s: float | None = None,
+    namespace: str = DEFAULT_NAMESPACE,
+    config: Path | None = None,
+    extra_overrides: Mapping[str, Mapping[str, ParameterValue]] | None = None,
+) -> Graph:
+    """Build the nodes of the graph in a fresh rclpy context.
+
+    Args:
+        scenario: The scenario, or None for the parameter files' defaults.
+        mode: ``lockstep`` or ``realtime``.
+        output_path: MCAP file to record to; None runs without recorder.
+        duration_s: Simulated duration; None takes the scenario's (0: forever).
+        namespace: Namespace of the nodes.
+        config: Directory of robot.yaml and controller.yaml (``config_dir()`` if None).
+        extra_overrides: Further parameters per node name (tests, benchmarks).
+
+    Raises:
+        ScenarioError: A scenario override names no parameter of its node, or has the
+            wrong type; the message names the file, key and expected type.
+        GraphError: A node cannot be built (invalid parameter file value, ...).
+    """
+    config = config if config is not None else config_dir()
+    if duration_s is None:
+        duration_s = scenario.duration_s if scenario is not None else 0.0
+    specs = graph_nodes(record=output_path is not None)
+    overrides = {
+        spec.name: {
+            **node_parameters(spec, scenario, mode, duration_s,
+                              None if output_path is None else str(output_path)),
+            **(extra_overrides or {}).get(spec.name, {}),
+        }
+        for spec in specs
+    }
+    if scenario is not None:
+        _check_overrides(scenario, specs, config, namespace)
+    context = Context()
+    rclpy.init(args=[], context=context)
+    graph = Graph(context=context, mode=mode, duration_s=duration_s)
+    try:
+        for spec in specs:
+            if spec is RECORDER:
+                overrides[spec.name].update(_recorder_run_parameters(graph, scenario, mode))
+            graph.nodes[spec.name] = _make_node(spec, overrides[spec.name], config, namespace,
+                                                context)
+    except BaseException:
+        graph.destroy()
+        raise
+    return graph
+
+
+def run_graph(
+    graph: Graph,
+    *,
+    progress: ProgressBar | None = None,
+    on_spin: Callable[[Graph], None] | None = None,
+) -> RunResult:
+    """Spin the graph until its duration (simulated time) or Ctrl-C, then destroy it.
+
+    Args:
+        graph: A graph from ``build_graph``.
+        progress: Progress bar to update, if any.
+        on_spin: Called after every executor turn (tests and benchmarks).
+
+    Raises:
+        GraphError: A node raised (e.g. the simulation diverged); the recording is closed
+            up to that point.
+    """
+    sim = graph.simulator
+    executor: SingleThreadedExecutor | MultiThreadedExecutor
+    if graph.mode == 'lockstep':
+        executor = SingleThreadedExecutor(context=graph.context)
+    else:
+        executor = MultiThreadedExecutor(num_threads=2, context=graph.context)
+    for node in graph.nodes.values():
+        executor.add_node(node)
+    output = graph.nodes.get(RECORDER.name)
+    output_path = Path(output.recorder.path) if output is not None else None
+    interrupted = False
+    start = time.monotonic()
+    try:
+        while not sim.finished:
+            executor.spin_once(timeout_sec=_SPIN_TIMEOUT_S)
+            if progress is not None:
+                progress.update(sim.sim_time_ns * 1e-9)
+            if on_spin is not None:
+                on_spin(graph)
+        wall_s = time.monotonic() - start
+        deadline = time.monotonic() + _DRAIN_S
+        while time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.01)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        interrupted = True
+        wall_s = time.monotonic() - start
+    except Exception as exc:
+        name = type(exc).__name__
+        msg = f'the run stopped at t = {sim.sim_time_ns * 1e-9:.3f} s (simulated): {name}: {exc}'
+        raise GraphError(msg) from exc
+    finally:
+        if progress is not None:
+            progress.close(sim.sim_time_ns * 1e-9)
+        timeouts = sim.timeouts
+        sim_time_s = sim.sim_time_ns * 1e-9
+        executor.shutdown()
+        graph.destroy()
+    return RunResult(sim_time_s, wall_s, output_path, timeouts, interrupted)
+
+
+def run_scenario(
+    scenario: Scenario,
+    mode: str = 'lockstep',
+    *,
+    output_path: str | Path | None = None,
+    duration_s: float | None = None,
+    progress: bool = False,
+) -> RunResult:
+    """Build and run the graph of a scenario (the ``uvms run`` and ``uvms launch`` path)."""
+    graph = build_graph(scenario, mode, output_path=output_path, duration_s=duration_s)
+    bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
+    return run_graph(graph, progress=bar)
+
+
+def _make_node(
+    spec: NodeSpec,
+    overrides: Mapping[str, ParameterValue],
+    config: Path,
+    namespace: str,
+    context: Context,
+) -> Node:
+    """Import a node class and build it with its parameter files and overrides."""
+    try:
+        module = importlib.import_module(spec.module)
+        node_class = getattr(module, spec.class_name)
+    except (ImportError, AttributeError) as exc:
+        msg = f'node {spec.name!r}: cannot import {spec.module}.{spec.class_name}: {exc}'
+        raise GraphError(msg) from exc
+    cli_args = ['--ros-args']
+    for file in spec.parameter_files:
+        path = config / file
+        if not path.is_file():
+            msg = f'node {spec.name!r}: parameter file {path} does not exist'
+            raise GraphError(msg)
+        cli_args += ['--params-file', str(path)]
+    try:
+        node: Node = node_class(
+            namespace=namespace,
+            context=context,
+            cli_args=cli_args if len(cli_args) > 1 else None,
+            parameter_overrides=[Parameter(name, value=value)
+                                 for name, value in overrides.items()],
+        )
+    except Exception as exc:
+        msg = f'node {spec.name!r} could not start: {type(exc).__name__}: {exc}'
+        raise GraphError(msg) from exc
+    return node
+
+
+def _recorder_run_parameters(
+    graph: Graph, scenario: Scenario | None, mode: str
+) -> dict[str, ParameterValue]:
+    """The recorder's run metadata: scenario, seed, mode and every node's parameters."""
+    files: dict[str, Any] = {}
+    for node in graph.nodes.values():
+        values = {name: _plain(parameter.value)
+                  for name, parameter in sorted(node.get_parameters_by_prefix('').items())}
+        files[node.get_fully_qualified_name()] = {'ros__parameters': values}
+    return {
+        'run.scenario': scenario.name if scenario is not None else '',
+        'run.seed': scenario.seed if scenario is not None else 0,
+        'run.mode': mode,
+        'run.parameters': yaml.safe_dump(files, sort_keys=True),
+    }
+
+
+def _plain(value: Any) -> Any:
+    """A parameter value as plain YAML-able Python (arrays become lists)."""
+    if isinstance(value, bool | int | float | str) or value is None:
+        return value
+    return [_plain(item) for item in value]
+
+
+_TYPE_NAMES = {
+    Parameter.Type.BOOL: 'bool',
+    Parameter.Type.INTEGER: 'int',
+    Parameter.Type.DOUBLE: 'float (write a decimal point, e.g. 1.0e+4)',
+    Parameter.Type.STRING: 'str',
+    Parameter.Type.BOOL_ARRAY: 'list of bool',
+    Parameter.Type.INTEGER_ARRAY: 'list of int',
+    Parameter.Type.DOUBLE_ARRAY: 'list of float',
+    Parameter.Type.STRING_ARRAY: 'list of str',
+}
+
+
+def _check_overrides(
+    scenario: Scenario, specs: Sequence[NodeSpec], config: Path, namespace: str
+) -> None:
+    """Check every scenario override against what its node declares, before the real run.
+
+    The nodes are built once with their parameter files only, in a throwaway context, to
+    read the declared names and types; the recorder is left out (it would open its file).
+    """
+    sections = {spec.name: spec for spec in specs}
+    for node_name in scenario.overrides:
+        if node_name not in sections and node_name != RECORDER.name:
+            msg = f'{scenario.path}: key {node_name!r}: no such node in this run'
+            raise ScenarioError(msg)
+    to_check = [spec for spec in specs if spec.name in scenario.overrides and spec is not RECORDER]
+    if not to_check:
+        return
+    context = Context()
+    rclpy.init(args=[], context=context)
+    try:
+        for spec in to_check:
+            node = _make_node(spec, {}, config, namespace, context)
+            try:
+                for name, value in scenario.overrides[spec.name].items():
+                    _check_override(scenario, spec.name, node, name, value)
+            finally:
+                node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+def _check_override(
+    scenario: Scenario, node_name: str, node: Node, name: str, value: ParameterValue
+) -> None:
+    """One override: declared by the node, and of the declared type."""
+    key = f'{node_name}.{name}'
+    if not node.has_parameter(name):
+        declared = list(node.get_parameters_by_prefix('').keys())
+        close = difflib.get_close_matches(name, declared, n=3)
+        hint = f'; did you mean {", ".join(close)}?' if close else ''
+        msg = f'{scenario.path}: key {key!r}: the {node_name} node has no parameter {name!r}{hint}'
+        raise ScenarioError(msg)
+    declared_type = node.get_parameter(name).type_
+    given_type = Parameter(name, value=value).type_
+    if declared_type != given_type:
+        expected = _TYPE_NAMES.get(declared_type, declared_type.name)
+        msg = (f'{scenario.path}: key {key!r}: expected {expected}, got '
+               f'{type(value).__name__} {value!r}')
+        raise ScenarioError(msg)
