@@ -1,0 +1,55 @@
+"""Simulator parameters: defaults are valid, bad values stop with name, value and range."""
+
+import pytest
+from uvms_sim.errors import SimParameterError
+from uvms_sim.parameters import SIMULATOR_PARAMETERS, SPECS_BY_NAME, SimulatorSettings
+
+DEFAULTS = {spec.name: spec.default for spec in SIMULATOR_PARAMETERS}
+
+
+def test_defaults_give_1khz_physics_and_500hz_publication() -> None:
+    """The default settings integrate at 1 kHz and publish every second step (500 Hz)."""
+    settings = SimulatorSettings.from_values(DEFAULTS)
+    assert settings.physics_dt_ns == 1_000_000
+    assert settings.steps_per_publish == 2
+    assert settings.mode == 'lockstep'
+
+
+@pytest.mark.parametrize(
+    ('name', 'value'),
+    [
+        ('physics_rate_hz', 0.0),
+        ('publish_rate_hz', -5.0),
+        ('watchdog_timeout_s', float('nan')),
+        ('mode', 'fast'),
+        ('initial.vehicle_pose', [0.0, 0.0, 0.0]),
+        ('initial.joint_positions', [0.0, 10.0, 0.0]),
+        ('wall_enabled', 1),
+    ],
+)
+def test_invalid_value_error_names_parameter_value_and_range(name: str, value: object) -> None:
+    """An invalid value raises SimParameterError naming the parameter, value and valid range."""
+    with pytest.raises(SimParameterError) as info:
+        SimulatorSettings.from_values({**DEFAULTS, name: value})
+    message = str(info.value)
+    assert repr(name) in message
+    assert str(value)[:6] in message
+    assert SPECS_BY_NAME[name].range_text() in message
+
+
+def test_publish_rate_must_divide_physics_rate() -> None:
+    """A publication rate that is no whole fraction of the physics rate is rejected."""
+    with pytest.raises(SimParameterError, match='publish_rate_hz'):
+        SimulatorSettings.from_values({**DEFAULTS, 'publish_rate_hz': 300.0})
+
+
+def test_tf_rate_above_publish_rate_is_rejected() -> None:
+    """/tf cannot be published more often than the state."""
+    with pytest.raises(SimParameterError, match='tf_rate_hz'):
+        SimulatorSettings.from_values({**DEFAULTS, 'tf_rate_hz': 1000.0})
+
+
+def test_zero_tf_rate_disables_tf() -> None:
+    """tf_rate_hz = 0 turns /tf off."""
+    settings = SimulatorSettings.from_values({**DEFAULTS, 'tf_rate_hz': 0.0})
+    assert settings.publishes_per_tf == 0
