@@ -16,7 +16,10 @@ setup(
     zip_safe=True,
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
-    description='Unified force controller (impedance + hybrid position/force, fuzzy switching) and thruster allocation with thruster dynamics, as pure cores and ROS 2 nodes.',
+    description=(
+        'Unified force controller (impedance + hybrid position/force, fuzzy switching) and '
+        'thruster allocation with thruster dynamics, as pure cores and ROS 2 nodes.'
+    ),
     license='Apache-2.0',
     entry_points={
         'console_scripts': [

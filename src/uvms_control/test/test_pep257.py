@@ -5,8 +5,20 @@ import pytest
 
 # pydocstyle's google convention, plus D105/D107 as in pyproject.toml's ruff settings.
 GOOGLE_CONVENTION_IGNORES = [
-    'D105', 'D107', 'D203', 'D204', 'D213', 'D215', 'D400', 'D401', 'D404', 'D406', 'D407',
-    'D408', 'D409', 'D413',
+    'D105',
+    'D107',
+    'D203',
+    'D204',
+    'D213',
+    'D215',
+    'D400',
+    'D401',
+    'D404',
+    'D406',
+    'D407',
+    'D408',
+    'D409',
+    'D413',
 ]
 
 

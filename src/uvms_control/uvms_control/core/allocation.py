@@ -1,0 +1,243 @@
+"""Thruster and motor allocation (paper eq. 9-10) with direction-preserving saturation.
+
+tau_b = E F_td (eq. 9) with E = [[T, 0], [0, I_n]]: T (6, p) maps thrusts to the vehicle
+wrench in base_link_frd, and each arm motor drives its own joint. The desired thrusts and
+motor torques are F_td = E⁺ tau_b (eq. 10), E⁺ = Eᵀ (E Eᵀ)⁻¹ computed once.
+
+Saturation: clipping each thruster on its own would turn the wrench that the thrusters
+produce away from the commanded one (a surge command would grow a yaw moment). Instead the
+whole vehicle wrench is scaled by the largest factor s in (0, 1] that keeps every thruster
+within its limit, so the achieved wrench s tau_v is parallel to the commanded one. Arm
+torques are scaled likewise, by their own factor, against the motor torque limits.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class AllocatorParameters:
+    """Everything the allocator needs.
+
+    Attributes:
+        thrust_matrix: T (6, p), column i = [d_i; r_i x d_i] in base_link_frd, from
+            ``uvms_model.thrusters.ThrusterLayout.thrust_matrix()``.
+        max_thrust: forward thrust limit of each thruster (p,) (N), ``thrusters.max_thrust_n``.
+        max_joint_torque: torque limit of each arm motor (n,) (N m).
+        thruster: constants of the thruster model (eq. 11-15); its reverse_thrust_ratio also
+            sets the reverse thrust limit, reverse_thrust_ratio * max_thrust.
+    """
+
+    thrust_matrix: FloatArray
+    max_thrust: FloatArray
+    max_joint_torque: FloatArray
+    thruster: ThrusterModelParameters = field(default_factory=ThrusterModelParameters)
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.thrust_matrix, dtype=np.float64)
+        if t.ndim != 2 or t.shape[0] != 6 or t.shape[1] < 6 or not np.all(np.isfinite(t)):
+            raise ControlParameterError(
+                'thrusters.positions_m/directions',
+                t.shape,
+                'a finite thrust matrix T of shape (6, p >= 6)',
+            )
+        if np.linalg.matrix_rank(t) < 6:
+            raise ControlParameterError(
+                'thrusters.positions_m/directions',
+                'rank < 6',
+                'a thrust matrix of full row rank 6',
+            )
+        limits = np.asarray(self.max_thrust, dtype=np.float64)
+        if (
+            limits.shape != (t.shape[1],)
+            or not np.all(np.isfinite(limits))
+            or np.any(limits <= 0.0)
+        ):
+            raise ControlParameterError(
+                'thrusters.max_thrust_n', limits.tolist(), f'{t.shape[1]} values in (0, inf) N'
+            )
+        torques = np.asarray(self.max_joint_torque, dtype=np.float64)
+        if (
+            torques.ndim != 1
+            or torques.size < 1
+            or not np.all(np.isfinite(torques))
+            or np.any(torques <= 0.0)
+        ):
+            raise ControlParameterError(
+                'allocator.max_joint_torque_n_m',
+                torques.tolist(),
+                'one value in (0, inf) N m per joint',
+            )
+        object.__setattr__(self, 'thrust_matrix', t)
+        object.__setattr__(self, 'max_thrust', limits)
+        object.__setattr__(self, 'max_joint_torque', torques)
+
+    @property
+    def n_thrusters(self) -> int:
+        """Number of thrusters p."""
+        return int(self.thrust_matrix.shape[1])
+
+    @property
+    def n_joints(self) -> int:
+        """Number of arm motors n."""
+        return int(self.max_joint_torque.size)
+
+    def configuration_matrix(self) -> FloatArray:
+        """E (6 + n, p + n) of eq. 9."""
+        p, n = self.n_thrusters, self.n_joints
+        e = np.zeros((6 + n, p + n))
+        e[:6, :p] = self.thrust_matrix
+        e[6:, p:] = np.eye(n)
+        return e
+
+
+@dataclass
+class AllocationResult:
+    """Static allocation of one generalized force (eq. 10 after saturation).
+
+    Attributes:
+        thrust: desired thrusts F_td,v (p,) within the limits (N).
+        joint_torques: motor torques F_td,m (n,) within the limits (N m).
+        achieved_wrench: T F_td,v (6,), the vehicle wrench the desired thrusts produce.
+        saturation_scale: s in (0, 1] applied to the vehicle wrench; 1 when unsaturated.
+        joint_scale: factor in (0, 1] applied to the joint torques.
+    """
+
+    thrust: FloatArray
+    joint_torques: FloatArray
+    achieved_wrench: FloatArray
+    saturation_scale: float
+    joint_scale: float
+
+
+@dataclass
+class AllocatorOutput:
+    """One allocator step: the static allocation plus the thruster dynamics (eq. 11-15).
+
+    The arrays are the allocator's own buffers, overwritten by the next step.
+
+    Attributes:
+        allocation: the static allocation (desired thrusts after saturation).
+        thrust: actual thrusts F_t,act (p,) (N).
+        joint_torques: motor torques (n,) (N m); the motors are taken as ideal.
+        propeller_speed: Ω (p,) (rad/s).
+        reference_speed: Ω_r (p,) (rad/s).
+        motor_current: i_m (p,) (A).
+    """
+
+    allocation: AllocationResult
+    thrust: FloatArray
+    joint_torques: FloatArray
+    propeller_speed: FloatArray
+    reference_speed: FloatArray
+    motor_current: FloatArray
+
+
+class ThrusterAllocator:
+    """F_td = E⁺ tau_b (eq. 10), direction-preserving saturation, thruster dynamics (11-15).
+
+    Example:
+        >>> from uvms_model.thrusters import ThrusterLayout
+        >>> layout = ThrusterLayout.from_parameters()
+        >>> limits = layout.max_thrust_n
+        >>> params = AllocatorParameters(layout.thrust_matrix(), limits, np.full(3, 100.0))
+        >>> allocator = ThrusterAllocator(params)
+        >>> result = allocator.allocate(np.array([50.0, 0, 0, 0, 0, 0, 1.0, 2.0, 3.0]))
+        >>> (np.round(result.achieved_wrench, 9) + 0.0).tolist(), result.saturation_scale
+        ([50.0, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0)
+    """
+
+    def __init__(self, params: AllocatorParameters) -> None:
+        self.params = params
+        t = params.thrust_matrix
+        self._p = params.n_thrusters
+        self._n = params.n_joints
+        self._t = t
+        # T⁺ = Tᵀ (T Tᵀ)⁻¹, once: E⁺ = blockdiag(T⁺, I_n) because E is block diagonal.
+        self._t_pinv = t.T @ np.linalg.inv(t @ t.T)
+        self._inv_forward = 1.0 / params.max_thrust
+        self._inv_reverse = 1.0 / (params.thruster.reverse_thrust_ratio * params.max_thrust)
+        self._inv_joint = 1.0 / params.max_joint_torque
+        self.thrusters = ThrusterBank(params.thruster, self._p)
+        reachable = self.thrusters.max_steady_thrust(forward=True)
+        largest = float(np.max(params.max_thrust))
+        if reachable < largest:
+            raise ControlParameterError(
+                'thruster.max_motor_current_a',
+                params.thruster.max_motor_current,
+                f'a current that holds the largest thrust limit {largest} N '
+                f'(it holds {reachable:.1f} N)',
+            )
+
+    @property
+    def pseudo_inverse(self) -> FloatArray:
+        """E⁺ (p + n, 6 + n) of eq. 10."""
+        e_pinv = np.zeros((self._p + self._n, 6 + self._n))
+        e_pinv[: self._p, :6] = self._t_pinv
+        e_pinv[self._p :, 6:] = np.eye(self._n)
+        return e_pinv
+
+    def reset(self) -> None:
+        """Stop the thrusters (zero speed, current and flow)."""
+        self.thrusters.reset()
+
+    def _check(self, tau_b: npt.ArrayLike) -> FloatArray:
+        tau = np.asarray(tau_b, dtype=np.float64)
+        if tau.shape != (6 + self._n,) or not np.all(np.isfinite(tau)):
+            raise ControlInputError(
+                f'tau_b must be {6 + self._n} finite values, got {np.ravel(tau).tolist()}'
+            )
+        return tau
+
+    def allocate(self, tau_b: npt.ArrayLike) -> AllocationResult:
+        """Desired thrusts and motor torques for tau_b (9,) (eq. 10), saturated by scaling.
+
+        Raises:
+            ControlInputError: if tau_b is not a finite (6 + n,) vector.
+        """
+        tau = self._check(tau_b)
+        thrust = self._t_pinv @ tau[:6]
+        usage = np.where(thrust >= 0.0, thrust * self._inv_forward, -thrust * self._inv_reverse)
+        worst = float(usage.max())
+        scale = 1.0 if worst <= 1.0 else 1.0 / worst
+        if scale < 1.0:
+            thrust *= scale
+        joints = tau[6:].copy()
+        worst_joint = float(np.max(np.abs(joints) * self._inv_joint))
+        joint_scale = 1.0 if worst_joint <= 1.0 else 1.0 / worst_joint
+        if joint_scale < 1.0:
+            joints *= joint_scale
+        return AllocationResult(
+            thrust=thrust,
+            joint_torques=joints,
+            achieved_wrench=self._t @ thrust,
+            saturation_scale=scale,
+            joint_scale=joint_scale,
+        )
+
+    def step(self, tau_b: npt.ArrayLike, dt: float) -> AllocatorOutput:
+        """Allocate tau_b and advance the thrusters by dt (s) toward the desired thrusts.
+
+        Raises:
+            ControlInputError: if tau_b is not a finite (6 + n,) vector or dt is negative.
+        """
+        allocation = self.allocate(tau_b)
+        bank = self.thrusters
+        thrust = bank.step(allocation.thrust, dt)
+        return AllocatorOutput(
+            allocation=allocation,
+            thrust=thrust,
+            joint_torques=allocation.joint_torques,
+            propeller_speed=bank.omega,
+            reference_speed=bank.omega_r,
+            motor_current=bank.motor_current,
+        )

@@ -1,0 +1,381 @@
+"""Fuzzy switch between impedance and hybrid position/force control (paper sec. 4.3).
+
+The switch maps the force ratio F_e/F_d and the end-effector velocity v_e along the
+environment normal to the weight W of the blend F_c = W F_IP + (1 - W) F_H (eq. 2), with the
+paper's three rules (sec. 4.3):
+
+    IF F_e/F_d is FS AND v_e is VF THEN W is WL
+    IF F_e/F_d is FM               THEN W is WM
+    IF F_e/F_d is FL AND v_e is VS THEN W is WS
+
+Inference is Mamdani: min for AND, clipping implication, max aggregation, centroid
+defuzzification. The centroid is computed exactly (the aggregated set is piecewise linear, so
+integrating it between its kinks is exact), which keeps W(F_e/F_d, v_e) continuous and cheap.
+
+Sign convention: v_e is the end-effector velocity along the unit normal n pointing from the
+end effector into the environment (the direction in which it pushes), so approaching the wall
+is positive. Receding (v_e < 0) is "slow" (VS): it carries no impact risk.
+
+Where no rule fires (a small force while moving slowly, or a large force while still
+approaching fast), the paper gives no answer. We answer W = 1, the impedance law: it is the
+law designed for free motion and impacts, while the hybrid law's force loop acts on a force
+error that is meaningless before a stable contact exists. To keep W continuous at the edges of
+the rule supports, the rule-base output is blended with that answer by the degree to which the
+rules cover the input, m = min(1, sum of the rule strengths): W = m W_centroid + (1 - m) W_none.
+Wherever the rules cover the input fully (m = 1: one rule fires fully, or neighbouring rules
+share it, as FM and FL do between their cores), W is exactly the paper's min-max-centroid
+inference; a hard switch to W_none where no rule fires would jump at the edges of FM.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_control.core.errors import ControlParameterError
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Trapezoid:
+    """Trapezoidal membership function: 0 outside [a, d], 1 on [b, c], linear in between.
+
+    ``a = b = -inf`` makes a left shoulder, ``c = d = +inf`` a right shoulder and ``b == c``
+    a triangle.
+
+    Example:
+        >>> Trapezoid.triangle(0.0, 0.5, 1.0).scalar(0.25)
+        0.5
+    """
+
+    a: float
+    b: float
+    c: float
+    d: float
+    name: str = 'membership'
+
+    def __post_init__(self) -> None:
+        corners = (self.a, self.b, self.c, self.d)
+        if (
+            any(math.isnan(x) for x in corners)
+            or not (self.a <= self.b <= self.c <= self.d)
+            or self.b == math.inf
+            or self.c == -math.inf
+        ):
+            raise ControlParameterError(
+                self.name, list(corners), 'corners a <= b <= c <= d, not NaN, with a finite core'
+            )
+
+    @classmethod
+    def left_shoulder(
+        cls, full_until: float, zero_from: float, name: str = 'membership'
+    ) -> Trapezoid:
+        """Set that is 1 up to ``full_until`` and 0 from ``zero_from`` on."""
+        return cls(-math.inf, -math.inf, full_until, zero_from, name)
+
+    @classmethod
+    def right_shoulder(
+        cls, zero_until: float, full_from: float, name: str = 'membership'
+    ) -> Trapezoid:
+        """Set that is 0 up to ``zero_until`` and 1 from ``full_from`` on."""
+        return cls(zero_until, full_from, math.inf, math.inf, name)
+
+    @classmethod
+    def triangle(
+        cls, left: float, peak: float, right: float, name: str = 'membership'
+    ) -> Trapezoid:
+        """Triangle with feet at ``left`` and ``right`` and its peak at ``peak``."""
+        return cls(left, peak, peak, right, name)
+
+    def __call__(self, x: npt.ArrayLike) -> FloatArray:
+        """Membership degree of each element of ``x``, in [0, 1]."""
+        x = np.asarray(x, dtype=np.float64)
+        if self.b > self.a:
+            rise = (x - self.a) / (self.b - self.a)
+        else:
+            rise = np.where(x >= self.a, 1.0, 0.0)
+        if self.d > self.c:
+            fall = (self.d - x) / (self.d - self.c)
+        else:
+            fall = np.where(x <= self.d, 1.0, 0.0)
+        result: FloatArray = np.clip(np.minimum(rise, fall), 0.0, 1.0)
+        return result
+
+    def scalar(self, x: float) -> float:
+        """Membership degree of one value (no numpy: the controller's per-step path)."""
+        rise = (x - self.a) / (self.b - self.a) if self.b > self.a else float(x >= self.a)
+        fall = (self.d - x) / (self.d - self.c) if self.d > self.c else float(x <= self.d)
+        return min(max(min(rise, fall), 0.0), 1.0)
+
+
+def _default_force_small() -> Trapezoid:
+    return Trapezoid.left_shoulder(0.1, 0.5, 'fuzzy.force_ratio_small')
+
+
+def _default_force_medium() -> Trapezoid:
+    return Trapezoid.triangle(0.1, 0.5, 0.9, 'fuzzy.force_ratio_medium')
+
+
+def _default_force_large() -> Trapezoid:
+    return Trapezoid.right_shoulder(0.5, 0.9, 'fuzzy.force_ratio_large')
+
+
+def _default_velocity_slow() -> Trapezoid:
+    return Trapezoid.left_shoulder(0.05, 0.15, 'fuzzy.normal_velocity_slow')
+
+
+def _default_velocity_fast() -> Trapezoid:
+    return Trapezoid.right_shoulder(0.05, 0.15, 'fuzzy.normal_velocity_fast')
+
+
+def _default_weight_small() -> Trapezoid:
+    return Trapezoid.triangle(-0.5, 0.0, 0.5, 'fuzzy.weight_small')
+
+
+def _default_weight_medium() -> Trapezoid:
+    return Trapezoid.triangle(0.0, 0.5, 1.0, 'fuzzy.weight_medium')
+
+
+def _default_weight_large() -> Trapezoid:
+    return Trapezoid.triangle(0.5, 1.0, 1.5, 'fuzzy.weight_large')
+
+
+@dataclass(frozen=True)
+class FuzzySwitchParameters:
+    """Membership functions of the fuzzy switch (paper Fig. 4) and the no-rule answer.
+
+    Defaults (our reading of Fig. 4; the paper prints no numbers):
+    force ratio F_e/F_d: FS left shoulder 1 below 0.1, 0 above 0.5; FM triangle 0.1-0.5-0.9;
+    FL right shoulder 0 below 0.5, 1 above 0.9. Normal velocity v_e (m/s): VS left shoulder
+    1 below 0.05, 0 above 0.15; VF its complement. The 0.05 m/s knee keeps a wall that
+    recedes at the paper's Case III speed (0.05 m/s) "slow", so force tracking holds on it.
+    Weight: WS, WM, WL triangles centred on 0, 0.5 and 1 with half-width 0.5. WS and WL
+    extend outside [0, 1] so that a single fully firing rule defuzzifies exactly to its
+    centre; W stays in [0, 1] because each set is symmetric about a centre inside [0, 1].
+    """
+
+    force_small: Trapezoid = field(default_factory=_default_force_small)
+    force_medium: Trapezoid = field(default_factory=_default_force_medium)
+    force_large: Trapezoid = field(default_factory=_default_force_large)
+    velocity_slow: Trapezoid = field(default_factory=_default_velocity_slow)
+    velocity_fast: Trapezoid = field(default_factory=_default_velocity_fast)
+    weight_small: Trapezoid = field(default_factory=_default_weight_small)
+    weight_medium: Trapezoid = field(default_factory=_default_weight_medium)
+    weight_large: Trapezoid = field(default_factory=_default_weight_large)
+    no_rule_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.no_rule_weight <= 1.0:
+            raise ControlParameterError('fuzzy.no_rule_weight', self.no_rule_weight, '[0, 1]')
+        for out in (self.weight_small, self.weight_medium, self.weight_large):
+            if not (math.isfinite(out.a) and math.isfinite(out.d) and out.d > out.a):
+                raise ControlParameterError(
+                    out.name, [out.a, out.b, out.c, out.d], 'a finite output set with d > a'
+                )
+
+
+def _clipped_trapezoid(line: tuple[float, float, float, float, float], x: float) -> float:
+    """Value at x of a trapezoid clipped at height h, given as (a, p, q, d, h)."""
+    a, p, q, d, h = line
+    if x <= a or x >= d:
+        return 0.0
+    if x < p:
+        return h * (x - a) / (p - a)
+    if x <= q:
+        return h
+    return h * (d - x) / (d - q)
+
+
+def _line_intersections(sets: Sequence[Trapezoid]) -> list[float]:
+    """Abscissae where the sloped sides of two different output sets cross."""
+    sides: list[tuple[float, float]] = []  # mu = slope * x + offset
+    for s in sets:
+        if s.b > s.a:
+            sides.append((1.0 / (s.b - s.a), -s.a / (s.b - s.a)))
+        if s.d > s.c:
+            sides.append((-1.0 / (s.d - s.c), s.d / (s.d - s.c)))
+    points = []
+    for i, (k1, o1) in enumerate(sides):
+        for k2, o2 in sides[i + 1 :]:
+            if k1 != k2:
+                points.append((o2 - o1) / (k1 - k2))
+    return points
+
+
+class FuzzySwitch:
+    """Fuzzy switching law W(F_e/F_d, v_e) of paper sec. 4.3 (Figs. 4 and 5).
+
+    Example:
+        >>> switch = FuzzySwitch()
+        >>> round(switch.weight(0.5, 0.0), 6)  # FM fires fully: W is WM's centre
+        0.5
+    """
+
+    def __init__(self, params: FuzzySwitchParameters | None = None) -> None:
+        self.params = params if params is not None else FuzzySwitchParameters()
+        p = self.params
+        # Output sets in rule order: rule 1 -> WL, rule 2 -> WM, rule 3 -> WS.
+        self._outputs = (p.weight_large, p.weight_medium, p.weight_small)
+        corners = np.array([[s.a, s.b, s.c, s.d] for s in self._outputs])
+        self._lo = float(corners[:, 0].min())
+        self._hi = float(corners[:, 3].max())
+        fixed = [*corners.ravel(), *_line_intersections(self._outputs)]
+        self._fixed_points = np.clip(np.array(fixed, dtype=np.float64), self._lo, self._hi)
+        # Clipping level h puts kinks at a + (b - a) h and d - (d - c) h on every output set.
+        self._rise_a = corners[:, 0]
+        self._rise_k = corners[:, 1] - corners[:, 0]
+        self._fall_d = corners[:, 3]
+        self._fall_k = corners[:, 3] - corners[:, 2]
+        self._rise_slope = np.where(
+            self._rise_k > 0.0, 1.0 / np.where(self._rise_k > 0.0, self._rise_k, 1.0), 0.0
+        )
+        self._fall_slope = np.where(
+            self._fall_k > 0.0, 1.0 / np.where(self._fall_k > 0.0, self._fall_k, 1.0), 0.0
+        )
+
+    def rule_strengths(
+        self, force_ratio: npt.ArrayLike, normal_velocity: npt.ArrayLike
+    ) -> FloatArray:
+        """Firing strengths (..., 3) of the rules (FS and VF, FM, FL and VS), min for AND."""
+        p = self.params
+        r = np.asarray(force_ratio, dtype=np.float64)
+        v = np.asarray(normal_velocity, dtype=np.float64)
+        r, v = np.broadcast_arrays(r, v)
+        rule_1 = np.minimum(p.force_small(r), p.velocity_fast(v))
+        rule_2 = p.force_medium(r)
+        rule_3 = np.minimum(p.force_large(r), p.velocity_slow(v))
+        return np.stack([rule_1, rule_2, rule_3], axis=-1)
+
+    def _output_membership(self, x: FloatArray) -> FloatArray:
+        """Membership (..., K, 3) of the points x (..., K) in the output sets WL, WM, WS."""
+        x3 = x[..., np.newaxis]
+        rise = np.where(
+            self._rise_k > 0.0, (x3 - self._rise_a) * self._rise_slope, (x3 >= self._rise_a) * 1.0
+        )
+        fall = np.where(
+            self._fall_k > 0.0, (self._fall_d - x3) * self._fall_slope, (x3 <= self._fall_d) * 1.0
+        )
+        result: FloatArray = np.clip(np.minimum(rise, fall), 0.0, 1.0)
+        return result
+
+    def defuzzify(self, strengths: npt.ArrayLike) -> FloatArray:
+        """Weight W (...) from rule strengths (..., 3): clip, max-aggregate, exact centroid.
+
+        Applies the no-rule blend W = m W_centroid + (1 - m) W_none with m = min(1, sum of
+        the strengths) (see the module docstring).
+        """
+        h = np.asarray(strengths, dtype=np.float64)
+        lead = h.shape[:-1]
+        # Every kink of the aggregated set max_k min(h_k, mu_k(x)) is a corner of an output
+        # set, a crossing of two sides, or where a side reaches a clipping level.
+        levels = h[..., np.newaxis, :]  # (..., 1, 3): each level against each set
+        rise_pts = self._rise_a[:, np.newaxis] + self._rise_k[:, np.newaxis] * levels
+        fall_pts = self._fall_d[:, np.newaxis] - self._fall_k[:, np.newaxis] * levels
+        x = np.concatenate(
+            [
+                np.broadcast_to(self._fixed_points, (*lead, self._fixed_points.size)),
+                np.clip(rise_pts.reshape(*lead, -1), self._lo, self._hi),
+                np.clip(fall_pts.reshape(*lead, -1), self._lo, self._hi),
+            ],
+            axis=-1,
+        )
+        x = np.sort(x, axis=-1)
+        g = np.max(np.minimum(self._output_membership(x), h[..., np.newaxis, :]), axis=-1)
+        x0, x1 = x[..., :-1], x[..., 1:]
+        g0, g1 = g[..., :-1], g[..., 1:]
+        dx = x1 - x0
+        area = np.sum(dx * (g0 + g1), axis=-1) / 2.0
+        moment = np.sum(dx * ((2.0 * x0 + x1) * g0 + (x0 + 2.0 * x1) * g1), axis=-1) / 6.0
+        m = np.minimum(np.sum(h, axis=-1), 1.0)
+        safe_area = np.where(area > 0.0, area, 1.0)
+        centroid = np.where(area > 0.0, moment / safe_area, self.params.no_rule_weight)
+        w: FloatArray = np.clip(m * centroid + (1.0 - m) * self.params.no_rule_weight, 0.0, 1.0)
+        return w
+
+    def weight(self, force_ratio: float, normal_velocity: float) -> float:
+        """Switching weight W in [0, 1] for one sample (sec. 4.3; 1 = impedance, 0 = hybrid).
+
+        Args:
+            force_ratio: F_e/F_d, the normal contact force over the desired force (-).
+            normal_velocity: v_e, end-effector speed toward the environment (m/s).
+        """
+        p = self.params
+        fs = p.force_small.scalar(force_ratio)
+        fm = p.force_medium.scalar(force_ratio)
+        fl = p.force_large.scalar(force_ratio)
+        strengths = (
+            min(fs, p.velocity_fast.scalar(normal_velocity)),
+            fm,
+            min(fl, p.velocity_slow.scalar(normal_velocity)),
+        )
+        return self.defuzzify_scalar(strengths)
+
+    def defuzzify_scalar(self, strengths: Sequence[float]) -> float:
+        """Weight W from the three rule strengths, exactly, in plain floats.
+
+        The same inference as `defuzzify` without numpy (a few microseconds instead of tens):
+        the aggregated set is the upper envelope of the clipped output trapezoids, integrated
+        exactly between its kinks, which are the trapezoids' corners and the crossings of
+        their sides.
+        """
+        m = min(sum(strengths), 1.0)
+        w_none = self.params.no_rule_weight
+        if m <= 0.0:
+            return w_none
+        lines = []
+        for out, h in zip(self._outputs, strengths, strict=True):
+            if h > 0.0:
+                lines.append(
+                    (out.a, out.a + (out.b - out.a) * h, out.d - (out.d - out.c) * h, out.d, h)
+                )
+        xs = sorted({x for line in lines for x in line[:4]})
+        points: list[tuple[float, float]] = []
+        prev: list[float] = []
+        for i, x in enumerate(xs):
+            values = [_clipped_trapezoid(line, x) for line in lines]
+            if i > 0:
+                # Between consecutive corners every clipped set is linear, so the envelope
+                # can only kink where two of them cross.
+                x_prev = xs[i - 1]
+                for j in range(len(lines)):
+                    for k in range(j + 1, len(lines)):
+                        d0 = prev[j] - prev[k]
+                        d1 = values[j] - values[k]
+                        if d0 * d1 < 0.0:
+                            xc = x_prev + (x - x_prev) * d0 / (d0 - d1)
+                            yc = max(_clipped_trapezoid(line, xc) for line in lines)
+                            points.append((xc, yc))
+            points.append((x, max(values)))
+            prev = values
+        points.sort()
+        area = 0.0
+        moment = 0.0
+        for (x0, g0), (x1, g1) in itertools.pairwise(points):
+            dx = x1 - x0
+            area += dx * (g0 + g1) / 2.0
+            moment += dx * ((2.0 * x0 + x1) * g0 + (x0 + 2.0 * x1) * g1) / 6.0
+        centroid = moment / area if area > 0.0 else w_none
+        return min(max(m * centroid + (1.0 - m) * w_none, 0.0), 1.0)
+
+    def surface(self, force_ratios: npt.ArrayLike, normal_velocities: npt.ArrayLike) -> FloatArray:
+        """Input/output surface of the switch (paper Fig. 5).
+
+        Args:
+            force_ratios: F_e/F_d samples (n_r,).
+            normal_velocities: v_e samples (n_v,) in m/s.
+
+        Returns:
+            W on the grid, shape (n_v, n_r): row i is velocity i, column j is ratio j (the
+            ``np.meshgrid(force_ratios, normal_velocities)`` layout, ready for plotting).
+        """
+        rr, vv = np.meshgrid(
+            np.asarray(force_ratios, dtype=np.float64),
+            np.asarray(normal_velocities, dtype=np.float64),
+        )
+        return self.defuzzify(self.rule_strengths(rr, vv))

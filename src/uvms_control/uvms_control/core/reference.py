@@ -1,0 +1,236 @@
+"""Reference generators: the paper's half-circle path and the contact-force set-point.
+
+Paper sec. 5.1-5.2: a circular trajectory of radius 0.1 m in the task space "with zero
+initial velocity and acceleration", toward the wall, down along it and back (Fig. 7), and a
+desired contact force of 150 N.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_control.core.errors import ControlParameterError
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def quintic_time_scaling(sigma: float) -> tuple[float, float, float]:
+    """Quintic time scaling s(σ) = 10σ³ - 15σ⁴ + 6σ⁵ and its first two derivatives.
+
+    s, ds/dσ and d²s/dσ² are 0, 0, 0 at σ = 0 and 1, 0, 0 at σ = 1 (rest to rest with zero
+    acceleration at both ends); σ is clipped to [0, 1].
+
+    Example:
+        >>> quintic_time_scaling(0.5)
+        (0.5, 1.875, 0.0)
+    """
+    if sigma <= 0.0:
+        return 0.0, 0.0, 0.0
+    if sigma >= 1.0:
+        return 1.0, 0.0, 0.0
+    s2 = sigma * sigma
+    s3 = s2 * sigma
+    return (
+        s3 * (10.0 - 15.0 * sigma + 6.0 * s2),
+        s2 * (30.0 - 60.0 * sigma + 30.0 * s2),
+        sigma * (60.0 - 180.0 * sigma + 120.0 * s2),
+    )
+
+
+def _unit(name: str, vector: npt.ArrayLike) -> FloatArray:
+    v = np.asarray(vector, dtype=np.float64).reshape(-1)
+    norm = float(np.linalg.norm(v)) if v.size == 3 else 0.0
+    if v.size != 3 or not np.all(np.isfinite(v)) or norm < 1e-9:
+        raise ControlParameterError(name, list(v), 'a finite non-zero 3-vector')
+    unit: FloatArray = v / norm
+    return unit
+
+
+class HalfCircleReference:
+    """Half circle X_d(s) = c + r (sin(πs) n - cos(πs) d), c = X0 + r d (paper Fig. 7).
+
+    Starts at X0 at rest, moves along n (toward the wall) and d (down in map_ned) to
+    X0 + r n + r d at s = 1/2, and ends at rest at X0 + 2 r d. The arc parameter follows a
+    quintic time scaling over ``duration`` after ``start_delay``, so velocity and
+    acceleration are zero at both ends, as the paper asks.
+
+    Args:
+        radius: r (m).
+        duration: time to run the half circle (s).
+        start_delay: time at X0 before the motion starts (s).
+        toward: n, direction toward the environment in map_ned (default +x, the wall normal).
+        sweep: d, direction of the diameter in map_ned (default +z, down); its component
+            along n is removed.
+
+    Example:
+        >>> ref = HalfCircleReference(radius=0.1, duration=10.0, start_delay=0.0)
+        >>> x_d, _, _ = ref.evaluate(5.0, np.zeros(3))
+        >>> np.round(x_d, 6).tolist()
+        [0.1, 0.0, 0.1]
+    """
+
+    def __init__(
+        self,
+        radius: float = 0.1,
+        duration: float = 20.0,
+        start_delay: float = 2.0,
+        toward: npt.ArrayLike = (1.0, 0.0, 0.0),
+        sweep: npt.ArrayLike = (0.0, 0.0, 1.0),
+    ) -> None:
+        if not (math.isfinite(radius) and radius > 0.0):
+            raise ControlParameterError('reference.radius', radius, '(0, inf) m')
+        if not (math.isfinite(duration) and duration > 0.0):
+            raise ControlParameterError('reference.duration', duration, '(0, inf) s')
+        if not (math.isfinite(start_delay) and start_delay >= 0.0):
+            raise ControlParameterError('reference.start_delay', start_delay, '[0, inf) s')
+        n = _unit('hybrid.force_direction', toward)
+        d = _unit('reference.sweep_direction', sweep)
+        d = d - float(n @ d) * n
+        if float(np.linalg.norm(d)) < 1e-6:
+            raise ControlParameterError(
+                'reference.sweep_direction',
+                list(np.asarray(sweep)),
+                'a direction not parallel to n',
+            )
+        self.radius = radius
+        self.duration = duration
+        self.start_delay = start_delay
+        self.toward: FloatArray = n
+        self.sweep: FloatArray = d / float(np.linalg.norm(d))
+
+    def evaluate(self, t: float, start: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Reference X_d, X_d_dot, X_d_ddot (m, m/s, m/s²) at time t after the start.
+
+        Args:
+            t: time since the reference started (s).
+            start: X0, the starting end-effector position in map_ned (m).
+        """
+        n = self.toward
+        d = self.sweep
+        s, ds, dds = quintic_time_scaling((t - self.start_delay) / self.duration)
+        s_dot = ds / self.duration
+        s_ddot = dds / (self.duration * self.duration)
+        angle = math.pi * s
+        sin_a, cos_a = math.sin(angle), math.cos(angle)
+        r = self.radius
+        p_s = r * (sin_a * n + (1.0 - cos_a) * d)
+        dp_ds = r * math.pi * (cos_a * n + sin_a * d)
+        d2p_ds2 = r * math.pi * math.pi * (-sin_a * n + cos_a * d)
+        return start + p_s, dp_ds * s_dot, d2p_ds2 * s_dot * s_dot + dp_ds * s_ddot
+
+
+class ForcePhase(enum.IntEnum):
+    """State of the force set-point."""
+
+    IDLE = 0
+    RAMP_UP = 1
+    RELEASE = 2
+
+
+@dataclass(frozen=True)
+class ForceSetpointSample:
+    """Desired normal force and its derivatives (eq. 39 needs F_d, F_d_dot, F_d_ddot)."""
+
+    f_d: float
+    f_d_dot: float
+    f_d_ddot: float
+    phase: ForcePhase
+
+
+class ForceSetpoint:
+    """Desired contact force along n: a smooth ramp to the set-point once contact is made.
+
+    The ramp starts when the measured normal force first reaches ``contact_threshold``
+    (model-free contact detection: no wall position is assumed), from the force measured at
+    that instant, and reaches ``magnitude`` after ``ramp_time`` along a quintic, so F_d, its
+    first and its second derivative are continuous (eq. 39 feeds F_d_ddot forward). Ramping
+    from the measured force avoids the force-error step that a set-point active from the start
+    would put into the PID at first contact; the fuzzy switch keeps the impedance law in
+    charge until the contact force has grown.
+
+    The set-point is released (ramped to zero) when the position reference retreats behind
+    the point where contact was detected (n·X_d < n·X_contact): the task reference then says
+    the end effector should be off the surface (the paper's C' -> C). It re-arms once the
+    measured force falls below half the threshold.
+
+    Example:
+        >>> fs = ForceSetpoint(magnitude=150.0, ramp_time=2.0, contact_threshold=5.0)
+        >>> fs.update(0.0, 0.0, 1.0, 0.9).f_d
+        0.0
+    """
+
+    def __init__(self, magnitude: float, ramp_time: float, contact_threshold: float) -> None:
+        if not (math.isfinite(magnitude) and magnitude > 0.0):
+            raise ControlParameterError('force.setpoint', magnitude, '(0, inf) N')
+        if not (math.isfinite(ramp_time) and ramp_time > 0.0):
+            raise ControlParameterError('force.ramp_time', ramp_time, '(0, inf) s')
+        if not (math.isfinite(contact_threshold) and 0.0 < contact_threshold < magnitude):
+            raise ControlParameterError(
+                'force.contact_threshold', contact_threshold, f'(0, {magnitude}) N'
+            )
+        self.magnitude = magnitude
+        self.ramp_time = ramp_time
+        self.contact_threshold = contact_threshold
+        self.reset()
+
+    def reset(self) -> None:
+        """Return to the idle state (no contact seen yet)."""
+        self.phase = ForcePhase.IDLE
+        self._armed = True
+        self._t0 = 0.0
+        self._f0 = 0.0
+        self._f1 = 0.0
+        self._x_contact = 0.0
+        self._last = ForceSetpointSample(0.0, 0.0, 0.0, ForcePhase.IDLE)
+
+    @property
+    def in_contact_since(self) -> float | None:
+        """Time at which the current contact was detected, or None."""
+        return self._t0 if self.phase == ForcePhase.RAMP_UP else None
+
+    def _ramp(self, t: float) -> tuple[float, float, float]:
+        s, ds, dds = quintic_time_scaling((t - self._t0) / self.ramp_time)
+        span = self._f1 - self._f0
+        return (
+            self._f0 + span * s,
+            span * ds / self.ramp_time,
+            span * dds / (self.ramp_time * self.ramp_time),
+        )
+
+    def update(
+        self, t: float, f_normal: float, x_normal: float, x_d_normal: float
+    ) -> ForceSetpointSample:
+        """Advance the set-point to time t and return F_d and its derivatives (N, N/s, N/s²).
+
+        Args:
+            t: time (s).
+            f_normal: measured contact force along n, n·F_e (N).
+            x_normal: end-effector position along n, n·X (m).
+            x_d_normal: position reference along n, n·X_d (m).
+        """
+        if self.phase == ForcePhase.IDLE:
+            if not self._armed and f_normal < 0.5 * self.contact_threshold:
+                self._armed = True
+            if self._armed and f_normal >= self.contact_threshold:
+                self.phase = ForcePhase.RAMP_UP
+                self._t0, self._f0, self._f1 = t, min(f_normal, self.magnitude), self.magnitude
+                self._x_contact = x_normal
+        if self.phase == ForcePhase.RAMP_UP and x_d_normal < self._x_contact:
+            f_now = self._ramp(t)[0]
+            self.phase = ForcePhase.RELEASE
+            self._t0, self._f0, self._f1 = t, f_now, 0.0
+        if self.phase == ForcePhase.IDLE:
+            sample = ForceSetpointSample(0.0, 0.0, 0.0, ForcePhase.IDLE)
+        else:
+            f_d, f_d_dot, f_d_ddot = self._ramp(t)
+            sample = ForceSetpointSample(f_d, f_d_dot, f_d_ddot, self.phase)
+            if self.phase == ForcePhase.RELEASE and t - self._t0 >= self.ramp_time:
+                self.phase = ForcePhase.IDLE
+                self._armed = False
+        self._last = sample
+        return sample

@@ -1,0 +1,112 @@
+"""Task-space model of the UVMS: end-effector dynamics M̃ Ẍ + ζ̃ = F - F_e (paper eq. 22-28)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_model import UvmsModel
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def inverse_3x3(a: FloatArray) -> FloatArray:
+    """Inverse of a 3x3 matrix by its adjugate (cheaper than a general LU for one 3x3).
+
+    The callers pass symmetric positive-definite matrices (J Jᵀ, M̃); a singular one (the arm
+    at a kinematic singularity) gives inf/nan, which the controller rejects.
+    """
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a.tolist()
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    inv_det = 1.0 / det if det != 0.0 else float('inf')
+    return (
+        np.array(
+            [
+                [c00, a02 * a21 - a01 * a22, a01 * a12 - a02 * a11],
+                [c01, a00 * a22 - a02 * a20, a02 * a10 - a00 * a12],
+                [c02, a01 * a20 - a00 * a21, a00 * a11 - a01 * a10],
+            ]
+        )
+        * inv_det
+    )
+
+
+@dataclass
+class TaskSpaceModel:
+    """Task-space quantities at one state (q, q_dot).
+
+    Attributes:
+        X: end-effector position in map_ned (3,) (m).
+        X_dot: end-effector velocity J q_dot (3,) (m/s), eq. 22.
+        J: end-effector Jacobian (3, 9), eq. 22.
+        J_dot_q_dot: J_dot q_dot (3,) (m/s²), eq. 23.
+        J_pinv: J⁺ = Jᵀ (J Jᵀ)⁻¹ (9, 3), eq. 24.
+        Jt_pinv: J̃⁺ = (Jᵀ)⁺ = (J Jᵀ)⁻¹ J (3, 9), eq. 27.
+        M: joint-space inertia M(q) (9, 9), eq. 18.
+        zeta: joint-space bias ζ(q, q_dot) (9,), eq. 19.
+        M_tilde: task-space inertia M̃ = J̃⁺ M J⁺ (3, 3) (kg), eq. 28.
+        zeta_tilde: task-space bias ζ̃ = J̃⁺ ζ - M̃ J̇ q̇ (3,) (N), eq. 28.
+    """
+
+    X: FloatArray
+    X_dot: FloatArray
+    J: FloatArray
+    J_dot_q_dot: FloatArray
+    J_pinv: FloatArray
+    Jt_pinv: FloatArray
+    M: FloatArray
+    zeta: FloatArray
+    M_tilde: FloatArray
+    zeta_tilde: FloatArray
+
+
+def task_space_model(
+    model: UvmsModel, q: FloatArray, q_dot: FloatArray, X: FloatArray | None = None
+) -> TaskSpaceModel:
+    """M̃ = J̃⁺ M J⁺ and ζ̃ = J̃⁺ ζ - M̃ J̇ q̇ at (q, q_dot) (paper eq. 27-28).
+
+    The paper writes the last term M̃ J̇ J⁺ Ẋ, which equals M̃ J̇ q̇ only when q̇ has no
+    null-space component (J⁺ Ẋ = J⁺ J q̇ is the row-space part of q̇). The exact product J̇ q̇
+    is what eq. 23 and 25 contain, so that is what we use.
+
+    Args:
+        model: the controller's UVMS model.
+        q: generalized coordinates (9,).
+        q_dot: generalized velocities (9,).
+        X: end-effector position if already known (saves one forward-kinematics pass).
+
+    Example:
+        >>> model = UvmsModel()
+        >>> q = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1, 0.5, -0.8])
+        >>> ts = task_space_model(model, q, np.zeros(9))
+        >>> bool(np.allclose(ts.J @ ts.J_pinv, np.eye(3)))
+        True
+    """
+    M = model.mass_matrix(q)
+    zeta = model.bias(q, q_dot)
+    J = model.ee_jacobian(q)
+    j_dot_q_dot = model.ee_jacobian_dot_qdot(q, q_dot)
+    if X is None:
+        X = model.ee_position(q)
+    Jt_pinv = inverse_3x3(J @ J.T) @ J
+    J_pinv = Jt_pinv.T
+    M_tilde = Jt_pinv @ M @ J_pinv
+    M_tilde = 0.5 * (M_tilde + M_tilde.T)
+    zeta_tilde = Jt_pinv @ zeta - M_tilde @ j_dot_q_dot
+    return TaskSpaceModel(
+        X=X,
+        X_dot=J @ q_dot,
+        J=J,
+        J_dot_q_dot=j_dot_q_dot,
+        J_pinv=J_pinv,
+        Jt_pinv=Jt_pinv,
+        M=M,
+        zeta=zeta,
+        M_tilde=M_tilde,
+        zeta_tilde=zeta_tilde,
+    )

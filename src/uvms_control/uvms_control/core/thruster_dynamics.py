@@ -1,0 +1,424 @@
+"""Thruster dynamics of Healey et al. (1995), paper eq. 11-15.
+
+Each thruster has two states: the propeller speed Ω (rad/s) and the axial flow speed u_p
+through the duct (m/s). The motor driver turns a desired thrust F_td into a reference speed
+Ω_r (eq. 11) and a current i_m (eq. 12); the motor (eq. 13) turns against the propeller
+torque Q, and the blade element at 0.7 R gives thrust and torque from lift and drag against
+the angle of attack (eq. 14-15, four quadrants):
+
+    V_t = 0.7 R Ω,  V² = u_p² + V_t²,  β = atan2(u_p, V_t),  α = p - β
+    C_L = C_Lmax sin 2α,  C_D = C_Dmax (1 - cos 2α),  L, D = ½ ρ A V² C_L, C_D
+    T = L cos β - D sin β,  Q = 0.7 R (L sin β + D cos β)
+    J_m Ω_dot = K_t i_m - K_f Ω - Q
+    ρ A_p L_d γ u_p_dot + ρ A_p Δβ u_p |u_p| = T
+
+Notes on the paper's printed equations:
+- eq. 12 prints the speed feedback as K_fb (Ω - Ω_r), which is positive feedback for a
+  positive gain; we use K_fb (Ω_r - Ω), and add the viscous term K_f Ω_r to the feed-forward
+  so that the steady speed equals Ω_r exactly: i_m = (α_1 F_td + K_f Ω_r) / K_t
+  + K_fb (Ω_r - Ω), clamped to ±i_max.
+- eq. 14-15 use θ = γ - α for the flow angle; we write it β with α = p - β (Healey).
+
+Calibration. Healey's constants are not at hand, so the free constants are chosen so that the
+bollard thrust (zero advance speed, steady state) is the Wageningen B-series value
+T = K_T ρ D⁴ n² (n = Ω / 2π, K_T ≈ 0.4566 for a 3-blade propeller at J = 0): at a steady
+state T = ρ A_p Δβ k² V_t² with k = u_p / V_t, which fixes k; the blade-element equation then
+fixes the effective blade area A. The sinusoidal lift/drag model is symmetric under reversal,
+whereas real propellers (cambered blades, ducts shaped for forward flow) are about 40 %
+weaker in reverse: the lift coefficient in reverse rotation is scaled by a factor η_r,
+calibrated so that reverse bollard thrust is ``reverse_thrust_ratio`` times forward at the
+same speed. α_1 (torque/thrust) and α_2 (thrust/Ω²) of eq. 11-12 are the steady bollard
+values of the calibrated model, one pair per direction.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_control.core.errors import ControlInputError, ControlParameterError
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ThrusterModelParameters:
+    """Constants of one thruster (all thrusters of the vehicle are alike).
+
+    Attributes:
+        water_density: ρ (kg/m³).
+        propeller_diameter: D (m); duct area A_p = π D² / 4.
+        thrust_coefficient: bollard K_T of T = K_T ρ D⁴ n² (-), Wageningen B-series 3-blade.
+        reverse_thrust_ratio: reverse / forward bollard thrust at equal |n| (-).
+        pitch_angle: blade pitch p at 0.7 R (rad); default atan(P/D / (0.7 π)) for P/D = 1.
+        lift_coefficient_max: C_Lmax (-).
+        drag_coefficient_max: C_Dmax (-); C_D reaches 2 C_Dmax at α = 90°, a flat plate's ~2.
+        duct_length: L_d (m).
+        duct_added_mass_ratio: γ, effective fluid mass in the duct over ρ A_p L_d (-).
+        momentum_flux_coefficient: Δβ of the duct momentum balance (-).
+        motor_inertia: J_m, motor + propeller + entrained water (kg m²).
+        motor_torque_constant: K_t (N m/A).
+        motor_viscous_friction: K_f (N m s/rad).
+        speed_feedback_gain: K_fb (A s/rad).
+        max_motor_current: i_max (A).
+    """
+
+    water_density: float = 1025.0
+    propeller_diameter: float = 0.15
+    thrust_coefficient: float = 0.4566
+    reverse_thrust_ratio: float = 0.6
+    pitch_angle: float = math.atan(1.0 / (0.7 * math.pi))
+    lift_coefficient_max: float = 1.2
+    drag_coefficient_max: float = 1.0
+    duct_length: float = 0.1
+    duct_added_mass_ratio: float = 1.0
+    momentum_flux_coefficient: float = 1.0
+    motor_inertia: float = 2.0e-3
+    motor_torque_constant: float = 0.2
+    motor_viscous_friction: float = 1.0e-3
+    speed_feedback_gain: float = 0.2
+    max_motor_current: float = 40.0
+
+    def __post_init__(self) -> None:
+        positive = {
+            'water_density': ('kg/m^3', self.water_density),
+            'propeller_diameter': ('m', self.propeller_diameter),
+            'thrust_coefficient': ('-', self.thrust_coefficient),
+            'lift_coefficient_max': ('-', self.lift_coefficient_max),
+            'drag_coefficient_max': ('-', self.drag_coefficient_max),
+            'duct_length': ('m', self.duct_length),
+            'duct_added_mass_ratio': ('-', self.duct_added_mass_ratio),
+            'momentum_flux_coefficient': ('-', self.momentum_flux_coefficient),
+            'motor_inertia': ('kg m^2', self.motor_inertia),
+            'motor_torque_constant': ('N m/A', self.motor_torque_constant),
+            'max_motor_current': ('A', self.max_motor_current),
+        }
+        for name, (unit, value) in positive.items():
+            if not (math.isfinite(value) and value > 0.0):
+                raise ControlParameterError(f'thruster.{name}', value, f'(0, inf) {unit}')
+        for name, value in (
+            ('motor_viscous_friction', self.motor_viscous_friction),
+            ('speed_feedback_gain', self.speed_feedback_gain),
+        ):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ControlParameterError(f'thruster.{name}', value, '[0, inf)')
+        if not (0.0 < self.reverse_thrust_ratio <= 1.0):
+            raise ControlParameterError(
+                'thruster.reverse_thrust_ratio', self.reverse_thrust_ratio, '(0, 1]'
+            )
+        if not (0.0 < self.pitch_angle < math.pi / 2.0):
+            raise ControlParameterError('thruster.pitch_angle', self.pitch_angle, '(0, pi/2) rad')
+
+
+@dataclass(frozen=True)
+class ThrusterCalibration:
+    """Constants derived from `ThrusterModelParameters` so that bollard thrust is K_T ρ D⁴ n².
+
+    Index 0 is forward (Ω > 0), index 1 reverse (Ω < 0).
+
+    Attributes:
+        blade_area: effective blade-element area A (m²).
+        reverse_lift_factor: η_r scaling C_Lmax in reverse rotation (-).
+        flow_ratio: steady k = |u_p / V_t| at bollard (-), per direction.
+        alpha_1: steady torque/thrust ratio Q/T (m), per direction (eq. 12).
+        alpha_2: steady thrust/speed² ratio T/Ω² (N s²), per direction (eq. 11).
+        max_step: largest stable explicit-Euler step at full thrust (s).
+    """
+
+    blade_area: float
+    reverse_lift_factor: float
+    flow_ratio: tuple[float, float]
+    alpha_1: tuple[float, float]
+    alpha_2: tuple[float, float]
+    max_step: float
+
+
+def _lift_drag_terms(pitch: float, k: float) -> tuple[float, float, float, float]:
+    """Sin 2α, 1 - cos 2α, cos β, sin β for a forward steady flow ratio k = tan β."""
+    beta = math.atan(k)
+    alpha = pitch - beta
+    return math.sin(2.0 * alpha), 1.0 - math.cos(2.0 * alpha), math.cos(beta), math.sin(beta)
+
+
+def calibrate(params: ThrusterModelParameters) -> ThrusterCalibration:
+    """Derive blade area, reverse lift factor, α_1, α_2 from the bollard law T = K_T ρ D⁴ n².
+
+    Raises:
+        ControlParameterError: if the pitch is too small for the requested K_T (the blade
+            would need a non-positive area).
+    """
+    p = params
+    radius = p.propeller_diameter / 2.0
+    r07 = 0.7 * radius
+    duct_area = math.pi * radius * radius
+    d4 = p.propeller_diameter**4
+    # T = ρ A_p Δβ k² (0.7 R Ω)² = K_T ρ D⁴ Ω² / (4π²)  ->  k.
+    k_fwd = math.sqrt(
+        p.thrust_coefficient
+        * d4
+        / (4.0 * math.pi**2 * duct_area * p.momentum_flux_coefficient * r07**2)
+    )
+    s2a, c2a, cb, sb = _lift_drag_terms(p.pitch_angle, k_fwd)
+    force_term = p.lift_coefficient_max * s2a * cb - p.drag_coefficient_max * c2a * sb
+    if force_term <= 0.0:
+        raise ControlParameterError(
+            'thruster.pitch_angle',
+            p.pitch_angle,
+            f'a pitch larger than the bollard flow angle atan({k_fwd:.3f}) with positive lift',
+        )
+    # ½ A (1 + k²) (C_L cos β - C_D sin β) = A_p Δβ k²  ->  A.
+    blade_area = (
+        2.0 * duct_area * p.momentum_flux_coefficient * k_fwd**2 / ((1.0 + k_fwd**2) * force_term)
+    )
+    k_rev = k_fwd * math.sqrt(p.reverse_thrust_ratio)
+    s2a_r, c2a_r, cb_r, sb_r = _lift_drag_terms(p.pitch_angle, k_rev)
+    needed = (
+        2.0 * duct_area * p.momentum_flux_coefficient * k_rev**2 / ((1.0 + k_rev**2) * blade_area)
+    )
+    reverse_lift_factor = (needed + p.drag_coefficient_max * c2a_r * sb_r) / (
+        p.lift_coefficient_max * s2a_r * cb_r
+    )
+    alpha_1 = []
+    alpha_2 = []
+    for k, s2, c2, c_b, s_b, eta in (
+        (k_fwd, s2a, c2a, cb, sb, 1.0),
+        (k_rev, s2a_r, c2a_r, cb_r, sb_r, reverse_lift_factor),
+    ):
+        lift = eta * p.lift_coefficient_max * s2
+        drag = p.drag_coefficient_max * c2
+        alpha_1.append(r07 * (lift * s_b + drag * c_b) / (lift * c_b - drag * s_b))
+        alpha_2.append(p.water_density * duct_area * p.momentum_flux_coefficient * k**2 * r07**2)
+    calibration = ThrusterCalibration(
+        blade_area=blade_area,
+        reverse_lift_factor=reverse_lift_factor,
+        flow_ratio=(k_fwd, k_rev),
+        alpha_1=(alpha_1[0], alpha_1[1]),
+        alpha_2=(alpha_2[0], alpha_2[1]),
+        max_step=1.0,
+    )
+    return _with_max_step(params, calibration)
+
+
+def _with_max_step(
+    params: ThrusterModelParameters, calibration: ThrusterCalibration
+) -> ThrusterCalibration:
+    """Largest explicit-Euler step, half the stability bound at full current.
+
+    Euler is stable for an eigenvalue λ = -σ + iω when h < 2σ / |λ|²; we take half of it and
+    at most 0.5 / |λ|. The time constants shrink as the propeller speeds up, so they are
+    evaluated at the bollard state whose steady current is the current limit.
+    """
+    bank = ThrusterBank(params, 1, calibration)
+    steps = []
+    for thrust in (
+        bank.max_steady_thrust(forward=True),
+        -bank.max_steady_thrust(forward=False),
+    ):
+        omega, u_p = bank.bollard_state(thrust)
+        f = np.array([thrust])
+        x0 = np.array([omega, u_p])
+        jac = np.zeros((2, 2))
+        for j in range(2):
+            h = 1e-6 * max(1.0, abs(x0[j]))
+            xp, xm = x0.copy(), x0.copy()
+            xp[j] += h
+            xm[j] -= h
+            jac[:, j] = (bank.derivatives(xp, f) - bank.derivatives(xm, f)) / (2.0 * h)
+        for lam in np.linalg.eigvals(jac):
+            sigma, mag = -float(lam.real), float(abs(lam))
+            if sigma <= 0.0:
+                raise ControlParameterError(
+                    'thruster constants', params, 'a stable bollard equilibrium at full current'
+                )
+            steps.append(min(0.5 / mag, sigma / (mag * mag)))
+    max_step = min(steps)
+    return ThrusterCalibration(
+        blade_area=calibration.blade_area,
+        reverse_lift_factor=calibration.reverse_lift_factor,
+        flow_ratio=calibration.flow_ratio,
+        alpha_1=calibration.alpha_1,
+        alpha_2=calibration.alpha_2,
+        max_step=max_step,
+    )
+
+
+class ThrusterBank:
+    """A set of identical thrusters integrated together (vectorised eq. 11-15).
+
+    Example:
+        >>> bank = ThrusterBank(ThrusterModelParameters(), count=2)
+        >>> for _ in range(1000):
+        ...     thrust = bank.step(np.array([100.0, -50.0]), 0.001)
+        >>> np.round(thrust, 1).tolist()
+        [100.0, -50.0]
+    """
+
+    def __init__(
+        self,
+        params: ThrusterModelParameters,
+        count: int,
+        calibration: ThrusterCalibration | None = None,
+    ) -> None:
+        if count < 1:
+            raise ControlParameterError('thruster count', count, '>= 1')
+        self.params = params
+        self.count = count
+        self.calibration = calibration if calibration is not None else calibrate(params)
+        p, c = params, self.calibration
+        radius = p.propeller_diameter / 2.0
+        self._r07 = 0.7 * radius
+        duct_area = math.pi * radius * radius
+        half_rho_a = 0.5 * p.water_density * c.blade_area
+        self._lift_k = (
+            half_rho_a * p.lift_coefficient_max,
+            half_rho_a * p.lift_coefficient_max * c.reverse_lift_factor,
+        )
+        self._drag_k = half_rho_a * p.drag_coefficient_max
+        self._sin2p = math.sin(2.0 * p.pitch_angle)
+        self._cos2p = math.cos(2.0 * p.pitch_angle)
+        self._duct_mass = p.water_density * duct_area * p.duct_length * p.duct_added_mass_ratio
+        self._duct_loss = p.water_density * duct_area * p.momentum_flux_coefficient
+        self._inv_sqrt_alpha_2 = (1.0 / math.sqrt(c.alpha_2[0]), 1.0 / math.sqrt(c.alpha_2[1]))
+        self._ff_gain = (
+            c.alpha_1[0] / p.motor_torque_constant,
+            c.alpha_1[1] / p.motor_torque_constant,
+        )
+        self._ff_friction = p.motor_viscous_friction / p.motor_torque_constant
+        self.omega = np.zeros(count)
+        self.u_p = np.zeros(count)
+        self.omega_r = np.zeros(count)
+        self.motor_current = np.zeros(count)
+        self.thrust = np.zeros(count)
+        self.torque = np.zeros(count)
+
+    def reset(self) -> None:
+        """Stop every propeller and the duct flow."""
+        for a in (
+            self.omega,
+            self.u_p,
+            self.omega_r,
+            self.motor_current,
+            self.thrust,
+            self.torque,
+        ):
+            a[:] = 0.0
+
+    def blade_forces(self, omega: FloatArray, u_p: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Thrust T (N) and shaft torque Q (N m) of the blade element at 0.7 R (eq. 14-15).
+
+        Written without trigonometric calls: with V² = u_p² + V_t², cos 2β = (V_t² - u_p²)/V²
+        and sin 2β = 2 u_p V_t / V², so V² sin 2α and V² cos 2α are polynomials.
+        """
+        v_t = self._r07 * omega
+        uu = u_p * u_p
+        tt = v_t * v_t
+        c2b = tt - uu  # V² cos 2β
+        s2b = 2.0 * u_p * v_t  # V² sin 2β
+        # ½ρA C_Lmax V² sin 2α, with C_Lmax scaled by η_r in reverse rotation.
+        lift = (self._sin2p * c2b - self._cos2p * s2b) * np.where(
+            omega >= 0.0, self._lift_k[0], self._lift_k[1]
+        )
+        # ½ρA C_Dmax V² (1 - cos 2α).
+        drag = self._drag_k * (uu + tt - self._cos2p * c2b - self._sin2p * s2b)
+        inv_v = 1.0 / np.maximum(np.sqrt(uu + tt), 1e-9)  # L and D vanish as V², so T, Q -> 0
+        thrust = (lift * v_t - drag * u_p) * inv_v  # L cos β - D sin β
+        torque = self._r07 * (lift * u_p + drag * v_t) * inv_v  # 0.7 R (L sin β + D cos β)
+        return thrust, torque
+
+    def _driver(self, f_td: FloatArray, omega: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Reference speed Ω_r (eq. 11) and motor current i_m (eq. 12, sign-corrected)."""
+        forward = f_td >= 0.0
+        omega_r = np.where(forward, self._inv_sqrt_alpha_2[0], -self._inv_sqrt_alpha_2[1])
+        omega_r *= np.sqrt(np.abs(f_td))
+        current = np.where(forward, self._ff_gain[0], self._ff_gain[1]) * f_td
+        current += self._ff_friction * omega_r
+        current += self.params.speed_feedback_gain * (omega_r - omega)
+        np.minimum(current, self.params.max_motor_current, out=current)
+        np.maximum(current, -self.params.max_motor_current, out=current)
+        return omega_r, current
+
+    def derivatives(self, state: FloatArray, f_td: FloatArray) -> FloatArray:
+        """Time derivative of the stacked state [Ω..., u_p...] for desired thrusts f_td."""
+        n = f_td.size
+        omega, u_p = state[:n], state[n:]
+        _, current = self._driver(f_td, omega)
+        thrust, torque = self.blade_forces(omega, u_p)
+        p = self.params
+        omega_dot = (
+            p.motor_torque_constant * current - p.motor_viscous_friction * omega - torque
+        ) / p.motor_inertia
+        u_dot = (thrust - self._duct_loss * u_p * np.abs(u_p)) / self._duct_mass
+        return np.concatenate([omega_dot, u_dot])
+
+    def steady_current(self, thrust: float) -> float:
+        """Motor current (A) that holds ``thrust`` at zero advance speed (eq. 12-13 at rest)."""
+        omega, _ = self.bollard_state(thrust)
+        index = 0 if thrust >= 0.0 else 1
+        p = self.params
+        torque = self.calibration.alpha_1[index] * thrust + p.motor_viscous_friction * omega
+        return torque / p.motor_torque_constant
+
+    def max_steady_thrust(self, forward: bool = True) -> float:
+        """Largest bollard thrust magnitude (N) the current limit can hold, per direction."""
+        c, p = self.calibration, self.params
+        index = 0 if forward else 1
+        # K_t i = α_1 T + K_f sqrt(T / α_2): a quadratic in sqrt(T).
+        a, b = c.alpha_1[index], p.motor_viscous_friction / math.sqrt(c.alpha_2[index])
+        rhs = p.motor_torque_constant * p.max_motor_current
+        root = (-b + math.sqrt(b * b + 4.0 * a * rhs)) / (2.0 * a)
+        return root * root
+
+    def bollard_state(self, thrust: float) -> tuple[float, float]:
+        """Steady (Ω, u_p) that produce ``thrust`` at zero advance speed."""
+        c = self.calibration
+        index = 0 if thrust >= 0.0 else 1
+        omega = math.copysign(math.sqrt(abs(thrust) / c.alpha_2[index]), thrust)
+        return omega, c.flow_ratio[index] * self._r07 * omega
+
+    def step(self, f_td: FloatArray, dt: float) -> FloatArray:
+        """Advance every thruster by dt (s) under desired thrusts f_td (N); return thrusts.
+
+        Explicit Euler, sub-stepped so that no step exceeds the calibrated stability bound.
+        The returned array is the bank's own buffer of actual thrusts F_t,act (eq. 15).
+
+        Raises:
+            ControlInputError: if f_td has the wrong size or is not finite, or dt < 0.
+        """
+        f_td = np.asarray(f_td, dtype=np.float64)
+        if f_td.shape != (self.count,) or not np.all(np.isfinite(f_td)):
+            raise ControlInputError(
+                f'desired thrusts must be {self.count} finite values, got {f_td.tolist()}'
+            )
+        if not (math.isfinite(dt) and dt >= 0.0):
+            raise ControlInputError(f'time step dt = {dt} s must be finite and >= 0')
+        p = self.params
+        omega, u_p = self.omega, self.u_p
+        substeps = max(1, math.ceil(dt / self.calibration.max_step)) if dt > 0.0 else 0
+        h = dt / max(substeps, 1)
+        k_omega = h / p.motor_inertia
+        k_u = h / self._duct_mass
+        omega_r, current = self._driver(f_td, omega)
+        # self.thrust and self.torque always hold the blade forces of the current state, so
+        # each sub-step evaluates the blade element once.
+        thrust, torque = self.thrust, self.torque
+        for i in range(substeps):
+            if i > 0:
+                omega_r, current = self._driver(f_td, omega)
+                thrust, torque = self.blade_forces(omega, u_p)
+            omega_next = omega + k_omega * (
+                p.motor_torque_constant * current - p.motor_viscous_friction * omega - torque
+            )
+            u_p = u_p + k_u * (thrust - self._duct_loss * u_p * np.abs(u_p))
+            omega = omega_next
+        if substeps:
+            thrust, torque = self.blade_forces(omega, u_p)
+        self.omega[:] = omega
+        self.u_p[:] = u_p
+        self.omega_r[:] = omega_r
+        self.motor_current[:] = current
+        self.thrust[:] = thrust
+        self.torque[:] = torque
+        return self.thrust
