@@ -4,15 +4,22 @@ Spatial-vector algorithms (Featherstone, Rigid Body Dynamics Algorithms, 2008) o
 bodies: the vehicle (body 0) and links 1-3. Every spatial quantity is expressed in
 base_link_frd at the body origin O ("frame 0") at the current instant, ordered
 [linear; angular] like the quasi-velocities w of eq. 8. Then
-- the body twist of link i is V_i = nu_0 + sum_{j<=i} s_j q_dot_j, with the joint motion
-  vectors s_j = [o_j x a_j; a_j];
-- M_b is the composite-rigid-body matrix of the inertias I_i (rigid + added mass);
-- C_b w is the recursive Newton-Euler force I_i a_i + V_i x* I_i V_i at w_dot = 0.
+- body i moves with the twist V_i = J_i w, J_i = [I_6, s_1 .. s_i, 0], where
+  s_j = [o_j x a_j; a_j] is the motion vector of joint j (axis a_j through o_j);
+- M_b = sum_i J_i^T I_i J_i with the spatial inertias I_i (rigid + added mass) moved to
+  frame 0: the composite-rigid-body matrix;
+- the bias is the recursive Newton-Euler force f_i = I_i a_i + V_i x* I_i V_i at w_dot = 0,
+  a_i = sum_{j<=i} (V_{j-1} x s_j) q_dot_j, minus gravity, buoyancy and drag, mapped by J_i^T.
 
 Added mass enters as extra (non rigid-body) spatial inertia of each body, which gives exactly
 M = M_RB + sum J_i^T M_A,i J_i and bias sum J_i^T (M_A,i J_dot_i w + nu_i x* M_A,i nu_i)
 (Kirchhoff's equations of a body in ideal fluid at rest); it is never applied as a force from
 a past acceleration. Gravity and buoyancy act as forces, so they never see the added mass.
+
+Speed: at these sizes numpy's per-call overhead dominates, so 3-vector kinematics is plain
+Python arithmetic, 6 x 6 work is batched over the bodies, spatial cross products are one
+matrix product with a constant map, the 9 x 9 solve is LAPACK's dposv (Cholesky), and the
+configuration-dependent part is cached for the last joint angles.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import lapack  # type: ignore[import-untyped]
 
 from uvms_model.errors import ModelError, ParameterError, StateError, UnreachableError
 from uvms_model.hydrodynamics import (
@@ -31,14 +39,7 @@ from uvms_model.hydrodynamics import (
     spheroid_added_mass,
     strip_nodes,
 )
-from uvms_model.kinematics import (
-    check_pitch,
-    euler_rate_matrix,
-    euler_rate_matrix_inverse,
-    rot_ned_from_body,
-    rotation_about_axis,
-    skew,
-)
+from uvms_model.kinematics import check_pitch
 from uvms_model.parameters import UvmsParameters
 
 FloatArray = NDArray[np.float64]
@@ -47,6 +48,9 @@ N_JOINTS = 3
 N_DOF = 6 + N_JOINTS
 FRAME_NAMES = ('base_link_frd', 'link_1', 'link_2', 'link_3', 'ee_link', 'ft_sensor_link')
 """Frames of ``UvmsModel.frame_poses``, all posed in map_ned."""
+
+Vec3 = tuple[float, float, float]
+Mat3 = tuple[float, float, float, float, float, float, float, float, float]  # row-major
 
 
 def _vector(name: str, value: ArrayLike, size: int) -> FloatArray:
@@ -59,52 +63,82 @@ def _vector(name: str, value: ArrayLike, size: int) -> FloatArray:
     return array
 
 
-def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Row-wise cross product of (..., 3) arrays (cheaper than np.cross for small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+def _cross(a: Vec3 | list[float], b: Vec3 | list[float]) -> Vec3:
+    """Cross product of two 3-vectors given as Python sequences."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def _motion_cross(v: FloatArray, m: FloatArray) -> FloatArray:
-    """Spatial motion cross product v x m of (..., 6) twists [linear; angular]."""
-    return np.concatenate(
-        (
-            _cross(v[..., 3:], m[..., :3]) + _cross(v[..., :3], m[..., 3:]),
-            _cross(v[..., 3:], m[..., 3:]),
-        ),
-        axis=-1,
+def _rotation(phi: float, theta: float, psi: float) -> Mat3:
+    """rot_ned_from_body (J1 of sec. 3.2), row-major, as plain floats."""
+    c4, s4 = math.cos(phi), math.sin(phi)
+    c5, s5 = math.cos(theta), math.sin(theta)
+    c6, s6 = math.cos(psi), math.sin(psi)
+    return (
+        c5 * c6, -s6 * c4 + s4 * s5 * c6, s4 * s6 + s5 * c4 * c6,
+        s6 * c5, c4 * c6 + s4 * s5 * s6, -s4 * c6 + s5 * s6 * c4,
+        -s5, s4 * c5, c4 * c5,
+    )  # fmt: skip
+
+
+def _mat_vec(r: Mat3, v: Vec3 | list[float]) -> Vec3:
+    return (
+        r[0] * v[0] + r[1] * v[1] + r[2] * v[2],
+        r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+        r[6] * v[0] + r[7] * v[1] + r[8] * v[2],
     )
 
 
-def _force_cross(v: FloatArray, f: FloatArray) -> FloatArray:
-    """Spatial force cross product v x* f of a (..., 6) twist and wrench [linear; angular]."""
-    return np.concatenate(
-        (
-            _cross(v[..., 3:], f[..., :3]),
-            _cross(v[..., 3:], f[..., 3:]) + _cross(v[..., :3], f[..., :3]),
-        ),
-        axis=-1,
+def _mat_t_vec(r: Mat3, v: Vec3 | list[float]) -> Vec3:
+    return (
+        r[0] * v[0] + r[3] * v[1] + r[6] * v[2],
+        r[1] * v[0] + r[4] * v[1] + r[7] * v[2],
+        r[2] * v[0] + r[5] * v[1] + r[8] * v[2],
     )
 
 
-class _ArmKinematics:
-    """Pose of the arm in frame 0 for one set of joint angles."""
+def _mat_mat(a: Mat3, b: Mat3) -> Mat3:
+    a0, a1, a2, a3, a4, a5, a6, a7, a8 = a
+    b0, b1, b2, b3, b4, b5, b6, b7, b8 = b
+    return (
+        a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8,
+        a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8,
+        a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8,
+    )  # fmt: skip
 
-    __slots__ = ('axes', 'ee', 'origins', 'rotations', 'subspaces')
 
-    def __init__(
-        self,
-        rotations: FloatArray,
-        origins: FloatArray,
-        axes: FloatArray,
-        ee: FloatArray,
-    ) -> None:
-        self.rotations = rotations  # (3, 3, 3) rot_body_from_link_i
-        self.origins = origins  # (3, 3) joint i position in frame 0
-        self.axes = axes  # (3, 3) joint i axis in frame 0
-        self.ee = ee  # (3,) end effector in frame 0
-        self.subspaces = np.concatenate((_cross(origins, axes), axes), axis=1)  # (3, 6)
+def _motion_cross_map() -> FloatArray:
+    """Constant T (6, 36) with crm(v).ravel() = v @ T: crm(v) m = v x m (spatial motion)."""
+    t = np.zeros((6, 6, 6))
+    skew_entries = ((0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0),
+                    (2, 0, 1, -1.0), (2, 1, 0, 1.0))  # fmt: skip
+    for row, col, k, sign in skew_entries:
+        t[3 + k, row, col] = sign  # omega x (linear part)
+        t[k, row, 3 + col] = sign  # v x (angular part of m) into linear
+        t[3 + k, 3 + row, 3 + col] = sign  # omega x (angular part)
+    return t.reshape(6, 36)
+
+
+class _Configuration:
+    """Quantities that depend on the joint angles only, in frame 0."""
+
+    __slots__ = (
+        'axes', 'coms', 'ee', 'inertias', 'jac', 'jac_flat', 'key', 'mass', 'origins',
+        'rotations', 'subspaces', 'x', 'x_t',
+    )  # fmt: skip
+
+    key: tuple[float, float, float]
+    rotations: list[Mat3]  # rot_body_from_link_i
+    origins: list[Vec3]  # joint i position in frame 0
+    axes: list[Vec3]  # joint i axis in frame 0
+    coms: list[Vec3]  # link i centre (mass and buoyancy) in frame 0
+    ee: Vec3  # end effector in frame 0
+    subspaces: FloatArray  # (3, 6) s_j
+    x: FloatArray  # (3, 6, 6) motion transforms frame 0 -> link i
+    x_t: FloatArray  # (3, 6, 6) their transposes (force transforms link i -> frame 0)
+    inertias: FloatArray  # (4, 6, 6) I_i in frame 0 at O
+    jac: FloatArray  # (4, 6, 9) body Jacobians J_i in frame 0
+    jac_flat: FloatArray  # (24, 9)
+    mass: FloatArray | None  # M_b, computed on demand
 
 
 class UvmsModel:
@@ -112,7 +146,8 @@ class UvmsModel:
 
     Coordinates (docs/architecture.md): q = [x, y, z, phi, theta, psi, q1, q2, q3] with the
     vehicle origin in map_ned and ZYX Euler angles; quasi-velocities w = [u, v, w, p, q, r,
-    q1_dot, q2_dot, q3_dot] in base_link_frd; q_dot = B(q) w (eq. 4).
+    q1_dot, q2_dot, q3_dot] in base_link_frd; q_dot = B(q) w (eq. 4). Arrays returned are
+    new arrays owned by the caller. Not thread-safe (one cache per instance).
 
     Example:
         >>> model = UvmsModel()
@@ -130,391 +165,316 @@ class UvmsModel:
         hydro = p.hydrodynamics
         rho = hydro.water_density_kg_m3
         self._g = hydro.gravity_m_s2
-        self._mount = np.array(p.arm.mount_position_m, dtype=float)
-        self._joint_axes = np.array(p.arm.joint_axes, dtype=float).reshape(3, 3)
-        self._joint_axes /= np.linalg.norm(self._joint_axes, axis=1, keepdims=True)
-        self._lengths = np.array(p.arm.link_lengths_m, dtype=float)
-        self._radii = np.array(p.arm.link_radii_m, dtype=float)
-        self._link_masses = np.array(p.arm.link_masses_kg, dtype=float)
+        self._method = p.integration.method
+        lengths = [float(v) for v in p.arm.link_lengths_m]
+        radii = [float(v) for v in p.arm.link_radii_m]
+        masses = [float(v) for v in p.arm.link_masses_kg]
         for i in range(N_JOINTS):
-            if self._lengths[i] <= 2.0 * self._radii[i]:
+            if lengths[i] <= 2.0 * radii[i]:
                 raise ParameterError(
-                    f'arm.link_lengths_m[{i}] = {self._lengths[i]!r} must exceed twice '
-                    f'arm.link_radii_m[{i}] = {self._radii[i]!r}: links are slender cylinders'
+                    f'arm.link_lengths_m[{i}] = {lengths[i]!r} must exceed twice '
+                    f'arm.link_radii_m[{i}] = {radii[i]!r}: links are slender cylinders'
                 )
+        self._lengths = lengths
+        self._mount: Vec3 = tuple(float(v) for v in p.arm.mount_position_m)  # type: ignore[assignment]
+        axes = np.array(p.arm.joint_axes, dtype=float).reshape(3, 3)
+        axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+        self._joint_axes: list[Vec3] = [tuple(a) for a in axes.tolist()]
 
-        # Vehicle: rigid body about the hull centre, plus the spheroid's added mass.
+        # Spatial inertias: vehicle at the hull centre O, links at their joint, own axes.
         veh = p.vehicle
         a_hull, b_hull = 0.5 * veh.length_m, 0.5 * veh.diameter_m
         r_g = np.array(veh.center_of_gravity_m, dtype=float)
         r_b = np.array(veh.center_of_buoyancy_m, dtype=float)
-        self._rigid_inertia_vehicle = rigid_body_inertia(
-            veh.mass_kg, r_g, np.diag(veh.inertia_kg_m2)
+        rigid_vehicle = rigid_body_inertia(veh.mass_kg, r_g, np.diag(veh.inertia_kg_m2))
+        rigid_links = np.array(
+            [
+                rigid_body_inertia(
+                    masses[i],
+                    np.array([0.5 * lengths[i], 0.0, 0.0]),
+                    cylinder_inertia(masses[i], lengths[i], radii[i]),
+                )
+                for i in range(N_JOINTS)
+            ]
         )
-        self._added_mass_vehicle = spheroid_added_mass(a_hull, b_hull, rho)
-        # Links: uniform cylinders about their joint, plus strip-theory added mass.
-        self._rigid_inertia_links = np.empty((N_JOINTS, 6, 6))
-        self._added_mass_links = np.empty((N_JOINTS, 6, 6))
-        link_volumes = math.pi * self._radii**2 * self._lengths
-        for i in range(N_JOINTS):
-            length, radius, mass = self._lengths[i], self._radii[i], self._link_masses[i]
-            self._rigid_inertia_links[i] = rigid_body_inertia(
-                mass, np.array([0.5 * length, 0.0, 0.0]), cylinder_inertia(mass, length, radius)
+        if hydro.added_mass_enabled:
+            added_vehicle = spheroid_added_mass(a_hull, b_hull, rho)
+            added_links = np.array(
+                [cylinder_added_mass(lengths[i], radii[i], rho) for i in range(N_JOINTS)]
             )
-            self._added_mass_links[i] = cylinder_added_mass(length, radius, rho)
-        if not hydro.added_mass_enabled:
-            self._added_mass_vehicle = np.zeros((6, 6))
-            self._added_mass_links = np.zeros((N_JOINTS, 6, 6))
-        self._inertia_vehicle = self._rigid_inertia_vehicle + self._added_mass_vehicle
-        self._inertia_links = self._rigid_inertia_links + self._added_mass_links
+        else:
+            added_vehicle = np.zeros((6, 6))
+            added_links = np.zeros((N_JOINTS, 6, 6))
+        self.added_mass_vehicle: FloatArray = added_vehicle
+        """Added-mass matrix M_A (6, 6) of the hull at O, base_link_frd axes."""
+        self.added_mass_links: FloatArray = added_links
+        """Added-mass matrices (3, 6, 6) of the links at their joint, link axes."""
+        self._inertia_vehicle = rigid_vehicle + added_vehicle
+        self._inertia_links = rigid_links + added_links
+        self._inertia_template = np.zeros((4, 6, 6))
+        self._inertia_template[0] = self._inertia_vehicle
 
-        # Gravity and buoyancy: net "wet" mass W_i and first moment H_i = m c - m_disp b.
-        total_mass = veh.mass_kg + float(self._link_masses.sum())
+        # Gravity and buoyancy as net ("wet") masses W_i and first moments W_i c_i.
+        total_mass = veh.mass_kg + sum(masses)
+        link_volumes = [math.pi * radii[i] ** 2 * lengths[i] for i in range(N_JOINTS)]
         if hydro.buoyancy_enabled:
-            link_displaced = rho * link_volumes
-            hull_displaced = veh.buoyancy_ratio * total_mass - float(link_displaced.sum())
+            link_displaced = [rho * v for v in link_volumes]
+            hull_displaced = veh.buoyancy_ratio * total_mass - sum(link_displaced)
             if hull_displaced < 0.0:
                 raise ParameterError(
                     f'vehicle.buoyancy_ratio = {veh.buoyancy_ratio!r} is below what the links '
-                    f'alone provide ({float(link_displaced.sum()) / total_mass:.4g})'
+                    f'alone provide ({sum(link_displaced) / total_mass:.4g})'
                 )
         else:
-            link_displaced = np.zeros(N_JOINTS)
+            link_displaced = [0.0] * N_JOINTS
             hull_displaced = 0.0
         self.hull_displaced_mass_kg = hull_displaced
-        self._wet_mass = np.concatenate(
-            ([veh.mass_kg - hull_displaced], self._link_masses - link_displaced)
+        """Mass of water displaced by the hull (kg), set by ``vehicle.buoyancy_ratio``."""
+        self._wet_vehicle = veh.mass_kg - hull_displaced
+        self._wet_links = [masses[i] - link_displaced[i] for i in range(N_JOINTS)]
+        self._first_moment_vehicle: Vec3 = tuple(
+            (veh.mass_kg * r_g - hull_displaced * r_b).tolist()
         )
-        self._first_moment_vehicle = veh.mass_kg * r_g - hull_displaced * r_b
-        self._first_moment_links_local = np.zeros((N_JOINTS, 3))
-        self._first_moment_links_local[:, 0] = self._wet_mass[1:] * 0.5 * self._lengths
 
-        # Drag.
+        # Drag: hull coefficients per quasi-velocity; links by Gauss-Legendre strips.
         self._drag_enabled = hydro.drag_enabled
-        self._hull_linear_drag = np.array(
-            [veh.linear_drag_translation_n_s_m] * 3 + [veh.linear_drag_rotation_n_m_s] * 3
-        )
+        self._hull_linear_drag = [veh.linear_drag_translation_n_s_m] * 3 + [
+            veh.linear_drag_rotation_n_m_s
+        ] * 3
         self._hull_quadratic_drag = hull_quadratic_drag(
             a_hull, b_hull, rho, veh.drag_coefficient_translation, veh.drag_coefficient_rotation
-        )
-        nodes = [strip_nodes(float(ln), hydro.drag_strips_per_link) for ln in self._lengths]
-        self._strip_x = np.array([x for x, _ in nodes])  # (3, N)
+        ).tolist()
+        nodes = [strip_nodes(length, hydro.drag_strips_per_link) for length in lengths]
+        strip_x = np.array([x for x, _ in nodes])  # (3, N)
         strip_dx = np.array([dx for _, dx in nodes])
-        self._strip_gain = (
-            0.5 * rho * p.arm.drag_coefficient * 2.0 * self._radii[:, None] * strip_dx
-        )  # (3, N): 1/2 rho C_D (2 r) dx
-        self._method = p.integration.method
+        # 1/2 rho C_D (2 r) dx per strip.
+        self._strip_gain = 0.5 * rho * p.arm.drag_coefficient * 2.0 * np.array(radii)[:, None]
+        self._strip_gain = self._strip_gain * strip_dx
+        self._strip_basis = np.stack((np.ones_like(strip_x), strip_x), axis=1)  # (3, 2, N)
+        self._strip_basis_t = self._strip_basis.transpose(0, 2, 1).copy()
+        # Link-frame twist -> [[v_y, w_z], [v_z, -w_y]]: normal velocity at x is row @ [1, x].
+        self._drag_select = np.zeros((6, 4))
+        self._drag_select[1, 0] = self._drag_select[5, 1] = self._drag_select[2, 2] = 1.0
+        self._drag_select[4, 3] = -1.0
+        # [sum w v_y, sum w x v_y, sum w v_z, sum w x v_z] -> link-frame drag wrench.
+        self._drag_wrench = np.zeros((4, 6))
+        self._drag_wrench[0, 1] = self._drag_wrench[1, 5] = self._drag_wrench[2, 2] = -1.0
+        self._drag_wrench[3, 4] = 1.0
 
-    # ------------------------------------------------------------------ kinematics
+        # Constant maps.
+        self._crm_map = _motion_cross_map()
+        self._jac_template = np.zeros((4, 6, N_DOF))
+        self._jac_template[:, :, :6] = np.eye(6)
+        self._joint_mask = np.tril(np.ones((N_JOINTS, N_JOINTS)))[:, None, :]  # (3, 1, 3)
+        self._x_map = np.zeros((18, 36))  # [rt (9), b (9)] -> X = [[rt, b], [0, rt]]
+        for r in range(3):
+            for c in range(3):
+                self._x_map[3 * r + c, 6 * r + c] = 1.0
+                self._x_map[3 * r + c, 6 * (r + 3) + c + 3] = 1.0
+                self._x_map[9 + 3 * r + c, 6 * r + c + 3] = 1.0
+        self._cache: _Configuration | None = None
 
-    def _arm(self, qm: FloatArray) -> _ArmKinematics:
-        """Arm kinematics in frame 0 for joint angles ``qm`` (3,)."""
-        axes_local = self._joint_axes
-        r1 = rotation_about_axis(axes_local[0], float(qm[0]))
-        r2 = r1 @ rotation_about_axis(axes_local[1], float(qm[1]))
-        r3 = r2 @ rotation_about_axis(axes_local[2], float(qm[2]))
-        rotations = np.stack((r1, r2, r3))
-        axes = np.stack((axes_local[0], r1 @ axes_local[1], r2 @ axes_local[2]))
-        o1 = self._mount
-        o2 = o1 + self._lengths[0] * r1[:, 0]
-        o3 = o2 + self._lengths[1] * r2[:, 0]
-        ee = o3 + self._lengths[2] * r3[:, 0]
-        return _ArmKinematics(rotations, np.stack((o1, o2, o3)), axes, ee)
+    # ------------------------------------------------------------------ configuration
 
-    def _link_inertias(self, arm: _ArmKinematics) -> FloatArray:
-        """Spatial inertias (3, 6, 6) of the links in frame 0 at O: X_i^T I_i X_i."""
-        rot_t = arm.rotations.transpose(0, 2, 1)  # rot_link_from_body
-        x = np.zeros((N_JOINTS, 6, 6))
-        x[:, :3, :3] = rot_t
-        x[:, 3:, 3:] = rot_t
-        x[:, :3, 3:] = -rot_t @ np.stack([skew(o) for o in arm.origins])
-        result: FloatArray = x.transpose(0, 2, 1) @ self._inertia_links @ x
+    def _configuration(self, q1: float, q2: float, q3: float) -> _Configuration:
+        """Arm kinematics, transforms, inertias and Jacobians in frame 0 (cached)."""
+        cached = self._cache
+        key = (q1, q2, q3)
+        if cached is not None and cached.key == key:
+            return cached
+        cfg = _Configuration()
+        cfg.key = key
+        rotations: list[Mat3] = []
+        origins: list[Vec3] = []
+        axes: list[Vec3] = []
+        coms: list[Vec3] = []
+        flat: list[float] = []
+        origin = self._mount
+        parent: Mat3 | None = None
+        for j, angle in enumerate(key):
+            x, y, z = self._joint_axes[j]
+            c, s = math.cos(angle), math.sin(angle)
+            k = 1.0 - c
+            relative: Mat3 = (
+                c + k * x * x, k * x * y - s * z, k * x * z + s * y,
+                k * x * y + s * z, c + k * y * y, k * y * z - s * x,
+                k * x * z - s * y, k * y * z + s * x, c + k * z * z,
+            )  # fmt: skip
+            if parent is None:
+                rot, axis = relative, (x, y, z)
+            else:
+                rot, axis = _mat_mat(parent, relative), _mat_vec(parent, (x, y, z))
+            r0, r1, r2, r3, r4, r5, r6, r7, r8 = rot
+            half = 0.5 * self._lengths[j]
+            rotations.append(rot)
+            origins.append(origin)
+            axes.append(axis)
+            coms.append((origin[0] + half * r0, origin[1] + half * r3, origin[2] + half * r6))
+            # X_j rows: rot^T, then o x e_k for the link axes e_k (columns of rot).
+            b0 = _cross(origin, (r0, r3, r6))
+            b1 = _cross(origin, (r1, r4, r7))
+            b2 = _cross(origin, (r2, r5, r8))
+            flat += (r0, r3, r6, r1, r4, r7, r2, r5, r8)
+            flat += (*b0, *b1, *b2)
+            length = self._lengths[j]
+            origin = (origin[0] + length * r0, origin[1] + length * r3, origin[2] + length * r6)
+            parent = rot
+        for j in range(N_JOINTS):
+            flat += (*_cross(origins[j], axes[j]), *axes[j])
+        data = np.array(flat)
+        cfg.rotations, cfg.origins, cfg.axes, cfg.coms, cfg.ee = (
+            rotations, origins, axes, coms, origin,
+        )  # fmt: skip
+        cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
+        cfg.x = (data[:54].reshape(N_JOINTS, 18) @ self._x_map).reshape(N_JOINTS, 6, 6)
+        cfg.x_t = cfg.x.transpose(0, 2, 1)
+        inertias = self._inertia_template.copy()
+        np.matmul(cfg.x_t, self._inertia_links @ cfg.x, out=inertias[1:])
+        cfg.inertias = inertias
+        jac = self._jac_template.copy()
+        jac[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
+        cfg.jac = jac
+        cfg.jac_flat = jac.reshape(4 * 6, N_DOF)
+        cfg.mass = None
+        self._cache = cfg
+        return cfg
+
+    def _mass(self, cfg: _Configuration) -> FloatArray:
+        """M_b = sum_i J_i^T I_i J_i (composite-rigid-body matrix), cached per configuration."""
+        if cfg.mass is None:
+            cfg.mass = cfg.jac_flat.T @ (cfg.inertias @ cfg.jac).reshape(4 * 6, N_DOF)
+        return cfg.mass
+
+    def _bias(
+        self,
+        cfg: _Configuration,
+        q: list[float],
+        w_list: list[float],
+        w: FloatArray,
+        f_ee_ned: list[float] | None,
+    ) -> FloatArray:
+        """C_b w + D_b w + G_b - J_ee^T f_ee (9,): RNEA at w_dot = 0 (eq. 8)."""
+        twists = (cfg.jac_flat @ w).reshape(4, 6)
+        crm = (twists @ self._crm_map).reshape(4, 6, 6)
+        joint_twists = cfg.subspaces * w[6:, None]  # s_j q_dot_j
+        # a_i = sum_{j <= i} (V_{j-1} x s_j) q_dot_j; V_{j-1} is body j-1's twist.
+        acc_vel = np.empty((4, 6, 2))
+        acc_vel[0, :, 0] = 0.0
+        acc_vel[1:, :, 0:1] = np.cumsum(crm[:3] @ joint_twists[:, :, None], axis=0)
+        acc_vel[:, :, 1] = twists
+        products = cfg.inertias @ acc_vel  # [I a, I V]
+        forces = products[:, :, 0] - (crm.transpose(0, 2, 1) @ products[:, :, 1:2])[:, :, 0]
+        if self._drag_enabled:
+            local = (cfg.x @ twists[1:, :, None])[:, :, 0] @ self._drag_select
+            normal = local.reshape(N_JOINTS, 2, 2) @ self._strip_basis  # (3, 2, N)
+            weights = self._strip_gain * np.hypot(normal[:, 0], normal[:, 1])
+            sums = (normal * weights[:, None, :]) @ self._strip_basis_t  # (3, 2, 2)
+            wrench = sums.reshape(N_JOINTS, 4) @ self._drag_wrench
+            forces[1:] -= (cfg.x_t @ wrench[:, :, None])[:, :, 0]
+        forces -= np.array(self._body_wrenches(cfg, q, w_list, f_ee_ned)).reshape(4, 6)
+        result: FloatArray = cfg.jac_flat.T @ forces.reshape(4 * 6)
         return result
+
+    def _body_wrenches(
+        self, cfg: _Configuration, q: list[float], w: list[float], f_ee_ned: list[float] | None
+    ) -> list[float]:
+        """Gravity, buoyancy, hull drag and EE force on the 4 bodies, frame 0 at O (24,)."""
+        out = [0.0] * 24
+        g = self._g
+        if g != 0.0:
+            phi, theta = q[3], q[4]
+            cth = math.cos(theta)
+            g_b = (-g * math.sin(theta), g * math.sin(phi) * cth, g * math.cos(phi) * cth)
+            wet = self._wet_vehicle
+            moment = _cross(self._first_moment_vehicle, g_b)
+            out[0:6] = (wet * g_b[0], wet * g_b[1], wet * g_b[2], *moment)
+            for i in range(N_JOINTS):
+                wet = self._wet_links[i]
+                force = (wet * g_b[0], wet * g_b[1], wet * g_b[2])
+                moment = _cross(cfg.coms[i], force)
+                out[6 * (i + 1) : 6 * (i + 2)] = (*force, *moment)
+        if self._drag_enabled:
+            linear, quadratic = self._hull_linear_drag, self._hull_quadratic_drag
+            for k in range(6):
+                out[k] -= (linear[k] + quadratic[k] * abs(w[k])) * w[k]
+        if f_ee_ned is not None:
+            f_b = _mat_t_vec(_rotation(q[3], q[4], q[5]), f_ee_ned)
+            moment = _cross(cfg.ee, f_b)
+            for k in range(3):
+                out[18 + k] += f_b[k]
+                out[21 + k] += moment[k]
+        return out
+
+    def _solve(self, mass: FloatArray, rhs: FloatArray) -> FloatArray:
+        """Solve M_b x = rhs by Cholesky (LAPACK dposv); M_b is symmetric positive definite."""
+        _, solution, info = lapack.dposv(mass, rhs)
+        if info != 0:
+            raise ModelError(f'M_b is not positive definite (dposv info {info})')
+        result: FloatArray = solution
+        return result
+
+    def _w_dot(
+        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f_ee_ned: list[float] | None
+    ) -> FloatArray:
+        q_list = q.tolist()
+        cfg = self._configuration(q_list[6], q_list[7], q_list[8])
+        bias = self._bias(cfg, q_list, w.tolist(), w, f_ee_ned)
+        return self._solve(self._mass(cfg), tau_b - bias)
+
+    def _q_dot(self, q: list[float], w: list[float]) -> list[float]:
+        """q_dot = B(q) w (eq. 4) as a list."""
+        phi, theta, psi = q[3], q[4], q[5]
+        c5 = check_pitch(theta, 'q (during integration)')
+        rot = _rotation(phi, theta, psi)
+        c4, s4 = math.cos(phi), math.sin(phi)
+        t5 = math.sin(theta) / c5
+        p, qq, r = w[3], w[4], w[5]
+        return [
+            *_mat_vec(rot, w),
+            p + (s4 * qq + c4 * r) * t5,
+            c4 * qq - s4 * r,
+            (s4 * qq + c4 * r) / c5,
+            w[6],
+            w[7],
+            w[8],
+        ]
+
+    # ------------------------------------------------------------------ public: dynamics
 
     def _check_q(self, q: ArrayLike) -> FloatArray:
         return _vector('q', q, N_DOF)
 
-    def velocity_transform(self, q: ArrayLike) -> FloatArray:
-        """B(q) (9, 9) of eq. 4, q_dot = B w, from J1 and J2 (paper sec. 3.2).
-
-        Raises:
-            SingularAttitudeError: Near pitch = +-90 deg.
-            StateError: If q is not a finite (9,) vector.
-        """
-        q = self._check_q(q)
-        b = np.eye(N_DOF)
-        b[0:3, 0:3] = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-        b[3:6, 3:6] = euler_rate_matrix(float(q[3]), float(q[4]))
-        return b
-
-    def _velocity_transform_inverse(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(R, J2^-1) so that B^-1 = blockdiag(R^T, J2^-1, I)."""
-        rot = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-        return rot, euler_rate_matrix_inverse(float(q[3]), float(q[4]))
-
-    def ee_position(self, q: ArrayLike) -> FloatArray:
-        """End-effector position X (3,) in map_ned (tip of link 3)."""
-        q = self._check_q(q)
-        rot = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-        result: FloatArray = q[:3] + rot @ self._arm(q[6:]).ee
-        return result
-
-    def ee_rotation(self, q: ArrayLike) -> FloatArray:
-        """rot_ned_from_ee (3, 3): ee_link axes, aligned with link 3 (x along the link)."""
-        q = self._check_q(q)
-        rot = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-        result: FloatArray = rot @ self._arm(q[6:]).rotations[2]
-        return result
-
-    def _ee_jacobian_body(self, arm: _ArmKinematics) -> FloatArray:
-        """Jacobian (3, 9) of the end-effector velocity in frame 0 with respect to w."""
-        jac = np.zeros((3, N_DOF))
-        jac[:, 0:3] = np.eye(3)
-        jac[:, 3:6] = -skew(arm.ee)
-        jac[:, 6:] = _cross(arm.axes, arm.ee - arm.origins).T
-        return jac
-
-    def ee_jacobian(self, q: ArrayLike) -> FloatArray:
-        """EE Jacobian J (3, 9) in map_ned with respect to q_dot: X_dot = J q_dot (eq. 22).
-
-        Raises:
-            SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
-        """
-        q = self._check_q(q)
-        check_pitch(float(q[4]))
-        rot, j2_inv = self._velocity_transform_inverse(q)
-        jac_w = rot @ self._ee_jacobian_body(self._arm(q[6:]))
-        jac = jac_w.copy()
-        jac[:, 0:3] = np.eye(3)
-        jac[:, 3:6] = jac_w[:, 3:6] @ j2_inv
-        return jac
-
-    def _euler_rate_matrix_dot_omega(self, q: FloatArray, eta_dot: FloatArray) -> FloatArray:
-        """J2_dot omega, with J2_dot from the Euler-angle rates eta_dot = (phi_dot, ...)."""
-        phi, theta = float(q[3]), float(q[4])
-        c4, s4 = math.cos(phi), math.sin(phi)
-        c5 = check_pitch(theta)
-        s5 = math.sin(theta)
-        t5 = s5 / c5
-        phi_dot, theta_dot = float(eta_dot[0]), float(eta_dot[1])
-        d_phi = np.array([[0.0, c4 * t5, -s4 * t5], [0.0, -s4, -c4], [0.0, c4 / c5, -s4 / c5]])
-        d_theta = np.array(
-            [
-                [0.0, s4 / c5**2, c4 / c5**2],
-                [0.0, 0.0, 0.0],
-                [0.0, s4 * s5 / c5**2, c4 * s5 / c5**2],
-            ]
-        )
-        omega = euler_rate_matrix_inverse(phi, theta) @ eta_dot
-        result: FloatArray = (phi_dot * d_phi + theta_dot * d_theta) @ omega
-        return result
-
-    def _binv_bdot_w(self, q: FloatArray, w: FloatArray, q_dot: FloatArray) -> FloatArray:
-        """B^-1 B_dot w (9,): [omega x v; J2^-1 J2_dot omega; 0]."""
-        out = np.zeros(N_DOF)
-        out[0:3] = _cross(w[3:6], w[0:3])
-        j2_dot_omega = self._euler_rate_matrix_dot_omega(q, q_dot[3:6])
-        out[3:6] = euler_rate_matrix_inverse(float(q[3]), float(q[4])) @ j2_dot_omega
-        return out
-
-    def ee_jacobian_dot_qdot(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
-        """J_dot q_dot (3,) in map_ned, so that X_ddot = J q_ddot + J_dot q_dot (eq. 23).
-
-        Raises:
-            SingularAttitudeError: Near pitch = +-90 deg.
-        """
-        q = self._check_q(q)
-        q_dot = _vector('q_dot', q_dot, N_DOF)
-        check_pitch(float(q[4]))
-        rot, j2_inv = self._velocity_transform_inverse(q)
-        w = np.concatenate((rot.T @ q_dot[:3], j2_inv @ q_dot[3:6], q_dot[6:]))
-        arm = self._arm(q[6:])
-        # Classical acceleration of the EE point at w_dot = 0 (frame 0, fixed at this instant).
-        twists, accelerations = self._link_twists(arm, w)
-        v3, a3 = twists[3], accelerations[3]
-        point_velocity = v3[:3] + _cross(v3[3:], arm.ee)
-        ee_acc = a3[:3] + _cross(a3[3:], arm.ee) + _cross(v3[3:], point_velocity)
-        binv_bdot_w = self._binv_bdot_w(q, w, q_dot)
-        # X_ddot = J_w w_dot + J_w_dot w and w_dot = B^-1 (q_ddot - B_dot w).
-        jac_w = rot @ self._ee_jacobian_body(arm)
-        result: FloatArray = rot @ ee_acc - jac_w @ binv_bdot_w
-        return result
-
-    # ------------------------------------------------------------------ dynamics
-
-    def _link_twists(self, arm: _ArmKinematics, w: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Twists V (4, 6) and velocity-product accelerations (4, 6) of the 4 bodies."""
-        s = arm.subspaces
-        qd = w[6:]
-        twists = np.empty((4, 6))
-        twists[0] = w[:6]
-        twists[1:] = w[:6] + np.cumsum(s * qd[:, None], axis=0)
-        accelerations = np.zeros((4, 6))
-        accelerations[1:] = np.cumsum(_motion_cross(twists[:3], s) * qd[:, None], axis=0)
-        return twists, accelerations
-
-    def _body_inertias(self, arm: _ArmKinematics) -> FloatArray:
-        """Spatial inertias (4, 6, 6) of vehicle and links in frame 0 at O."""
-        inertias = np.empty((4, 6, 6))
-        inertias[0] = self._inertia_vehicle
-        inertias[1:] = self._link_inertias(arm)
-        return inertias
-
-    def _mass_matrix_from(self, arm: _ArmKinematics, inertias: FloatArray) -> FloatArray:
-        """Composite-rigid-body M_b (9, 9) from the body inertias in frame 0."""
-        composite = np.cumsum(inertias[::-1], axis=0)[::-1]
-        s = arm.subspaces
-        forces = (composite[1:] @ s[:, :, None])[:, :, 0]  # (3, 6): F_j = Ic_j s_j
-        mass = np.empty((N_DOF, N_DOF))
-        mass[:6, :6] = composite[0]
-        mass[:6, 6:] = forces.T
-        mass[6:, :6] = forces
-        proj = s @ forces.T  # proj[j, k] = s_j . Ic_k s_k, valid for j <= k
-        upper = np.triu(proj)
-        mass[6:, 6:] = upper + np.triu(proj, 1).T
-        return mass
-
-    def _external_wrenches(
-        self, q: FloatArray, w: FloatArray, arm: _ArmKinematics, twists: FloatArray
-    ) -> FloatArray:
-        """Gravity, buoyancy and drag wrenches (4, 6) on each body, frame 0 at O."""
-        wrenches = np.zeros((4, 6))
-        if self._g != 0.0:
-            phi, theta = float(q[3]), float(q[4])
-            cth = math.cos(theta)
-            g_body = self._g * np.array(
-                [-math.sin(theta), math.sin(phi) * cth, math.cos(phi) * cth]
-            )
-            first_moments = np.empty((4, 3))
-            first_moments[0] = self._first_moment_vehicle
-            first_moments[1:] = (
-                self._wet_mass[1:, None] * arm.origins
-                + (arm.rotations @ self._first_moment_links_local[:, :, None])[:, :, 0]
-            )
-            wrenches[:, :3] = self._wet_mass[:, None] * g_body
-            wrenches[:, 3:] = _cross(first_moments, g_body[None, :])
-        if self._drag_enabled:
-            nu = w[:6]
-            wrenches[0] -= (self._hull_linear_drag + self._hull_quadratic_drag * np.abs(nu)) * nu
-            link_axes = arm.rotations[:, :, 0]  # (3, 3) unit axes e_i in frame 0
-            v_o = twists[1:, :3] + _cross(twists[1:, 3:], arm.origins)  # at joint origins
-            v_o_normal = v_o - np.sum(v_o * link_axes, axis=1, keepdims=True) * link_axes
-            v_rate = _cross(twists[1:, 3:], link_axes)  # d v_n / d x, normal to the axis
-            v_n = v_o_normal[:, None, :] + self._strip_x[:, :, None] * v_rate[:, None, :]
-            speed = np.sqrt(np.sum(v_n * v_n, axis=2))
-            d_force = -(self._strip_gain * speed)[:, :, None] * v_n  # (3, N, 3)
-            force = d_force.sum(axis=1)
-            force_x = np.sum(self._strip_x[:, :, None] * d_force, axis=1)
-            wrenches[1:, :3] += force
-            wrenches[1:, 3:] += _cross(arm.origins, force) + _cross(link_axes, force_x)
-        return wrenches
-
-    def _bias_from(
-        self,
-        q: FloatArray,
-        w: FloatArray,
-        arm: _ArmKinematics,
-        inertias: FloatArray,
-        extra_wrench_link3: FloatArray | None = None,
-    ) -> FloatArray:
-        """Recursive Newton-Euler bias C_b w + D_b w + G_b (9,) at w_dot = 0 (eq. 8)."""
-        twists, accelerations = self._link_twists(arm, w)
-        momenta = (inertias @ twists[:, :, None])[:, :, 0]
-        forces = (inertias @ accelerations[:, :, None])[:, :, 0] + _force_cross(twists, momenta)
-        forces -= self._external_wrenches(q, w, arm, twists)
-        if extra_wrench_link3 is not None:
-            forces[3] -= extra_wrench_link3
-        composite = np.cumsum(forces[::-1], axis=0)[::-1]
-        bias = np.empty(N_DOF)
-        bias[:6] = composite[0]
-        bias[6:] = np.sum(arm.subspaces * composite[1:], axis=1)
-        return bias
-
     def mass_matrix_body(self, q: ArrayLike) -> FloatArray:
         """M_b(q_m) (9, 9) of eq. 8: rigid bodies plus added mass, in quasi-velocities w."""
         q = self._check_q(q)
-        arm = self._arm(q[6:])
-        return self._mass_matrix_from(arm, self._body_inertias(arm))
+        return self._mass(self._configuration(*q[6:].tolist())).copy()
 
     def bias_body(self, q: ArrayLike, w: ArrayLike) -> FloatArray:
         """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (9,) of eq. 8, so M_b w_dot + bias = tau_b."""
         q = self._check_q(q)
         w = _vector('w', w, N_DOF)
-        arm = self._arm(q[6:])
-        return self._bias_from(q, w, arm, self._body_inertias(arm))
+        q_list = q.tolist()
+        cfg = self._configuration(*q_list[6:])
+        return self._bias(cfg, q_list, w.tolist(), w, None)
 
     def gravity_body(self, q: ArrayLike) -> FloatArray:
         """G_b(q) (9,) of eq. 8: gravity and buoyancy as generalized body forces."""
         q = self._check_q(q)
-        arm = self._arm(q[6:])
-        wrenches = -self._external_wrenches_gravity_only(q, arm)
-        composite = np.cumsum(wrenches[::-1], axis=0)[::-1]
-        out = np.empty(N_DOF)
-        out[:6] = composite[0]
-        out[6:] = np.sum(arm.subspaces * composite[1:], axis=1)
-        return out
-
-    def _external_wrenches_gravity_only(self, q: FloatArray, arm: _ArmKinematics) -> FloatArray:
+        q_list = q.tolist()
+        cfg = self._configuration(*q_list[6:])
         drag = self._drag_enabled
         try:
             self._drag_enabled = False
-            return self._external_wrenches(q, np.zeros(N_DOF), arm, np.zeros((4, 6)))
+            wrenches = np.array(self._body_wrenches(cfg, q_list, [0.0] * N_DOF, None))
         finally:
             self._drag_enabled = drag
+        result: FloatArray = -(cfg.jac_flat.T @ wrenches)
+        return result
 
     def kinetic_energy(self, q: ArrayLike, w: ArrayLike) -> float:
         """Kinetic energy T = 1/2 w^T M_b w (J) of bodies and entrained water (added mass)."""
         w = _vector('w', w, N_DOF)
         return 0.5 * float(w @ self.mass_matrix_body(q) @ w)
-
-    def mass_matrix(self, q: ArrayLike) -> FloatArray:
-        """M(q) = B^-T M_b B^-1 (9, 9) in generalized coordinates (eq. 18)."""
-        q = self._check_q(q)
-        check_pitch(float(q[4]))
-        binv = self._binv(q)
-        result: FloatArray = binv.T @ self.mass_matrix_body(q) @ binv
-        return result
-
-    def _binv(self, q: FloatArray) -> FloatArray:
-        rot, j2_inv = self._velocity_transform_inverse(q)
-        binv = np.eye(N_DOF)
-        binv[0:3, 0:3] = rot.T
-        binv[3:6, 3:6] = j2_inv
-        return binv
-
-    def bias(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
-        """zeta(q, q_dot) = C q_dot + D q_dot + G (9,) of eq. 19, so M q_ddot + zeta = tau.
-
-        zeta = B^-T (C_b w + D_b w + G_b - M_b B^-1 B_dot w) with w = B^-1 q_dot (eq. 18).
-        """
-        q = self._check_q(q)
-        q_dot = _vector('q_dot', q_dot, N_DOF)
-        check_pitch(float(q[4]))
-        binv = self._binv(q)
-        w = binv @ q_dot
-        arm = self._arm(q[6:])
-        inertias = self._body_inertias(arm)
-        mass_b = self._mass_matrix_from(arm, inertias)
-        bias_b = self._bias_from(q, w, arm, inertias)
-        result: FloatArray = binv.T @ (bias_b - mass_b @ self._binv_bdot_w(q, w, q_dot))
-        return result
-
-    def _ee_wrench(self, q: FloatArray, arm: _ArmKinematics, f_ee_ned: FloatArray) -> FloatArray:
-        """Wrench (6,) in frame 0 at O of a force on the end effector given in map_ned."""
-        rot = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-        f_body = rot.T @ f_ee_ned
-        return np.concatenate((f_body, _cross(arm.ee, f_body)))
-
-    def _w_dot(
-        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f_ee_ned: FloatArray | None
-    ) -> FloatArray:
-        arm = self._arm(q[6:])
-        inertias = self._body_inertias(arm)
-        mass = self._mass_matrix_from(arm, inertias)
-        extra = None if f_ee_ned is None else self._ee_wrench(q, arm, f_ee_ned)
-        bias = self._bias_from(q, w, arm, inertias, extra)
-        result: FloatArray = np.linalg.solve(mass, tau_b - bias).astype(np.float64, copy=False)
-        return result
 
     def forward_dynamics(
         self,
@@ -536,18 +496,8 @@ class UvmsModel:
         q = self._check_q(q)
         w = _vector('w', w, N_DOF)
         tau_b = _vector('tau_b', tau_b, N_DOF)
-        f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3)
+        f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3).tolist()
         return self._w_dot(q, w, tau_b, f)
-
-    def _q_dot(self, q: FloatArray, w: FloatArray) -> FloatArray:
-        """q_dot = B(q) w (eq. 4)."""
-        phi, theta, psi = float(q[3]), float(q[4]), float(q[5])
-        check_pitch(theta, 'q (during integration)')
-        q_dot = np.empty(N_DOF)
-        q_dot[0:3] = rot_ned_from_body(phi, theta, psi) @ w[0:3]
-        q_dot[3:6] = euler_rate_matrix(phi, theta) @ w[3:6]
-        q_dot[6:] = w[6:]
-        return q_dot
 
     def step(
         self,
@@ -579,18 +529,18 @@ class UvmsModel:
         q = self._check_q(q)
         w = _vector('w', w, N_DOF)
         tau_b = _vector('tau_b', tau_b, N_DOF)
-        f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3)
+        f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3).tolist()
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
             raise StateError(f'dt must be a positive finite number of seconds, got {dt!r}')
         method = self._method if method is None else method
         if method == 'rk4':
-            q_new, w_new = self._rk4(q, w, tau_b, f, dt)
+            q_new, w_new = self._rk4(q, w, tau_b, f, float(dt))
         elif method == 'semi_implicit_euler':
             w_new = w + dt * self._w_dot(q, w, tau_b, f)
-            q_new = q + dt * self._q_dot(q, w_new)
+            q_new = q + dt * np.array(self._q_dot(q.tolist(), w_new.tolist()))
         else:
             raise ModelError(f"method = {method!r} must be 'rk4' or 'semi_implicit_euler'")
-        if not (np.isfinite(q_new).all() and np.isfinite(w_new).all()):
+        if not math.isfinite(float(q_new.sum() + w_new.sum())):
             raise StateError(
                 f'the state diverged in one step of dt = {dt!r} s from q = {q.tolist()!r}, '
                 f'w = {w.tolist()!r}'
@@ -598,20 +548,191 @@ class UvmsModel:
         return q_new, w_new
 
     def _rk4(
-        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f: FloatArray | None, dt: float
+        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f: list[float] | None, dt: float
     ) -> tuple[FloatArray, FloatArray]:
-        def rhs(qq: FloatArray, ww: FloatArray) -> tuple[FloatArray, FloatArray]:
-            return self._q_dot(qq, ww), self._w_dot(qq, ww, tau_b, f)
-
-        k1q, k1w = rhs(q, w)
-        k2q, k2w = rhs(q + 0.5 * dt * k1q, w + 0.5 * dt * k1w)
-        k3q, k3w = rhs(q + 0.5 * dt * k2q, w + 0.5 * dt * k2w)
-        k4q, k4w = rhs(q + dt * k3q, w + dt * k3w)
+        """Classical fourth-order Runge-Kutta step of (q_dot, w_dot) = (B w, M_b^-1 (...))."""
+        half = 0.5 * dt
+        k1w = self._w_dot(q, w, tau_b, f)
+        k1q = np.array(self._q_dot(q.tolist(), w.tolist()))
+        q2, w2 = q + half * k1q, w + half * k1w
+        k2w = self._w_dot(q2, w2, tau_b, f)
+        k2q = np.array(self._q_dot(q2.tolist(), w2.tolist()))
+        q3, w3 = q + half * k2q, w + half * k2w
+        k3w = self._w_dot(q3, w3, tau_b, f)
+        k3q = np.array(self._q_dot(q3.tolist(), w3.tolist()))
+        q4, w4 = q + dt * k3q, w + dt * k3w
+        k4w = self._w_dot(q4, w4, tau_b, f)
+        k4q = np.array(self._q_dot(q4.tolist(), w4.tolist()))
         sixth = dt / 6.0
         return (
-            q + sixth * (k1q + 2.0 * k2q + 2.0 * k3q + k4q),
-            w + sixth * (k1w + 2.0 * k2w + 2.0 * k3w + k4w),
+            q + sixth * (k1q + 2.0 * (k2q + k3q) + k4q),
+            w + sixth * (k1w + 2.0 * (k2w + k3w) + k4w),
         )
+
+    # ------------------------------------------------------------------ generalized coordinates
+
+    def velocity_transform(self, q: ArrayLike) -> FloatArray:
+        """B(q) (9, 9) of eq. 4, q_dot = B w: blockdiag(J1, J2, I) (paper sec. 3.2).
+
+        Raises:
+            SingularAttitudeError: Near pitch = +-90 deg.
+            StateError: If q is not a finite (9,) vector.
+        """
+        q = self._check_q(q)
+        phi, theta, psi = float(q[3]), float(q[4]), float(q[5])
+        c5 = check_pitch(theta)
+        c4, s4 = math.cos(phi), math.sin(phi)
+        t5 = math.sin(theta) / c5
+        b = np.eye(N_DOF)
+        b[0:3, 0:3] = np.reshape(_rotation(phi, theta, psi), (3, 3))
+        b[3:6, 3:6] = ((1.0, s4 * t5, c4 * t5), (0.0, c4, -s4), (0.0, s4 / c5, c4 / c5))
+        return b
+
+    def _b_inverse_blocks(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(R, J2^-1) with B^-1 = blockdiag(R^T, J2^-1, I); J2^-1 is regular at any pitch."""
+        phi, theta, psi = float(q[3]), float(q[4]), float(q[5])
+        c4, s4 = math.cos(phi), math.sin(phi)
+        c5, s5 = math.cos(theta), math.sin(theta)
+        rot = np.reshape(_rotation(phi, theta, psi), (3, 3))
+        j2_inv = np.array(((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5)))
+        return rot, j2_inv
+
+    def _b_inverse_b_dot_w(self, q: FloatArray, w: FloatArray, eta_dot: FloatArray) -> FloatArray:
+        """B^-1 B_dot w (9,) = [omega x v; J2^-1 J2_dot omega; 0] (eq. 18)."""
+        phi, theta = float(q[3]), float(q[4])
+        c4, s4 = math.cos(phi), math.sin(phi)
+        c5 = check_pitch(theta)
+        s5 = math.sin(theta)
+        t5 = s5 / c5
+        phi_dot, theta_dot = float(eta_dot[0]), float(eta_dot[1])
+        d_phi = np.array(((0.0, c4 * t5, -s4 * t5), (0.0, -s4, -c4), (0.0, c4 / c5, -s4 / c5)))
+        d_theta = np.array(
+            (
+                (0.0, s4 / c5**2, c4 / c5**2),
+                (0.0, 0.0, 0.0),
+                (0.0, s4 * s5 / c5**2, c4 * s5 / c5**2),
+            )
+        )
+        j2_inv = np.array(((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5)))
+        out = np.zeros(N_DOF)
+        out[0:3] = _cross(w[3:6].tolist(), w[0:3].tolist())
+        out[3:6] = j2_inv @ ((phi_dot * d_phi + theta_dot * d_theta) @ w[3:6])
+        return out
+
+    def mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """M(q) = B^-T M_b B^-1 (9, 9) in generalized coordinates (eq. 18).
+
+        Raises:
+            SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
+        """
+        q = self._check_q(q)
+        check_pitch(float(q[4]))
+        rot, j2_inv = self._b_inverse_blocks(q)
+        b_inv = np.eye(N_DOF)
+        b_inv[0:3, 0:3] = rot.T
+        b_inv[3:6, 3:6] = j2_inv
+        result: FloatArray = b_inv.T @ self._mass(self._configuration(*q[6:].tolist())) @ b_inv
+        return result
+
+    def bias(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """zeta(q, q_dot) = C q_dot + D q_dot + G (9,) of eq. 19, so M q_ddot + zeta = tau.
+
+        zeta = B^-T (C_b w + D_b w + G_b - M_b B^-1 B_dot w) with w = B^-1 q_dot (eq. 18).
+
+        Raises:
+            SingularAttitudeError: Near pitch = +-90 deg.
+        """
+        q = self._check_q(q)
+        q_dot = _vector('q_dot', q_dot, N_DOF)
+        check_pitch(float(q[4]))
+        rot, j2_inv = self._b_inverse_blocks(q)
+        b_inv = np.eye(N_DOF)
+        b_inv[0:3, 0:3] = rot.T
+        b_inv[3:6, 3:6] = j2_inv
+        w = b_inv @ q_dot
+        q_list = q.tolist()
+        cfg = self._configuration(*q_list[6:])
+        bias_b = self._bias(cfg, q_list, w.tolist(), w, None)
+        correction = self._mass(cfg) @ self._b_inverse_b_dot_w(q, w, q_dot[3:6])
+        result: FloatArray = b_inv.T @ (bias_b - correction)
+        return result
+
+    # ------------------------------------------------------------------ end effector
+
+    def ee_position(self, q: ArrayLike) -> FloatArray:
+        """End-effector position X (3,) in map_ned (tip of link 3)."""
+        q = self._check_q(q)
+        q_list = q.tolist()
+        cfg = self._configuration(*q_list[6:])
+        offset = _mat_vec(_rotation(*q_list[3:6]), cfg.ee)
+        return np.array((q_list[0] + offset[0], q_list[1] + offset[1], q_list[2] + offset[2]))
+
+    def ee_rotation(self, q: ArrayLike) -> FloatArray:
+        """rot_ned_from_ee (3, 3): ee_link axes, aligned with link 3 (x along the link)."""
+        q = self._check_q(q)
+        q_list = q.tolist()
+        cfg = self._configuration(*q_list[6:])
+        return np.reshape(_mat_mat(_rotation(*q_list[3:6]), cfg.rotations[2]), (3, 3))
+
+    def _ee_jacobian_body(self, cfg: _Configuration) -> FloatArray:
+        """Jacobian (3, 9) of the EE velocity in frame 0 with respect to w."""
+        ex, ey, ez = cfg.ee
+        columns = [
+            _cross(cfg.axes[j], [cfg.ee[k] - cfg.origins[j][k] for k in range(3)])
+            for j in range(N_JOINTS)
+        ]
+        return np.array(
+            (
+                (1.0, 0.0, 0.0, 0.0, ez, -ey, columns[0][0], columns[1][0], columns[2][0]),
+                (0.0, 1.0, 0.0, -ez, 0.0, ex, columns[0][1], columns[1][1], columns[2][1]),
+                (0.0, 0.0, 1.0, ey, -ex, 0.0, columns[0][2], columns[1][2], columns[2][2]),
+            )
+        )
+
+    def ee_jacobian(self, q: ArrayLike) -> FloatArray:
+        """EE Jacobian J (3, 9) in map_ned with respect to q_dot: X_dot = J q_dot (eq. 22).
+
+        J = [I, -R [r_ee]x J2^-1, R (a_j x (r_ee - o_j))], r_ee the EE in base_link_frd.
+
+        Raises:
+            SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
+        """
+        q = self._check_q(q)
+        check_pitch(float(q[4]))
+        rot, j2_inv = self._b_inverse_blocks(q)
+        jac = rot @ self._ee_jacobian_body(self._configuration(*q[6:].tolist()))
+        jac[:, 0:3] = np.eye(3)
+        jac[:, 3:6] = jac[:, 3:6] @ j2_inv
+        return jac
+
+    def ee_jacobian_dot_qdot(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """J_dot q_dot (3,) in map_ned, so that X_ddot = J q_ddot + J_dot q_dot (eq. 23).
+
+        Raises:
+            SingularAttitudeError: Near pitch = +-90 deg.
+        """
+        q = self._check_q(q)
+        q_dot = _vector('q_dot', q_dot, N_DOF)
+        check_pitch(float(q[4]))
+        rot, j2_inv = self._b_inverse_blocks(q)
+        w = np.concatenate((rot.T @ q_dot[:3], j2_inv @ q_dot[3:6], q_dot[6:]))
+        cfg = self._configuration(*q[6:].tolist())
+        # Classical acceleration of the EE point at w_dot = 0 in frame 0 (fixed at this instant).
+        twists = (cfg.jac_flat @ w).reshape(4, 6)
+        crm = (twists[:3] @ self._crm_map).reshape(3, 6, 6)
+        joint_twists = cfg.subspaces * w[6:, None]
+        acc = (crm @ joint_twists[:, :, None])[:, :, 0].sum(axis=0).tolist()
+        v3 = twists[3].tolist()
+        ee = cfg.ee
+        omega = v3[3:]
+        point_velocity = [v3[k] + c for k, c in enumerate(_cross(omega, ee))]
+        rel = _cross(acc[3:], ee)
+        cent = _cross(omega, point_velocity)
+        ee_acc = np.array([acc[k] + rel[k] + cent[k] for k in range(3)])
+        # X_ddot = J_w w_dot + J_w_dot w and w_dot = B^-1 (q_ddot - B_dot w).
+        jac_w = rot @ self._ee_jacobian_body(cfg)
+        result: FloatArray = rot @ ee_acc - jac_w @ self._b_inverse_b_dot_w(q, w, q_dot[3:6])
+        return result
 
     # ------------------------------------------------------------------ poses and IK
 
@@ -623,15 +744,22 @@ class UvmsModel:
             ee_link and ft_sensor_link at the tip of link 3 with link 3's axes.
         """
         q = self._check_q(q)
-        rot = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-        arm = self._arm(q[6:])
-        p0 = q[:3].copy()
-        poses = {'base_link_frd': (p0, rot)}
+        q_list = q.tolist()
+        rot = _rotation(*q_list[3:6])
+        cfg = self._configuration(*q_list[6:])
+        p0 = q_list[:3]
+
+        def pose(point: Vec3, frame_rot: Mat3) -> tuple[FloatArray, FloatArray]:
+            offset = _mat_vec(rot, point)
+            position = np.array([p0[k] + offset[k] for k in range(3)])
+            return position, np.reshape(_mat_mat(rot, frame_rot), (3, 3))
+
+        identity: Mat3 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+        poses = {'base_link_frd': pose((0.0, 0.0, 0.0), identity)}
         for i in range(N_JOINTS):
-            poses[f'link_{i + 1}'] = (p0 + rot @ arm.origins[i], rot @ arm.rotations[i])
-        ee = (p0 + rot @ arm.ee, rot @ arm.rotations[2])
-        poses['ee_link'] = ee
-        poses['ft_sensor_link'] = (ee[0].copy(), ee[1].copy())
+            poses[f'link_{i + 1}'] = pose(cfg.origins[i], cfg.rotations[i])
+        poses['ee_link'] = pose(cfg.ee, cfg.rotations[2])
+        poses['ft_sensor_link'] = pose(cfg.ee, cfg.rotations[2])
         return poses
 
     def joint_positions_for_ee_position(
@@ -660,15 +788,15 @@ class UvmsModel:
         q_vehicle = _vector('q_vehicle', q_vehicle, 6)
         target = _vector('x_ned', x_ned, 3)
         qm = _vector('q_arm_guess', q_arm_guess, N_JOINTS).copy()
-        rot = rot_ned_from_body(float(q_vehicle[3]), float(q_vehicle[4]), float(q_vehicle[5]))
+        rot = np.reshape(_rotation(*q_vehicle[3:6].tolist()), (3, 3))
         target_body = rot.T @ (target - q_vehicle[:3])
         error = np.full(3, np.inf)
         for _ in range(max_iterations):
-            arm = self._arm(qm)
-            error = target_body - arm.ee
+            cfg = self._configuration(*qm.tolist())
+            error = target_body - np.array(cfg.ee)
             if float(np.linalg.norm(error)) < tolerance_m:
                 break
-            jac = _cross(arm.axes, arm.ee - arm.origins).T
+            jac = self._ee_jacobian_body(cfg)[:, 6:]
             step = jac.T @ np.linalg.solve(jac @ jac.T + damping**2 * np.eye(3), error)
             qm = qm + step
         residual = float(np.linalg.norm(error))
