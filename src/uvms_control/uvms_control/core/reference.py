@@ -83,11 +83,11 @@ class HalfCircleReference:
         sweep: npt.ArrayLike = (0.0, 0.0, 1.0),
     ) -> None:
         if not (math.isfinite(radius) and radius > 0.0):
-            raise ControlParameterError('reference.radius', radius, '(0, inf) m')
+            raise ControlParameterError('reference.radius_m', radius, '(0, inf) m')
         if not (math.isfinite(duration) and duration > 0.0):
-            raise ControlParameterError('reference.duration', duration, '(0, inf) s')
+            raise ControlParameterError('reference.duration_s', duration, '(0, inf) s')
         if not (math.isfinite(start_delay) and start_delay >= 0.0):
-            raise ControlParameterError('reference.start_delay', start_delay, '[0, inf) s')
+            raise ControlParameterError('reference.start_delay_s', start_delay, '[0, inf) s')
         n = _unit('hybrid.force_direction', toward)
         d = _unit('reference.sweep_direction', sweep)
         d = d - float(n @ d) * n
@@ -166,12 +166,12 @@ class ForceSetpoint:
 
     def __init__(self, magnitude: float, ramp_time: float, contact_threshold: float) -> None:
         if not (math.isfinite(magnitude) and magnitude > 0.0):
-            raise ControlParameterError('force.setpoint', magnitude, '(0, inf) N')
+            raise ControlParameterError('force.setpoint_n', magnitude, '(0, inf) N')
         if not (math.isfinite(ramp_time) and ramp_time > 0.0):
-            raise ControlParameterError('force.ramp_time', ramp_time, '(0, inf) s')
+            raise ControlParameterError('force.ramp_time_s', ramp_time, '(0, inf) s')
         if not (math.isfinite(contact_threshold) and 0.0 < contact_threshold < magnitude):
             raise ControlParameterError(
-                'force.contact_threshold', contact_threshold, f'(0, {magnitude}) N'
+                'force.contact_threshold_n', contact_threshold, f'(0, {magnitude}) N'
             )
         self.magnitude = magnitude
         self.ramp_time = ramp_time

@@ -83,34 +83,37 @@ class ThrusterModelParameters:
     max_motor_current: float = 40.0
 
     def __post_init__(self) -> None:
+        # Keys are the ROS parameter names (config/controller.yaml), so errors name them.
         positive = {
-            'water_density': ('kg/m^3', self.water_density),
-            'propeller_diameter': ('m', self.propeller_diameter),
-            'thrust_coefficient': ('-', self.thrust_coefficient),
-            'lift_coefficient_max': ('-', self.lift_coefficient_max),
-            'drag_coefficient_max': ('-', self.drag_coefficient_max),
-            'duct_length': ('m', self.duct_length),
-            'duct_added_mass_ratio': ('-', self.duct_added_mass_ratio),
-            'momentum_flux_coefficient': ('-', self.momentum_flux_coefficient),
-            'motor_inertia': ('kg m^2', self.motor_inertia),
-            'motor_torque_constant': ('N m/A', self.motor_torque_constant),
-            'max_motor_current': ('A', self.max_motor_current),
+            'hydrodynamics.water_density_kg_m3': ('kg/m^3', self.water_density),
+            'thruster.propeller_diameter_m': ('m', self.propeller_diameter),
+            'thruster.thrust_coefficient': ('-', self.thrust_coefficient),
+            'thruster.lift_coefficient_max': ('-', self.lift_coefficient_max),
+            'thruster.drag_coefficient_max': ('-', self.drag_coefficient_max),
+            'thruster.duct_length_m': ('m', self.duct_length),
+            'thruster.duct_added_mass_ratio': ('-', self.duct_added_mass_ratio),
+            'thruster.momentum_flux_coefficient': ('-', self.momentum_flux_coefficient),
+            'thruster.motor_inertia_kg_m2': ('kg m^2', self.motor_inertia),
+            'thruster.motor_torque_constant_n_m_a': ('N m/A', self.motor_torque_constant),
+            'thruster.max_motor_current_a': ('A', self.max_motor_current),
         }
         for name, (unit, value) in positive.items():
             if not (math.isfinite(value) and value > 0.0):
-                raise ControlParameterError(f'thruster.{name}', value, f'(0, inf) {unit}')
+                raise ControlParameterError(name, value, f'(0, inf) {unit}')
         for name, value in (
-            ('motor_viscous_friction', self.motor_viscous_friction),
-            ('speed_feedback_gain', self.speed_feedback_gain),
+            ('thruster.motor_viscous_friction_n_m_s', self.motor_viscous_friction),
+            ('thruster.speed_feedback_gain_a_s', self.speed_feedback_gain),
         ):
             if not (math.isfinite(value) and value >= 0.0):
-                raise ControlParameterError(f'thruster.{name}', value, '[0, inf)')
+                raise ControlParameterError(name, value, '[0, inf)')
         if not (0.0 < self.reverse_thrust_ratio <= 1.0):
             raise ControlParameterError(
                 'thruster.reverse_thrust_ratio', self.reverse_thrust_ratio, '(0, 1]'
             )
         if not (0.0 < self.pitch_angle < math.pi / 2.0):
-            raise ControlParameterError('thruster.pitch_angle', self.pitch_angle, '(0, pi/2) rad')
+            raise ControlParameterError(
+                'thruster.pitch_angle_rad', self.pitch_angle, '(0, pi/2) rad'
+            )
 
 
 @dataclass(frozen=True)
@@ -165,7 +168,7 @@ def calibrate(params: ThrusterModelParameters) -> ThrusterCalibration:
     force_term = p.lift_coefficient_max * s2a * cb - p.drag_coefficient_max * c2a * sb
     if force_term <= 0.0:
         raise ControlParameterError(
-            'thruster.pitch_angle',
+            'thruster.pitch_angle_rad',
             p.pitch_angle,
             f'a pitch larger than the bollard flow angle atan({k_fwd:.3f}) with positive lift',
         )
