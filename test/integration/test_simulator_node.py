@@ -1,0 +1,314 @@
+"""The simulator node on an executor: rates, lockstep handshake, watchdog, bad input."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import pytest
+import rclpy
+from geometry_msgs.msg import PoseStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from tf2_msgs.msg import TFMessage
+from uvms_sim.errors import SimParameterError, SimulationError
+from uvms_sim.simulator_node import SimulatorNode
+
+from uvms_msgs.msg import ActuatorCommand, ContactState
+
+N_THRUSTERS = 8
+
+
+def stamp_ns(msg: Any) -> int:
+    """Header stamp of a message (ns)."""
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+@dataclass
+class Responder:
+    """Test stand-in for controller + allocator: answers each state with a command.
+
+    Attributes:
+        node: The test node in /uvms.
+        torques: Joint torques to command (N*m).
+        answer: Decides per state stamp (ns) whether to answer it.
+        states: Joint states received, in order.
+    """
+
+    node: Node
+    torques: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    answer: Callable[[int], bool] = lambda _: True
+    states: list[JointState] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.publisher = self.node.create_publisher(ActuatorCommand, 'command/actuators', 10)
+        self.node.create_subscription(JointState, 'joint_states', self._on_state, 100)
+
+    def _on_state(self, msg: JointState) -> None:
+        self.states.append(msg)
+        if self.answer(stamp_ns(msg)):
+            self.send(stamp_ns(msg))
+
+    def send(self, t_ns: int, thrust: list[float] | None = None,
+             torques: list[float] | None = None) -> None:
+        """Publish a command stamped t_ns."""
+        msg = ActuatorCommand(thrust=thrust if thrust is not None else [0.0] * N_THRUSTERS,
+                              joint_torques=torques if torques is not None else self.torques)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(t_ns, 1_000_000_000)
+        self.publisher.publish(msg)
+
+
+@dataclass
+class Harness:
+    """A simulator, a responder and an executor in their own context."""
+
+    context: Context
+    executor: SingleThreadedExecutor
+    responder: Responder
+    make_simulator: Callable[..., SimulatorNode]
+    simulator: SimulatorNode | None = None
+
+    def start(self, **parameters: Any) -> SimulatorNode:
+        """Build the simulator with parameter overrides and add it to the executor."""
+        self.simulator = self.make_simulator(**parameters)
+        self.executor.add_node(self.simulator)
+        return self.simulator
+
+    def spin_until(self, done: Callable[[], bool], timeout_s: float = 10.0) -> None:
+        """Spin until done() or the timeout (wall clock) fails the test."""
+        deadline = time.monotonic() + timeout_s
+        while not done():
+            assert time.monotonic() < deadline, 'timed out spinning'
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def spin_for(self, seconds: float) -> None:
+        """Spin for a wall-clock time."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.01)
+
+
+@pytest.fixture
+def harness() -> Iterator[Harness]:
+    """Fresh context with a responder node; the test starts the simulator."""
+    context = Context()
+    rclpy.init(args=[], context=context)
+    executor = SingleThreadedExecutor(context=context)
+    responder = Responder(rclpy.create_node('responder', namespace='uvms', context=context))
+    executor.add_node(responder.node)
+    made: list[SimulatorNode] = []
+
+    def make(**parameters: Any) -> SimulatorNode:
+        overrides = [Parameter(name.replace('__', '.'), value=value)
+                     for name, value in parameters.items()]
+        node = SimulatorNode(namespace='uvms', context=context, parameter_overrides=overrides)
+        made.append(node)
+        return node
+
+    yield Harness(context, executor, responder, make)
+    executor.shutdown()
+    for node in [*made, responder.node]:
+        node.destroy_node()
+    rclpy.try_shutdown(context=context)
+
+
+def collect(harness: Harness, msg_type: Any, topic: str, qos: Any = 100) -> list[Any]:
+    """Subscribe the responder node to a topic and return the list it fills."""
+    received: list[Any] = []
+    harness.responder.node.create_subscription(msg_type, topic, received.append, qos)
+    return received
+
+
+def test_state_topics_publish_every_second_physics_step(harness: Harness) -> None:
+    """At 1 kHz physics the state and /clock come every 2 ms of simulated time (500 Hz)."""
+    topics = {name: collect(harness, msg_type, name) for name, msg_type in [
+        ('odometry', Odometry), ('wrench', WrenchStamped), ('ee_pose', PoseStamped),
+        ('contact', ContactState)]}
+    clocks = collect(harness, Clock, '/clock')
+    sim = harness.start(duration_s=0.02)
+    harness.spin_until(lambda: sim.finished)
+    expected = [2_000_000 * k for k in range(11)]
+    assert [stamp_ns(m) for m in harness.responder.states] == expected
+    for name, received in topics.items():
+        assert [stamp_ns(m) for m in received] == expected, name
+    assert [c.clock.sec * 10**9 + c.clock.nanosec for c in clocks] == expected
+
+
+def test_publish_rate_parameter_sets_the_control_rate(harness: Harness) -> None:
+    """publish_rate_hz = 250 publishes every fourth step of the 1 kHz simulation."""
+    sim = harness.start(duration_s=0.02, publish_rate_hz=250.0)
+    harness.spin_until(lambda: sim.finished)
+    assert [stamp_ns(m) for m in harness.responder.states] == [4_000_000 * k for k in range(6)]
+
+
+def test_lockstep_simulator_waits_for_the_command_of_its_step(harness: Harness) -> None:
+    """No new state is published until the command stamped like the last state arrives."""
+    held = 10_000_000
+    harness.responder.answer = lambda t_ns: t_ns != held
+    sim = harness.start()
+    harness.spin_until(lambda: sim.sim_time_ns == held)
+    harness.spin_for(0.2)
+    assert stamp_ns(harness.responder.states[-1]) == held
+    assert sim.sim_time_ns == held
+    harness.responder.send(held - 2_000_000)  # an older command does not count
+    harness.spin_for(0.1)
+    assert sim.sim_time_ns == held
+    harness.responder.send(held)
+    harness.spin_until(lambda: sim.sim_time_ns > held)
+    assert sim.timeouts == 0
+
+
+def test_lockstep_timeout_steps_with_last_command(harness: Harness) -> None:
+    """Without the command of its step the simulator steps after the wall-clock timeout."""
+    harness.responder.answer = lambda t_ns: t_ns < 4_000_000
+    sim = harness.start(lockstep_timeout_s=0.05)
+    harness.spin_until(lambda: sim.sim_time_ns >= 10_000_000)
+    assert sim.timeouts >= 3
+
+
+def test_simulator_offers_first_state_until_a_command_arrives(harness: Harness) -> None:
+    """Before any command it re-publishes the initial state instead of stepping."""
+    harness.responder.answer = lambda _: False
+    sim = harness.start(lockstep_timeout_s=0.02)
+    harness.spin_until(lambda: len(harness.responder.states) >= 3)
+    assert sim.sim_time_ns == 0
+    assert {stamp_ns(m) for m in harness.responder.states} == {0}
+
+
+def test_stale_command_sets_motor_torques_to_zero(
+    harness: Harness, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """A command older than watchdog_timeout_s (simulated) is replaced by zeros, logged once."""
+    harness.responder.torques = [1.0, 2.0, 3.0]
+    harness.responder.answer = lambda t_ns: t_ns == 0
+    harness.start(lockstep_timeout_s=0.01, watchdog_timeout_s=0.005)
+    harness.spin_until(lambda: any(stamp_ns(m) >= 16_000_000 for m in harness.responder.states))
+    efforts = {stamp_ns(m): list(m.effort) for m in harness.responder.states}
+    assert efforts[2_000_000] == [1.0, 2.0, 3.0]
+    assert efforts[16_000_000] == [0.0, 0.0, 0.0]
+    assert capfd.readouterr().err.count('set to zero') == 1
+
+
+@pytest.mark.parametrize(
+    ('thrust', 'torques', 'expected'),
+    [
+        ([0.0] * N_THRUSTERS, [0.0, math.nan, 0.0], 'non-finite'),
+        ([0.0] * N_THRUSTERS, [math.inf, 0.0, 0.0], 'non-finite'),
+        ([0.0] * (N_THRUSTERS - 1), [0.0] * 3, 'thrust has 7 values'),
+        ([0.0] * N_THRUSTERS, [0.0] * 4, 'joint_torques has 4 values'),
+    ],
+)
+def test_bad_actuator_command_is_rejected_and_logged(
+    harness: Harness,
+    capfd: pytest.CaptureFixture[str],
+    thrust: list[float],
+    torques: list[float],
+    expected: str,
+) -> None:
+    """A NaN/Inf or wrongly sized command is logged as an error and never moves the state."""
+    harness.responder.answer = lambda _: False
+    sim = harness.start(lockstep_timeout_s=60.0)
+    harness.spin_until(lambda: len(harness.responder.states) == 1)
+    harness.responder.send(0, thrust=thrust, torques=torques)
+    harness.spin_for(0.1)
+    assert sim.sim_time_ns == 0
+    err = capfd.readouterr().err
+    assert 'rejected actuator command' in err
+    assert expected in err
+    harness.responder.send(0)
+    harness.spin_until(lambda: sim.sim_time_ns == 2_000_000)
+
+
+def test_joint_states_carry_arm_joints_and_applied_torques(harness: Harness) -> None:
+    """joint_states names the three arm joints and reports the applied torques as effort."""
+    harness.responder.torques = [0.5, -0.5, 0.25]
+    sim = harness.start(duration_s=0.004)
+    harness.spin_until(lambda: sim.finished)
+    last = harness.responder.states[-1]
+    assert list(last.name) == ['joint_1', 'joint_2', 'joint_3']
+    assert list(last.effort) == [0.5, -0.5, 0.25]
+    assert len(last.position) == len(last.velocity) == 3
+
+
+def test_frames_of_the_state_topics(harness: Harness) -> None:
+    """Odometry map_ned -> base_link_frd, wrench in ft_sensor_link, ee_pose in map_ned."""
+    odometry = collect(harness, Odometry, 'odometry')
+    wrench = collect(harness, WrenchStamped, 'wrench')
+    ee_pose = collect(harness, PoseStamped, 'ee_pose')
+    sim = harness.start(duration_s=0.002)
+    harness.spin_until(lambda: sim.finished)
+    assert (odometry[0].header.frame_id, odometry[0].child_frame_id) == ('map_ned',
+                                                                         'base_link_frd')
+    assert wrench[0].header.frame_id == 'ft_sensor_link'
+    assert ee_pose[0].header.frame_id == 'map_ned'
+    position = ee_pose[0].pose.position
+    assert (position.x, position.y, position.z) == pytest.approx((1.7, 0.0, -0.1), abs=1e-8)
+
+
+def test_static_tf_reaches_late_subscriber(harness: Harness) -> None:
+    """/tf_static is transient local: a subscriber created later still gets the twins."""
+    sim = harness.start(duration_s=0.002)
+    harness.spin_until(lambda: sim.finished)
+    latched = collect(harness, TFMessage, '/tf_static', QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    harness.spin_until(lambda: bool(latched))
+    pairs = {(t.header.frame_id, t.child_frame_id) for t in latched[0].transforms}
+    assert {('map', 'map_ned'), ('base_link_frd', 'base_link')} <= pairs
+
+
+def test_tf_is_published_at_its_own_rate(harness: Harness) -> None:
+    """/tf comes every 10th state at tf_rate_hz = 50 (500 Hz states)."""
+    tf = collect(harness, TFMessage, '/tf')
+    sim = harness.start(duration_s=0.04)
+    harness.spin_until(lambda: sim.finished)
+    assert [t.transforms[0].header.stamp.nanosec for t in tf] == [0, 20_000_000, 40_000_000]
+
+
+def test_invalid_parameter_stops_start_up_naming_it(harness: Harness) -> None:
+    """An out-of-range parameter raises at construction with name, value and range."""
+    with pytest.raises(SimParameterError) as info:
+        harness.start(physics_rate_hz=-1.0)
+    assert 'physics_rate_hz' in str(info.value)
+    assert '-1.0' in str(info.value)
+
+
+def test_invalid_robot_parameter_stops_start_up_naming_it(harness: Harness) -> None:
+    """A robot parameter outside its range stops the simulator naming it."""
+    with pytest.raises(SimParameterError, match=r'contact\.stiffness_n_m'):
+        harness.start(contact__stiffness_n_m=-5.0)
+
+
+def test_simulator_refuses_sim_time(harness: Harness) -> None:
+    """The clock source cannot run on /clock itself."""
+    with pytest.raises(SimParameterError, match='use_sim_time'):
+        harness.start(use_sim_time=True)
+
+
+def test_diverging_simulation_stops_with_its_cause(harness: Harness) -> None:
+    """Absurd motor torques make the state diverge: spinning raises, naming the cause."""
+    harness.responder.torques = [0.0, 0.0, 1.0e6]
+    harness.start()
+    with pytest.raises(SimulationError, match='state diverged'):
+        harness.spin_for(5.0)
+
+
+def test_realtime_mode_steps_on_the_wall_clock(harness: Harness) -> None:
+    """In real time the simulator steps on its own timer and publishes every 2 ms."""
+    harness.responder.answer = lambda _: False
+    sim = harness.start(mode='realtime', duration_s=0.05)
+    start = time.monotonic()
+    harness.spin_until(lambda: sim.finished and len(harness.responder.states) >= 26)
+    assert time.monotonic() - start >= 0.05
+    harness.spin_for(0.05)
+    assert sim.sim_time_ns == 50_000_000
+    stamps = [stamp_ns(m) for m in harness.responder.states]
+    assert stamps == [2_000_000 * k for k in range(26)]
