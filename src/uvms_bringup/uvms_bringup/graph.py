@@ -150,7 +150,7 @@ def build_graph(
         for spec in specs
     }
     if scenario is not None:
-        _check_overrides(scenario, specs, config, namespace)
+        check_scenario_overrides(scenario, specs, config, namespace)
     context = Context()
     rclpy.init(args=[], context=context)
     graph = Graph(context=context, mode=mode, duration_s=duration_s)
@@ -308,19 +308,30 @@ _TYPE_NAMES = {
 }
 
 
-def _check_overrides(
-    scenario: Scenario, specs: Sequence[NodeSpec], config: Path, namespace: str
+def check_scenario_overrides(
+    scenario: Scenario,
+    specs: Sequence[NodeSpec] | None = None,
+    config: Path | None = None,
+    namespace: str = DEFAULT_NAMESPACE,
 ) -> None:
     """Check every scenario override against what its node declares, before the real run.
 
     The nodes are built once with their parameter files only, in a throwaway context, to
     read the declared names and types; the recorder is left out (it would open its file).
+
+    Args:
+        scenario: The scenario.
+        specs: Nodes of the run (all, recorder included, if None).
+        config: Directory of the parameter files (``config_dir()`` if None).
+        namespace: Namespace of the nodes.
+
+    Raises:
+        ScenarioError: An override names no parameter of its node or has another type;
+            the message names the file, the key and the expected type.
+        GraphError: A node cannot be built from its parameter files.
     """
-    sections = {spec.name: spec for spec in specs}
-    for node_name in scenario.overrides:
-        if node_name not in sections and node_name != RECORDER.name:
-            msg = f'{scenario.path}: key {node_name!r}: no such node in this run'
-            raise ScenarioError(msg)
+    specs = specs if specs is not None else graph_nodes(record=True)
+    config = config if config is not None else config_dir()
     to_check = [spec for spec in specs if spec.name in scenario.overrides and spec is not RECORDER]
     if not to_check:
         return

@@ -1,0 +1,93 @@
+"""The Jazzy launch file parses and starts the graph's executables from the right packages."""
+
+import ast
+from pathlib import Path
+
+import pytest
+from uvms_bringup.launch_helpers import CORE_NODES, RECORDER, graph_nodes, node_parameters
+
+LAUNCH_FILE = (Path(__file__).resolve().parents[2] / 'src' / 'uvms_bringup' / 'launch'
+               / 'uvms.launch.py')
+TREE = ast.parse(LAUNCH_FILE.read_text(encoding='utf-8'), filename=str(LAUNCH_FILE))
+
+
+def calls_named(name: str) -> list[ast.Call]:
+    """Every call of a function or class with this (unqualified) name."""
+    return [node for node in ast.walk(TREE) if isinstance(node, ast.Call)
+            and getattr(node.func, 'id', getattr(node.func, 'attr', None)) == name]
+
+
+def keyword_string(call: ast.Call, name: str) -> str | None:
+    """A string literal keyword argument of a call, if present."""
+    for keyword in call.keywords:
+        if keyword.arg == name and isinstance(keyword.value, ast.Constant):
+            return str(keyword.value.value)
+    return None
+
+
+def test_launch_file_defines_generate_launch_description() -> None:
+    """ros2 launch calls generate_launch_description()."""
+    names = {node.name for node in TREE.body if isinstance(node, ast.FunctionDef)}
+    assert 'generate_launch_description' in names
+
+
+def test_launch_file_imports_launch_and_launch_ros() -> None:
+    """It builds on the Jazzy launch and launch_ros APIs."""
+    modules = {node.module for node in ast.walk(TREE) if isinstance(node, ast.ImportFrom)}
+    assert {'launch', 'launch.actions', 'launch_ros.actions',
+            'ament_index_python.packages'} <= modules
+
+
+def test_launch_arguments_are_declared() -> None:
+    """scenario, use_sim_time, mode and output_path are launch arguments."""
+    declared = {call.args[0].value for call in calls_named('DeclareLaunchArgument')
+                if call.args and isinstance(call.args[0], ast.Constant)}
+    assert {'scenario', 'use_sim_time', 'mode', 'output_path'} <= declared
+
+
+def test_node_actions_take_package_and_executable_from_the_graph_spec() -> None:
+    """The Node action uses each NodeSpec's package, executable, name and namespace."""
+    (node_call,) = calls_named('Node')
+    arguments = {keyword.arg: ast.unparse(keyword.value) for keyword in node_call.keywords}
+    assert arguments['package'] == 'spec.package'
+    assert arguments['executable'] == 'spec.executable'
+    assert arguments['name'] == 'spec.name'
+    assert arguments['namespace'] == 'namespace'
+    assert 'spec.parameter_files' in arguments['parameters']
+
+
+@pytest.mark.parametrize(
+    ('name', 'package', 'executable'),
+    [('simulator', 'uvms_sim', 'simulator'),
+     ('controller', 'uvms_control', 'controller'),
+     ('thruster_allocator', 'uvms_control', 'thruster_allocator'),
+     ('recorder', 'uvms_bringup', 'recorder')],
+)
+def test_graph_spec_names_the_console_scripts(name: str, package: str, executable: str) -> None:
+    """Each node runs the console script its package's setup.py installs."""
+    spec = {s.name: s for s in graph_nodes(record=True)}[name]
+    assert (spec.package, spec.executable) == (package, executable)
+    setup = (LAUNCH_FILE.parents[2] / package / 'setup.py').read_text(encoding='utf-8')
+    assert f"'{executable} = " in setup
+
+
+def test_recorder_only_runs_with_an_output() -> None:
+    """Without output_path the launch starts simulator, controller and allocator only."""
+    assert graph_nodes(record=False) == CORE_NODES
+    assert graph_nodes(record=True)[-1] is RECORDER
+
+
+def test_simulator_is_the_clock_source_and_the_others_use_sim_time() -> None:
+    """The simulator never gets use_sim_time; the other nodes run on /clock."""
+    for spec in graph_nodes(record=True):
+        values = node_parameters(spec, None, 'realtime', None, '/tmp/x.mcap')
+        assert values.get('use_sim_time', False) is (spec.name != 'simulator')
+
+
+def test_realtime_mode_puts_controller_and_allocator_on_timers() -> None:
+    """mode:=realtime sets trigger_mode timer; lockstep sets lockstep."""
+    controller, allocator = CORE_NODES[1], CORE_NODES[2]
+    for mode, trigger in (('realtime', 'timer'), ('lockstep', 'lockstep')):
+        assert node_parameters(controller, None, mode)['trigger_mode'] == trigger
+        assert node_parameters(allocator, None, mode)['trigger_mode'] == trigger
+        assert node_parameters(CORE_NODES[0], None, mode)['mode'] == mode
