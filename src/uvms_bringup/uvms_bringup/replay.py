@@ -548,6 +548,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f'uvms replay: error: {message}', file=sys.stderr)
         return status
 
+    if not (np.isfinite(args.rate) and args.rate > 0.0):
+        return fail(f'--rate must be a finite number > 0, got {args.rate}', 2)
+    if not (np.isfinite(args.tolerance) and args.tolerance >= 0.0):
+        return fail(f'--tolerance must be a finite number >= 0, got {args.tolerance}', 2)
+    if not (np.isfinite(args.timeout) and args.timeout > 0.0):
+        return fail(f'--timeout must be a finite number > 0 s, got {args.timeout}', 2)
+    if args.start < 0.0:
+        return fail(f'--start must be >= 0 s, got {args.start}', 2)
     if args.rerun_controller and (args.loop or args.topics or args.rate != 1.0):
         return fail('--rerun-controller feeds every input as fast as the controller answers; '
                     'it takes no --rate, --topics or --loop', 2)
@@ -575,8 +583,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _replay(recording: McapRecording, args: argparse.Namespace, ros_args: list[str]) -> int:
     options = ReplayOptions(rate=args.rate, topics=tuple(args.topics), loop=args.loop,
                             start_s=args.start, clock=args.clock)
-    if not np.isfinite(options.rate) or options.rate <= 0.0:
-        raise ReplayError(f'--rate must be > 0, got {options.rate}')
     if options.clock and '/clock' not in recording.topics:
         print(f'uvms replay: warning: {recording.path} has no /clock to publish',
               file=sys.stderr)

@@ -1,0 +1,199 @@
+"""Tests of the recorder node in one process: what the graph publishes ends up in the MCAP."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+import rclpy
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import TransformStamped, WrenchStamped
+from mcap.reader import make_reader
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+from rosbags.highlevel import AnyReader
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from tf2_msgs.msg import TFMessage
+from uvms_bringup.recorder_node import DEFAULT_TOPICS, RecorderNode
+from uvms_bringup.recording import RUN_METADATA_NAME, RecordingError, open_recording
+
+from uvms_msgs.msg import ControllerState
+
+
+@pytest.fixture
+def context() -> Iterator[Context]:
+    """An initialized rclpy context of its own, shut down after the test."""
+    ctx = Context()
+    rclpy.init(args=[], context=ctx)
+    yield ctx
+    rclpy.try_shutdown(context=ctx)
+
+
+def _recorder(context: Context, path: Path, **parameters: object) -> RecorderNode:
+    overrides = [Parameter('output_path', value=str(path))]
+    overrides += [Parameter(name, value=value) for name, value in parameters.items()]
+    return RecorderNode(context=context, namespace='/uvms', parameter_overrides=overrides)
+
+
+def _spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool],
+                timeout_s: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not done():
+        assert time.monotonic() < deadline, 'timed out spinning'
+        executor.spin_once(timeout_sec=0.01)
+
+
+def _joint_state(k: int) -> JointState:
+    return JointState(name=['joint_1', 'joint_2', 'joint_3'],
+                      position=[0.1 * k, 0.2, 0.3], velocity=[0.0, 0.0, 0.0],
+                      effort=[1.0, 2.0, float(k)])
+
+
+def test_recorder_writes_the_published_bytes_of_each_topic(context: Context,
+                                                           tmp_path: Path) -> None:
+    """Messages published on graph topics are recorded raw, in order, under resolved names."""
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path)
+    talker = Node('talker', namespace='/uvms', context=context)
+    joint_states = talker.create_publisher(JointState, 'joint_states', 10)
+    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    state = talker.create_publisher(ControllerState, 'controller/state', 10)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(recorder)
+    executor.add_node(talker)
+    sent = []
+    for k in range(5):
+        messages = [(joint_states, '/uvms/joint_states', _joint_state(k)),
+                    (wrench, '/uvms/wrench', WrenchStamped()),
+                    (state, '/uvms/controller/state', ControllerState(weight=0.1 * k))]
+        for publisher, topic, message in messages:
+            publisher.publish(message)
+            sent.append((topic, serialize_message(message)))
+    _spin_until(executor, lambda: recorder.recorder.message_count == len(sent))
+    recorder.destroy_node()
+    talker.destroy_node()
+
+    recorded = [(m.topic, m.data) for m in open_recording(path).messages()]
+    for topic in {topic for topic, _ in sent}:
+        assert [d for t, d in recorded if t == topic] == [d for t, d in sent if t == topic]
+
+
+def test_recording_decodes_with_rosbags_to_the_published_values(context: Context,
+                                                                tmp_path: Path) -> None:
+    """Rosbags reads back the field values that were published (independent decoder)."""
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path)
+    talker = Node('talker', namespace='/uvms', context=context)
+    joint_states = talker.create_publisher(JointState, 'joint_states', 10)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(recorder)
+    joint_states.publish(_joint_state(7))
+    _spin_until(executor, lambda: recorder.recorder.message_count == 1)
+    recorder.destroy_node()
+    with AnyReader([path]) as reader:
+        (value,) = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages()]
+    assert list(value.name) == ['joint_1', 'joint_2', 'joint_3']
+    assert list(value.position) == pytest.approx([0.7, 0.2, 0.3])
+    assert list(value.effort) == pytest.approx([1.0, 2.0, 7.0])
+
+
+def test_every_default_topic_is_a_channel_of_the_file(context: Context, tmp_path: Path) -> None:
+    """All graph topics, resolved in the namespace, are channels even before any message."""
+    path = tmp_path / 'run.mcap'
+    _recorder(context, path).destroy_node()
+    expected = {spec.rpartition(':')[0] for spec in DEFAULT_TOPICS}
+    expected = {t if t.startswith('/') else f'/uvms/{t}' for t in expected}
+    assert set(open_recording(path).topics) == expected
+
+
+def test_log_time_is_the_simulated_clock_under_use_sim_time(context: Context,
+                                                            tmp_path: Path) -> None:
+    """With use_sim_time, a message's log time is the last /clock the recorder received."""
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path, use_sim_time=True)
+    talker = Node('talker', namespace='/uvms', context=context)
+    clock = talker.create_publisher(Clock, '/clock', 10)
+    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(recorder)
+    clock.publish(Clock(clock=Time(sec=5, nanosec=250)))
+    _spin_until(executor, lambda: recorder.get_clock().now().nanoseconds == 5_000_000_250)
+    wrench.publish(WrenchStamped())
+    _spin_until(executor, lambda: recorder.recorder.message_count == 2)
+    recorder.destroy_node()
+    times = {m.topic: m.log_time_ns for m in open_recording(path).messages()}
+    assert times['/uvms/wrench'] == 5_000_000_250
+
+
+def test_latched_tf_static_published_before_the_recorder_is_recorded(context: Context,
+                                                                      tmp_path: Path) -> None:
+    """/tf_static is subscribed transient local, so an earlier latched message arrives."""
+    talker = Node('talker', context=context)
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    tf_static = talker.create_publisher(TFMessage, '/tf_static', latched)
+    message = TFMessage(transforms=[TransformStamped(child_frame_id='base_link_frd')])
+    tf_static.publish(message)
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(recorder)
+    _spin_until(executor, lambda: recorder.recorder.message_count == 1)
+    recorder.destroy_node()
+    (recorded,) = open_recording(path).messages()
+    assert (recorded.topic, recorded.data) == ('/tf_static', serialize_message(message))
+
+
+def test_topics_parameter_chooses_what_is_recorded(context: Context, tmp_path: Path) -> None:
+    """Only the 'topic:type' entries of the topics parameter become channels."""
+    path = tmp_path / 'run.mcap'
+    _recorder(context, path, topics=['wrench:geometry_msgs/msg/WrenchStamped']).destroy_node()
+    recording = open_recording(path)
+    assert list(recording.topics) == ['/uvms/wrench']
+    assert recording.topics['/uvms/wrench'].type_name == 'geometry_msgs/msg/WrenchStamped'
+
+
+def test_run_parameters_are_stored_for_replay(context: Context, tmp_path: Path) -> None:
+    """run.scenario, run.seed and run.parameters land in the 'uvms' metadata record."""
+    path = tmp_path / 'run.mcap'
+    yaml_text = '/uvms/controller:\n  ros__parameters:\n    force_setpoint_n: 150.0\n'
+    _recorder(context, path, **{'run.scenario': 'case1_ke1e4', 'run.seed': 3,
+                                'run.parameters': yaml_text}).destroy_node()
+    metadata = open_recording(path).metadata[RUN_METADATA_NAME]
+    assert metadata == {'scenario': 'case1_ke1e4', 'seed': '3', 'parameters': yaml_text}
+
+
+def test_destroying_the_node_leaves_a_complete_file(context: Context, tmp_path: Path) -> None:
+    """destroy_node() writes the summary with its Statistics record."""
+    path = tmp_path / 'run.mcap'
+    _recorder(context, path).destroy_node()
+    with path.open('rb') as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None
+    assert summary.statistics is not None
+
+
+def test_missing_output_path_stops_the_node_naming_the_parameter(context: Context) -> None:
+    """Without output_path the node refuses to start, naming the parameter."""
+    with pytest.raises(RecordingError, match="'output_path' is required"):
+        RecorderNode(context=context)
+
+
+def test_invalid_compression_names_the_value_and_the_choices(context: Context,
+                                                             tmp_path: Path) -> None:
+    """An unknown compression stops the node with the value and the valid values."""
+    with pytest.raises(RecordingError, match=r"'gzip'; valid values: zstd, lz4, none"):
+        _recorder(context, tmp_path / 'x.mcap', compression='gzip')
+
+
+def test_malformed_topic_entry_is_rejected(context: Context, tmp_path: Path) -> None:
+    """A topics entry without ':type' stops the node naming the entry."""
+    with pytest.raises(RecordingError, match="entry 'wrench'"):
+        _recorder(context, tmp_path / 'x.mcap', topics=['wrench'])
