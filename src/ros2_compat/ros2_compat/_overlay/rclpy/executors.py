@@ -488,6 +488,7 @@ class MultiThreadedExecutor(Executor):
         group = entity.callback_group
         if not group.beginning_execution(entity):
             entity._executor_event = False
+            self._end_work()
             self._wake()
             return
         try:
