@@ -87,13 +87,15 @@ def message_class(type_name: str) -> type[Any]:
 
 
 def publisher_qos(topic: str) -> QosDescription:
-    """QoS the graph's publishers offer on a topic: tf2's static QoS on /tf_static, else default.
+    """QoS the graph's publishers offer on a topic, as tf2_ros and our nodes publish.
 
-    /tf_static is latched (reliable, transient local, depth 1, as tf2_ros publishes it); every
-    other graph publisher uses rclpy's default (reliable, volatile, keep last 10).
+    /tf_static is latched (reliable, transient local, depth 1), /tf reliable with depth 100;
+    every other graph publisher is reliable, volatile, keep last 10 (rclpy's default).
     """
     if topic.endswith('/tf_static'):
         return QosDescription(durability='transient_local', depth=1)
+    if topic.endswith('/tf'):
+        return QosDescription(depth=100)
     return QosDescription()
 
 

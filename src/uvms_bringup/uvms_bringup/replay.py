@@ -13,6 +13,7 @@ compares its commands and states with the recorded ones, stamp by stamp.
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 import tempfile
 import time
@@ -265,7 +266,8 @@ def output_differences(type_name: str, recorded: bytes, rerun: bytes) -> dict[st
 
 def header_stamp_ns(type_name: str, data: bytes) -> int:
     """Header stamp (ns) of a CDR message with a std_msgs/Header 'header'."""
-    stamp = uvms_typestore().deserialize_cdr(data, type_name).header.stamp
+    message: Any = uvms_typestore().deserialize_cdr(data, type_name)
+    stamp = message.header.stamp
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
@@ -475,7 +477,8 @@ def _feed_and_compare(
             continue
         stamp_ns = header_stamp_ns(message.type_name, message.data)
         key = (message.topic, stamp_ns)
-        if not _spin_until(executor, lambda k=key: k in feeder.received, timeout_s):
+        if not _spin_until(executor, functools.partial(feeder.received.__contains__, key),
+                           timeout_s):
             report.missing.append(key)
             if report.compared == 0:
                 msg = (f'the re-run controller published no {message.topic} for the inputs '
