@@ -36,6 +36,7 @@ class ParameterSpec(NamedTuple):
 
 
 TRIGGER_MODES = ('lockstep', 'timer')
+SWITCH_MODES = ('fuzzy', 'impedance', 'hybrid')
 
 CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
     ParameterSpec(
@@ -67,13 +68,13 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'impedance.inertia_kg',
-        [10.0, 10.0, 10.0],
+        [50.0, 50.0, 50.0],
         'Target inertia P of eq. 21 (kg): 3 diagonal entries or 9 row-major entries of a '
         'symmetric positive-definite matrix.',
     ),
     ParameterSpec(
         'impedance.damping_n_s_m',
-        [500.0, 500.0, 500.0],
+        [1000.0, 1000.0, 1000.0],
         'Target damping B_d of eq. 21 (N s/m): 3 diagonal or 9 row-major entries, SPD.',
     ),
     ParameterSpec(
@@ -99,21 +100,21 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'hybrid.force_kp',
-        0.01,
+        0.05,
         'Force gain K_fp of eq. 39 along n ((m/s^2)/N).',
         0.0,
         1e3,
     ),
     ParameterSpec(
         'hybrid.force_ki',
-        0.02,
+        0.2,
         'Force integral gain K_fi of eq. 39 along n ((m/s^2)/(N s)).',
         0.0,
         1e3,
     ),
     ParameterSpec(
         'hybrid.force_kd',
-        0.002,
+        0.003,
         'Force derivative gain K_fv of eq. 39 along n ((m/s^2)/(N/s)).',
         0.0,
         1e3,
@@ -136,10 +137,16 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'hybrid.force_integral_limit_n_s',
-        30.0,
+        50.0,
         'Clamp on the force-error integral of eq. 39 (N s): anti-windup.',
         0.0,
         1e6,
+    ),
+    ParameterSpec(
+        'switch.mode',
+        'fuzzy',
+        "How W of eq. 2 is set: 'fuzzy' (sec. 4.3), or fixed for comparisons: 'impedance' "
+        "(W = 1) or 'hybrid' (W = 0).",
     ),
     ParameterSpec(
         'fuzzy.force_ratio_small',
@@ -192,7 +199,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ParameterSpec(
         'reference.radius_m', 0.1, 'Radius of the half circle (m); paper sec. 5.1.', 1e-4, 10.0
     ),
-    ParameterSpec('reference.duration_s', 20.0, 'Time to run the half circle (s).', 1e-3, 1e5),
+    ParameterSpec('reference.duration_s', 30.0, 'Time to run the half circle (s).', 1e-3, 1e5),
     ParameterSpec(
         'reference.start_delay_s',
         2.0,
@@ -222,7 +229,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'force.ramp_time_s',
-        2.0,
+        1.0,
         'Duration of the quintic ramp of the force set-point after contact, and of its '
         'release (s).',
         1e-3,
@@ -244,7 +251,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'null_space.stiffness_1_s2',
-        [1.0] * 9,
+        [4.0] * 6 + [0.25] * 3,
         'Posture stiffness K_n (1/s^2) per coordinate x, y, z, roll, pitch, yaw, q1..q3: '
         'phi_ddot = K_n (q_0 - q) - D_n q_dot, projected into the null space of J.',
         0.0,
@@ -253,7 +260,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'null_space.damping_1_s',
-        [2.0] * 9,
+        [4.0] * 6 + [1.0] * 3,
         'Posture damping D_n (1/s) per coordinate, as null_space.stiffness_1_s2.',
         0.0,
         1e4,
@@ -519,6 +526,7 @@ class ControllerParameters:
     force_feedforward_compliance: float
     force_derivative_cutoff_hz: float
     force_integral_limit: float
+    switch_mode: str
     fuzzy: FuzzySwitchParameters
     reference_radius: float
     reference_duration: float
@@ -581,6 +589,9 @@ class ControllerParameters:
             weight_large=_membership('fuzzy.weight_large', floats('fuzzy.weight_large'), 'inner'),
             no_rule_weight=number('fuzzy.no_rule_weight'),
         )
+        mode = v['switch.mode']
+        if mode not in SWITCH_MODES:
+            raise ControlParameterError('switch.mode', mode, f'one of {list(SWITCH_MODES)}')
         capture = v['reference.capture_start']
         assert isinstance(capture, bool)
         enabled = v['null_space.enabled']
@@ -609,6 +620,7 @@ class ControllerParameters:
             force_feedforward_compliance=number('hybrid.force_feedforward_compliance_m_n'),
             force_derivative_cutoff_hz=number('hybrid.force_derivative_cutoff_hz'),
             force_integral_limit=number('hybrid.force_integral_limit_n_s'),
+            switch_mode=str(mode),
             fuzzy=fuzzy,
             reference_radius=number('reference.radius_m'),
             reference_duration=number('reference.duration_s'),

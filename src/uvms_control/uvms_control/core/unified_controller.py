@@ -86,6 +86,8 @@ class ControllerResult:
         v_e: velocity along the environment normal, positive toward it (m/s).
         force_ratio: n·F_e over the force set-point (-).
         phase: task phase.
+        M_hat: inertia estimate M̂ = s M̃ (kg), eq. 29.
+        zeta_hat: bias estimate ζ̂ = ζ̃ (N), eq. 29.
     """
 
     tau_b: FloatArray
@@ -103,6 +105,8 @@ class ControllerResult:
     v_e: float
     force_ratio: float
     phase: Phase
+    M_hat: FloatArray
+    zeta_hat: FloatArray
 
 
 def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
@@ -260,7 +264,10 @@ class UnifiedForceController:
         if setpoint.phase == ForcePhase.IDLE and self.hybrid.integral != 0.0:
             self.hybrid.integral = 0.0
         force_ratio = f_normal / p.force_setpoint
-        W = self.fuzzy.weight(force_ratio, v_e)
+        if p.switch_mode == 'fuzzy':
+            W = self.fuzzy.weight(force_ratio, v_e)
+        else:
+            W = 1.0 if p.switch_mode == 'impedance' else 0.0
 
         M_hat = p.mass_scale * ts.M_tilde
         zeta_hat = ts.zeta_tilde
@@ -313,6 +320,8 @@ class UnifiedForceController:
             v_e=v_e,
             force_ratio=force_ratio,
             phase=phase,
+            M_hat=M_hat,
+            zeta_hat=zeta_hat,
         )
 
     def _null_space_torque(
