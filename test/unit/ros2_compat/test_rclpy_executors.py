@@ -332,3 +332,26 @@ def test_module_level_spin_once_uses_the_global_executor() -> None:
         node.destroy_node()
     finally:
         rclpy.shutdown()
+
+
+def test_shutdown_from_inside_a_callback_ends_rclpy_spin() -> None:
+    """As in rclpy, rclpy.shutdown() called in a callback makes rclpy.spin(node) return."""
+    rclpy.init(args=[])
+    node = rclpy.create_node('quitter')
+    node.create_timer(0.0, rclpy.shutdown)
+    outcome: list[str] = []
+
+    def run() -> None:
+        try:
+            rclpy.spin(node)
+            outcome.append('returned')
+        except ExternalShutdownException:
+            outcome.append('external shutdown')
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join(timeout=5.0)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    assert not thread.is_alive()
+    assert outcome in (['returned'], ['external shutdown'])

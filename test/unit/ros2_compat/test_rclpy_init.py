@@ -196,3 +196,39 @@ def test_context_manager_initializes_and_shuts_down() -> None:
     with Context() as context:
         assert context.ok()
     assert not context.ok()
+
+
+def test_sigterm_shuts_down_initialized_contexts(fresh_context: Context) -> None:
+    """As rclpy's signal handler: SIGTERM shuts every context down (spin then stops)."""
+    import os
+    import signal
+
+    from rclpy.signals import (
+        SignalHandlerOptions,
+        install_signal_handlers,
+        uninstall_signal_handlers,
+    )
+
+    previous = signal.getsignal(signal.SIGTERM)
+    rclpy.init(args=[], context=fresh_context, signal_handler_options=SignalHandlerOptions.NO)
+    install_signal_handlers(SignalHandlerOptions.SIGTERM)
+    try:
+        os.kill(os.getpid(), signal.SIGTERM)
+        assert not fresh_context.ok()
+    finally:
+        uninstall_signal_handlers()
+    assert signal.getsignal(signal.SIGTERM) is previous
+
+
+def test_node_failing_at_creation_leaves_no_trace_in_the_graph(fresh_context: Context) -> None:
+    """As in rclpy, a wrong-typed use_sim_time override fails Node creation with its type error."""
+    from rclpy.exceptions import InvalidParameterTypeException
+
+    rclpy.init(args=['--ros-args', '-p', 'use_sim_time:=1'], context=fresh_context)
+    with pytest.raises(InvalidParameterTypeException, match=r"'use_sim_time'.*type 'BOOL'"):
+        Node('broken', context=fresh_context)
+    local_fix = ['--ros-args', '-p', 'use_sim_time:=false']
+    witness = Node('witness', context=fresh_context, cli_args=local_fix)
+    names = witness.get_node_names()
+    witness.destroy_node()
+    assert names == ['witness']

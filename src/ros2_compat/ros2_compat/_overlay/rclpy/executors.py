@@ -81,6 +81,10 @@ def _never() -> bool:
     return False
 
 
+#: The executor whose callback the current thread is running, if any.
+_running = threading.local()
+
+
 def _invalid_context_error() -> RCLError:
     return RCLError(
         'failed to initialize wait set: the given context is not valid, either rclpy.init() '
@@ -141,8 +145,11 @@ class Executor:
         self._is_shutdown = True
         self._wake()
         deadline = None if timeout_sec is None else _time.monotonic() + timeout_sec
+        # A callback shutting its own executor down (rclpy.shutdown() in a callback) must not
+        # wait for itself.
+        own_work = 1 if getattr(_running, 'executor', None) is self else 0
         with self._work_cond:
-            while self._work_count:
+            while self._work_count > own_work:
                 remaining = None if deadline is None else deadline - _time.monotonic()
                 if remaining is not None and remaining <= 0:
                     return False
@@ -394,7 +401,12 @@ class Executor:
         callback = entity.callback
         if callback is None:
             return
-        result = callback(argument) if kind == _SUBSCRIPTION else callback()
+        previous = getattr(_running, 'executor', None)
+        _running.executor = self
+        try:
+            result = callback(argument) if kind == _SUBSCRIPTION else callback()
+        finally:
+            _running.executor = previous
         if result is not None and inspect.iscoroutine(result):
             task = Task(result, executor=self)
             task()

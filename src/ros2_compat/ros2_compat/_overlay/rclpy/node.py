@@ -187,17 +187,27 @@ class Node:
         if local_arguments.default_log_level is not None:
             self._logger.set_level(local_arguments.default_log_level)
 
+        self._clock = ROSClock()
         self._context._graph.add_node(self)
+        try:
+            self._start(
+                enable_rosout and global_arguments.rosout_logs and local_arguments.rosout_logs,
+                automatically_declare_parameters_from_overrides,
+            )
+        except BaseException:
+            self.destroy_node()
+            raise
+
+    def _start(self, enable_rosout: bool, declare_overrides: bool) -> None:
+        """Create the parameter-event publisher, rosout, declared overrides and time source."""
         from rcl_interfaces.msg import ParameterEvent
 
         self._parameter_event_publisher = self.create_publisher(
             ParameterEvent, '/parameter_events', qos_profile_parameter_events
         )
-        if enable_rosout and global_arguments.rosout_logs and local_arguments.rosout_logs:
-            self._start_rosout(logger_name)
-
-        self._clock = ROSClock()
-        if automatically_declare_parameters_from_overrides:
+        if enable_rosout:
+            self._start_rosout(self._logger.name)
+        if declare_overrides:
             self.declare_parameters(
                 '',
                 [
