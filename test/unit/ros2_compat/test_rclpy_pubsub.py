@@ -367,3 +367,35 @@ def test_publishing_after_shutdown_raises(context: Context, node: Node) -> None:
     context.shutdown()
     with pytest.raises(RuntimeError, match='context is invalid'):
         publisher.publish(String(data='late'))
+
+
+def test_incompatible_qos_is_reported_with_rclpy_warning(
+    node: Node, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """As rclpy's default QoS event handlers: an incompatible pair logs the offending policy."""
+    node.create_subscription(
+        String, 'latched', lambda m: None,
+        QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL),
+    )
+    node.create_publisher(String, 'latched', 10)
+    err = capfd.readouterr().err
+    assert "New publisher discovered on topic '/latched', offering incompatible QoS" in err
+    assert 'Last incompatible policy: DURABILITY' in err
+
+
+def test_sensor_data_preset_is_best_effort_keep_last_5() -> None:
+    """As rmw's qos_profile_sensor_data: KEEP_LAST 5, BEST_EFFORT, VOLATILE."""
+    from rclpy.qos import QoSPresetProfiles
+
+    assert QoSPresetProfiles.get_from_short_key('sensor_data') == qos_profile_sensor_data
+    assert qos_profile_sensor_data.depth == 5
+    assert qos_profile_sensor_data.reliability == ReliabilityPolicy.BEST_EFFORT
+    assert qos_profile_sensor_data.durability == DurabilityPolicy.VOLATILE
+
+
+def test_qos_argument_of_wrong_type_raises(node: Node) -> None:
+    """As in rclpy, qos_profile must be a QoSProfile or an int depth."""
+    with pytest.raises(TypeError, match='Expected QoSProfile or int'):
+        node.create_publisher(String, 'chatter', 'reliable')  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match='history depth must be greater than or equal to zero'):
+        node.create_publisher(String, 'chatter', -1)
