@@ -237,7 +237,11 @@ def _emit(severity: int, name: str, message: str, function: str, file: str, line
 
 
 class _Filters:
-    """State of the call-site filters (once, skip_first, throttle) of one log call site."""
+    """State of the call-site filters of one log call site, checked as rclpy does.
+
+    In rclpy's order (throttle, skip_first, once), stopping at the first filter that refuses;
+    a throttled call site starts as if it last logged at time 0 of its clock.
+    """
 
     __slots__ = ('kwargs', 'last_logged_ns', 'name', 'once_done', 'severity', 'skip_done')
 
@@ -247,30 +251,25 @@ class _Filters:
         self.kwargs = kwargs
         self.once_done = False
         self.skip_done = False
-        self.last_logged_ns: int | None = None
+        self.last_logged_ns = 0
 
     def should_log(self) -> bool:
         kwargs = self.kwargs
-        result = True
         duration = kwargs.get('throttle_duration_sec')
         if duration is not None:
             clock = kwargs.get('throttle_time_source_type')
             now_ns = clock.now().nanoseconds if clock is not None else _time.time_ns()
-            if self.last_logged_ns is not None and now_ns < self.last_logged_ns + int(
-                duration * 1e9
-            ):
-                result = False
-            else:
-                self.last_logged_ns = now_ns
+            if now_ns < self.last_logged_ns + duration * 1e9:
+                return False
+            self.last_logged_ns = now_ns
         if kwargs.get('skip_first') and not self.skip_done:
             self.skip_done = True
-            result = False
+            return False
         if kwargs.get('once'):
             if self.once_done:
-                result = False
-            elif result:
-                self.once_done = True
-        return result
+                return False
+            self.once_done = True
+        return True
 
 
 _FILTER_KWARGS = frozenset(('throttle_duration_sec', 'throttle_time_source_type', 'skip_first',
