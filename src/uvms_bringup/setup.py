@@ -15,15 +15,21 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         (os.path.join('share', package_name, 'launch'), glob('launch/*.launch.py')),
-        # The parameter files live at the repository top (config/); install them with this package.
+        # The parameter files live at the repository top (config/); this package installs them.
         (os.path.join('share', package_name, 'config'), glob('../../config/*.yaml')),
-        (os.path.join('share', package_name, 'config', 'scenarios'), glob('../../config/scenarios/*.yaml')),
+        (
+            os.path.join('share', package_name, 'config', 'scenarios'),
+            glob('../../config/scenarios/*.yaml'),
+        ),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
-    description='Bringup of the UVMS stack: launch file, the uvms command line (run, launch, replay, plot, report, doctor), MCAP recorder and replay.',
+    description=(
+        'Bringup of the UVMS stack: launch file, the uvms command line (run, launch, '
+        'replay, plot, report, doctor), MCAP recorder and replay.'
+    ),
     license='Apache-2.0',
     entry_points={
         'console_scripts': [

@@ -16,7 +16,11 @@ setup(
     zip_safe=True,
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
-    description='Pure numpy/scipy model of the underwater vehicle-manipulator system: kinematics, dynamics, hydrodynamics, contact, sensors, thruster layout (paper sections 3 and 5.1).',
+    description=(
+        'Pure numpy/scipy model of the underwater vehicle-manipulator system: kinematics,'
+        ' dynamics, hydrodynamics, contact, sensors, thruster layout (paper sections 3 '
+        'and 5.1).'
+    ),
     license='Apache-2.0',
     entry_points={
         'console_scripts': [

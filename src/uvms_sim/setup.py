@@ -16,7 +16,10 @@ setup(
     zip_safe=True,
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
-    description='Simulator node of the UVMS: integrates the uvms_model plant with the wall contact and the wrist force/torque sensor, publishes the robot state.',
+    description=(
+        'Simulator node of the UVMS: integrates the uvms_model plant with the wall '
+        'contact and the wrist force/torque sensor, publishes the robot state.'
+    ),
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
