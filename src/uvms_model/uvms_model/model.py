@@ -1,15 +1,16 @@
 """UVMS dynamics (paper eq. 8 and 18-20): floating vehicle + 3-link arm with hydrodynamics.
 
 Spatial-vector algorithms (Featherstone, Rigid Body Dynamics Algorithms, 2008) over four
-bodies: the vehicle (body 0) and links 1-3. Every spatial quantity is expressed in
-base_link_frd at the body origin O ("frame 0") at the current instant, ordered
-[linear; angular] like the quasi-velocities w of eq. 8. Then
-- body i moves with the twist V_i = J_i w, J_i = [I_6, s_1 .. s_i, 0], where
-  s_j = [o_j x a_j; a_j] is the motion vector of joint j (axis a_j through o_j);
-- M_b = sum_i J_i^T I_i J_i with the spatial inertias I_i (rigid + added mass) moved to
-  frame 0: the composite-rigid-body matrix;
-- the bias is the recursive Newton-Euler force f_i = I_i a_i + V_i x* I_i V_i at w_dot = 0,
-  a_i = sum_{j<=i} (V_{j-1} x s_j) q_dot_j, minus gravity, buoyancy and drag, mapped by J_i^T.
+bodies: the vehicle (body 0, frame base_link_frd at the hull centre O) and links 1-3 (frame
+link_i at joint i). Spatial vectors are ordered [linear; angular] like the quasi-velocities w
+of eq. 8. With J_i the body Jacobian of body i in its own frame (twist nu_i = J_i w) and I_i
+its constant spatial inertia (rigid + added mass):
+- M_b = sum_i J_i^T I_i J_i, the composite-rigid-body mass matrix;
+- the bias is the recursive Newton-Euler force f_i = I_i a_i + nu_i x* I_i nu_i at
+  w_dot = 0 (a_i = J_dot_i w), minus gravity, buoyancy and drag, mapped by J_i^T.
+J_i = X_i J0_i, where J0_i = [I_6, s_1 .. s_i, 0] holds the joint motion vectors
+s_j = [o_j x a_j; a_j] in base_link_frd at O ("frame 0") and X_i moves motion vectors from
+frame 0 to link i; a_i = X_i sum_{j<=i} (V_{j-1} x s_j) q_dot_j with frame-0 twists V.
 
 Added mass enters as extra (non rigid-body) spatial inertia of each body, which gives exactly
 M = M_RB + sum J_i^T M_A,i J_i and bias sum J_i^T (M_A,i J_dot_i w + nu_i x* M_A,i nu_i)
@@ -17,9 +18,9 @@ M = M_RB + sum J_i^T M_A,i J_i and bias sum J_i^T (M_A,i J_dot_i w + nu_i x* M_A
 a past acceleration. Gravity and buoyancy act as forces, so they never see the added mass.
 
 Speed: at these sizes numpy's per-call overhead dominates, so 3-vector kinematics is plain
-Python arithmetic, 6 x 6 work is batched over the bodies, spatial cross products are one
-matrix product with a constant map, the 9 x 9 solve is LAPACK's dposv (Cholesky), and the
-configuration-dependent part is cached for the last joint angles.
+Python arithmetic, 6 x 6 work is one block-diagonal product over the bodies, spatial cross
+products are an outer product times a constant map, the 9 x 9 solve is LAPACK's dposv
+(Cholesky), and the configuration-dependent part is cached for the last joint angles.
 """
 
 from __future__ import annotations
@@ -106,24 +107,37 @@ def _mat_mat(a: Mat3, b: Mat3) -> Mat3:
     )  # fmt: skip
 
 
-def _motion_cross_map() -> FloatArray:
-    """Constant T (6, 36) with crm(v).ravel() = v @ T: crm(v) m = v x m (spatial motion)."""
-    t = np.zeros((6, 6, 6))
-    skew_entries = ((0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0),
-                    (2, 0, 1, -1.0), (2, 1, 0, 1.0))  # fmt: skip
-    for row, col, k, sign in skew_entries:
-        t[3 + k, row, col] = sign  # omega x (linear part)
-        t[k, row, 3 + col] = sign  # v x (angular part of m) into linear
-        t[3 + k, 3 + row, 3 + col] = sign  # omega x (angular part)
-    return t.reshape(6, 36)
+def _skew_entries() -> list[tuple[int, int, int, float]]:
+    """(row, column, component, sign) of the entries of the cross-product matrix [a]x."""
+    return [(0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0),
+            (2, 0, 1, -1.0), (2, 1, 0, 1.0)]  # fmt: skip
+
+
+def _cross_maps() -> tuple[FloatArray, FloatArray]:
+    """Constant maps (36, 6): (u outer m).ravel() @ T_m = u x m, (u outer f) @ T_f = u x* f.
+
+    Spatial motion cross product u x m = [w x m_v + v x m_w; w x m_w] and force cross product
+    u x* f = [w x f_v; w x f_w + v x f_v] for u = [v; w] (Featherstone, reordered).
+    """
+    motion = np.zeros((6, 6, 6))
+    force = np.zeros((6, 6, 6))
+    for row, col, k, sign in _skew_entries():
+        # (a x b)_row = sum sign * a_k * b_col over the entries of [a]x.
+        motion[3 + k, col, row] += sign  # w x m_v
+        motion[k, 3 + col, row] += sign  # v x m_w
+        motion[3 + k, 3 + col, 3 + row] += sign  # w x m_w
+        force[3 + k, col, row] += sign  # w x f_v
+        force[3 + k, 3 + col, 3 + row] += sign  # w x f_w
+        force[k, col, 3 + row] += sign  # v x f_v
+    return motion.reshape(36, 6), force.reshape(36, 6)
 
 
 class _Configuration:
-    """Quantities that depend on the joint angles only, in frame 0."""
+    """Quantities that depend on the joint angles only."""
 
     __slots__ = (
-        'axes', 'coms', 'ee', 'inertias', 'jac', 'jac_flat', 'key', 'mass', 'origins',
-        'rotations', 'subspaces', 'x', 'x_t',
+        'axes', 'coms', 'ee', 'jac0', 'jac_local', 'key', 'mass', 'origins', 'rotations',
+        'strips', 'subspaces', 'x',
     )  # fmt: skip
 
     key: tuple[float, float, float]
@@ -132,12 +146,11 @@ class _Configuration:
     axes: list[Vec3]  # joint i axis in frame 0
     coms: list[Vec3]  # link i centre (mass and buoyancy) in frame 0
     ee: Vec3  # end effector in frame 0
-    subspaces: FloatArray  # (3, 6) s_j
+    subspaces: FloatArray  # (3, 6) s_j in frame 0
     x: FloatArray  # (3, 6, 6) motion transforms frame 0 -> link i
-    x_t: FloatArray  # (3, 6, 6) their transposes (force transforms link i -> frame 0)
-    inertias: FloatArray  # (4, 6, 6) I_i in frame 0 at O
-    jac: FloatArray  # (4, 6, 9) body Jacobians J_i in frame 0
-    jac_flat: FloatArray  # (24, 9)
+    jac0: FloatArray  # (24, 9) J0_i stacked: body twists in frame 0 at O
+    jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
+    strips: FloatArray | None  # (3 * 2N, 9) normal velocity at the drag strips from w
     mass: FloatArray | None  # M_b, computed on demand
 
 
@@ -180,6 +193,10 @@ class UvmsModel:
         axes = np.array(p.arm.joint_axes, dtype=float).reshape(3, 3)
         axes /= np.linalg.norm(axes, axis=1, keepdims=True)
         self._joint_axes: list[Vec3] = [tuple(a) for a in axes.tolist()]
+        # Rodrigues' formula, with the closed forms for +x, +y, +z (0, 1, 2; -1: general).
+        self._axis_kinds = [
+            next((k for k in range(3) if a[k] == 1.0), -1) for a in self._joint_axes
+        ]
 
         # Spatial inertias: vehicle at the hull centre O, links at their joint, own axes.
         veh = p.vehicle
@@ -209,10 +226,12 @@ class UvmsModel:
         """Added-mass matrix M_A (6, 6) of the hull at O, base_link_frd axes."""
         self.added_mass_links: FloatArray = added_links
         """Added-mass matrices (3, 6, 6) of the links at their joint, link axes."""
-        self._inertia_vehicle = rigid_vehicle + added_vehicle
-        self._inertia_links = rigid_links + added_links
-        self._inertia_template = np.zeros((4, 6, 6))
-        self._inertia_template[0] = self._inertia_vehicle
+        self._inertia_blocks = np.zeros((4 * 6, 4 * 6))  # blockdiag(I_0, I_1, I_2, I_3)
+        self._inertia_blocks[:6, :6] = rigid_vehicle + added_vehicle
+        for i in range(N_JOINTS):
+            block = slice(6 * i + 6, 6 * i + 12)
+            self._inertia_blocks[block, block] = rigid_links[i] + added_links[i]
+        self._inertia_link_blocks = self._inertia_blocks[6:, 6:].copy()
 
         # Gravity and buoyancy as net ("wet") masses W_i and first moments W_i c_i.
         total_mass = veh.mass_kg + sum(masses)
@@ -250,28 +269,35 @@ class UvmsModel:
         # 1/2 rho C_D (2 r) dx per strip.
         self._strip_gain = 0.5 * rho * p.arm.drag_coefficient * 2.0 * np.array(radii)[:, None]
         self._strip_gain = self._strip_gain * strip_dx
-        self._strip_basis = np.stack((np.ones_like(strip_x), strip_x), axis=1)  # (3, 2, N)
-        self._strip_basis_t = self._strip_basis.transpose(0, 2, 1).copy()
-        # Link-frame twist -> [[v_y, w_z], [v_z, -w_y]]: normal velocity at x is row @ [1, x].
-        self._drag_select = np.zeros((6, 4))
-        self._drag_select[1, 0] = self._drag_select[5, 1] = self._drag_select[2, 2] = 1.0
-        self._drag_select[4, 3] = -1.0
-        # [sum w v_y, sum w x v_y, sum w v_z, sum w x v_z] -> link-frame drag wrench.
-        self._drag_wrench = np.zeros((4, 6))
-        self._drag_wrench[0, 1] = self._drag_wrench[1, 5] = self._drag_wrench[2, 2] = -1.0
-        self._drag_wrench[3, 4] = 1.0
-
-        # Constant maps.
-        self._crm_map = _motion_cross_map()
-        self._jac_template = np.zeros((4, 6, N_DOF))
-        self._jac_template[:, :, :6] = np.eye(6)
-        self._joint_mask = np.tril(np.ones((N_JOINTS, N_JOINTS)))[:, None, :]  # (3, 1, 3)
-        self._x_map = np.zeros((18, 36))  # [rt (9), b (9)] -> X = [[rt, b], [0, rt]]
+        # Rows mapping a link-frame twist to the normal velocity (y, z) at each strip centre:
+        # v_y + w_z x and v_z - w_y x; all y rows of a link first, then all z rows.
+        count = hydro.drag_strips_per_link
+        strip_rows = np.zeros((N_JOINTS, 2 * count, 6))
+        strip_rows[:, :count, 1] = 1.0
+        strip_rows[:, :count, 5] = strip_x
+        strip_rows[:, count:, 2] = 1.0
+        strip_rows[:, count:, 4] = -strip_x
+        self._strip_count = count
+        # [rt (9), B (9)] of link i -> rows [X_i; strip rows @ X_i] (6 + 2N, 6), one product.
+        x_map = np.zeros((18, 6, 6))
         for r in range(3):
             for c in range(3):
-                self._x_map[3 * r + c, 6 * r + c] = 1.0
-                self._x_map[3 * r + c, 6 * (r + 3) + c + 3] = 1.0
-                self._x_map[9 + 3 * r + c, 6 * r + c + 3] = 1.0
+                x_map[3 * r + c, r, c] = 1.0
+                x_map[3 * r + c, r + 3, c + 3] = 1.0
+                x_map[9 + 3 * r + c, r, c + 3] = 1.0
+        extended = np.concatenate((np.broadcast_to(np.eye(6), (N_JOINTS, 6, 6)), strip_rows), 1)
+        # extended_i @ X_i is linear in the data of link i: map (18, (6 + 2N) * 6) per link.
+        self._x_maps = np.einsum('lrk,dkc->ldrc', extended, x_map).reshape(N_JOINTS, 18, -1)
+        self._extended_rows = 6 + 2 * count
+
+        # Constant maps.
+        self._motion_cross, self._force_cross = _cross_maps()
+        self._jac_template = np.zeros((4, 6, N_DOF))
+        self._jac_template[:, :, :6] = np.eye(6)
+        self._jac_local_template = self._jac_template.reshape(4 * 6, N_DOF).copy()
+        self._joint_mask = np.tril(np.ones((N_JOINTS, N_JOINTS)))[:, None, :]  # (3, 1, 3)
+        self._partial_sums = np.tril(np.ones((N_JOINTS, N_JOINTS)))
+        self._half_lengths = [0.5 * length for length in lengths]
         self._cache: _Configuration | None = None
 
     # ------------------------------------------------------------------ configuration
@@ -289,52 +315,67 @@ class UvmsModel:
         axes: list[Vec3] = []
         coms: list[Vec3] = []
         flat: list[float] = []
-        origin = self._mount
+        subspaces: list[float] = []
+        ox, oy, oz = self._mount
         parent: Mat3 | None = None
         for j, angle in enumerate(key):
             x, y, z = self._joint_axes[j]
             c, s = math.cos(angle), math.sin(angle)
-            k = 1.0 - c
-            relative: Mat3 = (
-                c + k * x * x, k * x * y - s * z, k * x * z + s * y,
-                k * x * y + s * z, c + k * y * y, k * y * z - s * x,
-                k * x * z - s * y, k * y * z + s * x, c + k * z * z,
-            )  # fmt: skip
+            kind = self._axis_kinds[j]
+            relative: Mat3
+            if kind == 2:
+                relative = (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+            elif kind == 1:
+                relative = (c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+            elif kind == 0:
+                relative = (1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+            else:
+                k = 1.0 - c
+                relative = (
+                    c + k * x * x, k * x * y - s * z, k * x * z + s * y,
+                    k * x * y + s * z, c + k * y * y, k * y * z - s * x,
+                    k * x * z - s * y, k * y * z + s * x, c + k * z * z,
+                )  # fmt: skip
             if parent is None:
                 rot, axis = relative, (x, y, z)
             else:
                 rot, axis = _mat_mat(parent, relative), _mat_vec(parent, (x, y, z))
             r0, r1, r2, r3, r4, r5, r6, r7, r8 = rot
+            ax, ay, az = axis
             half = 0.5 * self._lengths[j]
             rotations.append(rot)
-            origins.append(origin)
+            origins.append((ox, oy, oz))
             axes.append(axis)
-            coms.append((origin[0] + half * r0, origin[1] + half * r3, origin[2] + half * r6))
-            # X_j rows: rot^T, then o x e_k for the link axes e_k (columns of rot).
-            b0 = _cross(origin, (r0, r3, r6))
-            b1 = _cross(origin, (r1, r4, r7))
-            b2 = _cross(origin, (r2, r5, r8))
-            flat += (r0, r3, r6, r1, r4, r7, r2, r5, r8)
-            flat += (*b0, *b1, *b2)
+            coms.append((ox + half * r0, oy + half * r3, oz + half * r6))
+            # X_j = [[rot^T, B], [0, rot^T]], row k of B is o x e_k (e_k: column k of rot).
+            flat += (
+                r0, r3, r6, r1, r4, r7, r2, r5, r8,
+                oy * r6 - oz * r3, oz * r0 - ox * r6, ox * r3 - oy * r0,
+                oy * r7 - oz * r4, oz * r1 - ox * r7, ox * r4 - oy * r1,
+                oy * r8 - oz * r5, oz * r2 - ox * r8, ox * r5 - oy * r2,
+            )  # fmt: skip
+            subspaces += (oy * az - oz * ay, oz * ax - ox * az, ox * ay - oy * ax, ax, ay, az)
             length = self._lengths[j]
-            origin = (origin[0] + length * r0, origin[1] + length * r3, origin[2] + length * r6)
+            ox, oy, oz = ox + length * r0, oy + length * r3, oz + length * r6
             parent = rot
-        for j in range(N_JOINTS):
-            flat += (*_cross(origins[j], axes[j]), *axes[j])
+        flat += subspaces
+        origin = (ox, oy, oz)
         data = np.array(flat)
         cfg.rotations, cfg.origins, cfg.axes, cfg.coms, cfg.ee = (
             rotations, origins, axes, coms, origin,
         )  # fmt: skip
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
-        cfg.x = (data[:54].reshape(N_JOINTS, 18) @ self._x_map).reshape(N_JOINTS, 6, 6)
-        cfg.x_t = cfg.x.transpose(0, 2, 1)
-        inertias = self._inertia_template.copy()
-        np.matmul(cfg.x_t, self._inertia_links @ cfg.x, out=inertias[1:])
-        cfg.inertias = inertias
-        jac = self._jac_template.copy()
-        jac[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
-        cfg.jac = jac
-        cfg.jac_flat = jac.reshape(4 * 6, N_DOF)
+        rows = self._extended_rows
+        transforms = (data[:54].reshape(N_JOINTS, 1, 18) @ self._x_maps).reshape(N_JOINTS, rows, 6)
+        cfg.x = transforms[:, :6]
+        jac0 = self._jac_template.copy()
+        jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
+        cfg.jac0 = jac0.reshape(4 * 6, N_DOF)
+        links = transforms @ jac0[1:]  # (3, 6 + 2N, 9): [J_i; strip rows]
+        jac_local = self._jac_local_template.copy()
+        jac_local[6:] = links[:, :6].reshape(3 * 6, N_DOF)
+        cfg.jac_local = jac_local
+        cfg.strips = links[:, 6:].reshape(-1, N_DOF) if self._drag_enabled else None
         cfg.mass = None
         self._cache = cfg
         return cfg
@@ -342,7 +383,7 @@ class UvmsModel:
     def _mass(self, cfg: _Configuration) -> FloatArray:
         """M_b = sum_i J_i^T I_i J_i (composite-rigid-body matrix), cached per configuration."""
         if cfg.mass is None:
-            cfg.mass = cfg.jac_flat.T @ (cfg.inertias @ cfg.jac).reshape(4 * 6, N_DOF)
+            cfg.mass = cfg.jac_local.T @ (self._inertia_blocks @ cfg.jac_local)
         return cfg.mass
 
     def _bias(
@@ -354,25 +395,23 @@ class UvmsModel:
         f_ee_ned: list[float] | None,
     ) -> FloatArray:
         """C_b w + D_b w + G_b - J_ee^T f_ee (9,): RNEA at w_dot = 0 (eq. 8)."""
-        twists = (cfg.jac_flat @ w).reshape(4, 6)
-        crm = (twists @ self._crm_map).reshape(4, 6, 6)
-        joint_twists = cfg.subspaces * w[6:, None]  # s_j q_dot_j
-        # a_i = sum_{j <= i} (V_{j-1} x s_j) q_dot_j; V_{j-1} is body j-1's twist.
-        acc_vel = np.empty((4, 6, 2))
-        acc_vel[0, :, 0] = 0.0
-        acc_vel[1:, :, 0:1] = np.cumsum(crm[:3] @ joint_twists[:, :, None], axis=0)
-        acc_vel[:, :, 1] = twists
-        products = cfg.inertias @ acc_vel  # [I a, I V]
-        forces = products[:, :, 0] - (crm.transpose(0, 2, 1) @ products[:, :, 1:2])[:, :, 0]
-        if self._drag_enabled:
-            local = (cfg.x @ twists[1:, :, None])[:, :, 0] @ self._drag_select
-            normal = local.reshape(N_JOINTS, 2, 2) @ self._strip_basis  # (3, 2, N)
-            weights = self._strip_gain * np.hypot(normal[:, 0], normal[:, 1])
-            sums = (normal * weights[:, None, :]) @ self._strip_basis_t  # (3, 2, 2)
-            wrench = sums.reshape(N_JOINTS, 4) @ self._drag_wrench
-            forces[1:] -= (cfg.x_t @ wrench[:, :, None])[:, :, 0]
+        nu = cfg.jac_local @ w  # body twists, own frames (24,)
+        # a_i = X_i sum_{j <= i} (V_{j-1} x s_j) q_dot_j with frame-0 twists V_0, V_1, V_2.
+        parents = (cfg.jac0[:18] @ w).reshape(N_JOINTS, 6, 1)
+        joint_twists = (cfg.subspaces * w[6:, None]).reshape(N_JOINTS, 1, 6)
+        bias_acc = (parents * joint_twists).reshape(N_JOINTS, 36) @ self._motion_cross
+        bias_acc = (cfg.x @ (self._partial_sums @ bias_acc).reshape(N_JOINTS, 6, 1)).reshape(18)
+        # f_i = I_i a_i + nu_i x* I_i nu_i.
+        momenta = (self._inertia_blocks @ nu).reshape(4, 1, 6)
+        forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36) @ self._force_cross
+        forces[1:] += (self._inertia_link_blocks @ bias_acc).reshape(N_JOINTS, 6)
         forces -= np.array(self._body_wrenches(cfg, q, w_list, f_ee_ned)).reshape(4, 6)
-        result: FloatArray = cfg.jac_flat.T @ forces.reshape(4 * 6)
+        result: FloatArray = cfg.jac_local.T @ forces.reshape(4 * 6)
+        if cfg.strips is not None:
+            # Cross-flow strips: dF = -1/2 rho C_D (2 r) |v_n| v_n dx, mapped by J_strip^T.
+            normal = (cfg.strips @ w).reshape(N_JOINTS, 2, self._strip_count)
+            weights = self._strip_gain * np.hypot(normal[:, 0], normal[:, 1])
+            result += cfg.strips.T @ (normal * weights[:, None, :]).reshape(-1)
         return result
 
     def _body_wrenches(
@@ -384,25 +423,36 @@ class UvmsModel:
         if g != 0.0:
             phi, theta = q[3], q[4]
             cth = math.cos(theta)
-            g_b = (-g * math.sin(theta), g * math.sin(phi) * cth, g * math.cos(phi) * cth)
+            gx, gy, gz = -g * math.sin(theta), g * math.sin(phi) * cth, g * math.cos(phi) * cth
             wet = self._wet_vehicle
-            moment = _cross(self._first_moment_vehicle, g_b)
-            out[0:6] = (wet * g_b[0], wet * g_b[1], wet * g_b[2], *moment)
+            hx, hy, hz = self._first_moment_vehicle
+            out[0:6] = (
+                wet * gx, wet * gy, wet * gz,
+                hy * gz - hz * gy, hz * gx - hx * gz, hx * gy - hy * gx,
+            )  # fmt: skip
             for i in range(N_JOINTS):
+                # Link frame: weight and buoyancy act at the centre (L/2, 0, 0).
+                r0, r1, r2, r3, r4, r5, r6, r7, r8 = cfg.rotations[i]
                 wet = self._wet_links[i]
-                force = (wet * g_b[0], wet * g_b[1], wet * g_b[2])
-                moment = _cross(cfg.coms[i], force)
-                out[6 * (i + 1) : 6 * (i + 2)] = (*force, *moment)
+                fx = wet * (r0 * gx + r3 * gy + r6 * gz)
+                fy = wet * (r1 * gx + r4 * gy + r7 * gz)
+                fz = wet * (r2 * gx + r5 * gy + r8 * gz)
+                half = self._half_lengths[i]
+                out[6 * i + 6 : 6 * i + 12] = (fx, fy, fz, 0.0, -half * fz, half * fy)
         if self._drag_enabled:
             linear, quadratic = self._hull_linear_drag, self._hull_quadratic_drag
             for k in range(6):
                 out[k] -= (linear[k] + quadratic[k] * abs(w[k])) * w[k]
         if f_ee_ned is not None:
-            f_b = _mat_t_vec(_rotation(q[3], q[4], q[5]), f_ee_ned)
-            moment = _cross(cfg.ee, f_b)
-            for k in range(3):
-                out[18 + k] += f_b[k]
-                out[21 + k] += moment[k]
+            # Link 3 frame: the force acts at the tip (L3, 0, 0).
+            rot = _mat_mat(_rotation(q[3], q[4], q[5]), cfg.rotations[2])
+            fx, fy, fz = _mat_t_vec(rot, f_ee_ned)
+            length = self._lengths[2]
+            out[18] += fx
+            out[19] += fy
+            out[20] += fz
+            out[22] -= length * fz
+            out[23] += length * fy
         return out
 
     def _solve(self, mass: FloatArray, rhs: FloatArray) -> FloatArray:
@@ -420,6 +470,19 @@ class UvmsModel:
         cfg = self._configuration(q_list[6], q_list[7], q_list[8])
         bias = self._bias(cfg, q_list, w.tolist(), w, f_ee_ned)
         return self._solve(self._mass(cfg), tau_b - bias)
+
+    def _derivative(
+        self, state: FloatArray, tau_b: FloatArray, f_ee_ned: list[float] | None
+    ) -> FloatArray:
+        """(q_dot, w_dot) (18,) of the state (q, w) (18,): eq. 4 and eq. 8."""
+        values = state.tolist()
+        q, w = values[:9], values[9:]
+        cfg = self._configuration(q[6], q[7], q[8])
+        bias = self._bias(cfg, q, w, state[9:], f_ee_ned)
+        derivative = np.empty(2 * N_DOF)
+        derivative[:9] = self._q_dot(q, w)
+        derivative[9:] = self._solve(self._mass(cfg), tau_b - bias)
+        return derivative
 
     def _q_dot(self, q: list[float], w: list[float]) -> list[float]:
         """q_dot = B(q) w (eq. 4) as a list."""
@@ -468,7 +531,7 @@ class UvmsModel:
             wrenches = np.array(self._body_wrenches(cfg, q_list, [0.0] * N_DOF, None))
         finally:
             self._drag_enabled = drag
-        result: FloatArray = -(cfg.jac_flat.T @ wrenches)
+        result: FloatArray = -(cfg.jac_local.T @ wrenches)
         return result
 
     def kinetic_energy(self, q: ArrayLike, w: ArrayLike) -> float:
@@ -526,21 +589,33 @@ class UvmsModel:
             StateError: For a wrong shape, a non-finite input or a non-finite result.
             SingularAttitudeError: If the pitch reaches +-90 deg.
         """
-        q = self._check_q(q)
-        w = _vector('w', w, N_DOF)
-        tau_b = _vector('tau_b', tau_b, N_DOF)
+        state = np.concatenate((np.asarray(q, dtype=float), np.asarray(w, dtype=float)))
+        tau_b = np.asarray(tau_b, dtype=float)
+        if (
+            state.shape != (2 * N_DOF,)
+            or tau_b.shape != (N_DOF,)
+            or not math.isfinite(float(state.sum() + tau_b.sum()))
+        ):
+            # Slow path, only to name the offending argument.
+            _vector('q', q, N_DOF)
+            _vector('w', w, N_DOF)
+            _vector('tau_b', tau_b, N_DOF)
         f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3).tolist()
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
             raise StateError(f'dt must be a positive finite number of seconds, got {dt!r}')
         method = self._method if method is None else method
         if method == 'rk4':
-            q_new, w_new = self._rk4(q, w, tau_b, f, float(dt))
+            state_new = self._rk4(state, tau_b, f, float(dt))
         elif method == 'semi_implicit_euler':
+            q, w = state[:N_DOF], state[N_DOF:]
             w_new = w + dt * self._w_dot(q, w, tau_b, f)
             q_new = q + dt * np.array(self._q_dot(q.tolist(), w_new.tolist()))
+            state_new = np.concatenate((q_new, w_new))
         else:
             raise ModelError(f"method = {method!r} must be 'rk4' or 'semi_implicit_euler'")
-        if not math.isfinite(float(q_new.sum() + w_new.sum())):
+        q_new, w_new = state_new[:N_DOF], state_new[N_DOF:]
+        if not math.isfinite(float(state_new.sum())):
+            q, w = state[:N_DOF], state[N_DOF:]
             raise StateError(
                 f'the state diverged in one step of dt = {dt!r} s from q = {q.tolist()!r}, '
                 f'w = {w.tolist()!r}'
@@ -548,26 +623,16 @@ class UvmsModel:
         return q_new, w_new
 
     def _rk4(
-        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f: list[float] | None, dt: float
-    ) -> tuple[FloatArray, FloatArray]:
+        self, state: FloatArray, tau_b: FloatArray, f: list[float] | None, dt: float
+    ) -> FloatArray:
         """Classical fourth-order Runge-Kutta step of (q_dot, w_dot) = (B w, M_b^-1 (...))."""
         half = 0.5 * dt
-        k1w = self._w_dot(q, w, tau_b, f)
-        k1q = np.array(self._q_dot(q.tolist(), w.tolist()))
-        q2, w2 = q + half * k1q, w + half * k1w
-        k2w = self._w_dot(q2, w2, tau_b, f)
-        k2q = np.array(self._q_dot(q2.tolist(), w2.tolist()))
-        q3, w3 = q + half * k2q, w + half * k2w
-        k3w = self._w_dot(q3, w3, tau_b, f)
-        k3q = np.array(self._q_dot(q3.tolist(), w3.tolist()))
-        q4, w4 = q + dt * k3q, w + dt * k3w
-        k4w = self._w_dot(q4, w4, tau_b, f)
-        k4q = np.array(self._q_dot(q4.tolist(), w4.tolist()))
-        sixth = dt / 6.0
-        return (
-            q + sixth * (k1q + 2.0 * (k2q + k3q) + k4q),
-            w + sixth * (k1w + 2.0 * (k2w + k3w) + k4w),
-        )
+        k1 = self._derivative(state, tau_b, f)
+        k2 = self._derivative(state + half * k1, tau_b, f)
+        k3 = self._derivative(state + half * k2, tau_b, f)
+        k4 = self._derivative(state + dt * k3, tau_b, f)
+        result: FloatArray = state + (dt / 6.0) * (k1 + k4 + 2.0 * (k2 + k3))
+        return result
 
     # ------------------------------------------------------------------ generalized coordinates
 
@@ -718,10 +783,10 @@ class UvmsModel:
         w = np.concatenate((rot.T @ q_dot[:3], j2_inv @ q_dot[3:6], q_dot[6:]))
         cfg = self._configuration(*q[6:].tolist())
         # Classical acceleration of the EE point at w_dot = 0 in frame 0 (fixed at this instant).
-        twists = (cfg.jac_flat @ w).reshape(4, 6)
-        crm = (twists[:3] @ self._crm_map).reshape(3, 6, 6)
+        twists = (cfg.jac0 @ w).reshape(4, 6)
         joint_twists = cfg.subspaces * w[6:, None]
-        acc = (crm @ joint_twists[:, :, None])[:, :, 0].sum(axis=0).tolist()
+        outer = (twists[:3, :, None] * joint_twists[:, None, :]).reshape(N_JOINTS, 36)
+        acc = (outer @ self._motion_cross).sum(axis=0).tolist()
         v3 = twists[3].tolist()
         ee = cfg.ee
         omega = v3[3:]
