@@ -194,8 +194,9 @@ class VehicleParameters(_Group):
         length=3,
     )
     center_of_buoyancy_m: tuple[float, ...] = _param(
-        (0.0, 0.0, 0.0),
-        'Centre of buoyancy of the hull in base_link_frd (m); default: hull centre.',
+        (0.028, 0.0, 0.0),
+        'Centre of buoyancy of the hull in base_link_frd (m); default 2.8 cm forward of the '
+        'hull centre, which trims the UVMS level with the arm at its recommended start pose.',
         -100.0,
         100.0,
         length=3,

@@ -206,3 +206,10 @@ def test_neutral_vehicle_with_folded_arm_at_rest_stays_at_rest() -> None:
     for _ in range(100):
         q_next, w = MODEL.step(q_next, w, tau_b, None, 0.01)
     np.testing.assert_allclose(q_next, q, atol=1e-9)
+
+
+def test_uvms_is_trimmed_level_at_the_recommended_start_pose() -> None:
+    """With the arm at (0, atan(4/3), -pi/2) weight and buoyancy give < 1 N m roll/pitch moment."""
+    q = np.zeros(9)
+    q[6:] = [0.0, np.arctan2(4.0, 3.0), -np.pi / 2]
+    np.testing.assert_allclose(MODEL.gravity_body(q)[3:6], 0.0, atol=1.0)
