@@ -287,7 +287,12 @@ class UvmsModel:
                 x_map[9 + 3 * r + c, r, c + 3] = 1.0
         extended = np.concatenate((np.broadcast_to(np.eye(6), (N_JOINTS, 6, 6)), strip_rows), 1)
         # extended_i @ X_i is linear in the data of link i: map (18, (6 + 2N) * 6) per link.
-        self._x_maps = np.einsum('lrk,dkc->ldrc', extended, x_map).reshape(N_JOINTS, 18, -1)
+        x_maps = np.einsum('lrk,dkc->ldrc', extended, x_map).reshape(N_JOINTS, 18, -1)
+        self._x_map_blocks = np.zeros((N_JOINTS * 18, N_JOINTS * x_maps.shape[2]))
+        for i in range(N_JOINTS):
+            self._x_map_blocks[
+                18 * i : 18 * i + 18, i * x_maps.shape[2] : (i + 1) * x_maps.shape[2]
+            ] = x_maps[i]
         self._extended_rows = 6 + 2 * count
 
         # Constant maps.
@@ -366,7 +371,7 @@ class UvmsModel:
         )  # fmt: skip
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
         rows = self._extended_rows
-        transforms = (data[:54].reshape(N_JOINTS, 1, 18) @ self._x_maps).reshape(N_JOINTS, rows, 6)
+        transforms = data[:54].dot(self._x_map_blocks).reshape(N_JOINTS, rows, 6)
         cfg.x = transforms[:, :6]
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
@@ -383,7 +388,7 @@ class UvmsModel:
     def _mass(self, cfg: _Configuration) -> FloatArray:
         """M_b = sum_i J_i^T I_i J_i (composite-rigid-body matrix), cached per configuration."""
         if cfg.mass is None:
-            cfg.mass = cfg.jac_local.T @ (self._inertia_blocks @ cfg.jac_local)
+            cfg.mass = cfg.jac_local.T.dot(self._inertia_blocks.dot(cfg.jac_local))
         return cfg.mass
 
     def _bias(
@@ -393,37 +398,42 @@ class UvmsModel:
         w_list: list[float],
         w: FloatArray,
         f_ee_ned: list[float] | None,
+        rot: Mat3 | None = None,
     ) -> FloatArray:
-        """C_b w + D_b w + G_b - J_ee^T f_ee (9,): RNEA at w_dot = 0 (eq. 8)."""
-        nu = cfg.jac_local @ w  # body twists, own frames (24,)
+        """C_b w + D_b w + G_b - J_ee^T f_ee (9,): RNEA at w_dot = 0 (eq. 8).
+
+        ``rot`` is rot_ned_from_body of q when the caller has it already.
+        """
+        nu = cfg.jac_local.dot(w)  # body twists, own frames (24,)
         # a_i = X_i sum_{j <= i} (V_{j-1} x s_j) q_dot_j with frame-0 twists V_0, V_1, V_2.
-        parents = (cfg.jac0[:18] @ w).reshape(N_JOINTS, 6, 1)
+        parents = cfg.jac0[:18].dot(w).reshape(N_JOINTS, 6, 1)
         joint_twists = (cfg.subspaces * w[6:, None]).reshape(N_JOINTS, 1, 6)
-        bias_acc = (parents * joint_twists).reshape(N_JOINTS, 36) @ self._motion_cross
-        bias_acc = (cfg.x @ (self._partial_sums @ bias_acc).reshape(N_JOINTS, 6, 1)).reshape(18)
+        bias_acc = (parents * joint_twists).reshape(N_JOINTS, 36).dot(self._motion_cross)
+        bias_acc = (cfg.x @ self._partial_sums.dot(bias_acc).reshape(N_JOINTS, 6, 1)).reshape(18)
         # f_i = I_i a_i + nu_i x* I_i nu_i.
-        momenta = (self._inertia_blocks @ nu).reshape(4, 1, 6)
-        forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36) @ self._force_cross
-        forces[1:] += (self._inertia_link_blocks @ bias_acc).reshape(N_JOINTS, 6)
-        forces -= np.array(self._body_wrenches(cfg, q, w_list, f_ee_ned)).reshape(4, 6)
-        result: FloatArray = cfg.jac_local.T @ forces.reshape(4 * 6)
+        momenta = self._inertia_blocks.dot(nu).reshape(4, 1, 6)
+        forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36).dot(self._force_cross)
+        forces[1:] += self._inertia_link_blocks.dot(bias_acc).reshape(N_JOINTS, 6)
+        if rot is None:
+            rot = _rotation(q[3], q[4], q[5])
+        forces -= np.array(self._body_wrenches(cfg, rot, w_list, f_ee_ned)).reshape(4, 6)
+        result: FloatArray = forces.reshape(4 * 6).dot(cfg.jac_local)
         if cfg.strips is not None:
             # Cross-flow strips: dF = -1/2 rho C_D (2 r) |v_n| v_n dx, mapped by J_strip^T.
-            normal = (cfg.strips @ w).reshape(N_JOINTS, 2, self._strip_count)
-            weights = self._strip_gain * np.hypot(normal[:, 0], normal[:, 1])
-            result += cfg.strips.T @ (normal * weights[:, None, :]).reshape(-1)
+            normal = cfg.strips.dot(w).reshape(N_JOINTS, 2, self._strip_count)
+            normal *= (self._strip_gain * np.hypot(normal[:, 0], normal[:, 1]))[:, None, :]
+            result += normal.reshape(-1).dot(cfg.strips)
         return result
 
     def _body_wrenches(
-        self, cfg: _Configuration, q: list[float], w: list[float], f_ee_ned: list[float] | None
+        self, cfg: _Configuration, rot: Mat3, w: list[float], f_ee_ned: list[float] | None
     ) -> list[float]:
-        """Gravity, buoyancy, hull drag and EE force on the 4 bodies, frame 0 at O (24,)."""
+        """Gravity, buoyancy, hull drag and EE force on the 4 bodies, own frames (24,)."""
         out = [0.0] * 24
         g = self._g
         if g != 0.0:
-            phi, theta = q[3], q[4]
-            cth = math.cos(theta)
-            gx, gy, gz = -g * math.sin(theta), g * math.sin(phi) * cth, g * math.cos(phi) * cth
+            # Gravity in base_link_frd: g times the last row of rot_ned_from_body.
+            gx, gy, gz = g * rot[6], g * rot[7], g * rot[8]
             wet = self._wet_vehicle
             hx, hy, hz = self._first_moment_vehicle
             out[0:6] = (
@@ -445,8 +455,7 @@ class UvmsModel:
                 out[k] -= (linear[k] + quadratic[k] * abs(w[k])) * w[k]
         if f_ee_ned is not None:
             # Link 3 frame: the force acts at the tip (L3, 0, 0).
-            rot = _mat_mat(_rotation(q[3], q[4], q[5]), cfg.rotations[2])
-            fx, fy, fz = _mat_t_vec(rot, f_ee_ned)
+            fx, fy, fz = _mat_t_vec(cfg.rotations[2], _mat_t_vec(rot, f_ee_ned))
             length = self._lengths[2]
             out[18] += fx
             out[19] += fy
@@ -478,17 +487,19 @@ class UvmsModel:
         values = state.tolist()
         q, w = values[:9], values[9:]
         cfg = self._configuration(q[6], q[7], q[8])
-        bias = self._bias(cfg, q, w, state[9:], f_ee_ned)
+        rot = _rotation(q[3], q[4], q[5])
+        bias = self._bias(cfg, q, w, state[9:], f_ee_ned, rot)
         derivative = np.empty(2 * N_DOF)
-        derivative[:9] = self._q_dot(q, w)
+        derivative[:9] = self._q_dot(q, w, rot)
         derivative[9:] = self._solve(self._mass(cfg), tau_b - bias)
         return derivative
 
-    def _q_dot(self, q: list[float], w: list[float]) -> list[float]:
-        """q_dot = B(q) w (eq. 4) as a list."""
+    def _q_dot(self, q: list[float], w: list[float], rot: Mat3 | None = None) -> list[float]:
+        """q_dot = B(q) w (eq. 4) as a list; ``rot`` is rot_ned_from_body(q) if known."""
         phi, theta, psi = q[3], q[4], q[5]
         c5 = check_pitch(theta, 'q (during integration)')
-        rot = _rotation(phi, theta, psi)
+        if rot is None:
+            rot = _rotation(phi, theta, psi)
         c4, s4 = math.cos(phi), math.sin(phi)
         t5 = math.sin(theta) / c5
         p, qq, r = w[3], w[4], w[5]
@@ -528,7 +539,8 @@ class UvmsModel:
         drag = self._drag_enabled
         try:
             self._drag_enabled = False
-            wrenches = np.array(self._body_wrenches(cfg, q_list, [0.0] * N_DOF, None))
+            rot = _rotation(q_list[3], q_list[4], q_list[5])
+            wrenches = np.array(self._body_wrenches(cfg, rot, [0.0] * N_DOF, None))
         finally:
             self._drag_enabled = drag
         result: FloatArray = -(cfg.jac_local.T @ wrenches)
