@@ -1,4 +1,4 @@
-"""Integration: the recorder as a process closes its MCAP on signals; record then replay."""
+"""Integration: recorder process and signals, record then replay, controller re-run."""
 
 from __future__ import annotations
 
@@ -22,9 +22,13 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
+from uvms_bringup.graph import build_graph, run_graph
 from uvms_bringup.recorder_node import DEFAULT_TOPICS, RecorderNode
-from uvms_bringup.recording import open_recording
+from uvms_bringup.recording import McapRecorder, open_recording
 from uvms_bringup.replay import ReplayNode, ReplayOptions
+from uvms_bringup.scenario import load_scenario
+
+from uvms_bringup import replay
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
@@ -143,3 +147,72 @@ def test_recorded_then_replayed_messages_reach_a_subscriber_unchanged(
     replay.play(ReplayOptions(rate=1e6))
     _spin_until(executor, lambda: sum(map(len, received.values())) == 60)
     assert received == published
+
+
+@pytest.fixture(scope='module')
+def lockstep_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """0.3 s of the case1_ke1e4 scenario run in lockstep and recorded."""
+    path = tmp_path_factory.mktemp('rerun') / 'case1.mcap'
+    scenario = load_scenario(REPO / 'config' / 'scenarios' / 'case1_ke1e4.yaml')
+    run_graph(build_graph(scenario.with_changes(duration_s=0.3), 'lockstep', output_path=path))
+    return path
+
+
+def test_rerun_controller_reproduces_its_recorded_outputs_exactly(
+    lockstep_recording: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Re-running the unchanged controller gives every recorded output back, deviation 0."""
+    status = replay.main([str(lockstep_recording), '--rerun-controller', '--tolerance', '0'])
+    out = capsys.readouterr().out
+    assert status == 0, out
+    assert 'PASS' in out
+    recording = open_recording(lockstep_recording)
+    report = replay.rerun_controller(recording, tolerance=0.0)
+    outputs = ('/uvms/command/generalized_force', '/uvms/controller/state')
+    assert report.compared == sum(recording.topics[t].message_count for t in outputs)
+    assert {d.max_abs for d in report.deviations.values()} == {0.0}
+
+
+def test_rerun_with_changed_gains_reports_the_deviation_and_fails(
+    lockstep_recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A --params-file that changes the gains makes the re-run deviate and exit 1."""
+    gains = tmp_path / 'gains.yaml'
+    gains.write_text('/uvms/controller:\n  ros__parameters:\n'
+                     '    impedance.stiffness_n_m: [4000.0, 4000.0, 4000.0]\n'
+                     '    hybrid.position_kp: [150.0, 150.0, 150.0]\n')
+    status = replay.main([str(lockstep_recording), '--rerun-controller',
+                          '--params-file', str(gains)])
+    out = capsys.readouterr().out
+    assert status == 1
+    assert 'FAIL' in out
+    assert 'vehicle force        N' in out
+    assert '> tolerance' in out
+    assert str(gains) in out
+
+
+def test_rerun_on_a_cut_recording_compares_what_is_left(
+    lockstep_recording: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A cut recording re-runs up to its last complete chunk, with a 'cut short' warning."""
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(lockstep_recording.read_bytes()[:-300])
+    status = replay.main([str(cut), '--rerun-controller'])
+    captured = capsys.readouterr()
+    assert status == 0, captured.out + captured.err
+    assert 'cut short' in captured.err
+    assert 'PASS' in captured.out
+
+
+def test_rerun_needs_recorded_controller_outputs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A recording without controller commands gives a clear error and exit 1."""
+    path = tmp_path / 'inputs_only.mcap'
+    with McapRecorder(path) as recorder:
+        recorder.add_topic('/uvms/wrench', 'geometry_msgs/msg/WrenchStamped')
+    status = replay.main([str(path), '--rerun-controller'])
+    err = capsys.readouterr().err
+    assert status == 1
+    assert 'no command/generalized_force topic' in err
+    assert 'Traceback' not in err

@@ -296,7 +296,7 @@ class RerunReport:
             f'{"field":<20} {"unit":<5} {"max |deviation|":>16}  at t [s]',
         ]
         for deviation in self.deviations.values():
-            at = ('-' if deviation.at_time_ns is None
+            at = ('-' if deviation.at_time_ns is None or deviation.max_abs == 0.0
                   else f'{deviation.at_time_ns / 1e9:.6f}')
             flag = '  > tolerance' if deviation.max_abs > self.tolerance else ''
             lines.append(f'{deviation.field:<20} {deviation.unit:<5} '
