@@ -26,6 +26,7 @@ products are an outer product times a constant map, the 9 x 9 solve is LAPACK's 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -64,7 +65,7 @@ def _vector(name: str, value: ArrayLike, size: int) -> FloatArray:
     return array
 
 
-def _cross(a: Vec3 | list[float], b: Vec3 | list[float]) -> Vec3:
+def _cross(a: Sequence[float], b: Sequence[float]) -> Vec3:
     """Cross product of two 3-vectors given as Python sequences."""
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
@@ -137,7 +138,7 @@ class _Configuration:
 
     __slots__ = (
         'axes', 'coms', 'ee', 'jac0', 'jac_local', 'key', 'mass', 'origins', 'rotations',
-        'strips', 'subspaces', 'x',
+        'strips', 'subspace_rows', 'subspaces', 'x',
     )  # fmt: skip
 
     key: tuple[float, float, float]
@@ -147,6 +148,7 @@ class _Configuration:
     coms: list[Vec3]  # link i centre (mass and buoyancy) in frame 0
     ee: Vec3  # end effector in frame 0
     subspaces: FloatArray  # (3, 6) s_j in frame 0
+    subspace_rows: list[tuple[float, ...]]  # the same as Python tuples
     x: FloatArray  # (3, 6, 6) motion transforms frame 0 -> link i
     jac0: FloatArray  # (24, 9) J0_i stacked: body twists in frame 0 at O
     jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
@@ -370,6 +372,7 @@ class UvmsModel:
             rotations, origins, axes, coms, origin,
         )  # fmt: skip
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
+        cfg.subspace_rows = [tuple(subspaces[6 * j : 6 * j + 6]) for j in range(N_JOINTS)]
         rows = self._extended_rows
         transforms = data[:54].dot(self._x_map_blocks).reshape(N_JOINTS, rows, 6)
         cfg.x = transforms[:, :6]
@@ -665,36 +668,34 @@ class UvmsModel:
         b[3:6, 3:6] = ((1.0, s4 * t5, c4 * t5), (0.0, c4, -s4), (0.0, s4 / c5, c4 / c5))
         return b
 
-    def _b_inverse_blocks(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(R, J2^-1) with B^-1 = blockdiag(R^T, J2^-1, I); J2^-1 is regular at any pitch."""
-        phi, theta, psi = float(q[3]), float(q[4]), float(q[5])
-        c4, s4 = math.cos(phi), math.sin(phi)
-        c5, s5 = math.cos(theta), math.sin(theta)
-        rot = np.reshape(_rotation(phi, theta, psi), (3, 3))
-        j2_inv = np.array(((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5)))
-        return rot, j2_inv
+    def _w_from_q_dot(self, q: list[float], q_dot: list[float], rot: Mat3) -> list[float]:
+        """Quasi-velocities w = B^-1 q_dot = [R^T p_dot; J2^-1 eta_dot; q_m_dot] (any pitch)."""
+        c4, s4 = math.cos(q[3]), math.sin(q[3])
+        c5, s5 = math.cos(q[4]), math.sin(q[4])
+        phi_dot, theta_dot, psi_dot = q_dot[3], q_dot[4], q_dot[5]
+        return [
+            *_mat_t_vec(rot, q_dot),
+            phi_dot - s5 * psi_dot,
+            c4 * theta_dot + s4 * c5 * psi_dot,
+            -s4 * theta_dot + c4 * c5 * psi_dot,
+            q_dot[6],
+            q_dot[7],
+            q_dot[8],
+        ]
 
-    def _b_inverse_b_dot_w(self, q: FloatArray, w: FloatArray, eta_dot: FloatArray) -> FloatArray:
-        """B^-1 B_dot w (9,) = [omega x v; J2^-1 J2_dot omega; 0] (eq. 18)."""
-        phi, theta = float(q[3]), float(q[4])
-        c4, s4 = math.cos(phi), math.sin(phi)
-        c5 = check_pitch(theta)
-        s5 = math.sin(theta)
-        t5 = s5 / c5
-        phi_dot, theta_dot = float(eta_dot[0]), float(eta_dot[1])
-        d_phi = np.array(((0.0, c4 * t5, -s4 * t5), (0.0, -s4, -c4), (0.0, c4 / c5, -s4 / c5)))
-        d_theta = np.array(
-            (
-                (0.0, s4 / c5**2, c4 / c5**2),
-                (0.0, 0.0, 0.0),
-                (0.0, s4 * s5 / c5**2, c4 * s5 / c5**2),
-            )
-        )
-        j2_inv = np.array(((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5)))
-        out = np.zeros(N_DOF)
-        out[0:3] = _cross(w[3:6].tolist(), w[0:3].tolist())
-        out[3:6] = j2_inv @ ((phi_dot * d_phi + theta_dot * d_theta) @ w[3:6])
-        return out
+    def _b_inverse_b_dot_w(self, q: list[float], w: list[float], eta_dot: list[float]) -> Vec3:
+        """Angular part J2^-1 J2_dot omega of B^-1 B_dot w = [omega x v; J2^-1 J2_dot omega; 0]."""
+        c4, s4 = math.cos(q[3]), math.sin(q[3])
+        c5 = check_pitch(q[4])
+        s5 = math.sin(q[4])
+        phi_dot, theta_dot = eta_dot[0], eta_dot[1]
+        w1, w2 = w[4], w[5]
+        a = s4 * w1 + c4 * w2
+        b = c4 * w1 - s4 * w2
+        u0 = phi_dot * b * s5 / c5 + theta_dot * a / (c5 * c5)
+        u1 = -phi_dot * a
+        u2 = phi_dot * b / c5 + theta_dot * s5 * a / (c5 * c5)
+        return (u0 - s5 * u2, c4 * u1 + s4 * c5 * u2, -s4 * u1 + c4 * c5 * u2)
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """M(q) = B^-T M_b B^-1 (9, 9) in generalized coordinates (eq. 18).
@@ -703,12 +704,15 @@ class UvmsModel:
             SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
         """
         q = self._check_q(q)
-        check_pitch(float(q[4]))
-        rot, j2_inv = self._b_inverse_blocks(q)
+        q_list = q.tolist()
+        check_pitch(q_list[4])
+        c4, s4 = math.cos(q_list[3]), math.sin(q_list[3])
+        c5, s5 = math.cos(q_list[4]), math.sin(q_list[4])
         b_inv = np.eye(N_DOF)
-        b_inv[0:3, 0:3] = rot.T
-        b_inv[3:6, 3:6] = j2_inv
-        result: FloatArray = b_inv.T @ self._mass(self._configuration(*q[6:].tolist())) @ b_inv
+        b_inv[0:3, 0:3] = np.reshape(_rotation(*q_list[3:6]), (3, 3)).T
+        b_inv[3:6, 3:6] = ((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5))
+        mass = self._mass(self._configuration(*q_list[6:]))
+        result: FloatArray = b_inv.T.dot(mass.dot(b_inv))
         return result
 
     def bias(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
@@ -721,18 +725,35 @@ class UvmsModel:
         """
         q = self._check_q(q)
         q_dot = _vector('q_dot', q_dot, N_DOF)
-        check_pitch(float(q[4]))
-        rot, j2_inv = self._b_inverse_blocks(q)
-        b_inv = np.eye(N_DOF)
-        b_inv[0:3, 0:3] = rot.T
-        b_inv[3:6, 3:6] = j2_inv
-        w = b_inv @ q_dot
-        q_list = q.tolist()
+        q_list, q_dot_list = q.tolist(), q_dot.tolist()
+        check_pitch(q_list[4])
+        rot = _rotation(*q_list[3:6])
+        w_list = self._w_from_q_dot(q_list, q_dot_list, rot)
+        w = np.array(w_list)
         cfg = self._configuration(*q_list[6:])
-        bias_b = self._bias(cfg, q_list, w.tolist(), w, None)
-        correction = self._mass(cfg) @ self._b_inverse_b_dot_w(q, w, q_dot[3:6])
-        result: FloatArray = b_inv.T @ (bias_b - correction)
-        return result
+        bias_b = self._bias(cfg, q_list, w_list, w, None, rot)
+        correction = [
+            *_cross(w_list[3:6], w_list[0:3]),
+            *self._b_inverse_b_dot_w(q_list, w_list, q_dot_list[3:6]),
+            0.0,
+            0.0,
+            0.0,
+        ]
+        y = (bias_b - self._mass(cfg).dot(correction)).tolist()
+        c4, s4 = math.cos(q_list[3]), math.sin(q_list[3])
+        c5, s5 = math.cos(q_list[4]), math.sin(q_list[4])
+        # zeta = B^-T y = [R y_v; J2^-T y_w; y_m].
+        return np.array(
+            (
+                *_mat_vec(rot, y),
+                y[3],
+                c4 * y[4] - s4 * y[5],
+                -s5 * y[3] + s4 * c5 * y[4] + c4 * c5 * y[5],
+                y[6],
+                y[7],
+                y[8],
+            )
+        )
 
     # ------------------------------------------------------------------ end effector
 
@@ -751,18 +772,26 @@ class UvmsModel:
         cfg = self._configuration(*q_list[6:])
         return np.reshape(_mat_mat(_rotation(*q_list[3:6]), cfg.rotations[2]), (3, 3))
 
-    def _ee_jacobian_body(self, cfg: _Configuration) -> FloatArray:
-        """Jacobian (3, 9) of the EE velocity in frame 0 with respect to w."""
+    def _ee_joint_columns(self, cfg: _Configuration) -> list[Vec3]:
+        """a_j x (r_ee - o_j): EE velocity per unit joint rate, base_link_frd."""
         ex, ey, ez = cfg.ee
-        columns = [
-            _cross(cfg.axes[j], [cfg.ee[k] - cfg.origins[j][k] for k in range(3)])
+        return [
+            _cross(
+                cfg.axes[j],
+                (ex - cfg.origins[j][0], ey - cfg.origins[j][1], ez - cfg.origins[j][2]),
+            )
             for j in range(N_JOINTS)
         ]
+
+    def _ee_jacobian_body(self, cfg: _Configuration) -> FloatArray:
+        """Jacobian (3, 9) of the EE velocity in base_link_frd with respect to w."""
+        ex, ey, ez = cfg.ee
+        c0, c1, c2 = self._ee_joint_columns(cfg)
         return np.array(
             (
-                (1.0, 0.0, 0.0, 0.0, ez, -ey, columns[0][0], columns[1][0], columns[2][0]),
-                (0.0, 1.0, 0.0, -ez, 0.0, ex, columns[0][1], columns[1][1], columns[2][1]),
-                (0.0, 0.0, 1.0, ey, -ex, 0.0, columns[0][2], columns[1][2], columns[2][2]),
+                (1.0, 0.0, 0.0, 0.0, ez, -ey, c0[0], c1[0], c2[0]),
+                (0.0, 1.0, 0.0, -ez, 0.0, ex, c0[1], c1[1], c2[1]),
+                (0.0, 0.0, 1.0, ey, -ex, 0.0, c0[2], c1[2], c2[2]),
             )
         )
 
@@ -775,41 +804,67 @@ class UvmsModel:
             SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
         """
         q = self._check_q(q)
-        check_pitch(float(q[4]))
-        rot, j2_inv = self._b_inverse_blocks(q)
-        jac = rot @ self._ee_jacobian_body(self._configuration(*q[6:].tolist()))
-        jac[:, 0:3] = np.eye(3)
-        jac[:, 3:6] = jac[:, 3:6] @ j2_inv
-        return jac
+        q_list = q.tolist()
+        check_pitch(q_list[4])
+        rot = _rotation(*q_list[3:6])
+        cfg = self._configuration(*q_list[6:])
+        ex, ey, ez = cfg.ee
+        c4, s4 = math.cos(q_list[3]), math.sin(q_list[3])
+        c5, s5 = math.cos(q_list[4]), math.sin(q_list[4])
+        j2_inv = ((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5))
+        # -[r]x J2^-1 column k = -(r x j2_inv[:, k]) = j2_inv[:, k] x r.
+        cols = [_cross((j2_inv[0][k], j2_inv[1][k], j2_inv[2][k]), (ex, ey, ez)) for k in range(3)]
+        cols += self._ee_joint_columns(cfg)
+        ned = [_mat_vec(rot, col) for col in cols]
+        return np.array(
+            (
+                (1.0, 0.0, 0.0, *(c[0] for c in ned)),
+                (0.0, 1.0, 0.0, *(c[1] for c in ned)),
+                (0.0, 0.0, 1.0, *(c[2] for c in ned)),
+            )
+        )
 
     def ee_jacobian_dot_qdot(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """J_dot q_dot (3,) in map_ned, so that X_ddot = J q_ddot + J_dot q_dot (eq. 23).
+
+        X_ddot = J_w w_dot + J_w_dot w with w_dot = B^-1 (q_ddot - B_dot w), so
+        J_dot q_dot = R (a_ee - c_v - c_w x r_ee): a_ee the EE point's acceleration at
+        w_dot = 0 and [c_v; c_w] = B^-1 B_dot w.
 
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg.
         """
         q = self._check_q(q)
         q_dot = _vector('q_dot', q_dot, N_DOF)
-        check_pitch(float(q[4]))
-        rot, j2_inv = self._b_inverse_blocks(q)
-        w = np.concatenate((rot.T @ q_dot[:3], j2_inv @ q_dot[3:6], q_dot[6:]))
-        cfg = self._configuration(*q[6:].tolist())
-        # Classical acceleration of the EE point at w_dot = 0 in frame 0 (fixed at this instant).
-        twists = (cfg.jac0 @ w).reshape(4, 6)
-        joint_twists = cfg.subspaces * w[6:, None]
-        outer = (twists[:3, :, None] * joint_twists[:, None, :]).reshape(N_JOINTS, 36)
-        acc = (outer @ self._motion_cross).sum(axis=0).tolist()
-        v3 = twists[3].tolist()
+        q_list, q_dot_list = q.tolist(), q_dot.tolist()
+        check_pitch(q_list[4])
+        rot = _rotation(*q_list[3:6])
+        w = self._w_from_q_dot(q_list, q_dot_list, rot)
+        cfg = self._configuration(*q_list[6:])
+        # Twist of link 3 and its acceleration at w_dot = 0, base_link_frd at O (fixed now):
+        # a = sum_j (V_{j-1} x s_j) q_dot_j, V_j = V_{j-1} + s_j q_dot_j.
+        v = w[0:3]
+        omega = w[3:6]
+        acc_v = [0.0, 0.0, 0.0]
+        acc_w = [0.0, 0.0, 0.0]
+        for j in range(N_JOINTS):
+            sv, sw = cfg.subspace_rows[j][:3], cfg.subspace_rows[j][3:]
+            rate = w[6 + j]
+            cv1, cv2, cw = _cross(omega, sv), _cross(v, sw), _cross(omega, sw)
+            for k in range(3):
+                acc_v[k] += (cv1[k] + cv2[k]) * rate
+                acc_w[k] += cw[k] * rate
+            v = [v[k] + sv[k] * rate for k in range(3)]
+            omega = [omega[k] + sw[k] * rate for k in range(3)]
         ee = cfg.ee
-        omega = v3[3:]
-        point_velocity = [v3[k] + c for k, c in enumerate(_cross(omega, ee))]
-        rel = _cross(acc[3:], ee)
-        cent = _cross(omega, point_velocity)
-        ee_acc = np.array([acc[k] + rel[k] + cent[k] for k in range(3)])
-        # X_ddot = J_w w_dot + J_w_dot w and w_dot = B^-1 (q_ddot - B_dot w).
-        jac_w = rot @ self._ee_jacobian_body(cfg)
-        result: FloatArray = rot @ ee_acc - jac_w @ self._b_inverse_b_dot_w(q, w, q_dot[3:6])
-        return result
+        rel = _cross(acc_w, ee)
+        omega_r = _cross(omega, ee)
+        cent = _cross(omega, [v[k] + omega_r[k] for k in range(3)])
+        c_v = _cross(w[3:6], w[0:3])
+        c_w = self._b_inverse_b_dot_w(q_list, w, q_dot_list[3:6])
+        c_wr = _cross(c_w, ee)
+        total = [acc_v[k] + rel[k] + cent[k] - c_v[k] - c_wr[k] for k in range(3)]
+        return np.array(_mat_vec(rot, total))
 
     # ------------------------------------------------------------------ poses and IK
 
