@@ -35,14 +35,15 @@ SOURCES = [REPO / 'src' / name for name in
            ('uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control', 'ros2_compat')]
 
 
-def _start_recorder(path: Path) -> subprocess.Popen[str]:
-    """Start `python -m uvms_bringup.recorder_node` (compat runtime) writing to path."""
+def _start_recorder(*parameters: str) -> subprocess.Popen[str]:
+    """Start `python -m uvms_bringup.recorder_node` (compat runtime) with -p parameters."""
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([*map(str, SOURCES), env.get('PYTHONPATH', '')])
     # An installed stack (pip install, editable too) activates ros2_compat through its .pth.
+    arguments = [item for parameter in parameters for item in ('-p', parameter)]
     return subprocess.Popen(
         [sys.executable, '-m', 'uvms_bringup.recorder_node', '--ros-args',
-         '-r', '__ns:=/uvms', '-p', f'output_path:={path}'],
+         '-r', '__ns:=/uvms', *arguments],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
     )
 
@@ -71,7 +72,7 @@ def test_signal_closes_the_recorder_process_with_a_complete_file(
 ) -> None:
     """SIGTERM or SIGINT makes the recorder exit 0 leaving an MCAP with Statistics."""
     path = tmp_path / 'run.mcap'
-    process = _start_recorder(path)
+    process = _start_recorder(f'output_path:={path}')
     try:
         _wait_for_output(process, 'recording', timeout_s=60.0)
         process.send_signal(signum)
@@ -89,6 +90,15 @@ def test_signal_closes_the_recorder_process_with_a_complete_file(
     recording = open_recording(path)
     assert not recording.truncated
     assert len(recording.topics) == len(DEFAULT_TOPICS)
+
+
+def test_recorder_process_without_output_path_exits_1_naming_it() -> None:
+    """Started without output_path, the recorder logs the parameter and exits 1, no traceback."""
+    process = _start_recorder()
+    output, _ = process.communicate(timeout=60.0)
+    assert process.returncode == 1
+    assert "parameter 'output_path' is required" in output
+    assert 'Traceback' not in output
 
 
 @pytest.fixture

@@ -17,6 +17,7 @@ from rcl_interfaces.msg import (
     IntegerRange,
     ParameterDescriptor,
 )
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -293,7 +294,7 @@ def main(args: Sequence[str] | None = None) -> None:
     rclpy.init(args=args)
     try:
         node = RecorderNode()
-    except RecordingError as error:
+    except (RecordingError, ParameterException) as error:
         rclpy.logging.get_logger('recorder').fatal(str(error))
         rclpy.try_shutdown()
         raise SystemExit(1) from None

@@ -12,6 +12,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import TransformStamped, WrenchStamped
 from mcap.reader import make_reader
 from rclpy.context import Context
+from rclpy.exceptions import ParameterException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -197,3 +198,10 @@ def test_malformed_topic_entry_is_rejected(context: Context, tmp_path: Path) -> 
     """A topics entry without ':type' stops the node naming the entry."""
     with pytest.raises(RecordingError, match="entry 'wrench'"):
         _recorder(context, tmp_path / 'x.mcap', topics=['wrench'])
+
+
+def test_chunk_size_outside_its_range_stops_the_node_with_the_range(context: Context,
+                                                                    tmp_path: Path) -> None:
+    """chunk_size_bytes below 1024 is refused by its descriptor, naming the bounds."""
+    with pytest.raises(ParameterException, match=r'chunk_size_bytes.*Min: 1024'):
+        _recorder(context, tmp_path / 'x.mcap', chunk_size_bytes=5)
