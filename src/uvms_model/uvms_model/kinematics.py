@@ -97,55 +97,13 @@ def euler_rate_matrix_inverse(phi: float, theta: float) -> FloatArray:
     )
 
 
-def velocity_transform(q: FloatArray) -> FloatArray:
-    """B(q) of eq. 4, q_dot = B w: blockdiag(J1, J2, I) (paper sec. 3.2).
-
-    Args:
-        q: Generalized coordinates (6 + n,): position, roll, pitch, yaw, joint angles.
-
-    Returns:
-        B, shape (6 + n, 6 + n).
-
-    Raises:
-        SingularAttitudeError: Near pitch = +-90 deg.
-    """
-    n = q.shape[0]
-    b = np.eye(n)
-    b[3:6, 3:6] = euler_rate_matrix(float(q[3]), float(q[4]))
-    b[0:3, 0:3] = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5]))
-    return b
-
-
-def velocity_transform_inverse(q: FloatArray) -> FloatArray:
-    """B(q)^-1 = blockdiag(J1^T, J2^-1, I): w = B^-1 q_dot (regular at any pitch)."""
-    n = q.shape[0]
-    b = np.eye(n)
-    b[0:3, 0:3] = rot_ned_from_body(float(q[3]), float(q[4]), float(q[5])).T
-    b[3:6, 3:6] = euler_rate_matrix_inverse(float(q[3]), float(q[4]))
-    return b
-
-
 def skew(v: FloatArray) -> FloatArray:
     """Cross-product matrix [v]x with [v]x u = v x u."""
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-def rotation_about_axis(axis: FloatArray, angle: float) -> FloatArray:
-    """Rotation by ``angle`` about the unit ``axis`` (Rodrigues' formula)."""
-    x, y, z = float(axis[0]), float(axis[1]), float(axis[2])
-    c, s = math.cos(angle), math.sin(angle)
-    k = 1.0 - c
-    return np.array(
-        [
-            [c + k * x * x, k * x * y - s * z, k * x * z + s * y],
-            [k * x * y + s * z, c + k * y * y, k * y * z - s * x],
-            [k * x * z - s * y, k * y * z + s * x, c + k * z * z],
-        ]
-    )
-
-
 def euler_from_rotation(rot_ned_from_body_: FloatArray) -> tuple[float, float, float]:
-    """Roll, pitch, yaw (ZYX) of a rotation matrix, pitch in [-pi/2, pi/2]."""
+    """Roll, pitch, yaw (ZYX, as J1 of sec. 3.2) of a rotation matrix, pitch in [-pi/2, pi/2]."""
     r = rot_ned_from_body_
     theta = -math.asin(max(-1.0, min(1.0, float(r[2, 0]))))
     phi = math.atan2(float(r[2, 1]), float(r[2, 2]))

@@ -7,6 +7,7 @@ import pytest
 from model_oracles import random_state
 from scipy.spatial.transform import Rotation
 from uvms_model.kinematics import (
+    euler_from_rotation,
     euler_rate_matrix,
     euler_rate_matrix_inverse,
     rot_ned_from_body,
@@ -153,3 +154,9 @@ def test_inverse_kinematics_accounts_for_the_vehicle_pose() -> None:
     np.testing.assert_allclose(
         MODEL.ee_position(np.concatenate((q_vehicle, q_arm))), target, atol=1e-9
     )
+
+
+@pytest.mark.parametrize('rpy', ATTITUDES)
+def test_euler_angles_round_trip_through_the_rotation(rpy: tuple[float, float, float]) -> None:
+    """euler_from_rotation inverts rot_ned_from_body for |pitch| < 90 deg."""
+    np.testing.assert_allclose(euler_from_rotation(rot_ned_from_body(*rpy)), rpy, atol=1e-12)
