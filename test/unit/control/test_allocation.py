@@ -77,20 +77,16 @@ def test_saturated_wrench_keeps_its_direction(allocator: ThrusterAllocator, seed
 @pytest.mark.parametrize('seed', range(3))
 def test_saturation_scale_is_the_largest_feasible(allocator: ThrusterAllocator, seed: int) -> None:
     """Every thruster is within its limit and at least one sits exactly on it."""
-    ratio = allocator.params.thruster.reverse_thrust_ratio
     for tau in random_wrenches(20, 2000.0, seed):
         thrust = allocator.allocate(tau).thrust
-        usage = np.where(
-            thrust >= 0.0, thrust / LAYOUT.max_thrust_n, -thrust / (ratio * LAYOUT.max_thrust_n)
-        )
+        usage = np.abs(thrust) / LAYOUT.max_thrust_n
         assert usage.max() == pytest.approx(1.0, rel=1e-12)
 
 
-def test_reverse_thrust_limit_is_the_calibrated_fraction(allocator: ThrusterAllocator) -> None:
-    """A command that needs reverse thrust saturates at reverse_thrust_ratio of the limit."""
+def test_reverse_thrust_limit_is_the_thrust_magnitude_limit(allocator: ThrusterAllocator) -> None:
+    """thrusters.max_thrust_n bounds reverse thrust too (reached at a higher propeller speed)."""
     result = allocator.allocate(np.array([-5000.0, 0, 0, 0, 0, 0, 0, 0, 0]))
-    ratio = allocator.params.thruster.reverse_thrust_ratio
-    assert result.thrust.min() == pytest.approx(-ratio * LAYOUT.max_thrust_n[0])
+    assert result.thrust.min() == pytest.approx(-LAYOUT.max_thrust_n[0])
 
 
 def test_joint_torques_are_scaled_together(allocator: ThrusterAllocator) -> None:

@@ -74,7 +74,7 @@ def test_spd_matrix_from_diagonal_is_diagonal() -> None:
         ('model.mass_scale', 0.0),
         ('force.setpoint_n', math.nan),
         ('reference.radius_m', -0.1),
-        ('switch.mode', 'adaptive'),
+        ('mode', 'adaptive'),
         ('null_space.stiffness_1_s2', [1.0] * 8),
         ('fuzzy.force_ratio_medium', [0.5, 0.1, 0.9]),
         ('hybrid.force_direction', [0.0, 0.0, 0.0]),

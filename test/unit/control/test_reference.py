@@ -81,7 +81,7 @@ def test_sweep_parallel_to_the_wall_normal_is_rejected() -> None:
         HalfCircleReference(toward=(1.0, 0.0, 0.0), sweep=(2.0, 0.0, 0.0))
 
 
-def run_setpoint(setpoint: ForceSetpoint, samples: list[tuple[float, float, float, float]]):  # type: ignore[no-untyped-def]
+def run_setpoint(setpoint: ForceSetpoint, samples: list[tuple[float, float, float, float, float]]):  # type: ignore[no-untyped-def]
     """Feed (t, f_normal, x_normal, x_d_normal) samples; return the outputs."""
     return [setpoint.update(*sample) for sample in samples]
 
@@ -89,16 +89,16 @@ def run_setpoint(setpoint: ForceSetpoint, samples: list[tuple[float, float, floa
 def test_force_setpoint_is_zero_before_contact() -> None:
     """Without contact force the desired force stays zero (free motion)."""
     setpoint = ForceSetpoint(150.0, 2.0, 5.0)
-    out = run_setpoint(setpoint, [(0.01 * k, 1.0, 1.7, 1.75) for k in range(100)])
+    out = run_setpoint(setpoint, [(0.01 * k, 1.0, 1.7, 1.75, 0.0) for k in range(100)])
     assert all(s.f_d == 0.0 and s.phase == ForcePhase.IDLE for s in out)
 
 
 def test_force_setpoint_ramps_smoothly_from_the_contact_force() -> None:
     """After contact F_d rises from the measured force to the set-point, Ḟ_d = 0 at both ends."""
     setpoint = ForceSetpoint(150.0, 2.0, 5.0)
-    first = setpoint.update(1.0, 8.0, 1.78, 1.79)
-    middle = setpoint.update(2.0, 60.0, 1.78, 1.79)
-    end = setpoint.update(3.0, 150.0, 1.78, 1.79)
+    first = setpoint.update(1.0, 8.0, 1.78, 1.79, 0.01)
+    middle = setpoint.update(2.0, 60.0, 1.78, 1.79, 0.01)
+    end = setpoint.update(3.0, 150.0, 1.78, 1.79, 0.01)
     assert (first.f_d, first.f_d_dot, first.f_d_ddot) == (8.0, 0.0, 0.0)
     assert middle.f_d == pytest.approx((8.0 + 150.0) / 2.0)
     assert middle.f_d_dot == pytest.approx(1.875 * (150.0 - 8.0) / 2.0)
@@ -108,23 +108,30 @@ def test_force_setpoint_ramps_smoothly_from_the_contact_force() -> None:
 def test_force_setpoint_derivatives_match_finite_differences() -> None:
     """Ḟ_d and F̈_d of the ramp are the derivatives of F_d (they feed eq. 39)."""
     setpoint = ForceSetpoint(150.0, 2.0, 5.0)
-    setpoint.update(1.0, 5.0, 1.78, 1.79)
+    setpoint.update(1.0, 5.0, 1.78, 1.79, 0.01)
     h = 1e-5
-    values = {t: setpoint.update(t, 100.0, 1.78, 1.79) for t in (1.7 - h, 1.7, 1.7 + h)}
+    values = {t: setpoint.update(t, 100.0, 1.78, 1.79, 0.01) for t in (1.7 - h, 1.7, 1.7 + h)}
     f_dot = (values[1.7 + h].f_d - values[1.7 - h].f_d) / (2 * h)
     f_ddot = (values[1.7 + h].f_d_dot - values[1.7 - h].f_d_dot) / (2 * h)
     assert values[1.7].f_d_dot == pytest.approx(f_dot, rel=1e-6)
     assert values[1.7].f_d_ddot == pytest.approx(f_ddot, rel=1e-5)
 
 
+def test_force_setpoint_holds_while_the_reference_trails_at_contact() -> None:
+    """A reference just behind the end effector when contact starts does not release."""
+    setpoint = ForceSetpoint(150.0, 1.0, 5.0)
+    out = run_setpoint(setpoint, [(0.001 * k, 6.0 + k, 1.7776, 1.7774, 0.02) for k in range(50)])
+    assert all(s.phase == ForcePhase.RAMP_UP for s in out)
+
+
 def test_force_setpoint_releases_when_the_reference_leaves_the_surface() -> None:
     """Once n·X_d falls behind the contact point, F_d ramps to zero and the phase ends."""
     setpoint = ForceSetpoint(150.0, 1.0, 5.0)
-    setpoint.update(0.0, 6.0, 1.78, 1.80)
-    setpoint.update(2.0, 150.0, 1.78, 1.79)
-    release = setpoint.update(3.0, 150.0, 1.78, 1.77)
-    half = setpoint.update(3.5, 80.0, 1.78, 1.76)
-    done = setpoint.update(4.0, 10.0, 1.78, 1.75)
+    setpoint.update(0.0, 6.0, 1.78, 1.80, 0.01)
+    setpoint.update(2.0, 150.0, 1.78, 1.79, 0.01)
+    release = setpoint.update(3.0, 150.0, 1.78, 1.77, -0.01)
+    half = setpoint.update(3.5, 80.0, 1.78, 1.76, -0.01)
+    done = setpoint.update(4.0, 10.0, 1.78, 1.75, -0.01)
     assert release.phase == ForcePhase.RELEASE
     assert release.f_d == 150.0
     assert half.f_d == pytest.approx(75.0)
@@ -135,12 +142,12 @@ def test_force_setpoint_releases_when_the_reference_leaves_the_surface() -> None
 def test_force_setpoint_rearms_only_after_the_force_drops() -> None:
     """After a release, a new ramp needs the force to fall below half the threshold first."""
     setpoint = ForceSetpoint(150.0, 1.0, 5.0)
-    setpoint.update(0.0, 6.0, 1.78, 1.80)
-    setpoint.update(1.0, 150.0, 1.78, 1.77)
-    setpoint.update(2.5, 8.0, 1.78, 1.75)
-    still_touching = setpoint.update(2.6, 8.0, 1.78, 1.75)
-    setpoint.update(2.7, 1.0, 1.70, 1.75)
-    new_contact = setpoint.update(2.8, 8.0, 1.80, 1.85)
+    setpoint.update(0.0, 6.0, 1.78, 1.80, 0.01)
+    setpoint.update(1.0, 150.0, 1.78, 1.77, -0.01)
+    setpoint.update(2.5, 8.0, 1.78, 1.75, -0.01)
+    still_touching = setpoint.update(2.6, 8.0, 1.78, 1.75, -0.01)
+    setpoint.update(2.7, 1.0, 1.70, 1.75, -0.01)
+    new_contact = setpoint.update(2.8, 8.0, 1.80, 1.85, 0.01)
     assert still_touching.phase == ForcePhase.IDLE
     assert new_contact.phase == ForcePhase.RAMP_UP
 
@@ -160,3 +167,12 @@ def test_invalid_force_setpoint_parameters_name_the_parameter(
     """Non-positive set-point or ramp, or a threshold above the set-point, are rejected."""
     with pytest.raises(ControlParameterError, match=re.escape(name)):
         ForceSetpoint(*args)
+
+
+def test_immediate_setpoint_ramps_from_zero_without_contact() -> None:
+    """start_immediately (pure hybrid mode) ramps F_d from 0 at the first update, no contact."""
+    setpoint = ForceSetpoint(150.0, 1.0, 5.0, start_immediately=True)
+    first = setpoint.update(3.0, 0.0, 1.70, 1.70, 0.0)
+    later = setpoint.update(4.0, 0.0, 1.70, 1.69, -0.01)
+    assert (first.f_d, first.phase) == (0.0, ForcePhase.RAMP_UP)
+    assert later.f_d == 150.0  # no contact point yet, so no release either

@@ -94,7 +94,7 @@ def test_impedance_closed_loop_obeys_target_impedance(
     q: np.ndarray, w: np.ndarray, F_e: np.ndarray
 ) -> None:
     """With M̂ = M̃, ζ̂ = ζ̃ the plant under F_IP satisfies P Ë + B_d Ė + K E = F_e (eq. 21, 34)."""
-    ctrl = controller(**{'switch.mode': 'impedance', 'reference.start_delay_s': 1.0})
+    ctrl = controller(**{'mode': 'impedance', 'reference.start_delay_s': 1.0})
     result = step_at(ctrl, q, w, F_e)
     x_ddot = ee_acceleration(q, w, result.tau_b, F_e)
     _, _, x_ddot_d = ctrl.reference.evaluate(3.7, MODEL.ee_position(Q_START))
@@ -108,7 +108,7 @@ def test_impedance_closed_loop_obeys_target_impedance(
 @pytest.mark.parametrize(('q', 'w', 'F_e'), STATES)
 def test_hybrid_closed_loop_obeys_eq_36(q: np.ndarray, w: np.ndarray, F_e: np.ndarray) -> None:
     """With ζ̂ = ζ̃ the plant under F_H satisfies M̃ Ẍ = (I - S) F_p + S F_f (eq. 36)."""
-    ctrl = controller(**{'switch.mode': 'hybrid'})
+    ctrl = controller(**{'mode': 'hybrid'})
     result = step_at(ctrl, q, w, F_e)
     x_ddot = ee_acceleration(q, w, result.tau_b, F_e)
     selected = result.F_H - result.zeta_hat - F_e  # (I - S) F_p + S F_f of eq. 35
@@ -133,7 +133,7 @@ def test_blended_closed_loop_follows_the_blended_command(
 def test_paper_law_without_null_space_misses_the_target_impedance() -> None:
     """τ = Jᵀ F_IP alone does not give eq. 21 on this redundant UVMS (why the term exists)."""
     q, w, F_e = STATES[0]
-    ctrl = controller(**{'switch.mode': 'impedance', 'null_space.enabled': False})
+    ctrl = controller(**{'mode': 'impedance', 'null_space.enabled': False})
     result = step_at(ctrl, q, w, F_e)
     x_ddot = ee_acceleration(q, w, result.tau_b, F_e)
     _, _, x_ddot_d = ctrl.reference.evaluate(3.7, MODEL.ee_position(Q_START))
@@ -246,3 +246,12 @@ def test_singular_attitude_is_an_input_error() -> None:
     q[4] = math.pi / 2.0
     with pytest.raises(ControlInputError):
         controller().step(0.0, q, np.zeros(9), np.zeros(3))
+
+
+def test_force_integral_does_not_wind_up_out_of_contact() -> None:
+    """In free motion the force integral stays zero even with a pure hybrid set-point active."""
+    ctrl = controller(mode='hybrid')
+    for k in range(200):
+        ctrl.step(0.01 * k, Q_START, np.zeros(9), np.zeros(3))
+    assert ctrl.force_setpoint.phase.name == 'RAMP_UP'
+    assert ctrl.hybrid.integral == 0.0

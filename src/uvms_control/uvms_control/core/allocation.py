@@ -9,6 +9,11 @@ produce away from the commanded one (a surge command would grow a yaw moment). I
 whole vehicle wrench is scaled by the largest factor s in (0, 1] that keeps every thruster
 within its limit, so the achieved wrench s tau_v is parallel to the commanded one. Arm
 torques are scaled likewise, by their own factor, against the motor torque limits.
+
+Thrust limits are the magnitudes ``thrusters.max_thrust_n`` of the robot, in both directions:
+reverse thrust is weaker per revolution (thruster_dynamics), so the propeller turns faster in
+reverse for the same thrust, and the start-up check makes sure the motor current limit can
+hold each limit in both directions.
 """
 
 from __future__ import annotations
@@ -31,10 +36,10 @@ class AllocatorParameters:
     Attributes:
         thrust_matrix: T (6, p), column i = [d_i; r_i x d_i] in base_link_frd, from
             ``uvms_model.thrusters.ThrusterLayout.thrust_matrix()``.
-        max_thrust: forward thrust limit of each thruster (p,) (N), ``thrusters.max_thrust_n``.
+        max_thrust: thrust magnitude limit of each thruster (p,) (N), forward and reverse,
+            ``thrusters.max_thrust_n``.
         max_joint_torque: torque limit of each arm motor (n,) (N m).
-        thruster: constants of the thruster model (eq. 11-15); its reverse_thrust_ratio also
-            sets the reverse thrust limit, reverse_thrust_ratio * max_thrust.
+        thruster: constants of the thruster model (eq. 11-15).
     """
 
     thrust_matrix: FloatArray
@@ -164,18 +169,20 @@ class ThrusterAllocator:
         self._t = t
         # T⁺ = Tᵀ (T Tᵀ)⁻¹, once: E⁺ = blockdiag(T⁺, I_n) because E is block diagonal.
         self._t_pinv = t.T @ np.linalg.inv(t @ t.T)
-        self._inv_forward = 1.0 / params.max_thrust
-        self._inv_reverse = 1.0 / (params.thruster.reverse_thrust_ratio * params.max_thrust)
+        self._inv_limit = 1.0 / params.max_thrust
         self._inv_joint = 1.0 / params.max_joint_torque
         self.thrusters = ThrusterBank(params.thruster, self._p)
-        reachable = self.thrusters.max_steady_thrust(forward=True)
+        reachable = min(
+            self.thrusters.max_steady_thrust(forward=True),
+            self.thrusters.max_steady_thrust(forward=False),
+        )
         largest = float(np.max(params.max_thrust))
         if reachable < largest:
             raise ControlParameterError(
                 'thruster.max_motor_current_a',
                 params.thruster.max_motor_current,
-                f'a current that holds the largest thrust limit {largest} N '
-                f'(it holds {reachable:.1f} N)',
+                f'a current that holds the largest thrust limit {largest} N forward and '
+                f'reverse (it holds {reachable:.1f} N)',
             )
 
     @property
@@ -206,8 +213,7 @@ class ThrusterAllocator:
         """
         tau = self._check(tau_b)
         thrust = self._t_pinv @ tau[:6]
-        usage = np.where(thrust >= 0.0, thrust * self._inv_forward, -thrust * self._inv_reverse)
-        worst = float(usage.max())
+        worst = float(np.max(np.abs(thrust) * self._inv_limit))
         scale = 1.0 if worst <= 1.0 else 1.0 / worst
         if scale < 1.0:
             thrust *= scale

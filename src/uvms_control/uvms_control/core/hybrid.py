@@ -31,10 +31,11 @@ class HybridLaw:
     filtered ("dirty") derivative of the measured force: the paper (sec. 6) warns that
     differentiating the sensor signal amplifies its noise.
 
-    Anti-windup: the integral runs only while a force set-point is active and the hybrid law
-    has a say (W < 1): in free motion the force error is meaningless and would wind up. It is
-    also clamped to ±``integral_limit`` (N s), which bounds what it can command if the force
-    cannot be reached (thruster or motor saturation, a receding wall).
+    Anti-windup (conditional integration plus a clamp): the integral runs only in contact
+    (n·F_e above the contact threshold), while a force set-point is active and the hybrid law
+    has a say (W < 1): out of contact the force error cannot be reduced by pushing, and would
+    only wind up. It is also clamped to ±``integral_limit`` (N s), which bounds what it can
+    command if the force cannot be reached (thruster or motor saturation, a receding wall).
 
     Example:
         >>> law = HybridLaw(np.array([1.0, 0.0, 0.0]), 100.0 * np.eye(3), 20.0 * np.eye(3),

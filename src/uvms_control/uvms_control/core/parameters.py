@@ -46,7 +46,7 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         "arrived and stamp the command alike; 'timer': compute at control_rate_hz on the "
         'latest inputs (real time).',
     ),
-    ParameterSpec('control_rate_hz', 1000.0, 'Control rate in timer mode (Hz).', 1.0, 10000.0),
+    ParameterSpec('control_rate_hz', 500.0, 'Control rate in timer mode (Hz).', 1.0, 10000.0),
     ParameterSpec(
         'watchdog_timeout_s',
         0.2,
@@ -143,7 +143,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
         1e6,
     ),
     ParameterSpec(
-        'switch.mode',
+        'mode',
         'fuzzy',
         "How W of eq. 2 is set: 'fuzzy' (sec. 4.3), or fixed for comparisons: 'impedance' "
         "(W = 1) or 'hybrid' (W = 0).",
@@ -199,7 +199,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ParameterSpec(
         'reference.radius_m', 0.1, 'Radius of the half circle (m); paper sec. 5.1.', 1e-4, 10.0
     ),
-    ParameterSpec('reference.duration_s', 30.0, 'Time to run the half circle (s).', 1e-3, 1e5),
+    ParameterSpec('reference.duration_s', 16.0, 'Time to run the half circle (s).', 1e-3, 1e5),
     ParameterSpec(
         'reference.start_delay_s',
         2.0,
@@ -251,7 +251,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'null_space.stiffness_1_s2',
-        [4.0] * 6 + [0.25] * 3,
+        [4.0] * 6 + [2.0] * 3,
         'Posture stiffness K_n (1/s^2) per coordinate x, y, z, roll, pitch, yaw, q1..q3: '
         'phi_ddot = K_n (q_0 - q) - D_n q_dot, projected into the null space of J.',
         0.0,
@@ -260,7 +260,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'null_space.damping_1_s',
-        [4.0] * 6 + [1.0] * 3,
+        [4.0] * 6 + [3.0] * 3,
         'Posture damping D_n (1/s) per coordinate, as null_space.stiffness_1_s2.',
         0.0,
         1e4,
@@ -274,7 +274,7 @@ ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [
         "'lockstep': answer each command with the same stamp, integrating the thrusters over "
         "the time between command stamps; 'timer': step at rate_hz on the latest command.",
     ),
-    ParameterSpec('rate_hz', 1000.0, 'Allocator rate in timer mode (Hz).', 1.0, 10000.0),
+    ParameterSpec('rate_hz', 500.0, 'Allocator rate in timer mode (Hz).', 1.0, 10000.0),
     ParameterSpec(
         'watchdog_timeout_s',
         0.2,
@@ -316,8 +316,8 @@ ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [
     ParameterSpec(
         'thruster.reverse_thrust_ratio',
         0.6,
-        'Reverse over forward bollard thrust at equal speed (-); also sets the reverse thrust '
-        'limit to this fraction of thrusters.max_thrust_n.',
+        'Reverse over forward bollard thrust at equal propeller speed (-); the propeller turns '
+        'faster in reverse for the same thrust.',
         0.01,
         1.0,
     ),
@@ -589,9 +589,9 @@ class ControllerParameters:
             weight_large=_membership('fuzzy.weight_large', floats('fuzzy.weight_large'), 'inner'),
             no_rule_weight=number('fuzzy.no_rule_weight'),
         )
-        mode = v['switch.mode']
+        mode = v['mode']
         if mode not in SWITCH_MODES:
-            raise ControlParameterError('switch.mode', mode, f'one of {list(SWITCH_MODES)}')
+            raise ControlParameterError('mode', mode, f'one of {list(SWITCH_MODES)}')
         capture = v['reference.capture_start']
         assert isinstance(capture, bool)
         enabled = v['null_space.enabled']

@@ -153,18 +153,30 @@ class ForceSetpoint:
     would put into the PID at first contact; the fuzzy switch keeps the impedance law in
     charge until the contact force has grown.
 
-    The set-point is released (ramped to zero) when the position reference retreats behind
-    the point where contact was detected (n·X_d < n·X_contact): the task reference then says
-    the end effector should be off the surface (the paper's C' -> C). It re-arms once the
-    measured force falls below half the threshold.
+    With ``start_immediately`` the ramp starts from zero at the first update instead, without
+    waiting for contact: the pure hybrid law (W = 0) needs it, since along n it controls only
+    force and would never approach the wall with a zero set-point.
+
+    The set-point is released (ramped to zero) when the position reference, moving away from
+    the surface (n·Ẋ_d < 0), retreats behind the point where contact was detected
+    (n·X_d < n·X_contact): the task reference then says the end effector should be off the
+    surface (the paper's C' -> C). Requiring the reference to recede keeps a reference that
+    merely trails the end effector at the moment of contact from releasing at once. The
+    set-point re-arms once the measured force falls below half the threshold.
 
     Example:
         >>> fs = ForceSetpoint(magnitude=150.0, ramp_time=2.0, contact_threshold=5.0)
-        >>> fs.update(0.0, 0.0, 1.0, 0.9).f_d
+        >>> fs.update(0.0, 0.0, 1.0, 0.9, 0.0).f_d
         0.0
     """
 
-    def __init__(self, magnitude: float, ramp_time: float, contact_threshold: float) -> None:
+    def __init__(
+        self,
+        magnitude: float,
+        ramp_time: float,
+        contact_threshold: float,
+        start_immediately: bool = False,
+    ) -> None:
         if not (math.isfinite(magnitude) and magnitude > 0.0):
             raise ControlParameterError('force.setpoint_n', magnitude, '(0, inf) N')
         if not (math.isfinite(ramp_time) and ramp_time > 0.0):
@@ -176,6 +188,7 @@ class ForceSetpoint:
         self.magnitude = magnitude
         self.ramp_time = ramp_time
         self.contact_threshold = contact_threshold
+        self.start_immediately = start_immediately
         self.reset()
 
     def reset(self) -> None:
@@ -185,8 +198,8 @@ class ForceSetpoint:
         self._t0 = 0.0
         self._f0 = 0.0
         self._f1 = 0.0
-        self._x_contact = 0.0
-        self._last = ForceSetpointSample(0.0, 0.0, 0.0, ForcePhase.IDLE)
+        self._x_contact: float | None = None
+        self._started = False
 
     @property
     def in_contact_since(self) -> float | None:
@@ -203,7 +216,12 @@ class ForceSetpoint:
         )
 
     def update(
-        self, t: float, f_normal: float, x_normal: float, x_d_normal: float
+        self,
+        t: float,
+        f_normal: float,
+        x_normal: float,
+        x_d_normal: float,
+        x_d_dot_normal: float,
     ) -> ForceSetpointSample:
         """Advance the set-point to time t and return F_d and its derivatives (N, N/s, N/s²).
 
@@ -212,15 +230,29 @@ class ForceSetpoint:
             f_normal: measured contact force along n, n·F_e (N).
             x_normal: end-effector position along n, n·X (m).
             x_d_normal: position reference along n, n·X_d (m).
+            x_d_dot_normal: reference velocity along n, n·Ẋ_d (m/s).
         """
+        in_contact = f_normal >= self.contact_threshold
         if self.phase == ForcePhase.IDLE:
             if not self._armed and f_normal < 0.5 * self.contact_threshold:
                 self._armed = True
-            if self._armed and f_normal >= self.contact_threshold:
+            if self.start_immediately and not self._started:
+                self.phase = ForcePhase.RAMP_UP
+                self._t0, self._f0, self._f1 = t, 0.0, self.magnitude
+                self._x_contact = x_normal if in_contact else None
+            elif self._armed and in_contact:
                 self.phase = ForcePhase.RAMP_UP
                 self._t0, self._f0, self._f1 = t, min(f_normal, self.magnitude), self.magnitude
                 self._x_contact = x_normal
-        if self.phase == ForcePhase.RAMP_UP and x_d_normal < self._x_contact:
+            self._started = True
+        if self.phase == ForcePhase.RAMP_UP and self._x_contact is None and in_contact:
+            self._x_contact = x_normal
+        if (
+            self.phase == ForcePhase.RAMP_UP
+            and self._x_contact is not None
+            and x_d_dot_normal < 0.0
+            and x_d_normal < self._x_contact
+        ):
             f_now = self._ramp(t)[0]
             self.phase = ForcePhase.RELEASE
             self._t0, self._f0, self._f1 = t, f_now, 0.0
@@ -232,5 +264,4 @@ class ForceSetpoint:
             if self.phase == ForcePhase.RELEASE and t - self._t0 >= self.ramp_time:
                 self.phase = ForcePhase.IDLE
                 self._armed = False
-        self._last = sample
         return sample

@@ -159,7 +159,10 @@ class UnifiedForceController:
             params.reference_sweep_direction,
         )
         self.force_setpoint = ForceSetpoint(
-            params.force_setpoint, params.force_ramp_time, params.contact_threshold
+            params.force_setpoint,
+            params.force_ramp_time,
+            params.contact_threshold,
+            start_immediately=params.switch_mode == 'hybrid',
         )
         self.n = self.hybrid.n
         self._n_dof = model.n_dof
@@ -260,7 +263,9 @@ class UnifiedForceController:
         X, X_dot = ts.X, ts.X_dot
         f_normal = float(n @ F_e)
         v_e = float(n @ X_dot)
-        setpoint = self.force_setpoint.update(t_rel, f_normal, float(n @ X), float(n @ X_d))
+        setpoint = self.force_setpoint.update(
+            t_rel, f_normal, float(n @ X), float(n @ X_d), float(n @ X_dot_d)
+        )
         if setpoint.phase == ForcePhase.IDLE and self.hybrid.integral != 0.0:
             self.hybrid.integral = 0.0
         force_ratio = f_normal / p.force_setpoint
@@ -282,7 +287,9 @@ class UnifiedForceController:
             setpoint.f_d_ddot,
             f_normal,
             dt,
-            integrate=setpoint.phase != ForcePhase.IDLE and W < 1.0,
+            integrate=setpoint.phase != ForcePhase.IDLE
+            and W < 1.0
+            and f_normal >= self.force_setpoint.contact_threshold,
         )
         F_H, F_H_selected = self.hybrid.force(M_hat, zeta_hat, F_e, a_p, a_f)
         F_c = W * F_IP + (1.0 - W) * F_H
