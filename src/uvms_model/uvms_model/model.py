@@ -539,14 +539,10 @@ class UvmsModel:
         q = self._check_q(q)
         q_list = q.tolist()
         cfg = self._configuration(*q_list[6:])
-        drag = self._drag_enabled
-        try:
-            self._drag_enabled = False
-            rot = _rotation(q_list[3], q_list[4], q_list[5])
-            wrenches = np.array(self._body_wrenches(cfg, rot, [0.0] * N_DOF, None))
-        finally:
-            self._drag_enabled = drag
-        result: FloatArray = -(cfg.jac_local.T @ wrenches)
+        # At w = 0 the hull drag in _body_wrenches vanishes: only gravity and buoyancy remain.
+        rot = _rotation(q_list[3], q_list[4], q_list[5])
+        wrenches = np.array(self._body_wrenches(cfg, rot, [0.0] * N_DOF, None))
+        result: FloatArray = -wrenches.dot(cfg.jac_local)
         return result
 
     def kinetic_energy(self, q: ArrayLike, w: ArrayLike) -> float:
