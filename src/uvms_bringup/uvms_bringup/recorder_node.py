@@ -225,6 +225,7 @@ class RecorderNode(Node):
             metadata=metadata,
         )
         self._subscriptions_by_topic: dict[str, Any] = {}
+        self._lock = threading.Lock()
         try:
             for topic, type_name in topics:
                 resolved = self.resolve_topic_name(topic)
@@ -253,18 +254,26 @@ class RecorderNode(Node):
 
     def _on_message(self, topic: str, data: bytes) -> None:
         log_time_ns = self.get_clock().now().nanoseconds
-        try:
-            self._recorder.write(topic, data, log_time_ns)
-        except RecordingError as error:
-            self.get_logger().error(str(error), throttle_duration_sec=5.0)
+        with self._lock:
+            if self._recorder.closed:
+                return
+            try:
+                self._recorder.write(topic, data, log_time_ns)
+            except RecordingError as error:
+                self.get_logger().error(str(error), throttle_duration_sec=5.0)
 
     def close(self) -> None:
-        """Write the file's summary and close it (idempotent); later messages are dropped."""
-        if not self._recorder.closed:
+        """Write the file's summary and close it (idempotent); later messages are dropped.
+
+        Safe to call from another thread than the executor's.
+        """
+        with self._lock:
+            if self._recorder.closed:
+                return
             self._recorder.close()
-            self.get_logger().info(
-                f'closed {self._recorder.path}: {self._recorder.message_count} messages'
-            )
+        self.get_logger().info(
+            f'closed {self._recorder.path}: {self._recorder.message_count} messages'
+        )
 
     def destroy_node(self) -> None:
         """Close the recording, then destroy the node."""

@@ -410,6 +410,11 @@ def rerun_controller(
 
     """
     namespace = controller_namespace(recording)
+    mode = (recording.run_metadata or {}).get('mode', '')
+    if mode and mode != 'lockstep':
+        msg = (f'{recording.path} was recorded in {mode!r} mode; re-running the controller '
+               'needs a lockstep recording (one controller output per set of inputs)')
+        raise ReplayError(msg)
     prefix = '' if namespace == '/' else namespace
     inputs = [topic for topic in ('/clock', f'{prefix}/joint_states', f'{prefix}/odometry',
                                   f'{prefix}/wrench') if topic in recording.topics]

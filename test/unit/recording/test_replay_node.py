@@ -155,3 +155,16 @@ def test_cli_rejects_an_unknown_topic(recording_path: Path,
     assert status == 1
     assert '/nope' in err
     assert '/uvms/wrench' in err
+
+
+def test_cli_refuses_to_rerun_a_real_time_recording(tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """--rerun-controller on a recording made in real time exits 1 saying it needs lockstep."""
+    path = tmp_path / 'realtime.mcap'
+    metadata = {'scenario': 'free_motion', 'seed': '1', 'parameters': '', 'mode': 'realtime'}
+    with McapRecorder(path, metadata=metadata) as recorder:
+        recorder.add_topic('/uvms/command/generalized_force', 'uvms_msgs/msg/GeneralizedForce')
+    status = main([str(path), '--rerun-controller'])
+    err = capsys.readouterr().err
+    assert status == 1
+    assert 'needs a lockstep recording' in err
