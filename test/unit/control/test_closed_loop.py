@@ -97,7 +97,7 @@ def test_impedance_step_response_against_a_wall_is_the_target_impedance(k_e: flo
 
 
 def test_without_null_space_the_paper_law_misses_the_target_impedance() -> None:
-    """τ = Jᵀ F_IP alone (the paper's) departs from eq. 21 on this redundant UVMS (it runs away)."""
+    """τ = Jᵀ F_IP alone (the paper's law) departs from eq. 21 here: it runs away."""
     t, x_sim = simulate(1e4, 0.5, **{'null_space.enabled': False})
     x_target = target_impedance(1e4, t, x_sim[0], ControllerParameters.from_flat_dict())
     assert np.max(np.abs(x_sim - x_target)) > 0.1 * STEP
