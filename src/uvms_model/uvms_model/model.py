@@ -137,7 +137,7 @@ class _Configuration:
     """Quantities that depend on the joint angles only."""
 
     __slots__ = (
-        'axes', 'coms', 'ee', 'jac0', 'jac_local', 'key', 'mass', 'origins', 'rotations',
+        'axes', 'ee', 'jac0', 'jac_local', 'key', 'mass', 'origins', 'rotations',
         'strips', 'subspace_rows', 'subspaces', 'x',
     )  # fmt: skip
 
@@ -145,11 +145,10 @@ class _Configuration:
     rotations: list[Mat3]  # rot_body_from_link_i
     origins: list[Vec3]  # joint i position in frame 0
     axes: list[Vec3]  # joint i axis in frame 0
-    coms: list[Vec3]  # link i centre (mass and buoyancy) in frame 0
     ee: Vec3  # end effector in frame 0
     subspaces: FloatArray  # (3, 6) s_j in frame 0
     subspace_rows: list[tuple[float, ...]]  # the same as Python tuples
-    x: FloatArray  # (3, 6, 6) motion transforms frame 0 -> link i
+    x: FloatArray  # (18, 18) blockdiag of the motion transforms X_i: frame 0 -> link i
     jac0: FloatArray  # (24, 9) J0_i stacked: body twists in frame 0 at O
     jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
     strips: FloatArray | None  # (3 * 2N, 9) normal velocity at the drag strips from w
@@ -290,11 +289,18 @@ class UvmsModel:
         extended = np.concatenate((np.broadcast_to(np.eye(6), (N_JOINTS, 6, 6)), strip_rows), 1)
         # extended_i @ X_i is linear in the data of link i: map (18, (6 + 2N) * 6) per link.
         x_maps = np.einsum('lrk,dkc->ldrc', extended, x_map).reshape(N_JOINTS, 18, -1)
-        self._x_map_blocks = np.zeros((N_JOINTS * 18, N_JOINTS * x_maps.shape[2]))
+        # Two outputs from the link data (54,): blockdiag(X_1, X_2, X_3) (18 x 18) for the
+        # bias accelerations, then the extended rows of each link.
+        width = x_maps.shape[2]
+        self._x_map_blocks = np.zeros((N_JOINTS * 18, 18 * 18 + N_JOINTS * width))
         for i in range(N_JOINTS):
-            self._x_map_blocks[
-                18 * i : 18 * i + 18, i * x_maps.shape[2] : (i + 1) * x_maps.shape[2]
-            ] = x_maps[i]
+            for r in range(3):
+                for c in range(3):
+                    for row, col, src in ((r, c, 3 * r + c), (r + 3, c + 3, 3 * r + c),
+                                          (r, c + 3, 9 + 3 * r + c)):  # fmt: skip
+                        self._x_map_blocks[18 * i + src, (6 * i + row) * 18 + 6 * i + col] = 1.0
+            columns = slice(324 + i * width, 324 + (i + 1) * width)
+            self._x_map_blocks[18 * i : 18 * i + 18, columns] = x_maps[i]
         self._extended_rows = 6 + 2 * count
 
         # Constant maps.
@@ -320,7 +326,6 @@ class UvmsModel:
         rotations: list[Mat3] = []
         origins: list[Vec3] = []
         axes: list[Vec3] = []
-        coms: list[Vec3] = []
         flat: list[float] = []
         subspaces: list[float] = []
         ox, oy, oz = self._mount
@@ -349,11 +354,9 @@ class UvmsModel:
                 rot, axis = _mat_mat(parent, relative), _mat_vec(parent, (x, y, z))
             r0, r1, r2, r3, r4, r5, r6, r7, r8 = rot
             ax, ay, az = axis
-            half = 0.5 * self._lengths[j]
             rotations.append(rot)
             origins.append((ox, oy, oz))
             axes.append(axis)
-            coms.append((ox + half * r0, oy + half * r3, oz + half * r6))
             # X_j = [[rot^T, B], [0, rot^T]], row k of B is o x e_k (e_k: column k of rot).
             flat += (
                 r0, r3, r6, r1, r4, r7, r2, r5, r8,
@@ -368,14 +371,15 @@ class UvmsModel:
         flat += subspaces
         origin = (ox, oy, oz)
         data = np.array(flat)
-        cfg.rotations, cfg.origins, cfg.axes, cfg.coms, cfg.ee = (
-            rotations, origins, axes, coms, origin,
+        cfg.rotations, cfg.origins, cfg.axes, cfg.ee = (
+            rotations, origins, axes, origin,
         )  # fmt: skip
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
         cfg.subspace_rows = [tuple(subspaces[6 * j : 6 * j + 6]) for j in range(N_JOINTS)]
         rows = self._extended_rows
-        transforms = data[:54].dot(self._x_map_blocks).reshape(N_JOINTS, rows, 6)
-        cfg.x = transforms[:, :6]
+        mapped = data[:54].dot(self._x_map_blocks)
+        cfg.x = mapped[:324].reshape(18, 18)  # blockdiag(X_1, X_2, X_3)
+        transforms = mapped[324:].reshape(N_JOINTS, rows, 6)
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
         cfg.jac0 = jac0.reshape(4 * 6, N_DOF)
@@ -412,7 +416,7 @@ class UvmsModel:
         parents = cfg.jac0[:18].dot(w).reshape(N_JOINTS, 6, 1)
         joint_twists = (cfg.subspaces * w[6:, None]).reshape(N_JOINTS, 1, 6)
         bias_acc = (parents * joint_twists).reshape(N_JOINTS, 36).dot(self._motion_cross)
-        bias_acc = (cfg.x @ self._partial_sums.dot(bias_acc).reshape(N_JOINTS, 6, 1)).reshape(18)
+        bias_acc = cfg.x.dot(self._partial_sums.dot(bias_acc).reshape(18))
         # f_i = I_i a_i + nu_i x* I_i nu_i.
         momenta = self._inertia_blocks.dot(nu).reshape(4, 1, 6)
         forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36).dot(self._force_cross)
