@@ -133,6 +133,40 @@ def _cross_maps() -> tuple[FloatArray, FloatArray]:
     return motion.reshape(36, 6), force.reshape(36, 6)
 
 
+def _transform_map(strip_rows: FloatArray) -> FloatArray:
+    """Constant map from the link data (54,) to [blockdiag(X_1..3).ravel(), E_i X_i .ravel()].
+
+    The data of link i is [rot^T (9), B (9)] with X_i = [[rot^T, B], [0, rot^T]]; E_i stacks
+    I_6 and the link's strip rows (2N, 6), so E_i X_i gives its body-Jacobian rows and its
+    strip rows in one product. Both outputs are linear in the data, hence one matrix.
+
+    Args:
+        strip_rows: (3, 2N, 6) strip rows of each link.
+
+    Returns:
+        (54, 18 * 18 + 3 * (6 + 2N) * 6) map.
+    """
+    n_links = strip_rows.shape[0]
+    unit = np.zeros((18, 6, 6))  # data of one link -> X
+    for r in range(3):
+        for c in range(3):
+            unit[3 * r + c, r, c] = unit[3 * r + c, r + 3, c + 3] = 1.0
+            unit[9 + 3 * r + c, r, c + 3] = 1.0
+    extended = np.concatenate((np.broadcast_to(np.eye(6), (n_links, 6, 6)), strip_rows), 1)
+    per_link = np.einsum('lrk,dkc->ldrc', extended, unit).reshape(n_links, 18, -1)
+    width = per_link.shape[2]
+    size = 6 * n_links
+    result = np.zeros((18 * n_links, size * size + n_links * width))
+    for i in range(n_links):
+        block = np.zeros((18, size, size))
+        block[:, 6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = unit
+        result[18 * i : 18 * i + 18, : size * size] = block.reshape(18, -1)
+        result[18 * i : 18 * i + 18, size * size + i * width : size * size + (i + 1) * width] = (
+            per_link[i]
+        )
+    return result
+
+
 class _Configuration:
     """Quantities that depend on the joint angles only."""
 
@@ -279,28 +313,7 @@ class UvmsModel:
         strip_rows[:, count:, 2] = 1.0
         strip_rows[:, count:, 4] = -strip_x
         self._strip_count = count
-        # [rt (9), B (9)] of link i -> rows [X_i; strip rows @ X_i] (6 + 2N, 6), one product.
-        x_map = np.zeros((18, 6, 6))
-        for r in range(3):
-            for c in range(3):
-                x_map[3 * r + c, r, c] = 1.0
-                x_map[3 * r + c, r + 3, c + 3] = 1.0
-                x_map[9 + 3 * r + c, r, c + 3] = 1.0
-        extended = np.concatenate((np.broadcast_to(np.eye(6), (N_JOINTS, 6, 6)), strip_rows), 1)
-        # extended_i @ X_i is linear in the data of link i: map (18, (6 + 2N) * 6) per link.
-        x_maps = np.einsum('lrk,dkc->ldrc', extended, x_map).reshape(N_JOINTS, 18, -1)
-        # Two outputs from the link data (54,): blockdiag(X_1, X_2, X_3) (18 x 18) for the
-        # bias accelerations, then the extended rows of each link.
-        width = x_maps.shape[2]
-        self._x_map_blocks = np.zeros((N_JOINTS * 18, 18 * 18 + N_JOINTS * width))
-        for i in range(N_JOINTS):
-            for r in range(3):
-                for c in range(3):
-                    for row, col, src in ((r, c, 3 * r + c), (r + 3, c + 3, 3 * r + c),
-                                          (r, c + 3, 9 + 3 * r + c)):  # fmt: skip
-                        self._x_map_blocks[18 * i + src, (6 * i + row) * 18 + 6 * i + col] = 1.0
-            columns = slice(324 + i * width, 324 + (i + 1) * width)
-            self._x_map_blocks[18 * i : 18 * i + 18, columns] = x_maps[i]
+        self._x_map_blocks = _transform_map(strip_rows)
         self._extended_rows = 6 + 2 * count
 
         # Constant maps.
@@ -378,8 +391,8 @@ class UvmsModel:
         cfg.subspace_rows = [tuple(subspaces[6 * j : 6 * j + 6]) for j in range(N_JOINTS)]
         rows = self._extended_rows
         mapped = data[:54].dot(self._x_map_blocks)
-        cfg.x = mapped[:324].reshape(18, 18)  # blockdiag(X_1, X_2, X_3)
-        transforms = mapped[324:].reshape(N_JOINTS, rows, 6)
+        cfg.x = mapped[: 18 * 18].reshape(18, 18)  # blockdiag(X_1, X_2, X_3)
+        transforms = mapped[18 * 18 :].reshape(N_JOINTS, rows, 6)
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
         cfg.jac0 = jac0.reshape(4 * 6, N_DOF)
