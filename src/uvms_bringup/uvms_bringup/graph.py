@@ -5,8 +5,8 @@ an output file) in the namespace ``/uvms``, each from its ROS 2 parameter files
 (``--params-file``) plus the scenario's overrides (``parameter_overrides``), exactly as a
 launch file would configure separate processes. Lockstep runs spin a
 SingleThreadedExecutor until the simulator has reached the scenario's duration in
-simulated time; real-time runs spin a MultiThreadedExecutor on wall-clock timers until the
-duration or Ctrl-C.
+simulated time; real-time runs spin on wall-clock timers until the duration or Ctrl-C
+(single-threaded by default, see ``run_graph``).
 """
 
 from __future__ import annotations
@@ -171,13 +171,20 @@ def run_graph(
     *,
     progress: ProgressBar | None = None,
     on_spin: Callable[[Graph], None] | None = None,
+    threads: int = 1,
 ) -> RunResult:
     """Spin the graph until its duration (simulated time) or Ctrl-C, then destroy it.
+
+    Lockstep always spins a SingleThreadedExecutor (one chain of callbacks, deterministic).
+    Real time spins one too by default: in one Python process the callbacks share the
+    interpreter lock, and a MultiThreadedExecutor measured more jitter and missed periods
+    (bench/bench_realtime.py --threads 2), so ``threads`` > 1 is an option, not the default.
 
     Args:
         graph: A graph from ``build_graph``.
         progress: Progress bar to update, if any.
         on_spin: Called after every executor turn (tests and benchmarks).
+        threads: Threads of a MultiThreadedExecutor for real time; 1 spins single-threaded.
 
     Raises:
         GraphError: A node raised (e.g. the simulation diverged); the recording is closed
@@ -185,10 +192,10 @@ def run_graph(
     """
     sim = graph.simulator
     executor: SingleThreadedExecutor | MultiThreadedExecutor
-    if graph.mode == 'lockstep':
-        executor = SingleThreadedExecutor(context=graph.context)
+    if threads > 1 and graph.mode == 'realtime':
+        executor = MultiThreadedExecutor(num_threads=threads, context=graph.context)
     else:
-        executor = MultiThreadedExecutor(num_threads=2, context=graph.context)
+        executor = SingleThreadedExecutor(context=graph.context)
     for node in graph.nodes.values():
         executor.add_node(node)
     output = graph.nodes.get(RECORDER.name)

@@ -52,6 +52,31 @@ class DivergenceLimits:
     max_joint_rate_rad_s: float = 50.0
 
 
+@dataclass(frozen=True)
+class Observation:
+    """What the plant shows at one instant: state, frames, contact truth and sensor reading.
+
+    Attributes:
+        t_ns: Simulated time (ns).
+        q: Generalized coordinates (9,).
+        w: Quasi-velocities (9,).
+        joint_torques: Motor torques applied during the last step (N*m).
+        poses: {frame: (p_ned, rot_ned_from_frame)} of the robot's frames.
+        contact: Contact ground truth (force on the wall in map_ned).
+        sensor_force: Wrist sensor force reading in ft_sensor_link (N).
+        sensor_torque: Wrist sensor torque reading in ft_sensor_link (N*m).
+    """
+
+    t_ns: int
+    q: FloatArray
+    w: FloatArray
+    joint_torques: FloatArray
+    poses: dict[str, tuple[FloatArray, FloatArray]]
+    contact: ContactState
+    sensor_force: FloatArray
+    sensor_torque: FloatArray
+
+
 def initial_coordinates(
     model: UvmsModel,
     vehicle_pose: ArrayLike,
@@ -131,7 +156,6 @@ class Plant:
         self._thrusts = np.zeros(self.n_thrusters)
         self._joint_torques = np.zeros(self.n_joints)
         self._failure: SimulationError | None = None
-        self._contact_cache: tuple[int, ContactState] | None = None
         self._check_state('initial state')
 
     @property
@@ -173,13 +197,7 @@ class Plant:
 
     def contact(self) -> ContactState:
         """Contact ground truth at the current state (no contact without a wall)."""
-        if self._wall is None:
-            return _NO_CONTACT
-        if self._contact_cache is None or self._contact_cache[0] != self._t_ns:
-            t_s = self._t_ns * 1e-9
-            state = self._wall.evaluate(t_s, self.model.ee_position(self._q), self._ee_velocity())
-            self._contact_cache = (self._t_ns, state)
-        return self._contact_cache[1]
+        return self._contact_at(self.model.ee_position(self._q))
 
     def read_wrench_sensor(self) -> tuple[FloatArray, FloatArray]:
         """One reading of the wrist sensor: (force N, torque N*m) in ft_sensor_link.
@@ -187,19 +205,35 @@ class Plant:
         The sensor feels F_e, the force the end effector exerts on the wall, with noise,
         saturation and the optional low-pass of ``sensor.*``. Each call draws new noise.
         """
-        rot_ned_from_sensor = self.model.ee_rotation(self._q)
-        force, torque = contact_wrench_in_sensor_frame(
-            rot_ned_from_sensor, self.contact().force_ned
-        )
-        dt = self._dt_s
-        if self._last_reading_ns is not None and self._t_ns > self._last_reading_ns:
-            dt = (self._t_ns - self._last_reading_ns) * 1e-9
-        self._last_reading_ns = self._t_ns
-        return self._sensor.measure(force, torque, dt)
+        observation = self.observe()
+        return observation.sensor_force, observation.sensor_torque
 
     def frame_poses(self) -> dict[str, tuple[FloatArray, FloatArray]]:
         """Poses of the robot's frames in map_ned: {frame: (p_ned, rot_ned_from_frame)}."""
         return self.model.frame_poses(self._q)
+
+    def observe(self) -> Observation:
+        """State, frames, contact and one wrist sensor reading (draws new sensor noise).
+
+        The kinematics are evaluated once for all of them.
+        """
+        poses = self.model.frame_poses(self._q)
+        contact = self._contact_at(poses['ee_link'][0])
+        force, torque = contact_wrench_in_sensor_frame(poses['ft_sensor_link'][1],
+                                                       contact.force_ned)
+        dt = self._dt_s
+        if self._last_reading_ns is not None and self._t_ns > self._last_reading_ns:
+            dt = (self._t_ns - self._last_reading_ns) * 1e-9
+        self._last_reading_ns = self._t_ns
+        force, torque = self._sensor.measure(force, torque, dt)
+        return Observation(self._t_ns, self._q.copy(), self._w.copy(),
+                           self._joint_torques.copy(), poses, contact, force, torque)
+
+    def _contact_at(self, p_ee_ned: FloatArray) -> ContactState:
+        """Contact ground truth for the end effector at p_ee_ned, at the current time."""
+        if self._wall is None:
+            return _NO_CONTACT
+        return self._wall.evaluate(self._t_ns * 1e-9, p_ee_ned, self._ee_velocity())
 
     def step(self, thrusts: ArrayLike, joint_torques: ArrayLike) -> None:
         """Advance the plant by one fixed step with the given actuator outputs held.
@@ -266,21 +300,21 @@ class Plant:
     def _check_state(self, where: str) -> None:
         """Raise DivergenceError if the state is non-finite or out of its bounds."""
         q, w, lim = self._q, self._w, self._limits
-        names = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', 'joint 1', 'joint 2', 'joint 3')
-        for label, vector in (('q', q), ('w', w)):
-            bad = np.flatnonzero(~np.isfinite(vector))
-            if bad.size:
-                i = int(bad[0])
-                msg = f'{where}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
-                raise DivergenceError(msg)
+        if not (np.isfinite(q).all() and np.isfinite(w).all()):
+            names = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', 'joint 1', 'joint 2', 'joint 3')
+            label, vector = ('q', q) if not np.isfinite(q).all() else ('w', w)
+            i = int(np.flatnonzero(~np.isfinite(vector))[0])
+            msg = f'{where}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
+            raise DivergenceError(msg)
+        x, y, z, u, v, w_, p, q_, r, dq1, dq2, dq3 = (*q[:3].tolist(), *w.tolist())
         checks = (
-            ('vehicle distance from the map_ned origin', float(np.linalg.norm(q[:3])),
+            ('vehicle distance from the map_ned origin', math.sqrt(x * x + y * y + z * z),
              lim.max_distance_m, 'm'),
-            ('vehicle speed |[u, v, w]|', float(np.linalg.norm(w[:3])),
+            ('vehicle speed |[u, v, w]|', math.sqrt(u * u + v * v + w_ * w_),
              lim.max_linear_speed_m_s, 'm/s'),
-            ('vehicle angular rate |[p, q, r]|', float(np.linalg.norm(w[3:6])),
+            ('vehicle angular rate |[p, q, r]|', math.sqrt(p * p + q_ * q_ + r * r),
              lim.max_angular_rate_rad_s, 'rad/s'),
-            ('largest arm joint rate', float(np.max(np.abs(w[6:]))),
+            ('largest arm joint rate', max(abs(dq1), abs(dq2), abs(dq3)),
              lim.max_joint_rate_rad_s, 'rad/s'),
         )
         for label, value, limit, unit in checks:

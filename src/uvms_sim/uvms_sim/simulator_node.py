@@ -30,6 +30,9 @@ from uvms_sim.errors import CommandError, SimParameterError, SimulationError
 from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings
 from uvms_sim.plant import Plant, initial_coordinates
 
+#: Most plant steps one real-time tick takes to catch up with the wall clock.
+_MAX_CATCH_UP_STEPS = 10
+
 
 class SimulatorNode(Node):
     """Simulated UVMS: actuator commands in, sensor topics, ``/clock`` and ``/tf`` out."""
@@ -76,6 +79,7 @@ class SimulatorNode(Node):
         self._awaiting_since: Any = None
         self._finished = False
         self.timeouts = 0
+        self._realtime_start: Any = None
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
@@ -153,14 +157,32 @@ class SimulatorNode(Node):
         self._answered()
 
     def _on_realtime_tick(self) -> None:
-        """Real time: one step per timer period on the latest command."""
+        """Real time: step until simulated time has caught up with the wall clock.
+
+        One step per period when the timer is on time; after a late tick, up to
+        ``_MAX_CATCH_UP_STEPS`` at once, so simulated time keeps pace with the wall clock
+        instead of silently dropping steps. Beyond that the simulation falls behind (warned).
+        """
         if self._finished:
             return
-        if self._plant.t_ns % (self._plant.dt_ns * self._settings.steps_per_publish) == 0:
-            self._publish_state()
-            if self._finished:
+        now = self.get_clock().now()
+        if self._realtime_start is None:
+            self._realtime_start = now
+        due_ns = (now - self._realtime_start).nanoseconds
+        publish_every_ns = self._plant.dt_ns * self._settings.steps_per_publish
+        for _ in range(_MAX_CATCH_UP_STEPS):
+            if self._plant.t_ns > due_ns:
                 return
-        self._step()
+            if self._plant.t_ns % publish_every_ns == 0:
+                self._publish_state()
+                if self._finished:
+                    return
+            self._step()
+        behind_s = (due_ns - self._plant.t_ns) * 1e-9
+        if behind_s > 0.0:
+            self.get_logger().warn(
+                f'the simulation runs {behind_s * 1e3:.1f} ms behind real time',
+                throttle_duration_sec=5.0)
 
     def _answered(self) -> None:
         """Lockstep: the published state is answered; integrate to the next one, or finish."""
@@ -201,19 +223,18 @@ class SimulatorNode(Node):
 
     def _publish_state(self) -> None:
         """Publish /clock, the sensor topics and, when due, /tf, all stamped t_k."""
-        plant, t_ns = self._plant, self._plant.t_ns
-        q, w = plant.q, plant.w
+        seen = self._plant.observe()
+        t_ns, q, w = seen.t_ns, seen.q, seen.w
         self._clock_pub.publish(conversions.clock_message(t_ns))
         self._joint_pub.publish(conversions.joint_state_message(
-            t_ns, plant.joint_names, q[6:], w[6:], plant.joint_torques))
+            t_ns, self._plant.joint_names, q[6:], w[6:], seen.joint_torques))
         self._odom_pub.publish(conversions.odometry_message(t_ns, q[:6], w[:6]))
-        force, torque = plant.read_wrench_sensor()
-        self._wrench_pub.publish(conversions.wrench_message(t_ns, force, torque))
-        poses = plant.frame_poses()
-        self._ee_pub.publish(conversions.pose_message(t_ns, *poses['ee_link']))
-        self._contact_pub.publish(conversions.contact_message(t_ns, plant.contact()))
+        self._wrench_pub.publish(
+            conversions.wrench_message(t_ns, seen.sensor_force, seen.sensor_torque))
+        self._ee_pub.publish(conversions.pose_message(t_ns, *seen.poses['ee_link']))
+        self._contact_pub.publish(conversions.contact_message(t_ns, seen.contact))
         if self._tf_pub is not None and self._published % self._settings.publishes_per_tf == 0:
-            self._tf_pub.publish(conversions.tf_message(t_ns, poses))
+            self._tf_pub.publish(conversions.tf_message(t_ns, seen.poses))
         self._published += 1
         if self._settings.mode == 'lockstep':
             self._awaiting_since = self.get_clock().now()
