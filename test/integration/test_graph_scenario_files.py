@@ -52,10 +52,10 @@ def test_paper_cases_set_the_paper_values() -> None:
     assert case4.overrides['controller']['model.mass_scale'] == 0.9
 
 
-@pytest.mark.parametrize('name', PAPER_SCENARIOS)
-def test_simulator_overrides_of_shipped_scenarios_are_declared_parameters(name: str) -> None:
-    """Each simulator override is a parameter the simulator declares, with that type."""
-    check_scenario_overrides(load_scenario(SCENARIOS / f'{name}.yaml'), [SIMULATOR])
+@pytest.mark.parametrize('name', [*PAPER_SCENARIOS, 'impedance_only', 'hybrid_only'])
+def test_overrides_of_shipped_scenarios_are_declared_parameters(name: str) -> None:
+    """Each override is a parameter its node declares, with that type."""
+    check_scenario_overrides(load_scenario(SCENARIOS / f'{name}.yaml'))
 
 
 def test_valid_file_gives_flat_dotted_overrides_and_yaml12_floats(tmp_path: Path) -> None:
