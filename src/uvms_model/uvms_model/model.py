@@ -133,38 +133,25 @@ def _cross_maps() -> tuple[FloatArray, FloatArray]:
     return motion.reshape(36, 6), force.reshape(36, 6)
 
 
-def _transform_map(strip_rows: FloatArray) -> FloatArray:
-    """Constant map from the link data (54,) to [blockdiag(X_1..3).ravel(), E_i X_i .ravel()].
+def _transform_maps(strip_rows: FloatArray) -> FloatArray:
+    """Constant maps (3, 18, (6 + 2N) * 6): link data [rot^T (9), B (9)] -> (E_i X_i).ravel().
 
-    The data of link i is [rot^T (9), B (9)] with X_i = [[rot^T, B], [0, rot^T]]; E_i stacks
-    I_6 and the link's strip rows (2N, 6), so E_i X_i gives its body-Jacobian rows and its
-    strip rows in one product. Both outputs are linear in the data, hence one matrix.
+    X_i = [[rot^T, B], [0, rot^T]] moves motion vectors from frame 0 to link i; E_i stacks
+    I_6 and the link's strip rows (2N, 6), so E_i X_i gives the link's body-Jacobian rows
+    and strip rows in one product. E_i X_i is linear in the data, hence a constant map.
 
     Args:
         strip_rows: (3, 2N, 6) strip rows of each link.
-
-    Returns:
-        (54, 18 * 18 + 3 * (6 + 2N) * 6) map.
     """
-    n_links = strip_rows.shape[0]
     unit = np.zeros((18, 6, 6))  # data of one link -> X
     for r in range(3):
         for c in range(3):
             unit[3 * r + c, r, c] = unit[3 * r + c, r + 3, c + 3] = 1.0
             unit[9 + 3 * r + c, r, c + 3] = 1.0
+    n_links = strip_rows.shape[0]
     extended = np.concatenate((np.broadcast_to(np.eye(6), (n_links, 6, 6)), strip_rows), 1)
-    per_link = np.einsum('lrk,dkc->ldrc', extended, unit).reshape(n_links, 18, -1)
-    width = per_link.shape[2]
-    size = 6 * n_links
-    result = np.zeros((18 * n_links, size * size + n_links * width))
-    for i in range(n_links):
-        block = np.zeros((18, size, size))
-        block[:, 6 * i : 6 * i + 6, 6 * i : 6 * i + 6] = unit
-        result[18 * i : 18 * i + 18, : size * size] = block.reshape(18, -1)
-        result[18 * i : 18 * i + 18, size * size + i * width : size * size + (i + 1) * width] = (
-            per_link[i]
-        )
-    return result
+    maps: FloatArray = np.einsum('lrk,dkc->ldrc', extended, unit).reshape(n_links, 18, -1)
+    return maps
 
 
 class _Configuration:
@@ -182,7 +169,7 @@ class _Configuration:
     ee: Vec3  # end effector in frame 0
     subspaces: FloatArray  # (3, 6) s_j in frame 0
     subspace_rows: list[tuple[float, ...]]  # the same as Python tuples
-    x: FloatArray  # (18, 18) blockdiag of the motion transforms X_i: frame 0 -> link i
+    x: FloatArray  # (3, 6, 6) motion transforms X_i: frame 0 -> link i
     jac0: FloatArray  # (24, 9) J0_i stacked: body twists in frame 0 at O
     jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
     strips: FloatArray | None  # (3 * 2N, 9) normal velocity at the drag strips from w
@@ -313,7 +300,7 @@ class UvmsModel:
         strip_rows[:, count:, 2] = 1.0
         strip_rows[:, count:, 4] = -strip_x
         self._strip_count = count
-        self._x_map_blocks = _transform_map(strip_rows)
+        self._transform_maps = _transform_maps(strip_rows)
         self._extended_rows = 6 + 2 * count
 
         # Constant maps.
@@ -390,9 +377,10 @@ class UvmsModel:
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
         cfg.subspace_rows = [tuple(subspaces[6 * j : 6 * j + 6]) for j in range(N_JOINTS)]
         rows = self._extended_rows
-        mapped = data[:54].dot(self._x_map_blocks)
-        cfg.x = mapped[: 18 * 18].reshape(18, 18)  # blockdiag(X_1, X_2, X_3)
-        transforms = mapped[18 * 18 :].reshape(N_JOINTS, rows, 6)
+        transforms = (data[:54].reshape(N_JOINTS, 1, 18) @ self._transform_maps).reshape(
+            N_JOINTS, rows, 6
+        )
+        cfg.x = transforms[:, :6]
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
         cfg.jac0 = jac0.reshape(4 * 6, N_DOF)
@@ -429,7 +417,7 @@ class UvmsModel:
         parents = cfg.jac0[:18].dot(w).reshape(N_JOINTS, 6, 1)
         joint_twists = (cfg.subspaces * w[6:, None]).reshape(N_JOINTS, 1, 6)
         bias_acc = (parents * joint_twists).reshape(N_JOINTS, 36).dot(self._motion_cross)
-        bias_acc = cfg.x.dot(self._partial_sums.dot(bias_acc).reshape(18))
+        bias_acc = (cfg.x @ self._partial_sums.dot(bias_acc).reshape(N_JOINTS, 6, 1)).reshape(18)
         # f_i = I_i a_i + nu_i x* I_i nu_i.
         momenta = self._inertia_blocks.dot(nu).reshape(4, 1, 6)
         forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36).dot(self._force_cross)
