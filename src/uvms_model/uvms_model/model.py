@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import lapack  # type: ignore[import-untyped]
 
-from uvms_model.errors import ModelError, ParameterError, StateError, UnreachableError
+from uvms_model.errors import ModelError, StateError, UnreachableError
 from uvms_model.hydrodynamics import (
     cylinder_added_mass,
     cylinder_inertia,
@@ -204,12 +204,6 @@ class UvmsModel:
         lengths = [float(v) for v in p.arm.link_lengths_m]
         radii = [float(v) for v in p.arm.link_radii_m]
         masses = [float(v) for v in p.arm.link_masses_kg]
-        for i in range(N_JOINTS):
-            if lengths[i] <= 2.0 * radii[i]:
-                raise ParameterError(
-                    f'arm.link_lengths_m[{i}] = {lengths[i]!r} must exceed twice '
-                    f'arm.link_radii_m[{i}] = {radii[i]!r}: links are slender cylinders'
-                )
         self._lengths = lengths
         self._mount: Vec3 = tuple(float(v) for v in p.arm.mount_position_m)  # type: ignore[assignment]
         axes = np.array(p.arm.joint_axes, dtype=float).reshape(3, 3)
@@ -260,12 +254,8 @@ class UvmsModel:
         link_volumes = [math.pi * radii[i] ** 2 * lengths[i] for i in range(N_JOINTS)]
         if hydro.buoyancy_enabled:
             link_displaced = [rho * v for v in link_volumes]
+            # Non-negative: UvmsParameters checks the ratio against the links' displacement.
             hull_displaced = veh.buoyancy_ratio * total_mass - sum(link_displaced)
-            if hull_displaced < 0.0:
-                raise ParameterError(
-                    f'vehicle.buoyancy_ratio = {veh.buoyancy_ratio!r} is below what the links '
-                    f'alone provide ({sum(link_displaced) / total_mass:.4g})'
-                )
         else:
             link_displaced = [0.0] * N_JOINTS
             hull_displaced = 0.0

@@ -305,6 +305,13 @@ class ArmParameters(_Group):
                     f'arm.joint_axes: axis of joint {j + 1} = {list(axis)!r} has norm '
                     f'{norm:.6g}, expected a unit vector'
                 )
+        for i in range(3):
+            if self.link_lengths_m[i] <= 2.0 * self.link_radii_m[i]:
+                raise ParameterError(
+                    f'arm.link_lengths_m[{i}] = {self.link_lengths_m[i]!r} must exceed twice '
+                    f'arm.link_radii_m[{i}] = {self.link_radii_m[i]!r}: links are slender '
+                    'cylinders (strip theory)'
+                )
         if len(set(self.joint_names)) != 3 or not all(self.joint_names):
             raise ParameterError(
                 f'arm.joint_names = {list(self.joint_names)!r} must be three distinct names'
@@ -530,6 +537,21 @@ class UvmsParameters:
     sensor: SensorParameters = field(default_factory=SensorParameters)
     contact: ContactParameters = field(default_factory=ContactParameters)
     integration: IntegrationParameters = field(default_factory=IntegrationParameters)
+
+    def __post_init__(self) -> None:
+        if self.hydrodynamics.buoyancy_enabled:
+            rho = self.hydrodynamics.water_density_kg_m3
+            links = sum(
+                rho * math.pi * r * r * length
+                for r, length in zip(self.arm.link_radii_m, self.arm.link_lengths_m, strict=True)
+            )
+            total = self.vehicle.mass_kg + sum(self.arm.link_masses_kg)
+            if self.vehicle.buoyancy_ratio * total < links:
+                raise ParameterError(
+                    f'vehicle.buoyancy_ratio = {self.vehicle.buoyancy_ratio!r} is below what '
+                    f'the links alone provide ({links / total:.4g}); valid range '
+                    f'[{links / total:.4g}, 10.0]'
+                )
 
     @classmethod
     def from_flat_dict(cls, values: Mapping[str, object]) -> UvmsParameters:

@@ -96,6 +96,8 @@ def test_unknown_parameter_is_rejected_by_name() -> None:
         ('arm.joint_axes', [0.0, 0.0, 2.0, 0, 1, 0, 0, 1, 0], r'arm\.joint_axes'),
         ('vehicle.length_m', 0.4, r'vehicle\.length_m = 0\.4 must exceed vehicle\.diameter_m'),
         ('integration.method', 'euler', r'integration\.method'),
+        ('arm.link_radii_m', [0.3, 0.04, 0.035], r'arm\.link_lengths_m\[0\] = 0\.5 must exceed'),
+        ('vehicle.buoyancy_ratio', 0.01, r'vehicle\.buoyancy_ratio = 0\.01 is below'),
     ],
 )
 def test_invalid_parameter_raises_a_value_error_naming_it(
