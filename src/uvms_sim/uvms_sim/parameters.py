@@ -103,6 +103,12 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         'Whether the wall of the contact.* parameters exists (false: free motion).',
     ),
     ParameterSpec(
+        'wall_motion_start_force_n', 0.0,
+        'Contact force (N) at which a moving wall (contact.wall_speed_m_s) starts to move; '
+        '0 starts it at the first touch.',
+        0.0, 1.0e6,
+    ),
+    ParameterSpec(
         'initial.vehicle_pose', [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         'Initial vehicle pose in map_ned: x, y, z (m), roll, pitch, yaw (rad).',
         -1000.0, 1000.0, length=6,
@@ -141,6 +147,7 @@ class SimulatorSettings:
     watchdog_timeout_ns: int
     duration_ns: int
     wall_enabled: bool
+    wall_motion_start_force_n: float
     vehicle_pose: np.ndarray
     arm_from_ee_position: bool
     joint_positions: np.ndarray
@@ -197,6 +204,7 @@ class SimulatorSettings:
             watchdog_timeout_ns=round(float(checked['watchdog_timeout_s']) * 1e9),
             duration_ns=round(float(checked['duration_s']) * 1e9),
             wall_enabled=bool(checked['wall_enabled']),
+            wall_motion_start_force_n=float(checked['wall_motion_start_force_n']),
             vehicle_pose=np.array(checked['initial.vehicle_pose'], dtype=float),
             arm_from_ee_position=checked['initial.arm'] == 'ee_position',
             joint_positions=np.array(checked['initial.joint_positions'], dtype=float),

@@ -9,7 +9,7 @@ time is kept in integer nanoseconds, so stamps are exact and runs repeat bit for
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NoReturn
 
 import numpy as np
@@ -118,6 +118,9 @@ class Plant:
         q0: Initial generalized coordinates (9,).
         dt_ns: Fixed integration step (ns).
         wall_enabled: Whether the wall exists.
+        wall_motion_start_force_n: Contact force (N) at which a moving wall
+            (``contact.wall_speed_m_s``) starts to move; 0 starts it at the first touch, as
+            ``uvms_model.contact`` does.
         limits: Divergence bounds.
 
     Example:
@@ -133,6 +136,7 @@ class Plant:
         q0: ArrayLike,
         dt_ns: int = 1_000_000,
         wall_enabled: bool = True,
+        wall_motion_start_force_n: float = 0.0,
         limits: DivergenceLimits | None = None,
     ) -> None:
         if dt_ns <= 0:
@@ -143,7 +147,13 @@ class Plant:
         self.n_joints = self.model.n_joints
         self._e = configuration_matrix(params.thrusters, self.n_joints)
         self.n_thrusters = self._e.shape[1] - self.n_joints
-        self._wall = WallContact(params.contact) if wall_enabled else None
+        self._contact_params = params.contact
+        self._motion_start_force_n = wall_motion_start_force_n
+        self._wall_waits = wall_motion_start_force_n > 0.0 and params.contact.wall_speed_m_s != 0.0
+        # A wall that waits for a force holds still until then; a fresh moving wall then
+        # takes over at the same place and, touched at once, starts moving (Case III).
+        still = replace(params.contact, wall_speed_m_s=0.0) if self._wall_waits else None
+        self._wall = WallContact(still or params.contact) if wall_enabled else None
         self._damped_wall = params.contact.damping_n_s_m > 0.0
         self._sensor = ForceTorqueSensor(params.sensor)
         self._limits = limits if limits is not None else DivergenceLimits()
@@ -257,9 +267,13 @@ class Plant:
         t_s = self._t_ns * 1e-9
         f_on_ee = None
         if self._wall is not None:
-            contact = self._wall.update(
-                t_s, self.model.ee_position(self._q), self._ee_velocity()
-            )
+            p_ee = self.model.ee_position(self._q)
+            contact = self._wall.update(t_s, p_ee, self._ee_velocity())
+            if self._wall_waits and contact.force_ned[0] >= self._motion_start_force_n:
+                self._wall_waits = False
+                self._wall = WallContact(replace(
+                    self._contact_params, wall_position_m=contact.wall_position_m))
+                contact = self._wall.update(t_s, p_ee, self._ee_velocity())
             if contact.in_contact:
                 f_on_ee = -contact.force_ned
         try:

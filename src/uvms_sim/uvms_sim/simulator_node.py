@@ -52,10 +52,11 @@ class SimulatorNode(Node):
         except ModelError as exc:
             raise SimParameterError(f'invalid robot parameter: {exc}') from exc
         self._settings = cfg = SimulatorSettings.from_values(values)
-        plant = Plant(params, [0.0] * 9, cfg.physics_dt_ns, cfg.wall_enabled)
+        plant = Plant(params, [0.0] * 9, cfg.physics_dt_ns)
         q0 = initial_coordinates(plant.model, cfg.vehicle_pose, cfg.joint_positions,
                                  cfg.ee_position if cfg.arm_from_ee_position else None)
-        self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled)
+        self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled,
+                            cfg.wall_motion_start_force_n)
 
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._clock_pub = self.create_publisher(Clock, '/clock', reliable)

@@ -150,3 +150,16 @@ def test_frame_poses_start_at_vehicle_pose() -> None:
     p, rot = plant.frame_poses()['base_link_frd']
     np.testing.assert_allclose(p, [1.0, 2.0, 3.0])
     np.testing.assert_allclose(rot, rot_ned_from_body(0.1, -0.2, 0.3), atol=1e-12)
+
+
+@pytest.mark.parametrize(('start_force_n', 'moving'), [(0.0, True), (50.0, True), (200.0, False)])
+def test_moving_wall_starts_once_the_contact_force_reaches_the_threshold(
+    start_force_n: float, moving: bool
+) -> None:
+    """A 0.05 m/s wall pressed with 100 N moves only if its start force is at most 100 N."""
+    params = PARAMS.updated({'contact.wall_speed_m_s': 0.05})
+    plant = plant_with_ee_at([1.7871, 0.0, -0.1], params=params,
+                             wall_motion_start_force_n=start_force_n)
+    plant.step(*zero_inputs(plant))
+    assert plant.contact().wall_velocity_m_s == (0.05 if moving else 0.0)
+    assert plant.contact().wall_position_m == pytest.approx(1.7771 + (5e-5 if moving else 0.0))
