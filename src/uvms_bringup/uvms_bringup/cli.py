@@ -10,10 +10,13 @@ import argparse
 import importlib
 import math
 import shutil
+import signal
 import subprocess
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
+from types import FrameType
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -179,6 +182,7 @@ def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
     except GraphError as exc:
         _error(command, str(exc))
         return EXIT_FAILURE
+    _stop_on_sigterm()
     bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
     if command == 'launch' and not args.quiet:
         print(f'uvms launch: {mode} graph running in this process; Ctrl-C stops it',
@@ -200,6 +204,17 @@ def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
     if not args.quiet:
         print(f'uvms {command}: {summary}', file=sys.stderr)
     return EXIT_INTERRUPTED if result.interrupted else EXIT_OK
+
+
+def _stop_on_sigterm() -> None:
+    """Let SIGTERM stop a run like Ctrl-C does, so the recording is closed cleanly."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, interrupt)
 
 
 def _quiet_logs() -> None:
