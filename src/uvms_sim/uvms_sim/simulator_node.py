@@ -136,7 +136,7 @@ class SimulatorNode(Node):
 
     def _on_kick(self) -> None:
         """Lockstep start: publish the initial state once the executor runs."""
-        self.destroy_timer(self._kick)
+        self._kick.cancel()
         self._publish_state()
 
     def _on_lockstep_timer(self) -> None:
@@ -152,7 +152,7 @@ class SimulatorNode(Node):
             self._publish_state()
             return
         self.timeouts += 1
-        self.get_logger().warn(
+        self.get_logger().warning(
             f'no actuator command stamped t = {self._plant.t_ns * 1e-9:.3f} s after '
             f'{waited_s:.2f} s: stepping with the last command', throttle_duration_sec=5.0)
         self._answered()
@@ -181,7 +181,7 @@ class SimulatorNode(Node):
             self._step()
         behind_s = (due_ns - self._plant.t_ns) * 1e-9
         if behind_s > 0.0:
-            self.get_logger().warn(
+            self.get_logger().warning(
                 f'the simulation runs {behind_s * 1e3:.1f} ms behind real time',
                 throttle_duration_sec=5.0)
 
@@ -207,7 +207,7 @@ class SimulatorNode(Node):
             age_ns = self._plant.t_ns - self._command[0]
             stale = age_ns > self._settings.watchdog_timeout_ns
             if stale and not self._stale:
-                self.get_logger().warn(
+                self.get_logger().warning(
                     f'actuator command is {age_ns * 1e-9:.3f} s old (limit '
                     f'{self._settings.watchdog_timeout_ns * 1e-9:g} s): thrusters and motors '
                     'set to zero')
