@@ -34,7 +34,12 @@ from uvms_model import UvmsModel  # noqa: E402
 
 Q = np.array([0.01, -0.02, 0.03, 0.02, -0.01, 0.05, 0.02, 0.48, -1.5])
 W = np.array([0.02, 0.01, -0.01, 0.01, 0.02, -0.01, 0.05, -0.03, 0.04])
-F_SENSOR = np.array([80.0, 1.0, -2.0])
+#: Wrist force in ft_sensor_link for the three regimes of the fuzzy switch.
+FORCES = {
+    'free motion, no rule fires': np.zeros(3),
+    'transition, two rules fire': np.array([80.0, 1.0, -2.0]),
+    'constrained, one rule fires': np.array([150.0, 1.0, -2.0]),
+}
 
 
 def time_us(function: Callable[[], object], repeat: int, rounds: int = 5) -> tuple[float, float]:
@@ -56,19 +61,24 @@ def main() -> None:
     repeat = parser.parse_args().repeat
 
     model = UvmsModel()
-    controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
-    t = [0.0]
+    steps = []
+    for regime, force in FORCES.items():
+        controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
+        t = [0.0]
 
-    def controller_step() -> None:
-        t[0] += 0.002
-        controller.step_from_sensors(t[0], Q, W, F_SENSOR)
+        def controller_step(c=controller, t=t, f=force) -> None:  # type: ignore[no-untyped-def]
+            t[0] += 0.002
+            c.step_from_sensors(t[0], Q, W, f)
+
+        steps.append((f'controller step, {regime}', controller_step, 150.0))
 
     q_dot = model.velocity_transform(Q) @ W
     x_ee = model.ee_position(Q)
 
     def model_evaluations() -> None:
         model.velocity_transform(Q)
-        model.frame_poses(Q)
+        model.ee_position(Q)
+        model.ee_rotation(Q)
         model.mass_matrix(Q)
         model.bias(Q, q_dot)
         model.ee_jacobian(Q)
@@ -84,7 +94,7 @@ def main() -> None:
     switch = FuzzySwitch()
 
     rows = [
-        ('controller step (step_from_sensors), total', controller_step, 150.0),
+        *steps,
         ('  of which UVMS model evaluations (uvms_model)', model_evaluations, None),
         (
             '  task-space model M~, zeta~ (eq. 27-28)',
@@ -112,9 +122,10 @@ def main() -> None:
         results[label] = median
         target_text = f'{target:.0f}' if target is not None else ''
         print(f'{label:62s} {median:10.1f} {best:9.1f} {target_text:>10s}')
-    total = results[rows[0][0]]
-    model_part = results[rows[1][0]]
-    print(f'\ncontrol law without the model evaluations: {total - model_part:.1f} µs')
+    model_part = results[rows[3][0]]
+    for label, _, _ in steps:
+        law = results[label] - model_part
+        print(f'{label}: control law without the model evaluations {law:.1f} µs')
 
 
 if __name__ == '__main__':

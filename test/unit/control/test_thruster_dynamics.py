@@ -136,3 +136,15 @@ def test_pitch_below_the_bollard_flow_angle_is_rejected() -> None:
     """A pitch too flat for the requested K_T cannot be calibrated: the error names the pitch."""
     with pytest.raises(ControlParameterError, match=r'thruster\.pitch_angle'):
         calibrate(ThrusterModelParameters(pitch_angle=0.2))
+
+
+def test_control_rate_step_matches_a_fine_integration() -> None:
+    """At the 500 Hz step (one sub-step) thrust tracks a 0.1 ms integration: 3 %, then 1 %.
+
+    3 % of the 200 N range during the first 50 ms of the rise, 1 % after it.
+    """
+    command = np.array([200.0, 20.0, 1.0, -150.0])
+    coarse, _ = simulate(command, 0.6, dt=2e-3)
+    fine = simulate(command, 0.6, dt=1e-4)[0][19::20]
+    np.testing.assert_allclose(coarse[:25], fine[:25], atol=0.03 * 200.0)
+    np.testing.assert_allclose(coarse[25:], fine[25:], atol=0.01 * 200.0)

@@ -334,6 +334,13 @@ class FuzzySwitch:
                 lines.append(
                     (out.a, out.a + (out.b - out.a) * h, out.d - (out.d - out.c) * h, out.d, h)
                 )
+        if len(lines) == 1:
+            # One clipped trapezoid (a, 0) (p, h) (q, h) (d, 0): its centroid in closed form.
+            a, p, q, d, _ = lines[0]
+            area = (p - a) + 2.0 * (q - p) + (d - q)
+            moment = (p - a) * (a + 2.0 * p) + 3.0 * (q - p) * (p + q) + (d - q) * (2.0 * q + d)
+            centroid = moment / (3.0 * area) if area > 0.0 else w_none
+            return min(max(m * centroid + (1.0 - m) * w_none, 0.0), 1.0)
         xs = sorted({x for line in lines for x in line[:4]})
         points: list[tuple[float, float]] = []
         prev: list[float] = []

@@ -102,6 +102,8 @@ class HalfCircleReference:
         self.start_delay = start_delay
         self.toward: FloatArray = n
         self.sweep: FloatArray = d / float(np.linalg.norm(d))
+        self._n: list[float] = self.toward.tolist()
+        self._d: list[float] = self.sweep.tolist()
 
     def evaluate(self, t: float, start: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Reference X_d, X_d_dot, X_d_ddot (m, m/s, m/s²) at time t after the start.
@@ -110,18 +112,23 @@ class HalfCircleReference:
             t: time since the reference started (s).
             start: X0, the starting end-effector position in map_ned (m).
         """
-        n = self.toward
-        d = self.sweep
         s, ds, dds = quintic_time_scaling((t - self.start_delay) / self.duration)
         s_dot = ds / self.duration
         s_ddot = dds / (self.duration * self.duration)
         angle = math.pi * s
         sin_a, cos_a = math.sin(angle), math.cos(angle)
         r = self.radius
-        p_s = r * (sin_a * n + (1.0 - cos_a) * d)
-        dp_ds = r * math.pi * (cos_a * n + sin_a * d)
-        d2p_ds2 = r * math.pi * math.pi * (-sin_a * n + cos_a * d)
-        return start + p_s, dp_ds * s_dot, d2p_ds2 * s_dot * s_dot + dp_ds * s_ddot
+        # Position, velocity and acceleration along n and d, in plain floats (a hot path).
+        p_n, p_d = r * sin_a, r * (1.0 - cos_a)
+        v_n, v_d = r * math.pi * cos_a * s_dot, r * math.pi * sin_a * s_dot
+        a_n = r * math.pi * (cos_a * s_ddot - math.pi * sin_a * s_dot * s_dot)
+        a_d = r * math.pi * (sin_a * s_ddot + math.pi * cos_a * s_dot * s_dot)
+        n, d = self._n, self._d
+        return (
+            start + np.array([p_n * n[i] + p_d * d[i] for i in range(3)]),
+            np.array([v_n * n[i] + v_d * d[i] for i in range(3)]),
+            np.array([a_n * n[i] + a_d * d[i] for i in range(3)]),
+        )
 
 
 class ForcePhase(enum.IntEnum):

@@ -95,8 +95,7 @@ def task_space_model(
         X = model.ee_position(q)
     Jt_pinv = inverse_3x3(J @ J.T) @ J
     J_pinv = Jt_pinv.T
-    M_tilde = Jt_pinv @ M @ J_pinv
-    M_tilde = 0.5 * (M_tilde + M_tilde.T)
+    M_tilde = Jt_pinv @ (M @ J_pinv)  # symmetric up to rounding (M is)
     zeta_tilde = Jt_pinv @ zeta - M_tilde @ j_dot_q_dot
     return TaskSpaceModel(
         X=X,

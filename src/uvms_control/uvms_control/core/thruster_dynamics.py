@@ -208,11 +208,12 @@ def calibrate(params: ThrusterModelParameters) -> ThrusterCalibration:
 def _with_max_step(
     params: ThrusterModelParameters, calibration: ThrusterCalibration
 ) -> ThrusterCalibration:
-    """Largest explicit-Euler step, half the stability bound at full current.
+    """Largest explicit-Euler step at full current: h ≤ σ / |λ|² for every eigenvalue.
 
-    Euler is stable for an eigenvalue λ = -σ + iω when h < 2σ / |λ|²; we take half of it and
-    at most 0.5 / |λ|. The time constants shrink as the propeller speeds up, so they are
-    evaluated at the bollard state whose steady current is the current limit.
+    Euler is stable for an eigenvalue λ = -σ + iω when h < 2σ / |λ|²; we take half of that.
+    For a real mode this is h |λ| ≤ 1, where Euler decays monotonically, without the
+    oscillation it shows beyond. The time constants shrink as the propeller speeds up, so
+    they are evaluated at the bollard state whose steady current is the current limit.
     """
     bank = ThrusterBank(params, 1, calibration)
     steps = []
@@ -236,7 +237,7 @@ def _with_max_step(
                 raise ControlParameterError(
                     'thruster constants', params, 'a stable bollard equilibrium at full current'
                 )
-            steps.append(min(0.5 / mag, sigma / (mag * mag)))
+            steps.append(sigma / (mag * mag))
     max_step = min(steps)
     return ThrusterCalibration(
         blade_area=calibration.blade_area,

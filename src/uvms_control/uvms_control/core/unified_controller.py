@@ -111,7 +111,7 @@ class ControllerResult:
 
 def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
     array = np.asarray(value, dtype=np.float64)
-    if array.shape != (size,) or not np.all(np.isfinite(array)):
+    if array.shape != (size,) or not np.isfinite(array).all():
         raise ControlInputError(
             f'{name} must be {size} finite values, got {np.ravel(array).tolist()}'
         )
@@ -206,11 +206,12 @@ class UnifiedForceController:
         w = _finite_vector('w', w, self._n_dof)
         f_sensor = _finite_vector('f_sensor', f_sensor, 3)
         try:
-            q_dot = self.model.velocity_transform(q) @ w
-            X, rot_ned_from_ee = self.model.frame_poses(q)['ee_link']
+            B = self.model.velocity_transform(q)
+            X = self.model.ee_position(q)
+            rot_ned_from_ee = self.model.ee_rotation(q)
         except ModelError as error:
             raise ControlInputError(str(error)) from error
-        return self._step(t, q, q_dot, rot_ned_from_ee @ f_sensor, X)
+        return self._step(t, q, B @ w, rot_ned_from_ee @ f_sensor, X, B)
 
     def step(
         self, t: float, q: npt.ArrayLike, q_dot: npt.ArrayLike, f_e_ned: npt.ArrayLike
@@ -229,7 +230,7 @@ class UnifiedForceController:
         q = _finite_vector('q', q, self._n_dof)
         q_dot = _finite_vector('q_dot', q_dot, self._n_dof)
         f_e = _finite_vector('f_e_ned', f_e_ned, 3)
-        return self._step(t, q, q_dot, f_e, None)
+        return self._step(t, q, q_dot, f_e, None, None)
 
     def _step(
         self,
@@ -238,12 +239,14 @@ class UnifiedForceController:
         q_dot: FloatArray,
         F_e: FloatArray,
         X: FloatArray | None,
+        B: FloatArray | None,
     ) -> ControllerResult:
         if not math.isfinite(t):
             raise ControlInputError(f'time t = {t} s must be finite')
         try:
             ts = task_space_model(self.model, q, q_dot, X)
-            B = self.model.velocity_transform(q)
+            if B is None:
+                B = self.model.velocity_transform(q)
         except ModelError as error:
             raise ControlInputError(str(error)) from error
         if self._t0 is None:
@@ -261,11 +264,9 @@ class UnifiedForceController:
 
         X_d, X_dot_d, X_ddot_d = self.reference.evaluate(t_rel, self._X0)
         X, X_dot = ts.X, ts.X_dot
-        f_normal = float(n @ F_e)
-        v_e = float(n @ X_dot)
-        setpoint = self.force_setpoint.update(
-            t_rel, f_normal, float(n @ X), float(n @ X_d), float(n @ X_dot_d)
-        )
+        normal = (np.vstack((F_e, X_dot, X, X_d, X_dot_d)) @ n).tolist()
+        f_normal, v_e = normal[0], normal[1]
+        setpoint = self.force_setpoint.update(t_rel, f_normal, normal[2], normal[3], normal[4])
         if setpoint.phase == ForcePhase.IDLE and self.hybrid.integral != 0.0:
             self.hybrid.integral = 0.0
         force_ratio = f_normal / p.force_setpoint
@@ -274,7 +275,7 @@ class UnifiedForceController:
         else:
             W = 1.0 if p.switch_mode == 'impedance' else 0.0
 
-        M_hat = p.mass_scale * ts.M_tilde
+        M_hat = ts.M_tilde if p.mass_scale == 1.0 else p.mass_scale * ts.M_tilde
         zeta_hat = ts.zeta_tilde
         E = X_d - X
         E_dot = X_dot_d - X_dot
@@ -300,7 +301,7 @@ class UnifiedForceController:
             a_c = W * U + (1.0 - W) * (inverse_3x3(M_hat) @ F_H_selected)
             tau += self._null_space_torque(ts, q, q_dot, a_c)
         tau_b = B.T @ tau
-        if not np.all(np.isfinite(tau_b)):
+        if not np.isfinite(tau_b).all():
             raise ControlInputError(
                 f'the control law gave a non-finite command at q = {q.tolist()} '
                 '(kinematic singularity?)'
@@ -341,7 +342,7 @@ class UnifiedForceController:
         error[3:6] = (error[3:6] + math.pi) % (2.0 * math.pi) - math.pi
         phi_ddot = p.null_space_stiffness * error - p.null_space_damping * q_dot
         N = self._eye - ts.J_pinv @ ts.J
-        M_hat_q = p.mass_scale * ts.M
+        M_hat_q = ts.M if p.mass_scale == 1.0 else p.mass_scale * ts.M
         row_space = M_hat_q @ (ts.J_pinv @ (a_c - ts.J_dot_q_dot)) + ts.zeta
         result: FloatArray = N @ row_space + M_hat_q @ (N @ phi_ddot)
         return result
