@@ -85,12 +85,14 @@ class Graph:
         nodes: Node name to node, in start order.
         mode: ``lockstep`` or ``realtime``.
         duration_s: Simulated duration (s); 0 runs until stopped.
+        output_path: MCAP file the recorder writes, if it runs.
     """
 
     context: Context
     nodes: dict[str, Node] = field(default_factory=dict)
     mode: str = 'lockstep'
     duration_s: float = 0.0
+    output_path: Path | None = None
 
     @property
     def simulator(self) -> Any:
@@ -153,7 +155,8 @@ def build_graph(
         check_scenario_overrides(scenario, specs, config, namespace)
     context = Context()
     rclpy.init(args=[], context=context)
-    graph = Graph(context=context, mode=mode, duration_s=duration_s)
+    graph = Graph(context=context, mode=mode, duration_s=duration_s,
+                  output_path=None if output_path is None else Path(output_path))
     try:
         for spec in specs:
             if spec is RECORDER:
@@ -198,8 +201,7 @@ def run_graph(
         executor = SingleThreadedExecutor(context=graph.context)
     for node in graph.nodes.values():
         executor.add_node(node)
-    output = graph.nodes.get(RECORDER.name)
-    output_path = Path(output.recorder.path) if output is not None else None
+    output_path = graph.output_path
     interrupted = False
     start = time.monotonic()
     try:

@@ -124,7 +124,7 @@ def config_dir() -> Path:
     here = Path(__file__).resolve().parent
     candidates = [here / '_config', here.parents[2] / 'config']
     if importlib.util.find_spec('ament_index_python') is not None:
-        from ament_index_python.packages import (  # only on ROS 2 installs
+        from ament_index_python.packages import (  # type: ignore[import-not-found]
             PackageNotFoundError,
             get_package_share_directory,
         )

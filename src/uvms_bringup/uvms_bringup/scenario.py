@@ -54,7 +54,7 @@ class _Loader(yaml.SafeLoader):
     """YAML loader that reads ``1e4`` as a float, as ROS 2 parameter files do (YAML 1.2)."""
 
 
-_Loader.add_implicit_resolver(
+_Loader.add_implicit_resolver(  # type: ignore[no-untyped-call]
     'tag:yaml.org,2002:float',
     re.compile(
         r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?

@@ -169,8 +169,8 @@ class SimulatorSettings:
             SimParameterError: A value is out of range, of the wrong type, or the rates do
                 not fit together; the message names the parameter, value and valid range.
         """
-        checked = {spec.name: validate_value(spec, values[spec.name])
-                   for spec in SIMULATOR_PARAMETERS}
+        checked: dict[str, Any] = {spec.name: validate_value(spec, values[spec.name])
+                                   for spec in SIMULATOR_PARAMETERS}
         physics_hz = float(checked['physics_rate_hz'])
         publish_hz = float(checked['publish_rate_hz'])
         ratio = physics_hz / publish_hz

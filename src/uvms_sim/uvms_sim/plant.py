@@ -320,7 +320,8 @@ class Plant:
             i = int(np.flatnonzero(~np.isfinite(vector))[0])
             msg = f'{where}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
             raise DivergenceError(msg)
-        x, y, z, u, v, w_, p, q_, r, dq1, dq2, dq3 = (*q[:3].tolist(), *w.tolist())
+        values: list[float] = [*q[:3].tolist(), *w.tolist()]
+        x, y, z, u, v, w_, p, q_, r, dq1, dq2, dq3 = values
         checks = (
             ('vehicle distance from the map_ned origin', math.sqrt(x * x + y * y + z * z),
              lim.max_distance_m, 'm'),
