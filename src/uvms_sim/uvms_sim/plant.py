@@ -102,7 +102,7 @@ def initial_coordinates(
             arm = model.joint_positions_for_ee_position(pose, ee_position, arm)
         except UnreachableError as exc:
             msg = (
-                f"parameter 'initial.ee_position' = {list(np.asarray(ee_position, float))}: "
+                f"parameter 'initial.ee_position' = {np.asarray(ee_position, float).tolist()}: "
                 f'out of reach from initial.vehicle_pose = {pose.tolist()} ({exc})'
             )
             raise SimParameterError(msg) from exc
