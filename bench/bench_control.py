@@ -34,11 +34,11 @@ from uvms_model import UvmsModel  # noqa: E402
 
 Q = np.array([0.01, -0.02, 0.03, 0.02, -0.01, 0.05, 0.02, 0.48, -1.5])
 W = np.array([0.02, 0.01, -0.01, 0.01, 0.02, -0.01, 0.05, -0.03, 0.04])
-#: Wrist force in ft_sensor_link for the three regimes of the fuzzy switch.
-FORCES = {
-    'free motion, no rule fires': np.zeros(3),
-    'transition, two rules fire': np.array([80.0, 1.0, -2.0]),
-    'constrained, one rule fires': np.array([150.0, 1.0, -2.0]),
+#: Normal contact force (N, along map_ned +x) in the three regimes of the fuzzy switch.
+NORMAL_FORCES = {
+    'free motion, no rule fires': 0.0,
+    'transition, FM and FL fire': 105.0,
+    'constrained, FL and VS fire': 150.0,
 }
 
 
@@ -62,7 +62,9 @@ def main() -> None:
 
     model = UvmsModel()
     steps = []
-    for regime, force in FORCES.items():
+    rot_ned_from_ee = model.ee_rotation(Q)
+    for regime, normal_force in NORMAL_FORCES.items():
+        force = rot_ned_from_ee.T @ np.array([normal_force, 0.0, 0.0])
         controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
         t = [0.0]
 

@@ -149,3 +149,16 @@ def test_no_rule_weight_outside_unit_interval_is_rejected() -> None:
     """The no-rule answer must be a weight in [0, 1]."""
     with pytest.raises(ControlParameterError, match=r'fuzzy\.no_rule_weight'):
         FuzzySwitchParameters(no_rule_weight=1.5)
+
+
+def test_overlapping_output_sets_defuzzify_alike_in_both_paths() -> None:
+    """With three mutually overlapping output sets the float and vectorised paths agree."""
+    params = FuzzySwitchParameters(
+        weight_small=Trapezoid(-0.6, -0.1, 0.1, 0.9, 'ws'),
+        weight_medium=Trapezoid.triangle(-0.2, 0.5, 1.2, 'wm'),
+        weight_large=Trapezoid(0.1, 0.9, 1.1, 1.6, 'wl'),
+    )
+    switch = FuzzySwitch(params)
+    h = np.random.default_rng(11).random((300, 3))
+    scalar = np.array([switch.defuzzify_scalar(row.tolist()) for row in h])
+    np.testing.assert_allclose(scalar, switch.defuzzify(h), atol=1e-12)

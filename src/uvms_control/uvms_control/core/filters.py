@@ -4,16 +4,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-import numpy.typing as npt
-
 from uvms_control.core.errors import ControlParameterError
-
-FloatArray = npt.NDArray[np.float64]
 
 
 class DirtyDerivative:
-    """Filtered derivative s / (τ s + 1), τ = 1 / (2π f_c), by backward Euler.
+    """Filtered derivative s / (τ s + 1), τ = 1 / (2π f_c), of a scalar signal, by backward Euler.
 
     The paper (sec. 6) warns that the force derivative of eq. 39 amplifies sensor noise. A
     derivative rolled off by a first-order low-pass at f_c differentiates the slow force
@@ -22,43 +17,45 @@ class DirtyDerivative:
 
         y_k = (τ y_{k-1} + x_k - x_{k-1}) / (τ + Δt)
 
-    The first sample initialises the filter with a zero derivative.
+    The first sample initialises the filter with a zero derivative. Plain floats: it runs in
+    the control step.
 
     Example:
-        >>> f = DirtyDerivative(cutoff_hz=20.0, size=1)
+        >>> f = DirtyDerivative(cutoff_hz=20.0)
         >>> for k in range(200):  # a ramp of 100 units/s sampled at 1 kHz
-        ...     y = f.update(np.array([0.1 * k]), 0.001)
-        >>> round(float(y[0]), 3)
+        ...     y = f.update(0.1 * k, 0.001)
+        >>> round(y, 3)
         100.0
     """
 
-    def __init__(self, cutoff_hz: float, size: int = 3) -> None:
+    def __init__(self, cutoff_hz: float) -> None:
         if not (math.isfinite(cutoff_hz) and cutoff_hz > 0.0):
             raise ControlParameterError(
                 'hybrid.force_derivative_cutoff_hz', cutoff_hz, '(0, inf) Hz'
             )
         self.tau = 1.0 / (2.0 * math.pi * cutoff_hz)
-        self._x_prev = np.zeros(size)
-        self._y = np.zeros(size)
+        self._x_prev = 0.0
+        self._y = 0.0
         self._initialised = False
 
     def reset(self) -> None:
         """Forget the past: the next sample restarts the filter."""
         self._initialised = False
-        self._y[:] = 0.0
+        self._y = 0.0
 
     @property
-    def value(self) -> FloatArray:
+    def value(self) -> float:
         """Last output (units of x per second)."""
         return self._y
 
-    def update(self, x: FloatArray, dt: float) -> FloatArray:
+    def update(self, x: float, dt: float) -> float:
         """Feed sample x taken dt seconds after the previous one; return the derivative."""
-        if not self._initialised or dt <= 0.0:
-            if not self._initialised:
-                self._x_prev[:] = x
-                self._initialised = True
+        if not self._initialised:
+            self._x_prev = x
+            self._initialised = True
+            return self._y
+        if dt <= 0.0:
             return self._y
         self._y = (self.tau * self._y + (x - self._x_prev)) / (self.tau + dt)
-        self._x_prev[:] = x
+        self._x_prev = x
         return self._y

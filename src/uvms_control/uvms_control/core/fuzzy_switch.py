@@ -192,6 +192,88 @@ def _clipped_trapezoid(line: tuple[float, float, float, float, float], x: float)
     return h * (d - x) / (d - q)
 
 
+def _envelope_integrals(
+    lines: list[tuple[float, float, float, float, float]],
+) -> tuple[float, float]:
+    """Area and first moment of the upper envelope of clipped trapezoids (a, p, q, d, h).
+
+    Between consecutive corners every clipped set is linear, so the envelope can only kink
+    at the corners and where two sets cross; it is integrated exactly between those points.
+    """
+    xs = sorted({x for line in lines for x in line[:4]})
+    points: list[tuple[float, float]] = []
+    prev: list[float] = []
+    for i, x in enumerate(xs):
+        values = [_clipped_trapezoid(line, x) for line in lines]
+        if i > 0:
+            x_prev = xs[i - 1]
+            for j in range(len(lines)):
+                for k in range(j + 1, len(lines)):
+                    d0 = prev[j] - prev[k]
+                    d1 = values[j] - values[k]
+                    if d0 * d1 < 0.0:
+                        xc = x_prev + (x - x_prev) * d0 / (d0 - d1)
+                        points.append((xc, max(_clipped_trapezoid(line, xc) for line in lines)))
+        points.append((x, max(values)))
+        prev = values
+    points.sort()
+    area = 0.0
+    moment = 0.0
+    for (x0, g0), (x1, g1) in itertools.pairwise(points):
+        dx = x1 - x0
+        area += dx * (g0 + g1) / 2.0
+        moment += dx * ((2.0 * x0 + x1) * g0 + (x0 + 2.0 * x1) * g1) / 6.0
+    return area, moment
+
+
+def _envelope_integrals_two(
+    first: tuple[float, float, float, float, float],
+    second: tuple[float, float, float, float, float],
+) -> tuple[float, float]:
+    """`_envelope_integrals` for two sets, inlined: the control step's usual blend case.
+
+    With two sets a crossing of their sides always lies on the envelope, and there is at
+    most one per interval between corners.
+    """
+    xs = sorted({*first[:4], *second[:4]})
+    a1, p1, q1, d1, h1 = first
+    a2, p2, q2, d2, h2 = second
+    area = moment = 0.0
+    x_prev = g_prev = u_prev = v_prev = 0.0
+    for i, x in enumerate(xs):
+        if x <= a1 or x >= d1:
+            u = 0.0
+        elif x < p1:
+            u = h1 * (x - a1) / (p1 - a1)
+        elif x <= q1:
+            u = h1
+        else:
+            u = h1 * (d1 - x) / (d1 - q1)
+        if x <= a2 or x >= d2:
+            v = 0.0
+        elif x < p2:
+            v = h2 * (x - a2) / (p2 - a2)
+        elif x <= q2:
+            v = h2
+        else:
+            v = h2 * (d2 - x) / (d2 - q2)
+        g = u if u > v else v
+        if i > 0:
+            e0, e1 = u_prev - v_prev, u - v
+            if e0 * e1 < 0.0:
+                s = e0 / (e0 - e1)
+                xc, gc = x_prev + (x - x_prev) * s, u_prev + (u - u_prev) * s
+                dx = xc - x_prev
+                area += dx * (g_prev + gc)
+                moment += dx * ((2.0 * x_prev + xc) * g_prev + (x_prev + 2.0 * xc) * gc)
+                x_prev, g_prev = xc, gc
+            dx = x - x_prev
+            area += dx * (g_prev + g)
+            moment += dx * ((2.0 * x_prev + x) * g_prev + (x_prev + 2.0 * x) * g)
+        x_prev, g_prev, u_prev, v_prev = x, g, u, v
+    return area / 2.0, moment / 6.0
+
+
 def _line_intersections(sets: Sequence[Trapezoid]) -> list[float]:
     """Abscissae where the sloped sides of two different output sets cross."""
     sides: list[tuple[float, float]] = []  # mu = slope * x + offset
@@ -341,32 +423,10 @@ class FuzzySwitch:
             moment = (p - a) * (a + 2.0 * p) + 3.0 * (q - p) * (p + q) + (d - q) * (2.0 * q + d)
             centroid = moment / (3.0 * area) if area > 0.0 else w_none
             return min(max(m * centroid + (1.0 - m) * w_none, 0.0), 1.0)
-        xs = sorted({x for line in lines for x in line[:4]})
-        points: list[tuple[float, float]] = []
-        prev: list[float] = []
-        for i, x in enumerate(xs):
-            values = [_clipped_trapezoid(line, x) for line in lines]
-            if i > 0:
-                # Between consecutive corners every clipped set is linear, so the envelope
-                # can only kink where two of them cross.
-                x_prev = xs[i - 1]
-                for j in range(len(lines)):
-                    for k in range(j + 1, len(lines)):
-                        d0 = prev[j] - prev[k]
-                        d1 = values[j] - values[k]
-                        if d0 * d1 < 0.0:
-                            xc = x_prev + (x - x_prev) * d0 / (d0 - d1)
-                            yc = max(_clipped_trapezoid(line, xc) for line in lines)
-                            points.append((xc, yc))
-            points.append((x, max(values)))
-            prev = values
-        points.sort()
-        area = 0.0
-        moment = 0.0
-        for (x0, g0), (x1, g1) in itertools.pairwise(points):
-            dx = x1 - x0
-            area += dx * (g0 + g1) / 2.0
-            moment += dx * ((2.0 * x0 + x1) * g0 + (x0 + 2.0 * x1) * g1) / 6.0
+        if len(lines) == 2:
+            area, moment = _envelope_integrals_two(lines[0], lines[1])
+        else:
+            area, moment = _envelope_integrals(lines)
         centroid = moment / area if area > 0.0 else w_none
         return min(max(m * centroid + (1.0 - m) * w_none, 0.0), 1.0)
 

@@ -76,8 +76,7 @@ class HybridLaw:
         self.k_fv = force_kd
         self.c_ff = feedforward_compliance
         self.integral_limit = integral_limit
-        self._derivative = DirtyDerivative(derivative_cutoff_hz, size=1)
-        self._sample = np.zeros(1)
+        self._derivative = DirtyDerivative(derivative_cutoff_hz)
         self.integral = 0.0
 
     def reset(self) -> None:
@@ -114,8 +113,7 @@ class HybridLaw:
             dt: time since the previous call (s); the derivative filter and the integral use it.
             integrate: whether the integral may run (see the anti-windup note).
         """
-        self._sample[0] = f_normal
-        f_normal_dot = float(self._derivative.update(self._sample, dt)[0])
+        f_normal_dot = self._derivative.update(f_normal, dt)
         error = f_d - f_normal
         if integrate and dt > 0.0:
             limit = self.integral_limit

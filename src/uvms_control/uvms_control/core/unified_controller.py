@@ -165,6 +165,7 @@ class UnifiedForceController:
             start_immediately=params.switch_mode == 'hybrid',
         )
         self.n = self.hybrid.n
+        self._n_list: list[float] = self.n.tolist()
         self._n_dof = model.n_dof
         self._eye = np.eye(self._n_dof)
         self.reset()
@@ -264,9 +265,21 @@ class UnifiedForceController:
 
         X_d, X_dot_d, X_ddot_d = self.reference.evaluate(t_rel, self._X0)
         X, X_dot = ts.X, ts.X_dot
-        normal = (np.vstack((F_e, X_dot, X, X_d, X_dot_d)) @ n).tolist()
-        f_normal, v_e = normal[0], normal[1]
-        setpoint = self.force_setpoint.update(t_rel, f_normal, normal[2], normal[3], normal[4])
+        n0, n1, n2 = self._n_list
+        f0, f1, f2 = F_e.tolist()
+        v0, v1, v2 = X_dot.tolist()
+        x0, x1, x2 = X.tolist()
+        d0, d1, d2 = X_d.tolist()
+        w0, w1, w2 = X_dot_d.tolist()
+        f_normal = n0 * f0 + n1 * f1 + n2 * f2
+        v_e = n0 * v0 + n1 * v1 + n2 * v2
+        setpoint = self.force_setpoint.update(
+            t_rel,
+            f_normal,
+            n0 * x0 + n1 * x1 + n2 * x2,
+            n0 * d0 + n1 * d1 + n2 * d2,
+            n0 * w0 + n1 * w1 + n2 * w2,
+        )
         if setpoint.phase == ForcePhase.IDLE and self.hybrid.integral != 0.0:
             self.hybrid.integral = 0.0
         force_ratio = f_normal / p.force_setpoint
