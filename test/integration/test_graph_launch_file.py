@@ -4,7 +4,17 @@ import ast
 from pathlib import Path
 
 import pytest
-from uvms_bringup.launch_helpers import CORE_NODES, RECORDER, graph_nodes, node_parameters
+import rclpy
+from rclpy.context import Context
+from rclpy.node import Node
+from uvms_bringup.launch_helpers import (
+    CORE_NODES,
+    RECORDER,
+    file_parameters,
+    graph_nodes,
+    node_parameters,
+    parameters_file_text,
+)
 
 LAUNCH_FILE = (Path(__file__).resolve().parents[2] / 'src' / 'uvms_bringup' / 'launch'
                / 'uvms.launch.py')
@@ -91,3 +101,30 @@ def test_realtime_mode_puts_controller_and_allocator_on_timers() -> None:
         assert node_parameters(controller, None, mode)['trigger_mode'] == trigger
         assert node_parameters(allocator, None, mode)['trigger_mode'] == trigger
         assert node_parameters(CORE_NODES[0], None, mode)['mode'] == mode
+
+
+def test_parameter_file_sections_for_one_node_are_merged() -> None:
+    """/** and /**/controller sections apply to /uvms/controller, flattened to dotted names."""
+    config = LAUNCH_FILE.parents[3] / 'config'
+    robot = file_parameters(config / 'robot.yaml', 'controller', 'uvms')
+    gains = file_parameters(config / 'controller.yaml', 'controller', 'uvms')
+    assert robot['vehicle.mass_kg'] == 530.0
+    assert gains['force.setpoint_n'] == 150.0
+    assert 'rate_hz' not in gains  # the allocator's section
+
+
+def test_run_parameters_file_loads_back_into_a_node(tmp_path: Path) -> None:
+    """The recorded parameter file (nested from dotted names) configures a node."""
+    text = parameters_file_text({'/uvms/probe': {'contact.stiffness_n_m': 1.0e5, 'mode': 'x'}})
+    path = tmp_path / 'run.yaml'
+    path.write_text(text, encoding='utf-8')
+    context = Context()
+    rclpy.init(args=[], context=context)
+    try:
+        node = Node('probe', namespace='uvms', context=context,
+                    cli_args=['--ros-args', '--params-file', str(path)])
+        assert node.declare_parameter('contact.stiffness_n_m', 0.0).value == 1.0e5
+        assert node.declare_parameter('mode', '').value == 'x'
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)

@@ -26,8 +26,11 @@ from launch_ros.actions import Node
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     MODES,
+    RECORDER,
+    file_parameters,
     graph_nodes,
     node_parameters,
+    parameters_file_text,
     resolve_scenario_path,
 )
 from uvms_bringup.scenario import load_scenario
@@ -49,10 +52,19 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     if scenario_arg:
         scenario = load_scenario(resolve_scenario_path(scenario_arg, Path(config)))
     actions = []
+    run_values = {}
     for spec in graph_nodes(record=bool(output_path)):
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None)
         if spec.uses_sim_time:
             overrides['use_sim_time'] = use_sim_time
+        if spec is RECORDER:
+            # What the other nodes were given, so that replay can rebuild the controller.
+            overrides['run.parameters'] = parameters_file_text(run_values)
+        else:
+            values = {}
+            for file in spec.parameter_files:
+                values.update(file_parameters(Path(config, file), spec.name, namespace))
+            run_values[f'/{namespace.strip("/")}/{spec.name}'] = {**values, **overrides}
         actions.append(
             Node(
                 package=spec.package,

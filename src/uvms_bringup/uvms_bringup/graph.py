@@ -20,7 +20,6 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
-import yaml
 from rclpy.context import Context
 from rclpy.executors import (
     ExternalShutdownException,
@@ -38,6 +37,7 @@ from uvms_bringup.launch_helpers import (
     config_dir,
     graph_nodes,
     node_parameters,
+    parameters_file_text,
 )
 from uvms_bringup.progress import ProgressBar
 from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
@@ -160,7 +160,7 @@ def build_graph(
     try:
         for spec in specs:
             if spec is RECORDER:
-                overrides[spec.name].update(_recorder_run_parameters(graph, scenario, mode))
+                overrides[spec.name].update(_recorder_run_parameters(graph))
             graph.nodes[spec.name] = _make_node(spec, overrides[spec.name], config, namespace,
                                                 context)
     except BaseException:
@@ -281,21 +281,16 @@ def _make_node(
     return node
 
 
-def _recorder_run_parameters(
-    graph: Graph, scenario: Scenario | None, mode: str
-) -> dict[str, ParameterValue]:
-    """The recorder's run metadata: scenario, seed, mode and every node's parameters."""
-    files: dict[str, Any] = {}
-    for node in graph.nodes.values():
-        values = {name: _plain(parameter.value)
-                  for name, parameter in sorted(node.get_parameters_by_prefix('').items())}
-        files[node.get_fully_qualified_name()] = {'ros__parameters': values}
-    return {
-        'run.scenario': scenario.name if scenario is not None else '',
-        'run.seed': scenario.seed if scenario is not None else 0,
-        'run.mode': mode,
-        'run.parameters': yaml.safe_dump(files, sort_keys=True),
+def _recorder_run_parameters(graph: Graph) -> dict[str, ParameterValue]:
+    """The recorder's ``run.parameters``: every node's parameters as a parameter file."""
+    values = {
+        node.get_fully_qualified_name(): {
+            name: _plain(parameter.value)
+            for name, parameter in node.get_parameters_by_prefix('').items()
+        }
+        for node in graph.nodes.values()
     }
+    return {'run.parameters': parameters_file_text(values)}
 
 
 def _plain(value: Any) -> Any:

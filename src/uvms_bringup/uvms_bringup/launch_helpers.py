@@ -8,8 +8,12 @@ the nodes in one process from it; ``launch/uvms.launch.py`` starts them as proce
 from __future__ import annotations
 
 import importlib.util
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import yaml
 
 from uvms_bringup.scenario import ParameterValue, Scenario
 
@@ -106,9 +110,58 @@ def node_parameters(
         values['duration_s'] = float(duration_s or 0.0)
     elif spec in (CONTROLLER, THRUSTER_ALLOCATOR):
         values[TRIGGER_PARAMETER] = TRIGGER[mode]
-    elif spec is RECORDER and output_path is not None:
-        values['output_path'] = output_path
+    elif spec is RECORDER:
+        if output_path is not None:
+            values['output_path'] = output_path
+        values['run.scenario'] = scenario.name if scenario is not None else ''
+        values['run.seed'] = scenario.seed if scenario is not None else 0
+        values['run.mode'] = mode
     return values
+
+
+def file_parameters(path: Path, node_name: str, namespace: str) -> dict[str, Any]:
+    """Flat parameters that a ROS 2 parameter file gives one node.
+
+    Reads the sections that apply to ``/namespace/node_name``: ``/**``, ``/**/node_name``,
+    ``node_name`` and ``/namespace/node_name``, later ones winning as in rcl.
+    """
+    data = yaml.safe_load(path.read_text(encoding='utf-8')) or {}
+    keys = ('/**', f'/**/{node_name}', node_name, f'/{namespace.strip("/")}/{node_name}')
+    values: dict[str, Any] = {}
+    for key in keys:
+        section = data.get(key, {}) or {}
+        values.update(_flatten(section.get('ros__parameters', {}) or {}))
+    return values
+
+
+def parameters_file_text(values_by_node: Mapping[str, Mapping[str, Any]]) -> str:
+    """ROS 2 parameter file text, node name -> nested ``ros__parameters``."""
+    document = {node: {'ros__parameters': _nest(values)}
+                for node, values in sorted(values_by_node.items())}
+    return yaml.safe_dump(document, sort_keys=True)
+
+
+def _flatten(section: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
+    """Nested parameter mappings to dotted names."""
+    flat: dict[str, Any] = {}
+    for key, value in section.items():
+        if isinstance(value, Mapping):
+            flat.update(_flatten(value, f'{prefix}{key}.'))
+        else:
+            flat[f'{prefix}{key}'] = value
+    return flat
+
+
+def _nest(values: Mapping[str, Any]) -> dict[str, Any]:
+    """Dotted names to nested mappings, as parameter files write them."""
+    nested: dict[str, Any] = {}
+    for name, value in values.items():
+        *groups, leaf = name.split('.')
+        target = nested
+        for group in groups:
+            target = target.setdefault(group, {})
+        target[leaf] = value
+    return nested
 
 
 def config_dir() -> Path:
