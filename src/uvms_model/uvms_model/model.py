@@ -108,29 +108,21 @@ def _mat_mat(a: Mat3, b: Mat3) -> Mat3:
     )  # fmt: skip
 
 
-def _skew_entries() -> list[tuple[int, int, int, float]]:
-    """(row, column, component, sign) of the entries of the cross-product matrix [a]x."""
-    return [(0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0),
-            (2, 0, 1, -1.0), (2, 1, 0, 1.0)]  # fmt: skip
+def _force_cross_map() -> FloatArray:
+    """Constant map T (36, 6) with (u outer f).ravel() @ T = u x* f (spatial force cross).
 
-
-def _cross_maps() -> tuple[FloatArray, FloatArray]:
-    """Constant maps (36, 6): (u outer m).ravel() @ T_m = u x m, (u outer f) @ T_f = u x* f.
-
-    Spatial motion cross product u x m = [w x m_v + v x m_w; w x m_w] and force cross product
-    u x* f = [w x f_v; w x f_w + v x f_v] for u = [v; w] (Featherstone, reordered).
+    u x* f = [w x f_v; w x f_w + v x f_v] for the twist u = [v; w] and the wrench
+    f = [f_v; f_w] (Featherstone's cross product, reordered [linear; angular]).
     """
-    motion = np.zeros((6, 6, 6))
     force = np.zeros((6, 6, 6))
-    for row, col, k, sign in _skew_entries():
-        # (a x b)_row = sum sign * a_k * b_col over the entries of [a]x.
-        motion[3 + k, col, row] += sign  # w x m_v
-        motion[k, 3 + col, row] += sign  # v x m_w
-        motion[3 + k, 3 + col, 3 + row] += sign  # w x m_w
+    # (a x b)_row = sign * a_k * b_col over the entries of the cross-product matrix [a]x.
+    entries = ((0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0),
+               (2, 0, 1, -1.0), (2, 1, 0, 1.0))  # fmt: skip
+    for row, col, k, sign in entries:
         force[3 + k, col, row] += sign  # w x f_v
         force[3 + k, 3 + col, 3 + row] += sign  # w x f_w
         force[k, col, 3 + row] += sign  # v x f_v
-    return motion.reshape(36, 6), force.reshape(36, 6)
+    return force.reshape(36, 6)
 
 
 def _transform_maps(strip_rows: FloatArray) -> FloatArray:
@@ -158,18 +150,26 @@ class _Configuration:
     """Quantities that depend on the joint angles only."""
 
     __slots__ = (
-        'axes', 'ee', 'jac0', 'jac_local', 'key', 'mass', 'origins', 'rotations',
-        'strips', 'subspace_rows', 'subspaces', 'x',
+        'axes',
+        'ee',
+        'jac0',
+        'jac_local',
+        'key',
+        'mass',
+        'origins',
+        'relatives',
+        'rotations',
+        'strips',
+        'subspaces',
     )  # fmt: skip
 
     key: tuple[float, float, float]
     rotations: list[Mat3]  # rot_body_from_link_i
+    relatives: list[Mat3]  # rot_{i-1, i}: link i axes in link i-1 (the body for i = 1)
     origins: list[Vec3]  # joint i position in frame 0
     axes: list[Vec3]  # joint i axis in frame 0
     ee: Vec3  # end effector in frame 0
     subspaces: FloatArray  # (3, 6) s_j in frame 0
-    subspace_rows: list[tuple[float, ...]]  # the same as Python tuples
-    x: FloatArray  # (3, 6, 6) motion transforms X_i: frame 0 -> link i
     jac0: FloatArray  # (24, 9) J0_i stacked: body twists in frame 0 at O
     jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
     strips: FloatArray | None  # (3 * 2N, 9) normal velocity at the drag strips from w
@@ -294,12 +294,11 @@ class UvmsModel:
         self._extended_rows = 6 + 2 * count
 
         # Constant maps.
-        self._motion_cross, self._force_cross = _cross_maps()
+        self._force_cross = _force_cross_map()
         self._jac_template = np.zeros((4, 6, N_DOF))
         self._jac_template[:, :, :6] = np.eye(6)
         self._jac_local_template = self._jac_template.reshape(4 * 6, N_DOF).copy()
         self._joint_mask = np.tril(np.ones((N_JOINTS, N_JOINTS)))[:, None, :]  # (3, 1, 3)
-        self._partial_sums = np.tril(np.ones((N_JOINTS, N_JOINTS)))
         self._half_lengths = [0.5 * length for length in lengths]
         self._cache: _Configuration | None = None
 
@@ -314,6 +313,7 @@ class UvmsModel:
         cfg = _Configuration()
         cfg.key = key
         rotations: list[Mat3] = []
+        relatives: list[Mat3] = []
         origins: list[Vec3] = []
         axes: list[Vec3] = []
         flat: list[float] = []
@@ -338,6 +338,7 @@ class UvmsModel:
                     k * x * y + s * z, c + k * y * y, k * y * z - s * x,
                     k * x * z - s * y, k * y * z + s * x, c + k * z * z,
                 )  # fmt: skip
+            relatives.append(relative)
             if parent is None:
                 rot, axis = relative, (x, y, z)
             else:
@@ -361,16 +362,14 @@ class UvmsModel:
         flat += subspaces
         origin = (ox, oy, oz)
         data = np.array(flat)
-        cfg.rotations, cfg.origins, cfg.axes, cfg.ee = (
-            rotations, origins, axes, origin,
+        cfg.rotations, cfg.relatives, cfg.origins, cfg.axes, cfg.ee = (
+            rotations, relatives, origins, axes, origin,
         )  # fmt: skip
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
-        cfg.subspace_rows = [tuple(subspaces[6 * j : 6 * j + 6]) for j in range(N_JOINTS)]
         rows = self._extended_rows
         transforms = (data[:54].reshape(N_JOINTS, 1, 18) @ self._transform_maps).reshape(
             N_JOINTS, rows, 6
         )
-        cfg.x = transforms[:, :6]
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
         cfg.jac0 = jac0.reshape(4 * 6, N_DOF)
@@ -403,11 +402,7 @@ class UvmsModel:
         ``rot`` is rot_ned_from_body of q when the caller has it already.
         """
         nu = cfg.jac_local.dot(w)  # body twists, own frames (24,)
-        # a_i = X_i sum_{j <= i} (V_{j-1} x s_j) q_dot_j with frame-0 twists V_0, V_1, V_2.
-        parents = cfg.jac0[:18].dot(w).reshape(N_JOINTS, 6, 1)
-        joint_twists = (cfg.subspaces * w[6:, None]).reshape(N_JOINTS, 1, 6)
-        bias_acc = (parents * joint_twists).reshape(N_JOINTS, 36).dot(self._motion_cross)
-        bias_acc = (cfg.x @ self._partial_sums.dot(bias_acc).reshape(N_JOINTS, 6, 1)).reshape(18)
+        bias_acc = self._bias_accelerations(cfg, nu.tolist(), w_list)
         # f_i = I_i a_i + nu_i x* I_i nu_i.
         momenta = self._inertia_blocks.dot(nu).reshape(4, 1, 6)
         forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36).dot(self._force_cross)
@@ -422,6 +417,56 @@ class UvmsModel:
             normal *= (self._strip_gain * np.hypot(normal[:, 0], normal[:, 1]))[:, None, :]
             result += normal.reshape(-1).dot(cfg.strips)
         return result
+
+    def _bias_accelerations(
+        self, cfg: _Configuration, nu: list[float], w: list[float]
+    ) -> list[float]:
+        """Link accelerations a_i = J_dot_i w (18,) in link frames (Featherstone's RNEA pass).
+
+        a_1 = c_1, a_i = X_{i,i-1} a_{i-1} + c_i with c_i = nu_i x [0; a_i] q_dot_i
+        = [v_i x a_i; w_i x a_i] q_dot_i (joint axis a_i fixed in link i) and X_{i,i-1} the
+        joint transform: rotation rot_{i-1,i}^T, offset (L_{i-1}, 0, 0).
+        """
+        out: list[float] = []
+        acc_v: Vec3 = (0.0, 0.0, 0.0)
+        acc_w: Vec3 = (0.0, 0.0, 0.0)
+        for j in range(N_JOINTS):
+            base = 6 * j + 6
+            vx, vy, vz, wx, wy, wz = nu[base : base + 6]
+            ax, ay, az = self._joint_axes[j]
+            rate = w[6 + j]
+            cv = (
+                (vy * az - vz * ay) * rate,
+                (vz * ax - vx * az) * rate,
+                (vx * ay - vy * ax) * rate,
+            )
+            cw = (
+                (wy * az - wz * ay) * rate,
+                (wz * ax - wx * az) * rate,
+                (wx * ay - wy * ax) * rate,
+            )
+            if j == 0:
+                acc_v, acc_w = cv, cw
+            else:
+                e0, e1, e2, e3, e4, e5, e6, e7, e8 = cfg.relatives[j]
+                offset = self._lengths[j - 1]
+                m0 = acc_v[0]
+                m1 = acc_v[1] + acc_w[2] * offset
+                m2 = acc_v[2] - acc_w[1] * offset
+                n0, n1, n2 = acc_w
+                acc_v = (
+                    e0 * m0 + e3 * m1 + e6 * m2 + cv[0],
+                    e1 * m0 + e4 * m1 + e7 * m2 + cv[1],
+                    e2 * m0 + e5 * m1 + e8 * m2 + cv[2],
+                )
+                acc_w = (
+                    e0 * n0 + e3 * n1 + e6 * n2 + cw[0],
+                    e1 * n0 + e4 * n1 + e7 * n2 + cw[1],
+                    e2 * n0 + e5 * n1 + e8 * n2 + cw[2],
+                )
+            out += acc_v
+            out += acc_w
+        return out
 
     def _body_wrenches(
         self, cfg: _Configuration, rot: Mat3, w: list[float], f_ee_ned: list[float] | None
@@ -838,8 +883,9 @@ class UvmsModel:
         omega = w[3:6]
         acc_v = [0.0, 0.0, 0.0]
         acc_w = [0.0, 0.0, 0.0]
+        subspaces = cfg.subspaces.tolist()
         for j in range(N_JOINTS):
-            sv, sw = cfg.subspace_rows[j][:3], cfg.subspace_rows[j][3:]
+            sv, sw = subspaces[j][:3], subspaces[j][3:]
             rate = w[6 + j]
             cv1, cv2, cw = _cross(omega, sv), _cross(v, sw), _cross(omega, sw)
             for k in range(3):
