@@ -10,16 +10,18 @@ its constant spatial inertia (rigid + added mass):
   w_dot = 0 (a_i = J_dot_i w), minus gravity, buoyancy and drag, mapped by J_i^T.
 J_i = X_i J0_i, where J0_i = [I_6, s_1 .. s_i, 0] holds the joint motion vectors
 s_j = [o_j x a_j; a_j] in base_link_frd at O ("frame 0") and X_i moves motion vectors from
-frame 0 to link i; a_i = X_i sum_{j<=i} (V_{j-1} x s_j) q_dot_j with frame-0 twists V.
+frame 0 to link i; a_i follows the link-frame recursion a_i = X_{i,i-1} a_{i-1} +
+nu_i x [0; a_i] q_dot_i (a_0 = 0 at w_dot = 0).
 
 Added mass enters as extra (non rigid-body) spatial inertia of each body, which gives exactly
 M = M_RB + sum J_i^T M_A,i J_i and bias sum J_i^T (M_A,i J_dot_i w + nu_i x* M_A,i nu_i)
 (Kirchhoff's equations of a body in ideal fluid at rest); it is never applied as a force from
 a past acceleration. Gravity and buoyancy act as forces, so they never see the added mass.
 
-Speed: at these sizes numpy's per-call overhead dominates, so 3-vector kinematics is plain
-Python arithmetic, 6 x 6 work is one block-diagonal product over the bodies, spatial cross
-products are an outer product times a constant map, the 9 x 9 solve is LAPACK's dposv
+Speed: at these sizes numpy's per-call overhead dominates, so 3-vector work (kinematics,
+the RNEA accelerations, gravity) is plain Python arithmetic, the 6 x 6 work of all bodies is
+one block-diagonal product, spatial force cross products are an outer product times a
+constant map, small 2D products use ndarray.dot, the 9 x 9 solve is LAPACK's dposv
 (Cholesky), and the configuration-dependent part is cached for the last joint angles.
 """
 
@@ -152,7 +154,6 @@ class _Configuration:
     __slots__ = (
         'axes',
         'ee',
-        'jac0',
         'jac_local',
         'key',
         'mass',
@@ -161,7 +162,7 @@ class _Configuration:
         'rotations',
         'strips',
         'subspaces',
-    )  # fmt: skip
+    )
 
     key: tuple[float, float, float]
     rotations: list[Mat3]  # rot_body_from_link_i
@@ -170,7 +171,6 @@ class _Configuration:
     axes: list[Vec3]  # joint i axis in frame 0
     ee: Vec3  # end effector in frame 0
     subspaces: FloatArray  # (3, 6) s_j in frame 0
-    jac0: FloatArray  # (24, 9) J0_i stacked: body twists in frame 0 at O
     jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
     strips: FloatArray | None  # (3 * 2N, 9) normal velocity at the drag strips from w
     mass: FloatArray | None  # M_b, computed on demand
@@ -372,7 +372,6 @@ class UvmsModel:
         )
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
-        cfg.jac0 = jac0.reshape(4 * 6, N_DOF)
         links = transforms @ jac0[1:]  # (3, 6 + 2N, 9): [J_i; strip rows]
         jac_local = self._jac_local_template.copy()
         jac_local[6:] = links[:, :6].reshape(3 * 6, N_DOF)
