@@ -213,3 +213,18 @@ def test_uvms_is_trimmed_level_at_the_recommended_start_pose() -> None:
     q = np.zeros(9)
     q[6:] = [0.0, np.arctan2(4.0, 3.0), -np.pi / 2]
     np.testing.assert_allclose(MODEL.gravity_body(q)[3:6], 0.0, atol=1.0)
+
+
+def test_results_do_not_depend_on_the_previous_call() -> None:
+    """The per-configuration cache never leaks: a fresh model gives the same numbers."""
+    q1, w1 = random_state(7)
+    q2, w2 = random_state(8)
+    warm = UvmsModel()
+    warm.forward_dynamics(q1, w1, np.zeros(9))
+    warm.mass_matrix_body(q2)
+    fresh = UvmsModel()
+    np.testing.assert_array_equal(warm.bias_body(q2, w2), fresh.bias_body(q2, w2))
+    np.testing.assert_array_equal(warm.mass_matrix_body(q1), fresh.mass_matrix_body(q1))
+    returned = warm.mass_matrix_body(q1)
+    returned[:] = 0.0
+    np.testing.assert_array_equal(warm.mass_matrix_body(q1), fresh.mass_matrix_body(q1))
