@@ -57,11 +57,11 @@ def _wait_for_output(process: subprocess.Popen[str], text: str, timeout_s: float
     deadline = time.monotonic() + timeout_s
     while text not in seen:
         remaining = deadline - time.monotonic()
-        assert remaining > 0, f'no {text!r} from the recorder; output so far:\n{seen}'
+        assert remaining > 0, f'no {text!r} from the process; output so far:\n{seen}'
         if selector.select(timeout=remaining):
             line = process.stdout.readline()
             if not line:
-                pytest.fail(f'recorder exited early ({process.wait()}):\n{seen}')
+                pytest.fail(f'process exited early ({process.wait()}):\n{seen}')
             seen += line
     return seen
 
@@ -90,6 +90,37 @@ def test_signal_closes_the_recorder_process_with_a_complete_file(
     recording = open_recording(path)
     assert not recording.truncated
     assert len(recording.topics) == len(DEFAULT_TOPICS)
+
+
+@pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGINT], ids=['SIGTERM', 'SIGINT'])
+def test_signal_stops_a_looping_replay_process_cleanly(
+    tmp_path: Path, signum: signal.Signals
+) -> None:
+    """`uvms replay --loop` stops on SIGTERM or SIGINT between messages and exits 0."""
+    path = tmp_path / 'slow.mcap'
+    data = serialize_message(WrenchStamped())
+    with McapRecorder(path) as recorder:
+        recorder.add_topic('/uvms/wrench', 'geometry_msgs/msg/WrenchStamped')
+        for k in range(20):
+            recorder.write('/uvms/wrench', data, k * 50_000_000)
+    env = dict(os.environ)
+    env['PYTHONPATH'] = os.pathsep.join([*map(str, SOURCES), env.get('PYTHONPATH', '')])
+    process = subprocess.Popen(
+        [sys.executable, '-m', 'uvms_bringup.replay', str(path), '--loop'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
+    )
+    try:
+        _wait_for_output(process, 'replaying', timeout_s=60.0)
+        time.sleep(0.5)
+        process.send_signal(signum)
+        output, _ = process.communicate(timeout=30.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0, output
+    assert '(stopped)' in output
+    assert 'Traceback' not in output
 
 
 def test_recorder_process_without_output_path_exits_1_naming_it() -> None:

@@ -14,12 +14,15 @@ from __future__ import annotations
 
 import argparse
 import functools
+import signal
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 import numpy as np
@@ -189,8 +192,12 @@ class ReplayNode(Node):
         *,
         now: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
+        should_stop: Callable[[], bool] = lambda: False,
     ) -> int:
-        """Replay the selected topics as options say; return the number of messages published."""
+        """Replay the selected topics as options say; return the number of messages published.
+
+        Stops early when the node's context shuts down or should_stop() turns True.
+        """
         start_ns = self.recording.start_time_ns + round(options.start_s * 1e9)
         topics = self.topics
         return play_messages(
@@ -200,8 +207,40 @@ class ReplayNode(Node):
             loop=options.loop,
             now=now,
             sleep=sleep,
-            keep_going=lambda: self.context.ok(),
+            keep_going=lambda: self.context.ok() and not should_stop(),
         )
+
+
+class ReplayStopped(Exception):  # noqa: N818 (a request, not an error)
+    """A stop was requested (SIGINT/SIGTERM) while re-running the controller."""
+
+
+class StopOnSignal:
+    """While active, SIGINT and SIGTERM request a stop instead of killing the replay.
+
+    The replay then ends between two messages, cleanly. Only the main thread can install
+    signal handlers (elsewhere this does nothing); an ignored SIGINT (a background job) stays
+    ignored. The previous handlers come back on exit.
+    """
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous: dict[int, Any] = {}
+
+    def __enter__(self) -> StopOnSignal:
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                if signal.getsignal(signum) is not signal.SIG_IGN:
+                    self._previous[signum] = signal.signal(signum, self._request)
+        return self
+
+    def _request(self, signum: int, frame: FrameType | None) -> None:
+        self.requested = True
+
+    def __exit__(self, *exc_info: object) -> None:
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
+        self._previous.clear()
 
 
 # Re-running the controller -----------------------------------------------------------------
@@ -394,6 +433,7 @@ def rerun_controller(
     params_files: Sequence[Path] = (),
     tolerance: float = 1e-6,
     timeout_s: float = 5.0,
+    should_stop: Callable[[], bool] = lambda: False,
 ) -> RerunReport:
     """Re-run the controller on the recorded inputs and compare with the recorded outputs.
 
@@ -403,10 +443,12 @@ def rerun_controller(
         params_files: ROS 2 parameter files applied after the recorded parameters.
         tolerance: Largest accepted deviation per field, in the field's unit.
         timeout_s: Longest wall time to wait for one output.
+        should_stop: Polled while feeding; True raises ReplayStopped.
 
     Raises:
         ReplayError: No controller outputs recorded, controller node unavailable, or the
             controller never answers (e.g. a real-time recording).
+        ReplayStopped: should_stop() turned True.
 
     """
     namespace = controller_namespace(recording)
@@ -445,7 +487,8 @@ def rerun_controller(
             nodes.append(feeder)
             for node in nodes:
                 executor.add_node(node)
-            _feed_and_compare(recording, feeder, executor, inputs, outputs, report, timeout_s)
+            _feed_and_compare(recording, feeder, executor, inputs, outputs, report, timeout_s,
+                              should_stop)
         finally:
             for node in nodes:
                 executor.remove_node(node)
@@ -463,6 +506,7 @@ def _feed_and_compare(
     outputs: Sequence[str],
     report: RerunReport,
     timeout_s: float,
+    should_stop: Callable[[], bool],
 ) -> None:
     """Publish inputs in log order; at each recorded output, wait for the re-run's and compare."""
     connected = _spin_until(
@@ -477,6 +521,8 @@ def _feed_and_compare(
         raise ReplayError(msg)
     type_names = {topic: recording.topics[topic].type_name for topic in outputs}
     for message in recording.messages([*inputs, *outputs]):
+        if should_stop():
+            raise ReplayStopped
         if message.topic in feeder.input_publishers:
             feeder.input_publishers[message.topic].publish(message.data)
             continue
@@ -542,8 +588,9 @@ def _split_ros_args(argv: Sequence[str]) -> tuple[list[str], list[str]]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run `uvms replay`; argv excludes the program name. Returns the exit status.
 
-    0: replayed (or re-run within tolerance); 1: recording unreadable, replay failed, or
-    re-run outside tolerance; 2: invalid arguments; 130: interrupted.
+    0: replayed (also when stopped by SIGINT/SIGTERM) or re-run within tolerance;
+    1: recording unreadable, replay failed, or re-run outside tolerance; 2: invalid
+    arguments; 130: a re-run interrupted.
     """
     own_args, ros_args = _split_ros_args(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
@@ -574,21 +621,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     if recording.problem is not None:
         print(f'uvms replay: warning: {recording.problem}', file=sys.stderr)
 
-    try:
-        if args.rerun_controller:
-            report = rerun_controller(recording, params_files=args.params_file,
-                                      tolerance=args.tolerance, timeout_s=args.timeout)
-            print(report.render())
-            return 0 if report.passed else 1
-        return _replay(recording, args, ros_args)
-    except (RecordingError, ReplayError) as error:
-        return fail(str(error))
-    except KeyboardInterrupt:
-        print('uvms replay: interrupted', file=sys.stderr)
-        return 130
+    with StopOnSignal() as stop:
+        try:
+            if args.rerun_controller:
+                report = rerun_controller(
+                    recording, params_files=args.params_file, tolerance=args.tolerance,
+                    timeout_s=args.timeout, should_stop=lambda: stop.requested,
+                )
+                print(report.render())
+                return 0 if report.passed else 1
+            return _replay(recording, args, ros_args, lambda: stop.requested)
+        except (RecordingError, ReplayError) as error:
+            return fail(str(error))
+        except (KeyboardInterrupt, ReplayStopped):
+            print('uvms replay: interrupted', file=sys.stderr)
+            return 130
 
 
-def _replay(recording: McapRecording, args: argparse.Namespace, ros_args: list[str]) -> int:
+def _replay(recording: McapRecording, args: argparse.Namespace, ros_args: list[str],
+            should_stop: Callable[[], bool]) -> int:
     options = ReplayOptions(rate=args.rate, topics=tuple(args.topics), loop=args.loop,
                             start_s=args.start, clock=args.clock)
     if options.clock and '/clock' not in recording.topics:
@@ -602,8 +653,9 @@ def _replay(recording: McapRecording, args: argparse.Namespace, ros_args: list[s
         node = ReplayNode(recording, topics, context=context)
         print(f'replaying {recording.path} ({len(topics)} topics, rate {options.rate:g}'
               f'{", loop" if options.loop else ""})', file=sys.stderr)
-        count = node.play(options)
-        print(f'published {count} messages', file=sys.stderr)
+        count = node.play(options, should_stop=should_stop)
+        stopped = ' (stopped)' if should_stop() else ''
+        print(f'published {count} messages{stopped}', file=sys.stderr)
         return 0
     except ExternalShutdownException:
         return 0
