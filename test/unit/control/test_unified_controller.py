@@ -255,3 +255,21 @@ def test_force_integral_does_not_wind_up_out_of_contact() -> None:
         ctrl.step(0.01 * k, Q_START, np.zeros(9), np.zeros(3))
     assert ctrl.force_setpoint.phase.name == 'RAMP_UP'
     assert ctrl.hybrid.integral == 0.0
+
+
+def test_posture_error_in_yaw_is_taken_the_short_way_round() -> None:
+    """A yaw held at π - 0.05 seen at -π + 0.05 is 0.1 rad away, not 2π - 0.1 (Euler wrap)."""
+    q0 = Q_START.copy()
+    q0[5] = math.pi - 0.05
+    q = q0.copy()
+    q[5] = -math.pi + 0.05
+    ctrl = controller()
+    ctrl.step(0.0, q0, np.zeros(9), np.zeros(3))
+    result = ctrl.step(0.002, q, np.zeros(9), np.zeros(3))
+    q_ddot = generalized_acceleration(q, np.zeros(9), result.tau_b, np.zeros(3))
+    J = MODEL.ee_jacobian(q)
+    N = np.eye(9) - np.linalg.pinv(J) @ J
+    error = np.zeros(9)
+    error[5] = -0.1
+    phi_ddot = ctrl.params.null_space_stiffness * error
+    np.testing.assert_allclose(N @ q_ddot, N @ phi_ddot, atol=tolerance(q_ddot) + 1e-6)

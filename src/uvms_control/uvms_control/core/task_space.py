@@ -36,7 +36,7 @@ def inverse_3x3(a: FloatArray) -> FloatArray:
     )
 
 
-@dataclass
+@dataclass(slots=True)
 class TaskSpaceModel:
     """Task-space quantities at one state (q, q_dot).
 

@@ -65,7 +65,7 @@ class Phase(enum.IntEnum):
     CONSTRAINED = 2
 
 
-@dataclass
+@dataclass(slots=True)
 class ControllerResult:
     """Output and internals of one controller step (task-space vectors in map_ned).
 
@@ -311,7 +311,10 @@ class UnifiedForceController:
         tau = ts.J.T @ F_c
         if p.null_space_enabled:
             # M̂ a_c = F_c - ζ̂ - F_e = W M̂ U + (1 - W) [(I - S) F_p + S F_f].
-            a_c = W * U + (1.0 - W) * (inverse_3x3(M_hat) @ F_H_selected)
+            if W == 1.0:
+                a_c = U
+            else:
+                a_c = W * U + (1.0 - W) * (inverse_3x3(M_hat) @ F_H_selected)
             tau += self._null_space_torque(ts, q, q_dot, a_c)
         tau_b = B.T @ tau
         if not np.isfinite(tau_b).all():
@@ -352,7 +355,9 @@ class UnifiedForceController:
         p = self.params
         error = self._q0 - q
         # Euler angles wrap: hold the attitude the short way round.
-        error[3:6] = (error[3:6] + math.pi) % (2.0 * math.pi) - math.pi
+        e3, e4, e5 = error[3:6].tolist()
+        if max(abs(e3), abs(e4), abs(e5)) > math.pi:
+            error[3:6] = (error[3:6] + math.pi) % (2.0 * math.pi) - math.pi
         phi_ddot = p.null_space_stiffness * error - p.null_space_damping * q_dot
         N = self._eye - ts.J_pinv @ ts.J
         M_hat_q = ts.M if p.mass_scale == 1.0 else p.mass_scale * ts.M
