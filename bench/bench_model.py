@@ -77,8 +77,8 @@ def pinocchio_aba(
 def main() -> None:
     """Time the model's calls and print a table."""
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument('--repeat', type=int, default=7, help='rounds per figure (best kept)')
-    parser.add_argument('--number', type=int, default=2000, help='calls per round')
+    parser.add_argument('--repeat', type=int, default=40, help='rounds per figure (best kept)')
+    parser.add_argument('--number', type=int, default=300, help='calls per round')
     args = parser.parse_args()
 
     params = UvmsParameters()
