@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from rclpy.impl.implementation_singleton import RCLError
 from ros2_compat._messages import MessageMeta
 
+from rclpy.impl.implementation_singleton import RCLError
 from ros2_compat import _cdr
 
 __all__ = ['deserialize_message', 'serialize_message']
