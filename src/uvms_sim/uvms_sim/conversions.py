@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -29,6 +30,7 @@ from uvms_model.contact import ContactState as ContactTruth
 
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim.errors import CommandError
+from uvms_sim.plant import Observation
 
 FloatArray = NDArray[np.float64]
 
@@ -81,23 +83,23 @@ def quaternion_from_rpy(
 
 def quaternion_from_rotation(rot: FloatArray) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w), w >= 0, of a rotation matrix (Shepperd's method)."""
-    m = np.asarray(rot, dtype=float)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = np.asarray(rot, dtype=float).tolist()
+    trace = m00 + m11 + m22
     if trace > 0.0:
         s = 2.0 * math.sqrt(1.0 + trace)
-        x, y, z, w = m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1], 0.25 * s * s
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        x, y, z, w = 0.25 * s * s, m[0, 1] + m[1, 0], m[0, 2] + m[2, 0], m[2, 1] - m[1, 2]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        x, y, z, w = m[0, 1] + m[1, 0], 0.25 * s * s, m[1, 2] + m[2, 1], m[0, 2] - m[2, 0]
+        x, y, z, w = m21 - m12, m02 - m20, m10 - m01, 0.25 * s * s
+    elif m00 > m11 and m00 > m22:
+        s = 2.0 * math.sqrt(1.0 + m00 - m11 - m22)
+        x, y, z, w = 0.25 * s * s, m01 + m10, m02 + m20, m21 - m12
+    elif m11 > m22:
+        s = 2.0 * math.sqrt(1.0 + m11 - m00 - m22)
+        x, y, z, w = m01 + m10, 0.25 * s * s, m12 + m21, m02 - m20
     else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        x, y, z, w = m[0, 2] + m[2, 0], m[1, 2] + m[2, 1], 0.25 * s * s, m[1, 0] - m[0, 1]
+        s = 2.0 * math.sqrt(1.0 + m22 - m00 - m11)
+        x, y, z, w = m02 + m20, m12 + m21, 0.25 * s * s, m10 - m01
     x, y, z, w = x / s, y / s, z / s, w / s
     sign = -1.0 if w < 0.0 else 1.0
-    return float(sign * x), float(sign * y), float(sign * z), float(sign * w)
+    return sign * x, sign * y, sign * z, sign * w
 
 
 def _quaternion(xyzw: tuple[float, float, float, float]) -> Quaternion:
@@ -106,6 +108,64 @@ def _quaternion(xyzw: tuple[float, float, float, float]) -> Quaternion:
 
 def _vector3(v: FloatArray | Sequence[float]) -> Vector3:
     return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def _set_xyz(target: Any, xyz: Sequence[float]) -> None:
+    """Set x, y, z of a Vector3 or Point from plain floats."""
+    target.x, target.y, target.z = xyz
+
+
+def _set_xyzw(target: Quaternion, xyzw: tuple[float, float, float, float]) -> None:
+    target.x, target.y, target.z, target.w = xyzw
+
+
+def _fill_joint_state(
+    msg: JointState, stamp: Time, positions: Any, velocities: Any, efforts: Any
+) -> JointState:
+    msg.header.stamp = stamp
+    msg.position = np.asarray(positions, dtype=float)
+    msg.velocity = np.asarray(velocities, dtype=float)
+    msg.effort = np.asarray(efforts, dtype=float)
+    return msg
+
+
+def _fill_odometry(msg: Odometry, stamp: Time, eta: list[float], nu: list[float]) -> Odometry:
+    msg.header.stamp = stamp
+    pose = msg.pose.pose
+    _set_xyz(pose.position, eta[:3])
+    _set_xyzw(pose.orientation, quaternion_from_rpy(eta[3], eta[4], eta[5]))
+    twist = msg.twist.twist
+    _set_xyz(twist.linear, nu[:3])
+    _set_xyz(twist.angular, nu[3:6])
+    return msg
+
+
+def _fill_wrench(
+    msg: WrenchStamped, stamp: Time, force: list[float], torque: list[float]
+) -> WrenchStamped:
+    msg.header.stamp = stamp
+    _set_xyz(msg.wrench.force, force)
+    _set_xyz(msg.wrench.torque, torque)
+    return msg
+
+
+def _fill_pose(
+    msg: PoseStamped, stamp: Time, p_ned: list[float], rot_ned_from_frame: FloatArray
+) -> PoseStamped:
+    msg.header.stamp = stamp
+    _set_xyz(msg.pose.position, p_ned)
+    _set_xyzw(msg.pose.orientation, quaternion_from_rotation(rot_ned_from_frame))
+    return msg
+
+
+def _fill_contact(msg: ContactState, stamp: Time, truth: ContactTruth) -> ContactState:
+    msg.header.stamp = stamp
+    msg.in_contact = bool(truth.in_contact)
+    _set_xyz(msg.force, np.asarray(truth.force_ned, dtype=float).tolist())
+    msg.penetration = float(truth.penetration_m)
+    msg.wall_position = float(truth.wall_position_m)
+    msg.wall_velocity = float(truth.wall_velocity_m_s)
+    return msg
 
 
 def clock_message(t_ns: int) -> Clock:
@@ -121,13 +181,8 @@ def joint_state_message(
     efforts: FloatArray,
 ) -> JointState:
     """sensor_msgs/JointState of the arm: rad, rad/s and the applied motor torques N*m."""
-    return JointState(
-        header=Header(stamp=time_from_ns(t_ns), frame_id=''),
-        name=list(names),
-        position=np.asarray(positions, dtype=float),
-        velocity=np.asarray(velocities, dtype=float),
-        effort=np.asarray(efforts, dtype=float),
-    )
+    msg = JointState(header=Header(frame_id=''), name=list(names))
+    return _fill_joint_state(msg, time_from_ns(t_ns), positions, velocities, efforts)
 
 
 def odometry_message(t_ns: int, eta: FloatArray, nu: FloatArray) -> Odometry:
@@ -138,43 +193,64 @@ def odometry_message(t_ns: int, eta: FloatArray, nu: FloatArray) -> Odometry:
         eta: Position in map_ned (m) and roll, pitch, yaw (rad), shape (6,).
         nu: Body velocity [u, v, w] (m/s) and rates [p, q, r] (rad/s) in base_link_frd.
     """
-    msg = Odometry(header=Header(stamp=time_from_ns(t_ns), frame_id=MAP_NED),
-                   child_frame_id=BASE_LINK_FRD)
-    pose = msg.pose.pose
-    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in eta[:3])
-    pose.orientation = _quaternion(
-        quaternion_from_rpy(float(eta[3]), float(eta[4]), float(eta[5])))
-    msg.twist.twist.linear = _vector3(nu[:3])
-    msg.twist.twist.angular = _vector3(nu[3:6])
-    return msg
+    msg = Odometry(header=Header(frame_id=MAP_NED), child_frame_id=BASE_LINK_FRD)
+    return _fill_odometry(msg, time_from_ns(t_ns), _floats(eta), _floats(nu))
 
 
 def wrench_message(t_ns: int, force: FloatArray, torque: FloatArray) -> WrenchStamped:
     """geometry_msgs/WrenchStamped of the wrist sensor in ft_sensor_link (N, N*m)."""
-    msg = WrenchStamped(header=Header(stamp=time_from_ns(t_ns), frame_id=FT_SENSOR_LINK))
-    msg.wrench.force = _vector3(force)
-    msg.wrench.torque = _vector3(torque)
-    return msg
+    msg = WrenchStamped(header=Header(frame_id=FT_SENSOR_LINK))
+    return _fill_wrench(msg, time_from_ns(t_ns), _floats(force), _floats(torque))
 
 
 def pose_message(t_ns: int, p_ned: FloatArray, rot_ned_from_frame: FloatArray) -> PoseStamped:
     """geometry_msgs/PoseStamped of a frame in map_ned."""
-    msg = PoseStamped(header=Header(stamp=time_from_ns(t_ns), frame_id=MAP_NED))
-    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = (float(v) for v in p_ned)
-    msg.pose.orientation = _quaternion(quaternion_from_rotation(rot_ned_from_frame))
-    return msg
+    msg = PoseStamped(header=Header(frame_id=MAP_NED))
+    return _fill_pose(msg, time_from_ns(t_ns), _floats(p_ned), rot_ned_from_frame)
 
 
 def contact_message(t_ns: int, truth: ContactTruth) -> ContactState:
     """uvms_msgs/ContactState from the plant's contact ground truth (map_ned)."""
-    return ContactState(
-        header=Header(stamp=time_from_ns(t_ns), frame_id=MAP_NED),
-        in_contact=bool(truth.in_contact),
-        force=_vector3(truth.force_ned),
-        penetration=float(truth.penetration_m),
-        wall_position=float(truth.wall_position_m),
-        wall_velocity=float(truth.wall_velocity_m_s),
-    )
+    return _fill_contact(ContactState(header=Header(frame_id=MAP_NED)), time_from_ns(t_ns), truth)
+
+
+def _floats(values: FloatArray | Sequence[float]) -> list[float]:
+    """Plain Python floats of a vector."""
+    return np.asarray(values, dtype=float).tolist()  # type: ignore[no-any-return]
+
+
+class StateMessages:
+    """The simulator's state messages, built once and refilled for every published state.
+
+    rclpy serializes a message when it is published (the bundled runtime copies it), so
+    refilling the same objects is safe; it spares building some 30 sub-messages per state.
+    The fields hold the messages of the last ``update``, all stamped with its time.
+
+    Example:
+        >>> messages = StateMessages(('joint_1', 'joint_2', 'joint_3'))  # doctest: +SKIP
+        >>> messages.update(plant.observe())  # doctest: +SKIP
+        >>> odometry_publisher.publish(messages.odometry)  # doctest: +SKIP
+    """
+
+    def __init__(self, joint_names: Sequence[str]) -> None:
+        self.clock = Clock()
+        self.joint_state = JointState(header=Header(frame_id=''), name=list(joint_names))
+        self.odometry = Odometry(header=Header(frame_id=MAP_NED), child_frame_id=BASE_LINK_FRD)
+        self.wrench = WrenchStamped(header=Header(frame_id=FT_SENSOR_LINK))
+        self.ee_pose = PoseStamped(header=Header(frame_id=MAP_NED))
+        self.contact = ContactState(header=Header(frame_id=MAP_NED))
+
+    def update(self, seen: Observation) -> None:
+        """Refill every message from one observation of the plant, stamped seen.t_ns."""
+        stamp = time_from_ns(seen.t_ns)
+        q, w = seen.q.tolist(), seen.w.tolist()
+        self.clock.clock = stamp
+        _fill_joint_state(self.joint_state, stamp, seen.q[6:], seen.w[6:], seen.joint_torques)
+        _fill_odometry(self.odometry, stamp, q[:6], w[:6])
+        _fill_wrench(self.wrench, stamp, seen.sensor_force.tolist(), seen.sensor_torque.tolist())
+        p_ee, rot_ee = seen.poses['ee_link']
+        _fill_pose(self.ee_pose, stamp, p_ee.tolist(), rot_ee)
+        _fill_contact(self.contact, stamp, seen.contact)
 
 
 def _transform(

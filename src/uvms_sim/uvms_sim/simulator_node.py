@@ -73,6 +73,7 @@ class SimulatorNode(Node):
             self._static_tf_pub.publish(
                 conversions.static_tf_message(0, self._plant.frame_poses()))
         self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
+        self._messages = conversions.StateMessages(self._plant.joint_names)
 
         self._command: tuple[int, Any, Any] | None = None
         self._stale = False
@@ -225,17 +226,16 @@ class SimulatorNode(Node):
     def _publish_state(self) -> None:
         """Publish /clock, the sensor topics and, when due, /tf, all stamped t_k."""
         seen = self._plant.observe()
-        t_ns, q, w = seen.t_ns, seen.q, seen.w
-        self._clock_pub.publish(conversions.clock_message(t_ns))
-        self._joint_pub.publish(conversions.joint_state_message(
-            t_ns, self._plant.joint_names, q[6:], w[6:], seen.joint_torques))
-        self._odom_pub.publish(conversions.odometry_message(t_ns, q[:6], w[:6]))
-        self._wrench_pub.publish(
-            conversions.wrench_message(t_ns, seen.sensor_force, seen.sensor_torque))
-        self._ee_pub.publish(conversions.pose_message(t_ns, *seen.poses['ee_link']))
-        self._contact_pub.publish(conversions.contact_message(t_ns, seen.contact))
+        out = self._messages
+        out.update(seen)
+        self._clock_pub.publish(out.clock)
+        self._joint_pub.publish(out.joint_state)
+        self._odom_pub.publish(out.odometry)
+        self._wrench_pub.publish(out.wrench)
+        self._ee_pub.publish(out.ee_pose)
+        self._contact_pub.publish(out.contact)
         if self._tf_pub is not None and self._published % self._settings.publishes_per_tf == 0:
-            self._tf_pub.publish(conversions.tf_message(t_ns, seen.poses))
+            self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses))
         self._published += 1
         if self._settings.mode == 'lockstep':
             self._awaiting_since = self.get_clock().now()
