@@ -293,13 +293,15 @@ class ROSClock(Clock):
         """
         if not isinstance(time, Time):
             raise TypeError('Time must be specified as rclpy.time.Time')
-        active = self._ros_time_is_active
+        # Without jump handles (no timer on this clock) there is nobody to tell: skip the
+        # TimeJump objects; this runs once per /clock message per node.
+        notify = self._ros_time_is_active and bool(self._jump_handles)
         delta_ns = time.nanoseconds - self._override_ns
-        if active:
+        if notify:
             self._call_jump_callbacks(ClockChange.ROS_TIME_NO_CHANGE, delta_ns, before=True)
         with self._lock:
             self._override_ns = time.nanoseconds
-        if active:
+        if notify:
             self._call_jump_callbacks(ClockChange.ROS_TIME_NO_CHANGE, delta_ns, before=False)
 
     def _sleeps_on_wall_time(self) -> bool:

@@ -113,7 +113,11 @@ class Executor:
         self._ready: deque[tuple[Any, Any, int]] = deque()
         self._last_args: tuple[Any, ...] | None = None
         self._work_count = 0
-        self._work_cond = threading.Condition(threading.RLock())
+        # A plain lock (C-level context manager) guards the count; the condition on it is
+        # notified only while shutdown() waits on it.
+        self._work_lock = threading.Lock()
+        self._work_cond = threading.Condition(self._work_lock)
+        self._shutdown_waiting = False
         self._context._register_executor(self)
 
     @property
@@ -149,11 +153,15 @@ class Executor:
         # wait for itself.
         own_work = 1 if getattr(_running, 'executor', None) is self else 0
         with self._work_cond:
-            while self._work_count > own_work:
-                remaining = None if deadline is None else deadline - _time.monotonic()
-                if remaining is not None and remaining <= 0:
-                    return False
-                self._work_cond.wait(remaining)
+            self._shutdown_waiting = True
+            try:
+                while self._work_count > own_work:
+                    remaining = None if deadline is None else deadline - _time.monotonic()
+                    if remaining is not None and remaining <= 0:
+                        return False
+                    self._work_cond.wait(remaining)
+            finally:
+                self._shutdown_waiting = False
         with self._nodes_lock:
             for node in self._nodes:
                 if node._executor is self:
@@ -376,13 +384,13 @@ class Executor:
     # -- running work ----------------------------------------------------------------------
 
     def _begin_work(self) -> None:
-        with self._work_cond:
+        with self._work_lock:
             self._work_count += 1
 
     def _end_work(self) -> None:
-        with self._work_cond:
+        with self._work_lock:
             self._work_count -= 1
-            if not self._work_count:
+            if not self._work_count and self._shutdown_waiting:
                 self._work_cond.notify_all()
 
     def _take(self, entity: Any, kind: int) -> tuple[bool, Any]:

@@ -9,6 +9,9 @@ from rclpy.clock_type import ClockType
 from rclpy.constants import S_TO_NS
 from rclpy.duration import Duration
 
+#: builtin_interfaces.msg.Time, imported on first use (message packages import rclpy).
+_time_msg_class: Any = None
+
 
 class Time:
     """A point in time: a non-negative nanosecond count since the epoch of a clock type.
@@ -170,8 +173,11 @@ class Time:
         Raises:
             TypeError: If ``msg`` is not a ``builtin_interfaces.msg.Time``.
         """
-        from builtin_interfaces.msg import Time as TimeMsg
+        global _time_msg_class
+        if _time_msg_class is None:
+            from builtin_interfaces.msg import Time as TimeMsg
 
-        if not isinstance(msg, TimeMsg):
+            _time_msg_class = TimeMsg
+        if not isinstance(msg, _time_msg_class):
             raise TypeError('Must pass a builtin_interfaces.msg.Time object')
         return cls(seconds=msg.sec, nanoseconds=msg.nanosec, clock_type=clock_type)
