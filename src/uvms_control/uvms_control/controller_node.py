@@ -77,6 +77,9 @@ class ControllerNode(Node):
         self._first_stamp_ns: int | None = None
         self._zeroed_stamp_ns = -1
         self._stale = False
+        # Refilled for each publication (rclpy serializes at publish).
+        self._command_msg: GeneralizedForce | None = None
+        self._state_msg: ControllerState | None = None
 
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._command_pub = self.create_publisher(
@@ -168,7 +171,8 @@ class ControllerNode(Node):
         self._last_tau_b = result.tau_b
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
-        self._state_pub.publish(conversions.controller_state_message(t_ns, result))
+        self._state_msg = conversions.controller_state_message(t_ns, result, self._state_msg)
+        self._state_pub.publish(self._state_msg)
 
     def _zero(self, t_ns: int, reason: str) -> None:
         if not self._stale:
@@ -178,9 +182,10 @@ class ControllerNode(Node):
         self._publish_command(t_ns, self._last_tau_b)
 
     def _publish_command(self, t_ns: int, tau_b: np.ndarray) -> None:
-        self._command_pub.publish(
-            conversions.generalized_force_message(t_ns, tau_b, self._joint_names)
+        self._command_msg = conversions.generalized_force_message(
+            t_ns, tau_b, self._joint_names, self._command_msg
         )
+        self._command_pub.publish(self._command_msg)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -47,7 +47,8 @@ def time_from_ns(t_ns: int) -> Time:
 
 
 def _finite(name: str, values: FloatArray) -> FloatArray:
-    if not np.all(np.isfinite(values)):
+    # A finite sum of a few floats is the cheap test; a huge sum may overflow, so look again.
+    if not math.isfinite(sum(values.tolist())) and not np.all(np.isfinite(values)):
         raise ControlInputError(f'{name} holds a non-finite value: {values.tolist()}')
     return values
 
@@ -90,7 +91,13 @@ def joint_state_arrays(
     positions = np.asarray(msg.position, dtype=np.float64)
     velocities = np.asarray(msg.velocity, dtype=np.float64)
     names = list(msg.name)
-    if names:
+    if names and names == list(joint_names):
+        if len(names) != positions.size or len(names) != velocities.size:
+            raise ControlInputError(
+                f'joint_states names {names} with {positions.size} positions and '
+                f'{velocities.size} velocities do not cover the arm joints {list(joint_names)}'
+            )
+    elif names:
         missing = [name for name in joint_names if name not in names]
         if missing or len(names) != positions.size or len(names) != velocities.size:
             raise ControlInputError(
@@ -119,25 +126,12 @@ def odometry_arrays(msg: Odometry) -> tuple[FloatArray, FloatArray]:
     _check_frame('odometry header.frame_id', msg.header.frame_id, ('', MAP_NED))
     _check_frame('odometry child_frame_id', msg.child_frame_id, ('', BASE_LINK_FRD))
     pose, twist = msg.pose.pose, msg.twist.twist
-    position = _finite(
-        'odometry pose.position',
-        np.array([pose.position.x, pose.position.y, pose.position.z], dtype=np.float64),
+    p, o, v, w = pose.position, pose.orientation, twist.linear, twist.angular
+    position = _finite('odometry pose.position', np.array((p.x, p.y, p.z), dtype=np.float64))
+    eta = np.array(
+        (*position.tolist(), *rpy_from_quaternion(float(o.x), float(o.y), float(o.z), float(o.w)))
     )
-    o = pose.orientation
-    eta = np.empty(6)
-    eta[:3] = position
-    eta[3:] = rpy_from_quaternion(float(o.x), float(o.y), float(o.z), float(o.w))
-    nu = np.array(
-        [
-            twist.linear.x,
-            twist.linear.y,
-            twist.linear.z,
-            twist.angular.x,
-            twist.angular.y,
-            twist.angular.z,
-        ],
-        dtype=np.float64,
-    )
+    nu = np.array((v.x, v.y, v.z, w.x, w.y, w.z), dtype=np.float64)
     return eta, _finite('odometry twist', nu)
 
 
@@ -152,27 +146,37 @@ def wrench_force(msg: WrenchStamped) -> FloatArray:
     return _finite('wrench.force', np.array([f.x, f.y, f.z], dtype=np.float64))
 
 
-def _vector3(v: FloatArray) -> Vector3:
-    return Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
-
-
-def _point(v: FloatArray) -> Point:
-    return Point(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+def _set_xyz(target: Vector3 | Point, v: npt.ArrayLike) -> None:
+    """Set x, y, z of a Vector3 or Point from a 3-vector, as plain floats."""
+    target.x, target.y, target.z = np.asarray(v, dtype=np.float64).tolist()
 
 
 def _floats(values: npt.ArrayLike) -> array.array[float]:
     return array.array('d', np.asarray(values, dtype=np.float64).tolist())
 
 
+# The message builders take ``out``, a message an earlier call returned, to refill instead of
+# building a new one: rclpy serializes at publish (ros2_compat copies), so a node may keep
+# one message per publisher. Frames and joint names are set when the message is built.
+
+
 def generalized_force_message(
-    t_ns: int, tau_b: FloatArray, joint_names: Sequence[str]
+    t_ns: int,
+    tau_b: FloatArray,
+    joint_names: Sequence[str],
+    out: GeneralizedForce | None = None,
 ) -> GeneralizedForce:
     """uvms_msgs/GeneralizedForce from tau_b (9,): body wrench in base_link_frd, joint torques."""
-    msg = GeneralizedForce(header=Header(stamp=time_from_ns(t_ns), frame_id=BASE_LINK_FRD))
-    msg.vehicle_wrench.force = _vector3(tau_b[0:3])
-    msg.vehicle_wrench.torque = _vector3(tau_b[3:6])
-    msg.joint_names = list(joint_names)
-    msg.joint_torques = _floats(tau_b[6:])
+    msg = out
+    if msg is None:
+        msg = GeneralizedForce(header=Header(frame_id=BASE_LINK_FRD))
+        msg.joint_names = list(joint_names)
+    msg.header.stamp = time_from_ns(t_ns)
+    values = np.asarray(tau_b, dtype=np.float64).tolist()
+    wrench = msg.vehicle_wrench
+    wrench.force.x, wrench.force.y, wrench.force.z = values[0:3]
+    wrench.torque.x, wrench.torque.y, wrench.torque.z = values[3:6]
+    msg.joint_torques = array.array('d', values[6:])
     return msg
 
 
@@ -212,46 +216,59 @@ def generalized_force_arrays(
     return stamp_ns(msg.header.stamp), _finite('generalized force', tau_b)
 
 
-def controller_state_message(t_ns: int, result: ControllerResult) -> ControllerState:
+def controller_state_message(
+    t_ns: int, result: ControllerResult, out: ControllerState | None = None
+) -> ControllerState:
     """uvms_msgs/ControllerState of one controller step (task-space vectors in map_ned)."""
-    msg = ControllerState(header=Header(stamp=time_from_ns(t_ns), frame_id=MAP_NED))
+    msg = out if out is not None else ControllerState(header=Header(frame_id=MAP_NED))
+    msg.header.stamp = time_from_ns(t_ns)
     msg.weight = float(result.W)
     msg.phase = int(result.phase)
-    msg.contact_force = _vector3(result.F_e)
-    msg.desired_force = _vector3(result.F_d)
-    msg.position = _point(result.X)
-    msg.desired_position = _point(result.X_d)
-    msg.velocity = _vector3(result.X_dot)
-    msg.desired_velocity = _vector3(result.X_dot_d)
+    _set_xyz(msg.contact_force, result.F_e)
+    _set_xyz(msg.desired_force, result.F_d)
+    _set_xyz(msg.position, result.X)
+    _set_xyz(msg.desired_position, result.X_d)
+    _set_xyz(msg.velocity, result.X_dot)
+    _set_xyz(msg.desired_velocity, result.X_dot_d)
     msg.normal_velocity = float(result.v_e)
-    msg.impedance_force = _vector3(result.F_IP)
-    msg.hybrid_force = _vector3(result.F_H)
-    msg.command_force = _vector3(result.F_c)
+    _set_xyz(msg.impedance_force, result.F_IP)
+    _set_xyz(msg.hybrid_force, result.F_H)
+    _set_xyz(msg.command_force, result.F_c)
     return msg
 
 
 def actuator_command_message(
-    t_ns: int, thrust: FloatArray, joint_names: Sequence[str], joint_torques: FloatArray
+    t_ns: int,
+    thrust: FloatArray,
+    joint_names: Sequence[str],
+    joint_torques: FloatArray,
+    out: ActuatorCommand | None = None,
 ) -> ActuatorCommand:
     """uvms_msgs/ActuatorCommand: actual thrusts (N) and motor torques (N m)."""
-    return ActuatorCommand(
-        header=Header(stamp=time_from_ns(t_ns), frame_id=BASE_LINK_FRD),
-        thrust=_floats(thrust),
-        joint_names=list(joint_names),
-        joint_torques=_floats(joint_torques),
-    )
+    msg = out
+    if msg is None:
+        msg = ActuatorCommand(header=Header(frame_id=BASE_LINK_FRD))
+        msg.joint_names = list(joint_names)
+    msg.header.stamp = time_from_ns(t_ns)
+    msg.thrust = _floats(thrust)
+    msg.joint_torques = _floats(joint_torques)
+    return msg
 
 
-def thruster_state_message(t_ns: int, output: AllocatorOutput) -> ThrusterState:
+def thruster_state_message(
+    t_ns: int, output: AllocatorOutput, out: ThrusterState | None = None
+) -> ThrusterState:
     """uvms_msgs/ThrusterState of one allocator step."""
     allocation = output.allocation
-    msg = ThrusterState(header=Header(stamp=time_from_ns(t_ns), frame_id=BASE_LINK_FRD))
+    msg = out if out is not None else ThrusterState(header=Header(frame_id=BASE_LINK_FRD))
+    msg.header.stamp = time_from_ns(t_ns)
     msg.desired_thrust = _floats(allocation.thrust)
     msg.actual_thrust = _floats(output.thrust)
     msg.propeller_speed = _floats(output.propeller_speed)
     msg.reference_speed = _floats(output.reference_speed)
     msg.motor_current = _floats(output.motor_current)
-    msg.achieved_wrench.force = _vector3(allocation.achieved_wrench[0:3])
-    msg.achieved_wrench.torque = _vector3(allocation.achieved_wrench[3:6])
+    achieved = np.asarray(allocation.achieved_wrench, dtype=np.float64)
+    _set_xyz(msg.achieved_wrench.force, achieved[0:3])
+    _set_xyz(msg.achieved_wrench.torque, achieved[3:6])
     msg.saturation_scale = float(allocation.saturation_scale)
     return msg

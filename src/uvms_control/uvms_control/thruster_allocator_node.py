@@ -74,6 +74,9 @@ class ThrusterAllocatorNode(Node):
         self._last_stamp_ns: int | None = None
         self._arrival_ns: int | None = None
         self._stale = False
+        # Refilled for each publication (rclpy serializes at publish).
+        self._actuator_msg: ActuatorCommand | None = None
+        self._state_msg: ThrusterState | None = None
 
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._actuator_pub = self.create_publisher(ActuatorCommand, 'command/actuators', qos)
@@ -136,12 +139,12 @@ class ThrusterAllocatorNode(Node):
 
     def _step(self, t_ns: int, tau_b: np.ndarray, dt: float) -> None:
         output = self.core.step(tau_b, dt)
-        self._actuator_pub.publish(
-            conversions.actuator_command_message(
-                t_ns, output.thrust, self._joint_names, output.joint_torques
-            )
+        self._actuator_msg = conversions.actuator_command_message(
+            t_ns, output.thrust, self._joint_names, output.joint_torques, self._actuator_msg
         )
-        self._state_pub.publish(conversions.thruster_state_message(t_ns, output))
+        self._actuator_pub.publish(self._actuator_msg)
+        self._state_msg = conversions.thruster_state_message(t_ns, output, self._state_msg)
+        self._state_pub.publish(self._state_msg)
 
 
 def main(args: list[str] | None = None) -> None:
