@@ -1,0 +1,147 @@
+"""Wall time of every shipped scenario, each run through the whole graph with recording.
+
+Runs each scenario of config/scenarios (its full duration, 20 s simulated) as
+``uvms run SCENARIO --output F.mcap`` in its own process, ``--jobs`` at a time (default 2,
+the development machine's cores), and prints the wall time of each run (process start to
+exit, start-up included), their serial sum (what one process after another would take) and
+the wall time of the whole batch. Target: the batch under 2 minutes on 2 cores. A benchmark
+prints figures, it asserts nothing.
+
+With ``--out DIR`` the recordings are kept; ``--plot`` then writes the figures of each
+(``uvms plot``, into DIR/NAME/) and ``--report`` prints the metrics table
+(``uvms report --format markdown``), after the timing. This regenerates docs/results.md's
+numbers and figures in one command::
+
+    .venv/bin/python bench/bench_scenarios.py --out out --plot --report
+
+Usage::
+
+    .venv/bin/python bench/bench_scenarios.py [NAME ...] [--jobs N] [--out DIR] [--plot]
+        [--report]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO
+
+REPO = Path(__file__).resolve().parents[1]
+SCENARIO_DIR = REPO / 'config' / 'scenarios'
+SOURCES = [str(REPO / 'src' / package) for package in
+           ('uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup', 'ros2_compat')]
+#: The batch target on the 2-core development machine (s).
+TARGET_S = 120.0
+
+
+@dataclass
+class Job:
+    """One scenario run in a child process.
+
+    Attributes:
+        name: Scenario name.
+        output: Its recording.
+        process: The running ``uvms run``, None before it starts.
+        log: Its stderr (a temporary file: a pipe could fill up and stall the run).
+        start: perf_counter at its start (s).
+        wall_s: Wall time from start to exit (s), None while running.
+    """
+
+    name: str
+    output: Path
+    process: subprocess.Popen[bytes] | None = None
+    log: IO[bytes] | None = None
+    start: float = 0.0
+    wall_s: float | None = None
+
+
+def uvms(*args: str) -> list[str]:
+    """The ``uvms`` command line run by this interpreter (works in a bare checkout too)."""
+    return [sys.executable, '-m', 'uvms_bringup.cli', *args]
+
+
+def child_env() -> dict[str, str]:
+    """Environment whose PYTHONPATH finds the sources without an install."""
+    paths = [*SOURCES, os.environ.get('PYTHONPATH', '')]
+    return {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in paths if p)}
+
+
+def run_batch(jobs: list[Job], workers: int) -> float:
+    """Run the jobs, ``workers`` at a time; returns the batch wall time (s)."""
+    pending, running = list(jobs), []
+    env = child_env()
+    batch_start = time.perf_counter()
+    while pending or running:
+        while pending and len(running) < workers:
+            job = pending.pop(0)
+            job.log = tempfile.TemporaryFile()
+            job.start = time.perf_counter()
+            job.process = subprocess.Popen(
+                uvms('run', str(SCENARIO_DIR / f'{job.name}.yaml'), '--output', str(job.output),
+                     '--quiet'),
+                stdout=subprocess.DEVNULL, stderr=job.log, env=env)
+            running.append(job)
+        time.sleep(0.02)
+        for job in list(running):
+            assert job.process is not None and job.log is not None
+            if job.process.poll() is None:
+                continue
+            job.wall_s = time.perf_counter() - job.start
+            running.remove(job)
+            job.log.seek(0)
+            stderr = job.log.read().decode(errors='replace')
+            job.log.close()
+            status = job.process.returncode
+            note = '' if status == 0 else f'  FAILED (exit {status}): {stderr.strip()[-300:]}'
+            print(f'{job.name:20s} {job.wall_s:6.1f} s{note}', flush=True)
+    return time.perf_counter() - batch_start
+
+
+def main() -> None:
+    """Run the benchmark and print its figures."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('names', nargs='*', metavar='NAME',
+                        help='scenarios of config/scenarios (default: all)')
+    parser.add_argument('--jobs', '-j', type=int, default=2, help='parallel runs (default 2)')
+    parser.add_argument('--out', default=None,
+                        help='keep the recordings here (default: a temporary directory)')
+    parser.add_argument('--plot', action='store_true', help='write the figures (needs --out)')
+    parser.add_argument('--report', action='store_true', help='print the metrics table')
+    args = parser.parse_args()
+    if args.plot and args.out is None:
+        parser.error('--plot needs --out')
+    names = args.names or sorted(path.stem for path in SCENARIO_DIR.glob('*.yaml'))
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(args.out) if args.out else Path(tmp)
+        out.mkdir(parents=True, exist_ok=True)
+        jobs = [Job(name, out / f'{name}.mcap') for name in names]
+        print(f'{len(jobs)} scenarios, {args.jobs} at a time, recording to {out}')
+        batch_s = run_batch(jobs, max(1, args.jobs))
+        serial_s = sum(job.wall_s or 0.0 for job in jobs)
+        print(f'{"serial sum":20s} {serial_s:6.1f} s')
+        verdict = 'under' if batch_s < TARGET_S else 'OVER'
+        print(f'{"parallel wall":20s} {batch_s:6.1f} s  ({args.jobs} jobs; {verdict} the '
+              f'{TARGET_S:.0f} s target)')
+        recordings = [str(job.output) for job in jobs if job.output.is_file()]
+        if args.plot:
+            for job in jobs:
+                if job.output.is_file():
+                    subprocess.run(uvms('plot', str(job.output), '--out', str(out / job.name)),
+                                   check=False, env=child_env(), stdout=subprocess.DEVNULL)
+            subprocess.run(uvms('plot', '--fuzzy', '--out', str(out / 'fuzzy')), check=False,
+                           env=child_env(), stdout=subprocess.DEVNULL)
+            print(f'figures in {out}/NAME/ and {out}/fuzzy/')
+        if args.report and recordings:
+            sys.stdout.flush()
+            subprocess.run(uvms('report', *recordings, '--format', 'markdown'), check=False,
+                           env=child_env())
+
+
+if __name__ == '__main__':
+    main()
