@@ -915,20 +915,21 @@ class UvmsModel:
         q_list = q.tolist()
         rot = _rotation(*q_list[3:6])
         cfg = self._configuration(*q_list[6:])
-        p0 = q_list[:3]
-
-        def pose(point: Vec3, frame_rot: Mat3) -> tuple[FloatArray, FloatArray]:
-            offset = _mat_vec(rot, point)
-            position = np.array([p0[k] + offset[k] for k in range(3)])
-            return position, np.reshape(_mat_mat(rot, frame_rot), (3, 3))
-
+        x0, y0, z0 = q_list[:3]
         identity: Mat3 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-        poses = {'base_link_frd': pose((0.0, 0.0, 0.0), identity)}
-        for i in range(N_JOINTS):
-            poses[f'link_{i + 1}'] = pose(cfg.origins[i], cfg.rotations[i])
-        poses['ee_link'] = pose(cfg.ee, cfg.rotations[2])
-        poses['ft_sensor_link'] = pose(cfg.ee, cfg.rotations[2])
-        return poses
+        frames = [((0.0, 0.0, 0.0), identity)]
+        frames += zip(cfg.origins, cfg.rotations)
+        frames += [(cfg.ee, cfg.rotations[2])] * 2  # ee_link, ft_sensor_link
+        # One array for all poses (3 + 9 values each): one conversion instead of twelve.
+        flat: list[float] = []
+        for point, frame_rot in frames:
+            ox, oy, oz = _mat_vec(rot, point)
+            flat += (x0 + ox, y0 + oy, z0 + oz)
+            flat += _mat_mat(rot, frame_rot)
+        data = np.array(flat).reshape(len(FRAME_NAMES), 12)
+        return {
+            name: (data[i, :3], data[i, 3:].reshape(3, 3)) for i, name in enumerate(FRAME_NAMES)
+        }
 
     def joint_positions_for_ee_position(
         self,
