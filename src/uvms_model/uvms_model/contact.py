@@ -44,7 +44,8 @@ def _point(name: str, value: ArrayLike) -> FloatArray:
     array = np.asarray(value, dtype=float)
     if array.shape != (3,):
         raise StateError(f'{name} must have shape (3,), got {array.shape}')
-    if not np.isfinite(array).all():
+    # A finite sum is the cheap test (a huge finite sum may overflow: then look again).
+    if not math.isfinite(sum(array.tolist())) and not np.isfinite(array).all():
         raise StateError(f'{name} must be finite, got {array.tolist()!r}')
     return array
 

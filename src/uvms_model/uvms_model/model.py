@@ -918,7 +918,7 @@ class UvmsModel:
         x0, y0, z0 = q_list[:3]
         identity: Mat3 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
         frames = [((0.0, 0.0, 0.0), identity)]
-        frames += zip(cfg.origins, cfg.rotations)
+        frames += zip(cfg.origins, cfg.rotations, strict=True)
         frames += [(cfg.ee, cfg.rotations[2])] * 2  # ee_link, ft_sensor_link
         # One array for all poses (3 + 9 values each): one conversion instead of twelve.
         flat: list[float] = []

@@ -332,6 +332,8 @@ def actuator_command_arrays(
             msg_text = f'joint_names {names} do not match the arm joints {list(joint_names)}'
             raise CommandError(msg_text)
         torques = torques[[names.index(name) for name in joint_names]]
+    if math.isfinite(sum(thrusts.tolist()) + sum(torques.tolist())):
+        return ns_from_time(msg.header.stamp), thrusts, torques  # all finite: the usual case
     for field, values in (('thrust', thrusts), ('joint_torques', torques)):
         if not np.isfinite(values).all():
             msg_text = f'{field} holds a non-finite value: {values.tolist()}'
