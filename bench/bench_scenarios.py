@@ -8,16 +8,18 @@ the wall time of the whole batch. Target: the batch under 2 minutes on 2 cores. 
 prints figures, it asserts nothing.
 
 With ``--out DIR`` the recordings are kept; ``--plot`` then writes the figures of each
-(``uvms plot``, into DIR/NAME/) and ``--report`` prints the metrics table
-(``uvms report --format markdown``), after the timing. This regenerates docs/results.md's
+(``uvms plot``, into DIR/NAME/), ``--docs-figures DIR`` copies the ones docs/results.md shows
+there (palette PNGs, a third of the size), and ``--report`` prints the metrics table
+(``uvms report --format markdown``), all after the timing. This regenerates docs/results.md's
 numbers and figures in one command::
 
-    .venv/bin/python bench/bench_scenarios.py --out out --plot --report
+    .venv/bin/python bench/bench_scenarios.py --out out --plot --docs-figures docs/figures \
+        --report
 
 Usage::
 
     .venv/bin/python bench/bench_scenarios.py [NAME ...] [--jobs N] [--out DIR] [--plot]
-        [--report]
+        [--docs-figures DIR] [--report]
 """
 
 from __future__ import annotations
@@ -38,6 +40,21 @@ SOURCES = [str(REPO / 'src' / package) for package in
            ('uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup', 'ros2_compat')]
 #: The batch target on the 2-core development machine (s).
 TARGET_S = 120.0
+#: The figures docs/results.md shows: ``uvms plot`` output (under --out) -> docs file name.
+DOCS_FIGURES = {
+    'case1_ke1e4/trajectory_xz.png': 'case1_ke1e4_trajectory_xz.png',
+    'case1_ke1e4/force_response.png': 'case1_ke1e4_force.png',
+    'case1_ke1e4/position_errors_weight.png': 'case1_ke1e4_errors_weight.png',
+    'case1_ke1e5/force_response.png': 'case1_ke1e5_force.png',
+    'case2_noise/force_response.png': 'case2_noise_force.png',
+    'case3_moving_wall/trajectory_xz.png': 'case3_moving_wall_trajectory_xz.png',
+    'case3_moving_wall/vehicle_motion.png': 'case3_moving_wall_vehicle_motion.png',
+    'case4_model_error/force_response.png': 'case4_model_error_force.png',
+    'hybrid_only/force_response.png': 'hybrid_only_force.png',
+    'fuzzy/fuzzy_surface.png': 'fuzzy_surface.png',
+}
+#: Palette size of the copied figures: line plots and one colour map need no more.
+DOCS_FIGURE_COLOURS = 128
 
 
 @dataclass
@@ -103,6 +120,23 @@ def run_batch(jobs: list[Job], workers: int) -> float:
     return time.perf_counter() - batch_start
 
 
+def copy_docs_figures(out: Path, target: Path) -> None:
+    """Copy the figures docs/results.md shows as palette PNGs (about a third of the bytes)."""
+    from PIL import Image  # matplotlib's own dependency
+
+    target.mkdir(parents=True, exist_ok=True)
+    for source, name in DOCS_FIGURES.items():
+        if not (out / source).is_file():
+            print(f'missing {out / source}: run its scenario with --plot')
+            continue
+        with Image.open(out / source) as image:
+            palette = image.convert('RGB').quantize(
+                colors=DOCS_FIGURE_COLOURS, method=Image.Quantize.MEDIANCUT,
+                dither=Image.Dither.NONE)
+        palette.save(target / name, optimize=True)
+    print(f'docs figures in {target}/')
+
+
 def main() -> None:
     """Run the benchmark and print its figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -112,10 +146,14 @@ def main() -> None:
     parser.add_argument('--out', default=None,
                         help='keep the recordings here (default: a temporary directory)')
     parser.add_argument('--plot', action='store_true', help='write the figures (needs --out)')
+    parser.add_argument('--docs-figures', metavar='DIR', default=None,
+                        help="copy docs/results.md's figures here (needs --plot)")
     parser.add_argument('--report', action='store_true', help='print the metrics table')
     args = parser.parse_args()
     if args.plot and args.out is None:
         parser.error('--plot needs --out')
+    if args.docs_figures and not args.plot:
+        parser.error('--docs-figures needs --plot')
     names = args.names or sorted(path.stem for path in SCENARIO_DIR.glob('*.yaml'))
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(args.out) if args.out else Path(tmp)
@@ -137,6 +175,8 @@ def main() -> None:
             subprocess.run(uvms('plot', '--fuzzy', '--out', str(out / 'fuzzy')), check=False,
                            env=child_env(), stdout=subprocess.DEVNULL)
             print(f'figures in {out}/NAME/ and {out}/fuzzy/')
+        if args.docs_figures:
+            copy_docs_figures(out, Path(args.docs_figures))
         if args.report and recordings:
             sys.stdout.flush()
             subprocess.run(uvms('report', *recordings, '--format', 'markdown'), check=False,

@@ -74,7 +74,8 @@ def test_contact_force_barely_moves_the_vehicle(
 ) -> None:
     """With 150 N on the wall the vehicle path stays within 2 cm of its free-motion path.
 
-    Unreacted, 150 N for the 4.4 s of contact would push the 530 kg vehicle about 2.7 m.
+    Unreacted, 150 N for the 4.4 s of contact would push the 530 kg vehicle
+    ½ (F/m) t² = 2.7 m (before drag and added mass).
     """
     contact, free = case1_ke1e4.run.odometry, free_motion.run.odometry
     assert contact is not None and free is not None
