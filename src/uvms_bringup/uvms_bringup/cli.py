@@ -14,9 +14,13 @@ import signal
 import subprocess
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from uvms_bringup.graph import Graph
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -158,9 +162,8 @@ def _launch(args: argparse.Namespace) -> int:
 
 def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
     """Build and run the graph in this process; report the outcome."""
-    from uvms_bringup.graph import GraphError, build_graph, run_graph
+    from uvms_bringup.graph import GraphError, build_graph
     from uvms_bringup.launch_helpers import resolve_scenario_path
-    from uvms_bringup.progress import ProgressBar
     from uvms_bringup.scenario import ScenarioError, load_scenario
 
     command = args.command
@@ -182,7 +185,22 @@ def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
     except GraphError as exc:
         _error(command, str(exc))
         return EXIT_FAILURE
-    _stop_on_sigterm()
+    previous_sigterm = _stop_on_sigterm()
+    try:
+        return _run_graph_and_report(args, graph, mode, progress)
+    finally:
+        if previous_sigterm is not None:
+            signal.signal(signal.SIGTERM, previous_sigterm)
+
+
+def _run_graph_and_report(
+    args: argparse.Namespace, graph: Graph, mode: str, progress: bool
+) -> int:
+    """Spin a built graph to its end and print the outcome."""
+    from uvms_bringup.graph import GraphError, run_graph
+    from uvms_bringup.progress import ProgressBar
+
+    command = args.command
     bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
     if command == 'launch' and not args.quiet:
         print(f'uvms launch: {mode} graph running in this process; Ctrl-C stops it',
@@ -206,15 +224,22 @@ def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
     return EXIT_INTERRUPTED if result.interrupted else EXIT_OK
 
 
-def _stop_on_sigterm() -> None:
-    """Let SIGTERM stop a run like Ctrl-C does, so the recording is closed cleanly."""
+def _stop_on_sigterm() -> signal.Handlers | Callable[[int, FrameType | None], Any] | int | None:
+    """Let SIGTERM stop a run like Ctrl-C does, so the recording is closed cleanly.
+
+    Returns:
+        The handler it replaced, to be restored when the run ends (None off the main thread,
+        where signal handlers cannot be set).
+    """
     if threading.current_thread() is not threading.main_thread():
-        return
+        return None
+    previous = signal.getsignal(signal.SIGTERM)
 
     def interrupt(signum: int, frame: FrameType | None) -> None:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, interrupt)
+    return previous
 
 
 def _quiet_logs() -> None:
