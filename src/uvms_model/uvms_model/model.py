@@ -698,10 +698,18 @@ class UvmsModel:
         c5 = check_pitch(theta)
         c4, s4 = math.cos(phi), math.sin(phi)
         t5 = math.sin(theta) / c5
-        b = np.eye(N_DOF)
-        b[0:3, 0:3] = np.reshape(_rotation(phi, theta, psi), (3, 3))
-        b[3:6, 3:6] = ((1.0, s4 * t5, c4 * t5), (0.0, c4, -s4), (0.0, s4 / c5, c4 / c5))
-        return b
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = _rotation(phi, theta, psi)
+        return np.array((
+            r0, r1, r2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            r3, r4, r5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            r6, r7, r8, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 1.0, s4 * t5, c4 * t5, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, c4, -s4, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, s4 / c5, c4 / c5, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        )).reshape(N_DOF, N_DOF)  # fmt: skip
 
     def _w_from_q_dot(self, q: list[float], q_dot: list[float], rot: Mat3) -> list[float]:
         """Quasi-velocities w = B^-1 q_dot = [R^T p_dot; J2^-1 eta_dot; q_m_dot] (any pitch)."""
@@ -743,9 +751,19 @@ class UvmsModel:
         check_pitch(q_list[4])
         c4, s4 = math.cos(q_list[3]), math.sin(q_list[3])
         c5, s5 = math.cos(q_list[4]), math.sin(q_list[4])
-        b_inv = np.eye(N_DOF)
-        b_inv[0:3, 0:3] = np.reshape(_rotation(*q_list[3:6]), (3, 3)).T
-        b_inv[3:6, 3:6] = ((1.0, 0.0, -s5), (0.0, c4, s4 * c5), (0.0, -s4, c4 * c5))
+        # B^-1 = blockdiag(R^T, J2^-1, I).
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = _rotation(*q_list[3:6])
+        b_inv = np.array((
+            r0, r3, r6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            r1, r4, r7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            r2, r5, r8, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 1.0, 0.0, -s5, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, c4, s4 * c5, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, -s4, c4 * c5, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        )).reshape(N_DOF, N_DOF)  # fmt: skip
         mass = self._mass(self._configuration(*q_list[6:]))
         result: FloatArray = b_inv.T.dot(mass.dot(b_inv))
         return result
@@ -805,7 +823,7 @@ class UvmsModel:
         q = self._check_q(q)
         q_list = q.tolist()
         cfg = self._configuration(*q_list[6:])
-        return np.reshape(_mat_mat(_rotation(*q_list[3:6]), cfg.rotations[2]), (3, 3))
+        return np.array(_mat_mat(_rotation(*q_list[3:6]), cfg.rotations[2])).reshape(3, 3)
 
     def _ee_joint_columns(self, cfg: _Configuration) -> list[Vec3]:
         """a_j x (r_ee - o_j): EE velocity per unit joint rate, base_link_frd."""
@@ -852,12 +870,9 @@ class UvmsModel:
         cols += self._ee_joint_columns(cfg)
         ned = [_mat_vec(rot, col) for col in cols]
         return np.array(
-            (
-                (1.0, 0.0, 0.0, *(c[0] for c in ned)),
-                (0.0, 1.0, 0.0, *(c[1] for c in ned)),
-                (0.0, 0.0, 1.0, *(c[2] for c in ned)),
-            )
-        )
+            (1.0, 0.0, 0.0, *[c[0] for c in ned], 0.0, 1.0, 0.0, *[c[1] for c in ned],
+             0.0, 0.0, 1.0, *[c[2] for c in ned])
+        ).reshape(3, N_DOF)  # fmt: skip
 
     def ee_jacobian_dot_qdot(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """J_dot q_dot (3,) in map_ned, so that X_ddot = J q_ddot + J_dot q_dot (eq. 23).
@@ -878,20 +893,19 @@ class UvmsModel:
         cfg = self._configuration(*q_list[6:])
         # Twist of link 3 and its acceleration at w_dot = 0, base_link_frd at O (fixed now):
         # a = sum_j (V_{j-1} x s_j) q_dot_j, V_j = V_{j-1} + s_j q_dot_j.
-        v = w[0:3]
-        omega = w[3:6]
-        acc_v = [0.0, 0.0, 0.0]
-        acc_w = [0.0, 0.0, 0.0]
-        subspaces = cfg.subspaces.tolist()
-        for j in range(N_JOINTS):
-            sv, sw = subspaces[j][:3], subspaces[j][3:]
-            rate = w[6 + j]
-            cv1, cv2, cw = _cross(omega, sv), _cross(v, sw), _cross(omega, sw)
-            for k in range(3):
-                acc_v[k] += (cv1[k] + cv2[k]) * rate
-                acc_w[k] += cw[k] * rate
-            v = [v[k] + sv[k] * rate for k in range(3)]
-            omega = [omega[k] + sw[k] * rate for k in range(3)]
+        vx, vy, vz, wx, wy, wz = w[0:6]
+        avx = avy = avz = awx = awy = awz = 0.0
+        for (sx, sy, sz, tx, ty, tz), rate in zip(cfg.subspaces.tolist(), w[6:9], strict=True):
+            # (omega x s_v + v x s_w) and omega x s_w, written out.
+            avx += ((wy * sz - wz * sy) + (vy * tz - vz * ty)) * rate
+            avy += ((wz * sx - wx * sz) + (vz * tx - vx * tz)) * rate
+            avz += ((wx * sy - wy * sx) + (vx * ty - vy * tx)) * rate
+            awx += (wy * tz - wz * ty) * rate
+            awy += (wz * tx - wx * tz) * rate
+            awz += (wx * ty - wy * tx) * rate
+            vx, vy, vz = vx + sx * rate, vy + sy * rate, vz + sz * rate
+            wx, wy, wz = wx + tx * rate, wy + ty * rate, wz + tz * rate
+        acc_v, acc_w, v, omega = (avx, avy, avz), (awx, awy, awz), (vx, vy, vz), (wx, wy, wz)
         ee = cfg.ee
         rel = _cross(acc_w, ee)
         omega_r = _cross(omega, ee)
