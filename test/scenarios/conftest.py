@@ -5,17 +5,18 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from scenario_runs import SHORTENED_S, ScenarioResult, ScenarioRuns
+from scenario_runs import ScenarioResult, ScenarioRuns
 
 
 def _wanted_scenarios(session: pytest.Session) -> list[str]:
-    """Scenario fixtures the selected tests use, longest runs first."""
-    names: set[str] = set()
+    """Scenario fixtures the selected tests use, in the order the tests will ask for them."""
+    names: dict[str, None] = {}
     for item in session.items:
         params = getattr(getattr(item, 'callspec', None), 'params', {})
         used = [*getattr(item, 'fixturenames', ()), *params.values()]
-        names.update(name for name in used if isinstance(name, str) and name in SCENARIO_FIXTURES)
-    return sorted(names, key=lambda name: (SHORTENED_S.get(name, 20.0), name), reverse=True)
+        names.update((name, None) for name in used
+                     if isinstance(name, str) and name in SCENARIO_FIXTURES)
+    return list(names)
 
 
 @pytest.fixture(scope='session')

@@ -4,8 +4,8 @@ A scenario run is the whole node graph in lockstep (``uvms run SCENARIO --output
 recorded to MCAP in a session temporary directory and read back with
 ``uvms_bringup.analysis``. The runs are CPU-bound Python, so they go to separate processes:
 when the first scenario fixture is requested, every scenario that the selected tests need is
-started, at most ``WORKERS`` at a time (longest first), and each fixture then waits only for
-its own run.
+started, at most ``WORKERS`` at a time in the order the tests use them, and each fixture
+then waits only for its own run.
 """
 
 from __future__ import annotations
