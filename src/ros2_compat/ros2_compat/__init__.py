@@ -16,9 +16,8 @@ from types import ModuleType
 
 OVERLAY_DIR = Path(__file__).resolve().parent / '_overlay'
 
-#: Top-level modules the compat runtime provides, under their ROS 2 names.
-PROVIDED_PACKAGES = (
-    'rclpy',
+#: Packages whose message types ros2_compat provides (their whole `msg` namespace).
+MESSAGE_PACKAGES = (
     'builtin_interfaces',
     'std_msgs',
     'geometry_msgs',
@@ -29,6 +28,9 @@ PROVIDED_PACKAGES = (
     'rcl_interfaces',
     'uvms_msgs',
 )
+
+#: Top-level modules the compat runtime provides, under their ROS 2 names.
+PROVIDED_PACKAGES = ('rclpy', *MESSAGE_PACKAGES)
 
 
 class _FallbackFinder(importlib.abc.MetaPathFinder):

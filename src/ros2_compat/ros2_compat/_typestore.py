@@ -27,18 +27,6 @@ UVMS_MSGS_DIRS = (
     _PACKAGE_DIR.parent.parent / 'uvms_msgs' / 'msg',
 )
 
-#: Packages whose message types ros2_compat provides (their whole `msg` namespace).
-MESSAGE_PACKAGES = (
-    'builtin_interfaces',
-    'std_msgs',
-    'geometry_msgs',
-    'sensor_msgs',
-    'nav_msgs',
-    'rosgraph_msgs',
-    'tf2_msgs',
-    'rcl_interfaces',
-    'uvms_msgs',
-)
 
 #: Field default values of the Jazzy .msg files, which rosbags does not keep
 #: (common_interfaces and rcl_interfaces, Jazzy branch). Keyed by (type, field).

@@ -19,9 +19,9 @@ from typing import Any
 
 from rosbags.typesys import TypesysError
 
-from ros2_compat import PROVIDED_PACKAGES, _cdr, _messages, rclpy_is_compat
+from ros2_compat import MESSAGE_PACKAGES, PROVIDED_PACKAGES, _cdr, _messages, rclpy_is_compat
 from ros2_compat._messages import MessageMeta
-from ros2_compat._typestore import MESSAGE_PACKAGES, uvms_typestore
+from ros2_compat._typestore import uvms_typestore
 
 __all__ = [
     'MessageTypeError',
