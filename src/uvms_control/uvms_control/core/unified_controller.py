@@ -302,7 +302,7 @@ class UnifiedForceController:
             f_normal,
             dt,
             integrate=setpoint.phase != ForcePhase.IDLE
-            and W < 1.0
+            and W <= CONSTRAINED_WEIGHT
             and f_normal >= self.force_setpoint.contact_threshold,
         )
         F_H, F_H_selected = self.hybrid.force(M_hat, zeta_hat, F_e, a_p, a_f)
