@@ -1,24 +1,35 @@
 # Two entry points for a machine without ROS 2 (see README.md):
 #   make demo   set up .venv, run the Case I scenario through the whole node graph, write
 #               out/case1_ke1e4.mcap, the paper's figures and the metrics report
-#   make test   set up .venv, run ruff, mypy and the whole pytest suite
+#   make test   set up .venv, run ruff, mypy and the whole pytest suite; then the suite again
+#               on Python 3.12 (Jazzy's) in .venv-py3.12 when such an interpreter is found
 # With ROS 2 Jazzy sourced, use colcon, `ros2 run` and `ros2 launch` instead (README.md).
 
 PYTHON ?= python3
 VENV ?= .venv
+PYTHON_312 ?= $(shell tools/find-python 3.12)
+VENV_312 ?= .venv-py3.12
 OUT ?= out
 SCENARIO ?= case1_ke1e4
 BIN := $(VENV)/bin
 
-.PHONY: demo test setup clean
+.PHONY: demo test test-py312 setup clean
 
 setup: $(VENV)/.installed
 
+# A virtualenv with the project installed editable and the pins of pyproject.toml.
+define make_venv
+	$(1) -m venv $(2)
+	$(2)/bin/python -m pip install --quiet --upgrade pip
+	$(2)/bin/python -m pip install --quiet -e '.[test]'
+	touch $(2)/.installed
+endef
+
 $(VENV)/.installed: pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
-	touch $@
+	$(call make_venv,$(PYTHON),$(VENV))
+
+$(VENV_312)/.installed: pyproject.toml
+	$(call make_venv,$(PYTHON_312),$(VENV_312))
 
 demo: setup
 	$(BIN)/uvms run config/scenarios/$(SCENARIO).yaml --output $(OUT)/$(SCENARIO).mcap
@@ -29,6 +40,15 @@ test: setup
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(BIN)/pytest
+	$(MAKE) --no-print-directory test-py312
+
+test-py312:
+ifeq ($(PYTHON_312),)
+	@echo 'make test: no Python 3.12 interpreter found; the suite ran on Python 3.11 only'
+else
+	$(MAKE) --no-print-directory $(VENV_312)/.installed
+	$(VENV_312)/bin/pytest -q
+endif
 
 clean:
-	rm -rf $(VENV) $(OUT)
+	rm -rf $(VENV) $(VENV_312) $(OUT)
