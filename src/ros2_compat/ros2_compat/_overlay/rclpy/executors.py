@@ -415,7 +415,12 @@ class Executor:
             result = callback(argument) if kind == _SUBSCRIPTION else callback()
         finally:
             _running.executor = previous
-        if result is not None and inspect.iscoroutine(result):
+        if result is not None:
+            self._await_result(entity, result)
+
+    def _await_result(self, entity: Any, result: Any) -> None:
+        """Run a coroutine a callback returned as a task (other results are ignored)."""
+        if inspect.iscoroutine(result):
             task = Task(result, executor=self)
             task()
             if not task.done():
@@ -434,11 +439,29 @@ class Executor:
         group = entity.callback_group
         if not group.beginning_execution(entity):
             return
-        self._begin_work()
+        with self._work_lock:
+            self._work_count += 1
         try:
-            has_work, argument = self._take(entity, kind)
-            if has_work:
-                self._run_callback(entity, kind, argument)
+            if kind == _SUBSCRIPTION:
+                # The common case, inlined (_take and _run_callback): one message per wait.
+                queue = entity._queue
+                callback = entity.callback
+                if queue and callback is not None:
+                    msg = queue.popleft()
+                    previous = getattr(_running, 'executor', None)
+                    _running.executor = self
+                    try:
+                        result = callback(msg)
+                    finally:
+                        _running.executor = previous
+                    if result is not None:
+                        self._await_result(entity, result)
+                elif queue:
+                    queue.popleft()
+            else:
+                has_work, argument = self._take(entity, kind)
+                if has_work:
+                    self._run_callback(entity, kind, argument)
         finally:
             group.ending_execution(entity)
             self._end_work()
