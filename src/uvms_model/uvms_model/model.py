@@ -918,12 +918,21 @@ class UvmsModel:
 
     # ------------------------------------------------------------------ poses and IK
 
-    def frame_poses(self, q: ArrayLike) -> dict[str, tuple[FloatArray, FloatArray]]:
+    def frame_poses(
+        self, q: ArrayLike, frames: Sequence[str] = FRAME_NAMES
+    ) -> dict[str, tuple[FloatArray, FloatArray]]:
         """Poses of base_link_frd, link_1..3, ee_link, ft_sensor_link in map_ned.
+
+        Args:
+            q: Generalized coordinates (9,).
+            frames: The frames to pose, a subset of ``FRAME_NAMES`` (default: all).
 
         Returns:
             {frame: (p_ned (3,), rot_ned_from_frame (3, 3))}; link_i sits at joint i,
             ee_link and ft_sensor_link at the tip of link 3 with link 3's axes.
+
+        Raises:
+            ModelError: For a frame name not in ``FRAME_NAMES``.
         """
         q = self._check_q(q)
         q_list = q.tolist()
@@ -931,19 +940,26 @@ class UvmsModel:
         cfg = self._configuration(*q_list[6:])
         x0, y0, z0 = q_list[:3]
         identity: Mat3 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-        frames = [((0.0, 0.0, 0.0), identity)]
-        frames += zip(cfg.origins, cfg.rotations, strict=True)
-        frames += [(cfg.ee, cfg.rotations[2])] * 2  # ee_link, ft_sensor_link
+        # Each frame: its origin in base_link_frd and rot_base_from_frame.
+        sources = {
+            'base_link_frd': ((0.0, 0.0, 0.0), identity),
+            'link_1': (cfg.origins[0], cfg.rotations[0]),
+            'link_2': (cfg.origins[1], cfg.rotations[1]),
+            'link_3': (cfg.origins[2], cfg.rotations[2]),
+            'ee_link': (cfg.ee, cfg.rotations[2]),
+            'ft_sensor_link': (cfg.ee, cfg.rotations[2]),
+        }
         # One array for all poses (3 + 9 values each): one conversion instead of twelve.
         flat: list[float] = []
-        for point, frame_rot in frames:
-            ox, oy, oz = _mat_vec(rot, point)
+        for name in frames:
+            source = sources.get(name)
+            if source is None:
+                raise ModelError(f'frame {name!r} is not one of {FRAME_NAMES}')
+            ox, oy, oz = _mat_vec(rot, source[0])
             flat += (x0 + ox, y0 + oy, z0 + oz)
-            flat += _mat_mat(rot, frame_rot)
-        data = np.array(flat).reshape(len(FRAME_NAMES), 12)
-        return {
-            name: (data[i, :3], data[i, 3:].reshape(3, 3)) for i, name in enumerate(FRAME_NAMES)
-        }
+            flat += _mat_mat(rot, source[1])
+        data = np.array(flat).reshape(len(frames), 12)
+        return {name: (data[i, :3], data[i, 3:].reshape(3, 3)) for i, name in enumerate(frames)}
 
     def joint_positions_for_ee_position(
         self,

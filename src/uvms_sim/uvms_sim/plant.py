@@ -19,6 +19,7 @@ from uvms_model.sensors import ForceTorqueSensor, contact_wrench_in_sensor_frame
 from uvms_model.thrusters import configuration_matrix
 
 from uvms_model import (
+    FRAME_NAMES,
     ModelError,
     SingularAttitudeError,
     UnreachableError,
@@ -30,6 +31,7 @@ from uvms_sim.errors import CommandError, DivergenceError, SimParameterError, Si
 FloatArray = NDArray[np.float64]
 
 _NO_CONTACT = ContactState(False, np.zeros(3), 0.0, math.nan, 0.0)
+_SENSOR_FRAMES = ('ee_link', 'ft_sensor_link')
 
 
 @dataclass(frozen=True)
@@ -61,7 +63,8 @@ class Observation:
         q: Generalized coordinates (9,).
         w: Quasi-velocities (9,).
         joint_torques: Motor torques applied during the last step (N*m).
-        poses: {frame: (p_ned, rot_ned_from_frame)} of the robot's frames.
+        poses: {frame: (p_ned, rot_ned_from_frame)} of the robot's frames (only ee_link and
+            ft_sensor_link from ``Plant.observe(all_frames=False)``).
         contact: Contact ground truth (force on the wall in map_ned).
         sensor_force: Wrist sensor force reading in ft_sensor_link (N).
         sensor_torque: Wrist sensor torque reading in ft_sensor_link (N*m).
@@ -222,12 +225,16 @@ class Plant:
         """Poses of the robot's frames in map_ned: {frame: (p_ned, rot_ned_from_frame)}."""
         return self.model.frame_poses(self._q)
 
-    def observe(self) -> Observation:
+    def observe(self, all_frames: bool = True) -> Observation:
         """State, frames, contact and one wrist sensor reading (draws new sensor noise).
 
         The kinematics are evaluated once for all of them.
+
+        Args:
+            all_frames: Pose every robot frame; False poses only ee_link and
+                ft_sensor_link, all the sensor topics need (no /tf at this state).
         """
-        poses = self.model.frame_poses(self._q)
+        poses = self.model.frame_poses(self._q, FRAME_NAMES if all_frames else _SENSOR_FRAMES)
         contact = self._contact_at(poses['ee_link'][0])
         force, torque = contact_wrench_in_sensor_frame(poses['ft_sensor_link'][1],
                                                        contact.force_ned)

@@ -225,7 +225,9 @@ class SimulatorNode(Node):
 
     def _publish_state(self) -> None:
         """Publish /clock, the sensor topics and, when due, /tf, all stamped t_k."""
-        seen = self._plant.observe()
+        tf_due = (self._tf_pub is not None
+                  and self._published % self._settings.publishes_per_tf == 0)
+        seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
         out.update(seen)
         self._clock_pub.publish(out.clock)
@@ -234,7 +236,7 @@ class SimulatorNode(Node):
         self._wrench_pub.publish(out.wrench)
         self._ee_pub.publish(out.ee_pose)
         self._contact_pub.publish(out.contact)
-        if self._tf_pub is not None and self._published % self._settings.publishes_per_tf == 0:
+        if tf_due:
             self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses))
         self._published += 1
         if self._settings.mode == 'lockstep':
