@@ -21,7 +21,9 @@ a past acceleration. Gravity and buoyancy act as forces, so they never see the a
 Speed: at these sizes numpy's per-call overhead dominates, so 3-vector work (kinematics,
 the RNEA accelerations, gravity) is plain Python arithmetic, the 6 x 6 work of all bodies is
 one block-diagonal product, spatial force cross products are an outer product times a
-constant map, small 2D products use ndarray.dot, the 9 x 9 solve is LAPACK's dposv
+constant map, the drag strips see the link twists through one constant block-diagonal map
+(strip velocities nu @ map, link wrenches map @ f, so no strip Jacobian is built per
+configuration), small 2D products use ndarray.dot, the 9 x 9 solve is LAPACK's dposv
 (Cholesky), and the configuration-dependent part is cached for the last joint angles.
 """
 
@@ -127,24 +129,18 @@ def _force_cross_map() -> FloatArray:
     return force.reshape(36, 6)
 
 
-def _transform_maps(strip_rows: FloatArray) -> FloatArray:
-    """Constant maps (3, 18, (6 + 2N) * 6): link data [rot^T (9), B (9)] -> (E_i X_i).ravel().
+def _transform_maps(n_links: int) -> FloatArray:
+    """Constant maps (n_links, 18, 36): link data [rot^T (9), B (9)] -> X_i.ravel().
 
-    X_i = [[rot^T, B], [0, rot^T]] moves motion vectors from frame 0 to link i; E_i stacks
-    I_6 and the link's strip rows (2N, 6), so E_i X_i gives the link's body-Jacobian rows
-    and strip rows in one product. E_i X_i is linear in the data, hence a constant map.
-
-    Args:
-        strip_rows: (3, 2N, 6) strip rows of each link.
+    X_i = [[rot^T, B], [0, rot^T]] moves motion vectors from frame 0 to link i; it is linear
+    in the data, hence a constant map, and one batched product gives all links' X_i.
     """
     unit = np.zeros((18, 6, 6))  # data of one link -> X
     for r in range(3):
         for c in range(3):
             unit[3 * r + c, r, c] = unit[3 * r + c, r + 3, c + 3] = 1.0
             unit[9 + 3 * r + c, r, c + 3] = 1.0
-    n_links = strip_rows.shape[0]
-    extended = np.concatenate((np.broadcast_to(np.eye(6), (n_links, 6, 6)), strip_rows), 1)
-    maps: FloatArray = np.einsum('lrk,dkc->ldrc', extended, unit).reshape(n_links, 18, -1)
+    maps: FloatArray = np.broadcast_to(unit.reshape(18, 36), (n_links, 18, 36)).copy()
     return maps
 
 
@@ -160,7 +156,6 @@ class _Configuration:
         'origins',
         'relatives',
         'rotations',
-        'strips',
         'subspaces',
     )
 
@@ -172,7 +167,6 @@ class _Configuration:
     ee: Vec3  # end effector in frame 0
     subspaces: FloatArray  # (3, 6) s_j in frame 0
     jac_local: FloatArray  # (24, 9) J_i stacked: body twists in the bodies' own frames
-    strips: FloatArray | None  # (3 * 2N, 9) normal velocity at the drag strips from w
     mass: FloatArray | None  # M_b, computed on demand
 
 
@@ -290,8 +284,13 @@ class UvmsModel:
         strip_rows[:, count:, 2] = 1.0
         strip_rows[:, count:, 4] = -strip_x
         self._strip_count = count
-        self._transform_maps = _transform_maps(strip_rows)
-        self._extended_rows = 6 + 2 * count
+        # blockdiag of the links' strip rows, transposed (18, 6N): link twists -> strip normal
+        # velocities (nu @ map), strip forces -> link wrenches (map @ f).
+        rows = 2 * count
+        self._strip_map = np.zeros((6 * N_JOINTS, rows * N_JOINTS))
+        for i in range(N_JOINTS):
+            self._strip_map[6 * i : 6 * i + 6, rows * i : rows * (i + 1)] = strip_rows[i].T
+        self._transform_maps = _transform_maps(N_JOINTS)
 
         # Constant maps.
         self._force_cross = _force_cross_map()
@@ -366,17 +365,15 @@ class UvmsModel:
             rotations, relatives, origins, axes, origin,
         )  # fmt: skip
         cfg.subspaces = data[54:].reshape(N_JOINTS, 6)
-        rows = self._extended_rows
         transforms = (data[:54].reshape(N_JOINTS, 1, 18) @ self._transform_maps).reshape(
-            N_JOINTS, rows, 6
+            N_JOINTS, 6, 6
         )
         jac0 = self._jac_template.copy()
         jac0[1:, :, 6:] = cfg.subspaces.T * self._joint_mask
-        links = transforms @ jac0[1:]  # (3, 6 + 2N, 9): [J_i; strip rows]
+        links = transforms @ jac0[1:]  # (3, 6, 9): J_i
         jac_local = self._jac_local_template.copy()
-        jac_local[6:] = links[:, :6].reshape(3 * 6, N_DOF)
+        jac_local[6:] = links.reshape(3 * 6, N_DOF)
         cfg.jac_local = jac_local
-        cfg.strips = links[:, 6:].reshape(-1, N_DOF) if self._drag_enabled else None
         cfg.mass = None
         self._cache = cfg
         return cfg
@@ -409,12 +406,14 @@ class UvmsModel:
         if rot is None:
             rot = _rotation(q[3], q[4], q[5])
         forces -= np.array(self._body_wrenches(cfg, rot, w_list, f_ee_ned)).reshape(4, 6)
-        result: FloatArray = forces.reshape(4 * 6).dot(cfg.jac_local)
-        if cfg.strips is not None:
-            # Cross-flow strips: dF = -1/2 rho C_D (2 r) |v_n| v_n dx, mapped by J_strip^T.
-            normal = cfg.strips.dot(w).reshape(N_JOINTS, 2, self._strip_count)
+        if self._drag_enabled:
+            # Cross-flow strips: dF = -1/2 rho C_D (2 r) |v_n| v_n dx. The strip rows map a
+            # link twist to the normal velocities at the strips, their transpose the strip
+            # forces back to a link wrench.
+            normal = nu[6:].dot(self._strip_map).reshape(N_JOINTS, 2, self._strip_count)
             normal *= (self._strip_gain * np.hypot(normal[:, 0], normal[:, 1]))[:, None, :]
-            result += normal.reshape(-1).dot(cfg.strips)
+            forces[1:] += self._strip_map.dot(normal.reshape(-1)).reshape(N_JOINTS, 6)
+        result: FloatArray = forces.reshape(4 * 6).dot(cfg.jac_local)
         return result
 
     def _bias_accelerations(
