@@ -369,18 +369,19 @@ class McapRecorder:
                 f'(topics: {list(self._channel_ids)})'
             )
             raise RecordingError(msg)
-        self._check_open(f'write to {topic!r}')
+        if self._closed:  # checked here, not by _check_open: this runs once per message
+            self._check_open(f'write to {topic!r}')
         if log_time_ns < 0:
             msg = f'cannot write to {topic!r} in {self.path}: log time {log_time_ns} ns < 0'
             raise RecordingError(msg)
         sequence = self._sequences[topic] + 1
         self._sequences[topic] = sequence
         self._writer.add_message(
-            channel_id=channel_id,
-            log_time=log_time_ns,
-            data=bytes(data),
-            publish_time=log_time_ns if publish_time_ns is None else publish_time_ns,
-            sequence=sequence,
+            channel_id,
+            log_time_ns,
+            data if type(data) is bytes else bytes(data),
+            log_time_ns if publish_time_ns is None else publish_time_ns,
+            sequence,
         )
         self.message_count += 1
         if self._flush_interval_ns is not None:
