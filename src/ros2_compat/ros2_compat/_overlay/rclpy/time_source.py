@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from rclpy.clock import ROSClock
 from rclpy.clock_type import ClockType
+from rclpy.constants import S_TO_NS
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
@@ -123,7 +124,12 @@ class TimeSource:
 
     def clock_callback(self, msg: Any) -> None:
         """Set every attached clock to the time of a /clock message."""
-        time_from_msg = Time.from_msg(msg.clock)
+        stamp = msg.clock
+        nanoseconds = stamp.sec * S_TO_NS + stamp.nanosec
+        if type(nanoseconds) is int and 0 <= nanoseconds < 2**63:
+            time_from_msg = Time._from_ns(nanoseconds, ClockType.ROS_TIME)  # the common case
+        else:
+            time_from_msg = Time.from_msg(stamp)  # raises what rclpy raises
         self._last_time_set = time_from_msg
         for clock in self._associated_clocks:
             clock.set_ros_time_override(time_from_msg)
