@@ -48,6 +48,10 @@ DPI = 120
 
 AXIS_COLORS = ('tab:red', 'tab:green', 'tab:blue')
 
+#: Line widths (pt) of the force figure: measured force wide underneath, ground truth thin on top.
+MEASURED_FORCE_WIDTH = 2.6
+GROUND_TRUTH_FORCE_WIDTH = 0.9
+
 
 class PlotError(Exception):
     """A figure cannot be drawn as asked."""
@@ -167,21 +171,26 @@ def figure_force_response(run: Run) -> Figure | None:
     fig = _figure()
     ax = fig.add_subplot()
     _shade_contact(ax, run)
+    # Without sensor noise the two forces coincide: the measured force is drawn wide underneath
+    # and the ground truth thin, dashed and on top, so that both stay visible.
     if run.controller is not None:
         ctrl = run.controller
         ax.plot(
             ctrl.t,
             ctrl.F_e[:, 0],
             color='tab:blue',
-            linewidth=1.2,
+            linewidth=MEASURED_FORCE_WIDTH,
+            zorder=2,
             label='$F_e$ measured (controller)',
         )
     if run.contact is not None:
         ax.plot(
             run.contact.t,
             run.contact.force[:, 0],
+            '--',
             color='k',
-            linewidth=0.9,
+            linewidth=GROUND_TRUTH_FORCE_WIDTH,
+            zorder=3,
             label='$F_e$ ground truth (simulator)',
         )
     metrics = compute_metrics(run)

@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from uvms_bringup.plots import RECORDING_FIGURES, main
+from uvms_bringup.analysis import load_run
+from uvms_bringup.plots import RECORDING_FIGURES, figure_force_response, main
 
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 
@@ -44,6 +45,20 @@ def test_recording_figure_is_a_png_of_legible_size(moving_wall_figures: Path, na
     """Each figure is a real PNG at least 960 px wide and 600 px high (8 x 5 in at 120 dpi)."""
     width, height = png_size(moving_wall_figures / name)
     assert width >= 960 and height >= 600
+
+
+def test_ground_truth_force_is_drawn_thin_over_the_wider_measured_force(
+    contact_recording: Path,
+) -> None:
+    """Noise-free, the two forces coincide: the thin dashed truth on top leaves both visible."""
+    fig = figure_force_response(load_run(contact_recording))
+    assert fig is not None
+    lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    measured = lines['$F_e$ measured (controller)']
+    truth = lines['$F_e$ ground truth (simulator)']
+    assert truth.get_zorder() > measured.get_zorder()
+    assert truth.get_linewidth() < measured.get_linewidth() / 2
+    assert truth.get_linestyle() == '--'
 
 
 def test_figures_without_their_topics_are_skipped_with_a_note(
