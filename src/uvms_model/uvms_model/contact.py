@@ -98,7 +98,7 @@ class WallContact:
         if not math.isfinite(t):
             raise StateError(f't must be finite, got {t!r}')
         x = _point('x_ee_ned', x_ee_ned)
-        v = np.zeros(3) if v_ee_ned is None else _point('v_ee_ned', v_ee_ned)
+        v_x = 0.0 if v_ee_ned is None else float(_point('v_ee_ned', v_ee_ned)[0])
         wall_x = self.wall_position(t)
         wall_v = self.wall_velocity(t)
         penetration = float(x[0]) - wall_x
@@ -106,7 +106,7 @@ class WallContact:
         if penetration <= 0.0:
             return ContactState(False, force, 0.0, wall_x, wall_v)
         normal = self.params.stiffness_n_m * penetration + self.params.damping_n_s_m * (
-            float(v[0]) - wall_v
+            v_x - wall_v
         )
         force[0] = max(0.0, normal)
         return ContactState(True, force, penetration, wall_x, wall_v)

@@ -169,7 +169,7 @@ class Plant:
         self._thrusts = np.zeros(self.n_thrusters)
         self._joint_torques = np.zeros(self.n_joints)
         self._failure: SimulationError | None = None
-        self._check_state('initial state')
+        self._check_state(None)
 
     @property
     def t_ns(self) -> int:
@@ -297,7 +297,7 @@ class Plant:
         previous = (self._q, self._w)
         self._q, self._w = q, w
         try:
-            self._check_state(f'the step from t = {t_s:.3f} s')
+            self._check_state(t_s)
         except DivergenceError as exc:
             self._q, self._w = previous
             self._fail(exc)
@@ -318,8 +318,12 @@ class Plant:
         result: FloatArray = self.model.ee_jacobian(self._q) @ q_dot
         return result
 
-    def _check_state(self, where: str) -> None:
-        """Raise DivergenceError if the state is non-finite or out of its bounds."""
+    def _check_state(self, t_s: float | None) -> None:
+        """Raise DivergenceError if the state is non-finite or out of its bounds.
+
+        Args:
+            t_s: Start time (s) of the step that led to the state; None for the initial state.
+        """
         q, w, lim = self._q, self._w, self._limits
         q_list, w_list = q.tolist(), w.tolist()
         # A finite sum is the cheap test (a huge finite sum may overflow: then look again).
@@ -328,7 +332,7 @@ class Plant:
             names = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', 'joint 1', 'joint 2', 'joint 3')
             label, vector = ('q', q) if not np.isfinite(q).all() else ('w', w)
             i = int(np.flatnonzero(~np.isfinite(vector))[0])
-            msg = f'{where}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
+            msg = f'{_where(t_s)}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
             raise DivergenceError(msg)
         x, y, z = q_list[:3]
         u, v, w_, p, q_, r, dq1, dq2, dq3 = w_list
@@ -345,10 +349,15 @@ class Plant:
         for label, value, limit, unit in checks:
             if value > limit:
                 msg = (
-                    f'{where}: the state diverged: {label} = {value:.4g} {unit} exceeds '
+                    f'{_where(t_s)}: the state diverged: {label} = {value:.4g} {unit} exceeds '
                     f'{limit:g} {unit}'
                 )
                 raise DivergenceError(msg)
+
+
+def _where(t_s: float | None) -> str:
+    """Name the state of a check: the initial one, or the one after the step from t_s."""
+    return 'initial state' if t_s is None else f'the step from t = {t_s:.3f} s'
 
 
 def _actuator_vector(name: str, value: ArrayLike, size: int, unit: str) -> FloatArray:

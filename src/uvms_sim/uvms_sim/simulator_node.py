@@ -203,7 +203,7 @@ class SimulatorNode(Node):
 
     def _step(self) -> None:
         """One plant step with the command, or zeros when there is none or it is stale."""
-        thrusts, torques = [0.0] * self._plant.n_thrusters, [0.0] * self._plant.n_joints
+        thrusts = torques = None
         if self._command is not None:
             age_ns = self._plant.t_ns - self._command[0]
             stale = age_ns > self._settings.watchdog_timeout_ns
@@ -217,6 +217,8 @@ class SimulatorNode(Node):
             self._stale = stale
             if not stale:
                 thrusts, torques = self._command[1], self._command[2]
+        if thrusts is None:
+            thrusts, torques = [0.0] * self._plant.n_thrusters, [0.0] * self._plant.n_joints
         try:
             self._plant.step(thrusts, torques)
         except SimulationError as exc:
