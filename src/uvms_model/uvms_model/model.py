@@ -64,7 +64,7 @@ def _vector(name: str, value: ArrayLike, size: int) -> FloatArray:
     array = np.asarray(value, dtype=float)
     if array.shape != (size,):
         raise StateError(f'{name} must have shape ({size},), got {array.shape}')
-    if not math.isfinite(float(array.sum())):
+    if not math.isfinite(sum(array.tolist())):  # sum of floats: cheaper than ndarray.sum
         raise StateError(f'{name} must be finite, got {array.tolist()!r}')
     return array
 
@@ -643,7 +643,7 @@ class UvmsModel:
         if (
             state.shape != (2 * N_DOF,)
             or tau_b.shape != (N_DOF,)
-            or not math.isfinite(float(state.sum() + tau_b.sum()))
+            or not math.isfinite(sum(state.tolist()) + sum(tau_b.tolist()))
         ):
             # Slow path, only to name the offending argument.
             _vector('q', q, N_DOF)
@@ -663,7 +663,7 @@ class UvmsModel:
         else:
             raise ModelError(f"method = {method!r} must be 'rk4' or 'semi_implicit_euler'")
         q_new, w_new = state_new[:N_DOF], state_new[N_DOF:]
-        if not math.isfinite(float(state_new.sum())):
+        if not math.isfinite(sum(state_new.tolist())):
             q, w = state[:N_DOF], state[N_DOF:]
             raise StateError(
                 f'the state diverged in one step of dt = {dt!r} s from q = {q.tolist()!r}, '
