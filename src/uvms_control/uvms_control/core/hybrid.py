@@ -36,8 +36,9 @@ class HybridLaw:
     is in charge (the constrained phase, W <= 0.1): out of contact the force error cannot be
     reduced by pushing, and during the fuzzy hand-over (0.1 < W < 1) the impedance law still
     holds the force back, so an integral running then only winds up and overshoots F_d once
-    the hybrid law takes over (15 % on the K_e = 1e4 wall when it ran for any W < 1). It is also clamped to ±``integral_limit`` (N s), which bounds what it can
-    command if the force cannot be reached (thruster or motor saturation, a receding wall).
+    the hybrid law takes over (15 % on the K_e = 1e4 wall when it ran for any W < 1). It is
+    also clamped to ±``integral_limit`` (N s), which bounds what it can command if the force
+    cannot be reached (thruster or motor saturation, a receding wall).
 
     Example:
         >>> law = HybridLaw(np.array([1.0, 0.0, 0.0]), 100.0 * np.eye(3), 20.0 * np.eye(3),
