@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
 
 import pytest
 import rclpy
@@ -22,15 +21,6 @@ from rclpy.impl.implementation_singleton import RCLError
 from rclpy.node import Node
 from rclpy.task import Future
 from std_msgs.msg import Int32, String
-
-
-@pytest.fixture
-def context() -> Iterator[Context]:
-    """A context initialized without ROS arguments, shut down after the test."""
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    yield ctx
-    ctx.try_shutdown()
 
 
 def one_shot_timer(node: Node, log: list[str], label: str) -> None:

@@ -9,7 +9,6 @@ import re
 from collections.abc import Iterator
 
 import pytest
-import rclpy
 from rcl_interfaces.msg import Log
 from rclpy.clock import ROSClock
 from rclpy.context import Context
@@ -29,15 +28,6 @@ def clean_levels(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     clear_config()
     yield
     clear_config()
-
-
-@pytest.fixture
-def context() -> Iterator[Context]:
-    """A context initialized without ROS arguments, shut down after the test."""
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    yield ctx
-    ctx.try_shutdown()
 
 
 def test_console_line_has_ros2_format_on_stderr(capfd: pytest.CaptureFixture[str]) -> None:

@@ -5,7 +5,6 @@ Each test states the behaviour of rclpy (Jazzy) or rcl_yaml_param_parser it mirr
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -27,23 +26,6 @@ from rclpy.exceptions import (
 from rclpy.impl.implementation_singleton import RCLError
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-
-
-@pytest.fixture
-def context() -> Iterator[Context]:
-    """A context initialized without ROS arguments, shut down after the test."""
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    yield ctx
-    ctx.try_shutdown()
-
-
-@pytest.fixture
-def node(context: Context) -> Iterator[Node]:
-    """A node in the root namespace."""
-    n = Node('tester', context=context)
-    yield n
-    n.destroy_node()
 
 
 def make_node(args: list[str], name: str = 'controller', namespace: str = '/uvms',

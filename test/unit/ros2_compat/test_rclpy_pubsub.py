@@ -28,23 +28,6 @@ from std_msgs.msg import Float64, String
 
 
 @pytest.fixture
-def context() -> Iterator[Context]:
-    """A context initialized without ROS arguments, shut down after the test."""
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    yield ctx
-    ctx.try_shutdown()
-
-
-@pytest.fixture
-def node(context: Context) -> Iterator[Node]:
-    """A node in the root namespace."""
-    n = Node('tester', context=context)
-    yield n
-    n.destroy_node()
-
-
-@pytest.fixture
 def executor(context: Context, node: Node) -> Iterator[SingleThreadedExecutor]:
     """A single-threaded executor spinning ``node``."""
     ex = SingleThreadedExecutor(context=context)

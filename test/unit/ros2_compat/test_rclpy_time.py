@@ -6,7 +6,6 @@ Each test states the behaviour of rclpy (Jazzy, with rcl's timer rules) it mirro
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
 
 import pytest
 import rclpy
@@ -21,15 +20,6 @@ from rclpy.time import Time
 from rosgraph_msgs.msg import Clock as ClockMsg
 
 MS = 1_000_000
-
-
-@pytest.fixture
-def context() -> Iterator[Context]:
-    """A context initialized without ROS arguments, shut down after the test."""
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    yield ctx
-    ctx.try_shutdown()
 
 
 class SimClock:
