@@ -15,10 +15,15 @@ BIN := $(VENV)/bin
 
 .PHONY: demo test test-py312 setup clean
 
-setup: $(VENV)/.installed
+setup: $(VENV)/.interfaces
 
-# A virtualenv with the project installed editable and the pins of pyproject.toml.
+INTERFACES := $(shell find src/uvms_msgs interfaces -type f)
+
+# A virtualenv with genuine ROS 2 Jazzy from PyPI wheels, the project installed editable and
+# the pins of pyproject.toml; then our interface packages built into it with Jazzy's rosidl
+# generators (rebuilt when a file of theirs changes).
 define make_venv
+	@tools/check-platform $(1)
 	$(1) -m venv $(2)
 	$(2)/bin/python -m pip install --quiet --upgrade pip
 	$(2)/bin/python -m pip install --quiet -e '.[test]'
@@ -30,6 +35,14 @@ $(VENV)/.installed: pyproject.toml
 
 $(VENV_312)/.installed: pyproject.toml
 	$(call make_venv,$(PYTHON_312),$(VENV_312))
+
+$(VENV)/.interfaces: $(VENV)/.installed $(INTERFACES) tools/build_interfaces.py
+	$(VENV)/bin/python tools/build_interfaces.py
+	touch $@
+
+$(VENV_312)/.interfaces: $(VENV_312)/.installed $(INTERFACES) tools/build_interfaces.py
+	$(VENV_312)/bin/python tools/build_interfaces.py
+	touch $@
 
 demo: setup
 	$(BIN)/uvms run config/scenarios/$(SCENARIO).yaml --output $(OUT)/$(SCENARIO).mcap
@@ -46,7 +59,7 @@ test-py312:
 ifeq ($(PYTHON_312),)
 	@echo 'make test: no Python 3.12 interpreter found; the suite ran on Python 3.11 only'
 else
-	$(MAKE) --no-print-directory $(VENV_312)/.installed
+	$(MAKE) --no-print-directory $(VENV_312)/.interfaces
 	$(VENV_312)/bin/pytest -q
 endif
 

@@ -1,6 +1,6 @@
-"""Test-wide setup: make `import rclpy` resolve to ros2_compat when no ROS 2 is sourced."""
+"""Test-wide setup: the project's ROS 2 defaults (loopback-only Fast DDS profile) for rclpy."""
 
-import ros2_compat
+from uvms_bringup.ros_environment import ros_environment_defaults
 
-# Idempotent, and a no-op in effect under a sourced ROS 2: the fallback finder is asked last.
-ros2_compat.activate()
+# Before any test creates a DDS participant; a user's own settings win (see the module).
+ros_environment_defaults()

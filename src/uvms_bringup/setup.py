@@ -16,7 +16,8 @@ setup(
         ('share/' + package_name, ['package.xml']),
         (os.path.join('share', package_name, 'launch'), glob('launch/*.launch.py')),
         # The parameter files live at the repository top (config/); this package installs them.
-        (os.path.join('share', package_name, 'config'), glob('../../config/*.yaml')),
+        (os.path.join('share', package_name, 'config'),
+         glob('../../config/*.yaml') + glob('../../config/*.xml')),
         (
             os.path.join('share', package_name, 'config', 'scenarios'),
             glob('../../config/scenarios/*.yaml'),

@@ -19,6 +19,8 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
 
+from uvms_bringup.ros_environment import ros_environment_defaults
+
 if TYPE_CHECKING:
     from uvms_bringup.graph import Graph
 
@@ -33,26 +35,9 @@ DELEGATED = {
                                       'the controller on it'),
     'plot': ('uvms_bringup.plots', "draw the paper's figures from a recording (PNG)"),
     'report': ('uvms_bringup.report', 'print the metrics of recordings'),
-    'doctor': ('uvms_bringup.doctor', 'show the active ROS 2 runtime and check the messages'),
+    'doctor': ('uvms_bringup.doctor', 'show rclpy, rmw and DDS profile in use and check the '
+                                      'messages'),
 }
-
-
-def _activate_runtime() -> None:
-    """Make ``import rclpy`` work: a sourced ROS 2 wins, else the bundled ros2_compat."""
-    try:
-        import ros2_compat
-    except ImportError:  # a ROS 2 install without the compat runtime
-        return
-    ros2_compat.activate()
-
-
-def _runtime_is_compat() -> bool:
-    """True when rclpy resolves to the bundled compat runtime (no ROS 2 sourced)."""
-    try:
-        import ros2_compat
-    except ImportError:
-        return False
-    return ros2_compat.rclpy_is_compat()
 
 
 def _positive_seconds(text: str) -> float:
@@ -119,7 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``uvms``; returns the exit status."""
     args_list = list(sys.argv[1:] if argv is None else argv)
-    _activate_runtime()
+    ros_environment_defaults()
     if args_list and args_list[0] in DELEGATED:
         module = importlib.import_module(DELEGATED[args_list[0]][0])
         try:
@@ -155,8 +140,6 @@ def _run(args: argparse.Namespace) -> int:
 
 def _launch(args: argparse.Namespace) -> int:
     """``uvms launch``: real-time graph, as processes on ROS 2, else in this process."""
-    if not _runtime_is_compat():
-        return _ros2_launch(args)
     return _run_in_process(args, args.mode, progress=False)
 
 

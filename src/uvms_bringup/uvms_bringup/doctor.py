@@ -1,8 +1,7 @@
-"""`uvms doctor`: which ROS 2 runtime is active, and whether our messages load and round-trip.
+"""`uvms doctor`: which rclpy and rmw run, which DDS profile, and whether our messages work.
 
-Works on both runtimes: with ROS 2 Jazzy sourced it imports the real rclpy and message
-packages; without, the ros2_compat runtime. It touches ros2_compat only through its public
-``rclpy_is_compat()`` and ``activate()``.
+rclpy is the genuine one either way: Jazzy's PyPI wheels in the project venv, or a sourced
+ROS 2 Jazzy install (which comes first on ``sys.path`` when sourced).
 """
 
 from __future__ import annotations
@@ -17,6 +16,8 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
+
+from uvms_bringup.ros_environment import network_summary, ros_environment_defaults
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -59,49 +60,42 @@ USED_MESSAGE_TYPES = (
 )
 
 #: Python distributions whose versions the report shows; all are needed to run the stack.
-DISTRIBUTIONS = ('numpy', 'scipy', 'rosbags', 'mcap', 'PyYAML')
+DISTRIBUTIONS = ('numpy', 'scipy', 'rosbags', 'mcap', 'PyYAML', 'matplotlib')
 
 
 @dataclass
 class Runtime:
-    """Which rclpy `import rclpy` gives."""
+    """Which rclpy `import rclpy` gives, and on which middleware."""
 
     kind: str
     path: str
+    version: str = ''
+    rmw: str = ''
     notes: list[str] = field(default_factory=list)
 
 
 def detect_runtime() -> Runtime:
-    """Find the active rclpy: a sourced ROS 2 wins; else ros2_compat (activated if needed)."""
-    notes: list[str] = []
+    """Import rclpy (a sourced ROS 2 install's, or the venv's Jazzy wheels) and describe it."""
     try:
-        import ros2_compat
-    except ImportError:
-        ros2_compat = None  # type: ignore[assignment]
-    if importlib.util.find_spec('rclpy') is None and ros2_compat is not None:
-        ros2_compat.activate()
-        notes.append('ros2_compat fallback finder was not registered; doctor activated it')
-    spec = importlib.util.find_spec('rclpy')
-    if spec is None:
-        return Runtime('none', '', [*notes, 'no rclpy: neither ROS 2 nor ros2_compat'])
-    locations = list(spec.submodule_search_locations or [])
-    path = spec.origin or (locations[0] if locations else '?')
-    if ros2_compat is not None and _is_compat(ros2_compat, locations):
-        if os.environ.get('ROS_DISTRO'):
-            notes.append('ROS_DISTRO is set but rclpy is not importable from that install')
-        return Runtime('ros2_compat', path, notes)
-    distro = os.environ.get('ROS_DISTRO', '')
-    if distro != 'jazzy':
-        notes.append(f'this stack targets ROS 2 Jazzy; ROS_DISTRO is {distro or "unset"!r}')
-    return Runtime('ros2', path, notes)
-
-
-def _is_compat(ros2_compat: Any, locations: list[str]) -> bool:
-    """Tell whether rclpy is ros2_compat's (its package directory inside the overlay)."""
-    if ros2_compat.rclpy_is_compat():
-        return True
-    overlay = Path(ros2_compat.OVERLAY_DIR)
-    return any(Path(location).resolve().is_relative_to(overlay) for location in locations)
+        import rclpy
+        from rclpy.utilities import get_rmw_implementation_identifier
+    except ImportError as exc:
+        return Runtime('none', '', notes=[f'import rclpy failed: {exc}; run `make setup` or '
+                                          'source ROS 2 Jazzy (README)'])
+    path = str(Path(rclpy.__file__).resolve().parent)
+    version = ''
+    for distribution in ('ros-rclpy', 'ros-jazzy-rclpy', 'rclpy'):
+        try:
+            version = importlib.metadata.version(distribution)
+            break
+        except importlib.metadata.PackageNotFoundError:
+            continue
+    kind = 'wheels' if Path(sys.prefix) in Path(path).parents else 'sourced'
+    try:
+        rmw = get_rmw_implementation_identifier()
+    except Exception as exc:  # rmw library missing or broken
+        rmw = f'unavailable ({type(exc).__name__}: {exc})'
+    return Runtime(kind, path, version, rmw)
 
 
 def _load_class(typename: str) -> type:
@@ -171,14 +165,17 @@ def report(out: TextIO, types: Sequence[str] = USED_MESSAGE_TYPES) -> bool:
     """Write the doctor report to out and tell whether everything is in order."""
     runtime = detect_runtime()
     runtime_text = {
-        'ros2': 'ROS 2 (real rclpy)',
-        'ros2_compat': 'ros2_compat (in-process compatibility runtime, no ROS 2 sourced)',
+        'wheels': 'ROS 2 Jazzy from PyPI wheels (genuine rclpy in this venv)',
+        'sourced': 'ROS 2 from a sourced install (genuine rclpy)',
         'none': 'NONE',
     }[runtime.kind]
     out.write('uvms doctor\n')
     out.write(f'  runtime     {runtime_text}\n')
-    out.write(f'  rclpy       {runtime.path or "-"}\n')
+    out.write(f'  rclpy       {runtime.version or "?"} at {runtime.path or "-"}\n')
+    out.write(f'  rmw         {runtime.rmw or "-"}\n')
     out.write(f'  ROS_DISTRO  {os.environ.get("ROS_DISTRO") or "(unset)"}\n')
+    for line in network_summary():
+        out.write(f'  {line}\n')
     out.write(f'  python      {platform.python_version()} ({sys.executable})\n')
     versions, found = _distribution_versions()
     for name, version in versions:
@@ -200,10 +197,11 @@ def main(argv: list[str] | None = None) -> int:
     """Print the report; return 0 when the runtime, dependencies and messages are all fine."""
     parser = argparse.ArgumentParser(
         prog='uvms doctor',
-        description='Show the active ROS 2 runtime (real rclpy or ros2_compat) and check that '
+        description='Show which rclpy and rmw run, the DDS profile in force, and check that '
         'every message type of the stack loads and round-trips through CDR.',
     )
     parser.parse_args(argv)
+    ros_environment_defaults()
     return 0 if report(sys.stdout) else 1
 
 

@@ -184,7 +184,9 @@ def config_dir() -> Path:
 
         try:
             candidates.append(Path(get_package_share_directory('uvms_bringup')) / 'config')
-        except PackageNotFoundError:
+        except (PackageNotFoundError, OSError, ValueError):
+            # Not installed by colcon, or no ament index at all: a wheel venv has no
+            # AMENT_PREFIX_PATH and ament_index_python raises an OSError then.
             pass
     for candidate in candidates:
         if (candidate / 'robot.yaml').is_file():

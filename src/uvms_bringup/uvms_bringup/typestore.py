@@ -3,9 +3,7 @@
 from __future__ import annotations
 
 import functools
-import importlib.util
 import re
-import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -51,24 +49,12 @@ def _ament_share_msg_directory() -> Path | None:
         return None
 
 
-def _installed_wheel_msg_directories() -> list[Path]:
-    """Where `pip install` puts the .msg files: site-packages/ros2_compat/_interfaces."""
-    relative = Path('ros2_compat', '_interfaces', UVMS_MSGS_PACKAGE, 'msg')
-    roots = [Path(__file__).resolve().parents[1]]
-    # find_spec locates the package without importing (and so activating) ros2_compat.
-    spec = importlib.util.find_spec('ros2_compat')
-    if spec is not None and spec.submodule_search_locations:
-        roots.extend(Path(location).parent for location in spec.submodule_search_locations)
-    roots.extend(Path(entry) for entry in sys.path if entry)
-    return [root / relative for root in roots]
-
-
 def uvms_msgs_directory() -> Path:
     """Directory holding the uvms_msgs .msg files.
 
-    Looked up, in order: the ament index of a sourced ROS 2 install (share/uvms_msgs/msg),
-    the source tree (src/uvms_msgs/msg next to this package), the location a wheel installs
-    them to (site-packages/ros2_compat/_interfaces/uvms_msgs/msg).
+    Looked up, in order: the ament index (share/uvms_msgs/msg of a sourced install, or of
+    the venv the interfaces were built into), the source tree (src/uvms_msgs/msg next to
+    this package).
 
     Raises:
         InterfaceError: None of these holds .msg files.
@@ -77,7 +63,6 @@ def uvms_msgs_directory() -> Path:
     candidates = [
         _ament_share_msg_directory(),
         Path(__file__).resolve().parents[2] / UVMS_MSGS_PACKAGE / 'msg',
-        *_installed_wheel_msg_directories(),
     ]
     tried: list[str] = []
     for candidate in candidates:

@@ -4,17 +4,24 @@ from __future__ import annotations
 
 import importlib.metadata
 import io
+import os
+from pathlib import Path
 
 import pytest
 
 from uvms_bringup import doctor
 
 
-def test_doctor_reports_compat_runtime_and_succeeds(capsys: pytest.CaptureFixture[str]) -> None:
-    """Without ROS 2 sourced the report names ros2_compat, lists the types and exits 0."""
+def test_doctor_reports_genuine_rclpy_rmw_and_profile(capsys: pytest.CaptureFixture[str]) -> None:
+    """The report names the imported rclpy (path, version), the rmw and the DDS profile."""
+    import rclpy
+
     assert doctor.main([]) == 0
     out = capsys.readouterr().out
-    assert 'runtime     ros2_compat' in out
+    assert f'at {Path(rclpy.__file__).resolve().parent}' in out
+    assert '  rclpy       7.1.6 at ' in out
+    assert '  rmw         rmw_fastrtps_cpp' in out
+    assert f'DDS profile {os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"]}' in out
     assert f'rosbags     {importlib.metadata.version("rosbags")}' in out
     for typename in doctor.USED_MESSAGE_TYPES:
         assert f'ok   {typename}: ok (' in out

@@ -1,5 +1,0 @@
-"""rclpy.validate_topic_name: see :func:`rclpy._names.validate_topic_name`."""
-
-from rclpy._names import validate_topic_name
-
-__all__ = ['validate_topic_name']

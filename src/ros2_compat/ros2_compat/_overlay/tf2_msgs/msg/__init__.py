@@ -1,6 +1,0 @@
-"""Message classes of tf2_msgs (ros2_compat), generated on first use."""
-
-from ros2_compat._messages import package_dir, package_getattr
-
-__getattr__ = package_getattr('tf2_msgs')
-__dir__ = package_dir('tf2_msgs')
