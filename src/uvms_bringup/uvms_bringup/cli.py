@@ -9,17 +9,12 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
-import shutil
-import signal
-import subprocess
 import sys
-import threading
-from collections.abc import Callable, Sequence
-from pathlib import Path
-from types import FrameType
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-from uvms_bringup.ros_environment import ros_environment_defaults
+from uvms_common.node_main import StopEvent
+from uvms_common.ros_environment import ros_environment_defaults
 
 if TYPE_CHECKING:
     from uvms_bringup.graph import Graph
@@ -105,6 +100,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``uvms``; returns the exit status."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     ros_environment_defaults()
+    # Installed first, so that a signal at any later point (building the graph, opening the
+    # recording) ends the run cleanly with status 130.
+    stop = StopEvent()
+    try:
+        return _main(args_list, stop)
+    finally:
+        stop.restore()
+
+
+def _main(args_list: list[str], stop: StopEvent) -> int:
+    """``main`` once the stop handlers are in place."""
     if args_list and args_list[0] in DELEGATED:
         module = importlib.import_module(DELEGATED[args_list[0]][0])
         try:
@@ -121,8 +127,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     try:
         if args.command == 'run':
-            return _run(args)
-        return _launch(args)
+            return _run(args, stop)
+        return _launch(args, stop)
     except KeyboardInterrupt:
         print('uvms: interrupted', file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -133,17 +139,19 @@ def _error(command: str, message: str) -> None:
     print(f'uvms {command}: error: {message}', file=sys.stderr)
 
 
-def _run(args: argparse.Namespace) -> int:
-    """``uvms run``: lockstep run of a scenario."""
-    return _run_in_process(args, 'lockstep', progress=not args.quiet)
+def _run(args: argparse.Namespace, stop: StopEvent) -> int:
+    """``uvms run``: lockstep run of a scenario in this process."""
+    return _run_in_process(args, 'lockstep', stop, progress=not args.quiet)
 
 
-def _launch(args: argparse.Namespace) -> int:
-    """``uvms launch``: real-time graph, as processes on ROS 2, else in this process."""
-    return _run_in_process(args, args.mode, progress=False)
+def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
+    """``uvms launch``: the graph in real time."""
+    return _run_in_process(args, args.mode, stop, progress=False)
 
 
-def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
+def _run_in_process(
+    args: argparse.Namespace, mode: str, stop: StopEvent, progress: bool
+) -> int:
     """Build and run the graph in this process; report the outcome."""
     from uvms_bringup.graph import GraphError, build_graph
     from uvms_bringup.launch_helpers import resolve_scenario_path
@@ -168,16 +176,11 @@ def _run_in_process(args: argparse.Namespace, mode: str, progress: bool) -> int:
     except GraphError as exc:
         _error(command, str(exc))
         return EXIT_FAILURE
-    previous_sigterm = _stop_on_sigterm()
-    try:
-        return _run_graph_and_report(args, graph, mode, progress)
-    finally:
-        if previous_sigterm is not None:
-            signal.signal(signal.SIGTERM, previous_sigterm)
+    return _run_graph_and_report(args, graph, mode, stop, progress)
 
 
 def _run_graph_and_report(
-    args: argparse.Namespace, graph: Graph, mode: str, progress: bool
+    args: argparse.Namespace, graph: Graph, mode: str, stop: StopEvent, progress: bool
 ) -> int:
     """Spin a built graph to its end and print the outcome."""
     from uvms_bringup.graph import GraphError, run_graph
@@ -189,7 +192,7 @@ def _run_graph_and_report(
         print(f'uvms launch: {mode} graph running in this process; Ctrl-C stops it',
               file=sys.stderr)
     try:
-        result = run_graph(graph, progress=bar)
+        result = run_graph(graph, progress=bar, stop=stop)
     except GraphError as exc:
         _error(command, str(exc))
         if args.output:
@@ -207,52 +210,11 @@ def _run_graph_and_report(
     return EXIT_INTERRUPTED if result.interrupted else EXIT_OK
 
 
-def _stop_on_sigterm() -> signal.Handlers | Callable[[int, FrameType | None], Any] | int | None:
-    """Let SIGTERM stop a run like Ctrl-C does, so the recording is closed cleanly.
-
-    Returns:
-        The handler it replaced, to be restored when the run ends (None off the main thread,
-        where signal handlers cannot be set).
-    """
-    if threading.current_thread() is not threading.main_thread():
-        return None
-    previous = signal.getsignal(signal.SIGTERM)
-
-    def interrupt(signum: int, frame: FrameType | None) -> None:
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGTERM, interrupt)
-    return previous
-
-
 def _quiet_logs() -> None:
     """Show only warnings and errors of the nodes."""
     import rclpy.logging
 
     rclpy.logging.set_logger_level('uvms', rclpy.logging.LoggingSeverity.WARN)
-
-
-def _ros2_launch(args: argparse.Namespace) -> int:
-    """Start the graph as ROS 2 processes through ``ros2 launch``."""
-    ros2 = shutil.which('ros2')
-    if ros2 is None:
-        _error('launch', 'ROS 2 rclpy is active but the ros2 command is not on PATH; '
-                         'source your ROS 2 Jazzy setup.bash')
-        return EXIT_FAILURE
-    command = [ros2, 'launch', 'uvms_bringup', 'uvms.launch.py', f'mode:={args.mode}']
-    if args.scenario is not None:
-        scenario = args.scenario
-        if Path(scenario).exists():
-            scenario = str(Path(scenario).resolve())
-        command.append(f'scenario:={scenario}')
-    if args.duration is not None:
-        command.append(f'duration:={args.duration}')
-    if args.output is not None:
-        command.append(f'output_path:={Path(args.output).resolve()}')
-    try:
-        return subprocess.call(command)
-    except KeyboardInterrupt:
-        return EXIT_INTERRUPTED
 
 
 if __name__ == '__main__':

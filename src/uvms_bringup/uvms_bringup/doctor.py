@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
-from uvms_bringup.ros_environment import network_summary, ros_environment_defaults
+from uvms_common.ros_environment import network_summary, ros_environment_defaults
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

@@ -21,13 +21,11 @@ from typing import Any
 
 import rclpy
 from rclpy.context import Context
-from rclpy.executors import (
-    ExternalShutdownException,
-    MultiThreadedExecutor,
-    SingleThreadedExecutor,
-)
+from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
+from uvms_common.node_main import StopEvent, make_executor
 
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
@@ -154,7 +152,9 @@ def build_graph(
     if scenario is not None:
         check_scenario_overrides(scenario, specs, config, namespace)
     context = Context()
-    rclpy.init(args=[], context=context)
+    # No rclpy signal handlers: they would shut the context down under running callbacks;
+    # the caller's StopEvent (uvms run) or KeyboardInterrupt ends run_graph instead.
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     graph = Graph(context=context, mode=mode, duration_s=duration_s,
                   output_path=None if output_path is None else Path(output_path))
     try:
@@ -175,30 +175,35 @@ def run_graph(
     progress: ProgressBar | None = None,
     on_spin: Callable[[Graph], None] | None = None,
     threads: int = 1,
+    stop: StopEvent | None = None,
+    executor_kind: str | None = None,
 ) -> RunResult:
-    """Spin the graph until its duration (simulated time) or Ctrl-C, then destroy it.
+    """Spin the graph until its duration (simulated time), a stop signal or Ctrl-C.
 
-    Lockstep always spins a SingleThreadedExecutor (one chain of callbacks, deterministic).
-    Real time spins one too by default: in one Python process the callbacks share the
-    interpreter lock, and a MultiThreadedExecutor measured more jitter and missed periods
-    (bench/bench_realtime.py --threads 2), so ``threads`` > 1 is an option, not the default.
+    One single-threaded executor spins every node (``make_executor``: the EventsExecutor
+    unless ``UVMS_EXECUTOR`` or ``executor_kind`` say otherwise); lockstep is one chain of
+    callbacks and deterministic either way. In one Python process the callbacks share the
+    interpreter lock, so ``threads`` > 1 (a MultiThreadedExecutor, real time only) is an
+    option, not the default.
 
     Args:
         graph: A graph from ``build_graph``.
         progress: Progress bar to update, if any.
         on_spin: Called after every executor turn (tests and benchmarks).
         threads: Threads of a MultiThreadedExecutor for real time; 1 spins single-threaded.
+        stop: Set by SIGINT/SIGTERM (``uvms run``); the run then ends as interrupted.
+        executor_kind: ``events`` or ``single``; None: ``UVMS_EXECUTOR`` or ``events``.
 
     Raises:
         GraphError: A node raised (e.g. the simulation diverged); the recording is closed
             up to that point.
     """
     sim = graph.simulator
-    executor: SingleThreadedExecutor | MultiThreadedExecutor
+    executor: Executor
     if threads > 1 and graph.mode == 'realtime':
         executor = MultiThreadedExecutor(num_threads=threads, context=graph.context)
     else:
-        executor = SingleThreadedExecutor(context=graph.context)
+        executor = make_executor(executor_kind, graph.context)
     for node in graph.nodes.values():
         executor.add_node(node)
     output_path = graph.output_path
@@ -206,6 +211,8 @@ def run_graph(
     start = time.monotonic()
     try:
         while not sim.finished:
+            if stop is not None and stop.is_set():
+                raise KeyboardInterrupt
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT_S)
             if progress is not None:
                 progress.update(sim.sim_time_ns * 1e-9)
@@ -340,7 +347,7 @@ def check_scenario_overrides(
     if not to_check:
         return
     context = Context()
-    rclpy.init(args=[], context=context)
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     try:
         for spec in to_check:
             node = _make_node(spec, {}, config, namespace, context)

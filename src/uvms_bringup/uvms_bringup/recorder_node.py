@@ -4,23 +4,21 @@ from __future__ import annotations
 
 import functools
 import importlib
-import signal
+import sys
 import threading
 from collections.abc import Sequence
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
-import rclpy
 from rcl_interfaces.msg import (
     FloatingPointRange,
     IntegerRange,
     ParameterDescriptor,
 )
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from uvms_common.node_main import run_node
 
 from uvms_bringup.recording import (
     DEFAULT_CHUNK_SIZE,
@@ -281,43 +279,9 @@ class RecorderNode(Node):
         super().destroy_node()
 
 
-def _request_shutdown(signum: int, frame: FrameType | None) -> None:
-    """Stop spinning on SIGINT/SIGTERM, raising nothing inside a callback (no half record)."""
-    rclpy.try_shutdown()
-
-
-def _install_shutdown_handlers() -> dict[int, Any]:
-    """Make SIGINT and SIGTERM shut rclpy down; returns the handlers they replace.
-
-    Installed before `rclpy.init()`, so that a real rclpy chains its own handlers to these
-    (and wakes the executor). Only the main thread may install signal handlers.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        return {}
-    return {sig: signal.signal(sig, _request_shutdown) for sig in (signal.SIGINT, signal.SIGTERM)}
-
-
 def main(args: Sequence[str] | None = None) -> None:
     """Run the recorder until SIGINT or SIGTERM, then close the MCAP file cleanly."""
-    previous_handlers = _install_shutdown_handlers()
-    rclpy.init(args=args)
-    try:
-        node = RecorderNode()
-    except (RecordingError, ParameterException) as error:
-        rclpy.logging.get_logger('recorder').fatal(str(error))
-        rclpy.try_shutdown()
-        raise SystemExit(1) from None
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.close()
-        node.destroy_node()
-        rclpy.try_shutdown()
-        for sig, handler in previous_handlers.items():
-            signal.signal(sig, handler)
-
+    sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException)))
 
 if __name__ == '__main__':
     main()

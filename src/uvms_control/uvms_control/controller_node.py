@@ -17,13 +17,13 @@ from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
-import rclpy
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
-from rclpy.executors import ExternalShutdownException
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from uvms_common.node_main import run_node
 
 from uvms_control import conversions
 from uvms_control.core.errors import ControlInputError, ControlParameterError
@@ -189,22 +189,9 @@ class ControllerNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the controller node until shutdown."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = ControllerNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ControlParameterError as error:
-        rclpy.logging.get_logger('controller').fatal(str(error))
-        sys.exit(1)
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    """Run the controller node until SIGINT/SIGTERM."""
+    sys.exit(run_node(ControllerNode, args, 'controller',
+                      (ControlParameterError, ParameterException)))
 
 if __name__ == '__main__':
     main()

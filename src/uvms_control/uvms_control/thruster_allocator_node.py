@@ -15,10 +15,10 @@ import sys
 from typing import Any
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from uvms_common.node_main import run_node
 from uvms_model.thrusters import ThrusterLayout
 
 from uvms_control import conversions
@@ -148,22 +148,9 @@ class ThrusterAllocatorNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the thruster allocator node until shutdown."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = ThrusterAllocatorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ControlParameterError as error:
-        rclpy.logging.get_logger('thruster_allocator').fatal(str(error))
-        sys.exit(1)
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    """Run the thruster allocator node until SIGINT/SIGTERM."""
+    sys.exit(run_node(ThrusterAllocatorNode, args, 'thruster_allocator',
+                      (ControlParameterError, ParameterException)))
 
 if __name__ == '__main__':
     main()

@@ -11,17 +11,16 @@ from __future__ import annotations
 import sys
 from typing import Any
 
-import rclpy
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
+from uvms_common.node_main import run_node
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
@@ -248,22 +247,9 @@ class SimulatorNode(Node):
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the simulator node until shutdown."""
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SimulatorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (SimParameterError, SimulationError) as exc:
-        rclpy.logging.get_logger('simulator').fatal(str(exc))
-        sys.exit(1)
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-
+    """Run the simulator node until SIGINT/SIGTERM or the end of its duration."""
+    sys.exit(run_node(SimulatorNode, args, 'simulator', (SimParameterError, ParameterException),
+                      finished=lambda node: node.finished))
 
 if __name__ == '__main__':
     main()

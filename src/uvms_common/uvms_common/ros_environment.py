@@ -1,11 +1,11 @@
 """ROS 2 environment defaults that everything the project starts runs with: loopback-only DDS.
 
-Applied by the ``uvms`` command, the node console scripts of a pip install, the launch
-file, the tests and the benchmarks, before ``rclpy.init`` creates a DDS participant. Each
+Applied by every node's ``main`` (``uvms_common.node_main``), the ``uvms`` command, the
+launch file, the tests and the benchmarks, before ``rclpy.init`` creates a DDS participant. Each
 variable is set only where the user has not set it: a user's own choice always wins.
 
 - ``FASTRTPS_DEFAULT_PROFILES_FILE``: the project's Fast DDS profile
-  (``config/fastdds_loopback.xml``): shared memory plus UDPv4 restricted to 127.0.0.1,
+  (``uvms_common/fastdds_loopback.xml``): shared memory plus UDPv4 restricted to 127.0.0.1,
   no builtin transports, discovery by unicast to 127.0.0.1.
 - ``ROS_AUTOMATIC_DISCOVERY_RANGE``: ``SYSTEM_DEFAULT``, which leaves transports and
   discovery to that profile. ``LOCALHOST`` would not keep the traffic on loopback:
@@ -30,18 +30,8 @@ PROFILE_FILE_NAME = 'fastdds_loopback.xml'
 
 
 def loopback_profile_path() -> Path:
-    """The shipped loopback-only Fast DDS profile (next to the parameter files).
-
-    Raises:
-        FileNotFoundError: The profile is not installed with the parameter files.
-    """
-    from uvms_bringup.launch_helpers import config_dir
-
-    path = config_dir() / PROFILE_FILE_NAME
-    if not path.is_file():
-        msg = f'the loopback Fast DDS profile {path} is missing'
-        raise FileNotFoundError(msg)
-    return path
+    """The shipped loopback-only Fast DDS profile (package data of uvms_common)."""
+    return Path(__file__).resolve().parent / PROFILE_FILE_NAME
 
 
 def ros_environment_defaults(

@@ -1,0 +1,1 @@
+"""What every UVMS node process shares: loopback-only DDS defaults and the node main loop."""

@@ -1,0 +1,152 @@
+"""The main loop every UVMS node process runs: init, spin until a signal, shut down cleanly.
+
+rclpy's own signal handler shuts the context down from inside the signal, while callbacks
+may still run: a timer then publishes on an invalid context and the process ends with a
+traceback (``RCLError: Failed to publish: publisher's context is invalid``, measured on
+Jazzy). So rclpy is initialised without its handlers; SIGINT and SIGTERM only set an event,
+the executor spins in short turns and checks it, and the node is destroyed before the
+context is shut down. The same holds before the executor exists: a signal during start-up
+stops the process after the node is built, without a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from collections.abc import Callable, Sequence
+from types import FrameType
+from typing import Any
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+
+from uvms_common.ros_environment import ros_environment_defaults
+
+#: Executors a node process can spin on; ``UVMS_EXECUTOR`` picks one (default ``events``).
+EXECUTORS = ('events', 'single')
+#: Longest wait of one executor turn before the stop event is checked again (s).
+SPIN_TURN_S = 0.1
+#: Exit status of a node stopped by a signal, as a shell reports SIGINT.
+EXIT_INTERRUPTED = 130
+
+
+class StopEvent:
+    """Set by SIGINT or SIGTERM; restores the previous handlers on ``restore``."""
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+        self._previous: dict[int, Any] = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._previous[sig] = signal.signal(sig, self._on_signal)
+        self.signal_number = 0
+
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        self.signal_number = signum
+        self._event.set()
+
+    def is_set(self) -> bool:
+        """Whether a stop signal arrived."""
+        return self._event.is_set()
+
+    def set(self) -> None:
+        """Ask the loop to stop (as a signal would)."""
+        self._event.set()
+
+    def restore(self) -> None:
+        """Put the handlers back that were installed before."""
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+        self._previous.clear()
+
+
+def make_executor(kind: str | None = None, context: Context | None = None) -> Executor:
+    """The executor a node process spins on.
+
+    Args:
+        kind: ``events`` (rclpy.experimental.EventsExecutor, the fastest here) or
+            ``single`` (SingleThreadedExecutor); None reads ``UVMS_EXECUTOR``.
+        context: The rclpy context (the default one if None).
+
+    Raises:
+        ValueError: An unknown kind; the message names the valid ones.
+    """
+    kind = kind or os.environ.get('UVMS_EXECUTOR', 'events')
+    if kind == 'events':
+        from rclpy.experimental import EventsExecutor
+
+        return EventsExecutor(context=context)
+    if kind == 'single':
+        return SingleThreadedExecutor(context=context)
+    msg = f'executor {kind!r} (UVMS_EXECUTOR): valid: {", ".join(EXECUTORS)}'
+    raise ValueError(msg)
+
+
+def spin_until_stopped(
+    executor: Executor,
+    stop: StopEvent,
+    finished: Callable[[], bool] = lambda: False,
+    context: Context | None = None,
+) -> None:
+    """Spin in short turns until a stop signal, ``finished()``, or the context shuts down."""
+    while not stop.is_set() and not finished() and rclpy.ok(context=context):
+        executor.spin_once(timeout_sec=SPIN_TURN_S)
+
+
+def run_node(
+    make_node: Callable[[], Node],
+    args: Sequence[str] | None,
+    logger_name: str,
+    startup_errors: tuple[type[Exception], ...] = (),
+    finished: Callable[[Node], bool] | None = None,
+) -> int:
+    """Build a node and spin it until SIGINT/SIGTERM; return the process exit status.
+
+    Args:
+        make_node: Builds the node (after ``rclpy.init``).
+        args: Command-line arguments for rclpy (``--ros-args ...``); None: ``sys.argv``.
+        logger_name: Logger for errors that stop the node.
+        startup_errors: Exceptions of a node that cannot start (invalid parameter, ...):
+            logged as fatal in one line, exit status 1, no traceback.
+        finished: The node's own end (e.g. the simulator reached its duration); exit 0.
+
+    Returns:
+        0 after ``finished`` or a clean external shutdown, 130 after a signal, 1 after a
+        start-up error or an error raised by a callback (logged with its type).
+    """
+    ros_environment_defaults()
+    stop = StopEvent()
+    rclpy.init(args=None if args is None else list(args),
+               signal_handler_options=SignalHandlerOptions.NO)
+    logger = rclpy.logging.get_logger(logger_name)
+    node: Node | None = None
+    executor: Executor | None = None
+    status = 0
+    try:
+        node = make_node()
+        executor = make_executor()
+        executor.add_node(node)
+        built = node
+        spin_until_stopped(executor, stop,
+                           (lambda: finished(built)) if finished is not None else lambda: False)
+        status = EXIT_INTERRUPTED if stop.is_set() else 0
+    except startup_errors as exc:
+        logger.fatal(str(exc))
+        status = 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        status = EXIT_INTERRUPTED
+    except Exception as exc:
+        logger.fatal(f'{type(exc).__name__}: {exc}')
+        status = 1
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+        stop.restore()
+    return status
