@@ -52,7 +52,7 @@ demo: setup
 test: setup
 	$(BIN)/ruff check .
 	$(BIN)/mypy
-	$(BIN)/pytest
+	tools/loopback-netns $(BIN)/pytest
 	$(MAKE) --no-print-directory test-py312
 
 test-py312:
@@ -60,7 +60,7 @@ ifeq ($(PYTHON_312),)
 	@echo 'make test: no Python 3.12 interpreter found; the suite ran on Python 3.11 only'
 else
 	$(MAKE) --no-print-directory $(VENV_312)/.interfaces
-	$(VENV_312)/bin/pytest -q
+	tools/loopback-netns $(VENV_312)/bin/pytest -q -m 'not colcon'
 endif
 
 clean:

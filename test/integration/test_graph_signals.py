@@ -14,11 +14,11 @@ from mcap.reader import make_reader
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
-           ('uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control', 'ros2_compat')]
+           ('uvms_common', 'uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control')]
 
 
 def start_cli(*args: str) -> subprocess.Popen[str]:
-    """Start `python -m uvms_bringup.cli ARGS` on the bundled runtime."""
+    """Start `python -m uvms_bringup.cli ARGS` (genuine rclpy of this venv)."""
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([*map(str, SOURCES), env.get('PYTHONPATH', '')])
     return subprocess.Popen([sys.executable, '-m', 'uvms_bringup.cli', *args],

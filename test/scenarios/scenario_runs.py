@@ -27,6 +27,9 @@ RUN_TIMEOUT_S = 600.0
 #: Simulated duration per scenario where a test needs less than the scenario file's (s).
 #: hybrid_only touches the wall at 0.45 s and its claim is about the first 0.5 s of contact.
 SHORTENED_S = {'hybrid_only': 3.0}
+#: First ROS_DOMAIN_ID of the scenario runs (each run gets the next one; the rest of the
+#: suite runs in the default domain 0 or its own random ones).
+SCENARIO_DOMAIN_BASE = 150
 
 
 @dataclass(frozen=True)
@@ -55,6 +58,7 @@ class ScenarioRuns:
         self._running: dict[str, subprocess.Popen[bytes]] = {}
         self._exit_status: dict[str, int] = {}
         self._done: dict[str, ScenarioResult] = {}
+        self._domains = 0
         self._start_more()
 
     def get(self, name: str) -> ScenarioResult:
@@ -112,6 +116,10 @@ class ScenarioRuns:
         if name in SHORTENED_S:
             command += ['--duration', str(SHORTENED_S[name])]
         # The child finds the sources as this process does (pytest's pythonpath setting).
-        env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p)}
+        # A DDS domain of its own: two lockstep graphs in one domain would hear each other's
+        # commands (same node names, same stamps from t = 0).
+        self._domains += 1
+        env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p),
+               'ROS_DOMAIN_ID': str(SCENARIO_DOMAIN_BASE + self._domains % 50)}
         with self._path(name).with_suffix('.log').open('wb') as log:
             return subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Sequence
 from types import FrameType
@@ -30,8 +31,6 @@ from uvms_common.ros_environment import ros_environment_defaults
 EXECUTORS = ('events', 'single')
 #: Longest wait of one executor turn before the stop event is checked again (s).
 SPIN_TURN_S = 0.1
-#: Exit status of a node stopped by a signal, as a shell reports SIGINT.
-EXIT_INTERRUPTED = 130
 
 
 class StopEvent:
@@ -79,7 +78,14 @@ def make_executor(kind: str | None = None, context: Context | None = None) -> Ex
     if kind == 'events':
         from rclpy.experimental import EventsExecutor
 
-        return EventsExecutor(context=context)
+        # EventsExecutor calls faulthandler.enable() on sys.stderr, which fails where that
+        # stream has no file descriptor (pytest's capture, a notebook): give it the real one.
+        stderr = sys.stderr
+        sys.stderr = sys.__stderr__
+        try:
+            return EventsExecutor(context=context)
+        finally:
+            sys.stderr = stderr
     if kind == 'single':
         return SingleThreadedExecutor(context=context)
     msg = f'executor {kind!r} (UVMS_EXECUTOR): valid: {", ".join(EXECUTORS)}'
@@ -115,8 +121,9 @@ def run_node(
         finished: The node's own end (e.g. the simulator reached its duration); exit 0.
 
     Returns:
-        0 after ``finished`` or a clean external shutdown, 130 after a signal, 1 after a
-        start-up error or an error raised by a callback (logged with its type).
+        0 after ``finished``, a signal or an external shutdown, each ending in a clean
+        shutdown (as Jazzy's demo nodes exit 0 on Ctrl-C); 1 after a start-up error or an
+        error raised by a callback (logged with its type).
     """
     ros_environment_defaults()
     stop = StopEvent()
@@ -133,12 +140,11 @@ def run_node(
         built = node
         spin_until_stopped(executor, stop,
                            (lambda: finished(built)) if finished is not None else lambda: False)
-        status = EXIT_INTERRUPTED if stop.is_set() else 0
     except startup_errors as exc:
         logger.fatal(str(exc))
         status = 1
     except (KeyboardInterrupt, ExternalShutdownException):
-        status = EXIT_INTERRUPTED
+        pass
     except Exception as exc:
         logger.fatal(f'{type(exc).__name__}: {exc}')
         status = 1

@@ -3,9 +3,11 @@
 Subscribes ``joint_states``, ``odometry`` and ``wrench``; publishes
 ``command/generalized_force`` and ``controller/state`` (relative names: run it in ``/uvms``).
 ``trigger_mode: lockstep`` computes once the three inputs with one stamp have arrived and
-stamps the command alike (a repeated stamp re-sends the same command); ``timer`` computes at
-``control_rate_hz`` on the latest inputs. A rejected input (NaN/Inf, wrong size or frame)
-is logged and the last safe command is held; stale inputs (older than
+stamps the command alike (a repeated stamp re-sends the same command); inputs are gathered
+per stamp, so inputs with other stamps (another publisher, a flood of bad messages) cannot
+stall the exchange. ``timer`` computes at ``control_rate_hz`` on the latest inputs. A
+rejected input (NaN/Inf, wrong size or frame) is logged; at the stamp of a running lockstep
+exchange the last safe command is held; stale inputs (older than
 ``watchdog_timeout_s``: by stamp in lockstep, by node-clock arrival time in timer mode) give a
 zero command, logged once.
 """
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -47,6 +50,54 @@ class _Input(NamedTuple):
     value: Any  # None when the message was rejected
 
 
+@dataclass
+class _PendingEntry:
+    """The inputs of one stamp that have arrived (None: arrived but rejected)."""
+
+    values: dict[str, Any] = field(default_factory=dict)
+    valid: int = 0
+    complete: bool = False
+
+
+class PendingStamps:
+    """Lockstep inputs gathered per stamp, so that inputs of other stamps cannot disturb one.
+
+    A stamp is complete when every topic has arrived for it and at least one of them was
+    valid: a rejected input at the stamp of the running exchange is then answered with the
+    last safe command, while rejected inputs of stamps nothing valid asked for never complete
+    and never evict an entry that holds valid inputs. At most ``capacity`` stamps are kept.
+    """
+
+    def __init__(self, topics: tuple[str, ...], capacity: int = 16) -> None:
+        self._topics = topics
+        self._capacity = capacity
+        self._entries: dict[int, _PendingEntry] = {}
+
+    def arrive(self, stamp_ns: int, topic: str, value: Any) -> _PendingEntry:
+        """Record one input (None if it was rejected); return the entry of its stamp."""
+        entry = self._entries.get(stamp_ns)
+        if entry is None:
+            if len(self._entries) >= self._capacity:
+                self._evict()
+            entry = self._entries[stamp_ns] = _PendingEntry()
+        if value is not None and entry.values.get(topic) is None:
+            entry.valid += 1
+        if value is not None or topic not in entry.values:
+            entry.values[topic] = value
+        entry.complete = entry.valid > 0 and len(entry.values) == len(self._topics)
+        return entry
+
+    def finish(self, stamp_ns: int) -> None:
+        """Forget a computed stamp and every older one (the exchange has moved past them)."""
+        for stamp in [s for s in self._entries if s <= stamp_ns]:
+            del self._entries[stamp]
+
+    def _evict(self) -> None:
+        """Drop the oldest entry without a valid input, else the oldest entry."""
+        invalid = [s for s, e in self._entries.items() if e.valid == 0]
+        del self._entries[invalid[0] if invalid else next(iter(self._entries))]
+
+
 class ControllerNode(Node):
     """Unified force controller: sensor topics in, generalized force and state out."""
 
@@ -71,7 +122,7 @@ class ControllerNode(Node):
         self._lockstep = node['trigger_mode'] == 'lockstep'
         self._watchdog_ns = round(float(node['watchdog_timeout_s']) * 1e9)
         self._inputs: dict[str, _Input | None] = dict.fromkeys(TOPICS)
-        self._pending: tuple[int, set[str]] = (-1, set())
+        self._pending = PendingStamps(TOPICS)
         self._last_tau_b = np.zeros(model.n_dof)
         self._last_stamp_ns = -1
         self._first_stamp_ns: int | None = None
@@ -113,24 +164,24 @@ class ControllerNode(Node):
         except ControlInputError as error:
             self.get_logger().error(f'rejected {topic}: {error}', throttle_duration_sec=1.0)
             value = None
-        if value is None and not self._lockstep:
-            return  # timer mode computes on the last valid input
-        self._inputs[topic] = _Input(stamp, self.get_clock().now().nanoseconds, value)
         if not self._lockstep:
+            if value is not None:  # timer mode computes on the last valid input
+                self._inputs[topic] = _Input(stamp, self.get_clock().now().nanoseconds, value)
             return
-        pending_stamp, arrived = self._pending
-        if stamp != pending_stamp:
-            pending_stamp, arrived = stamp, set()
-        arrived.add(topic)
-        self._pending = (pending_stamp, arrived)
-        inputs = [self._inputs[name] for name in TOPICS]
-        if self._first_stamp_ns is None:
-            self._first_stamp_ns = stamp
-        if len(arrived) == len(TOPICS):
-            self._pending = (-1, set())
+        entry = self._pending.arrive(stamp, topic, value)
+        if value is not None:
+            self._inputs[topic] = _Input(stamp, 0, value)
+            if self._first_stamp_ns is None:
+                self._first_stamp_ns = stamp
+        if entry.complete:
+            self._pending.finish(stamp)
+            inputs = [_Input(stamp, 0, entry.values[name]) for name in TOPICS]
             self._compute(stamp, inputs)
             return
-        oldest = min(self._first_stamp_ns if i is None else i.stamp_ns for i in inputs)
+        if value is None or self._first_stamp_ns is None:
+            return  # only valid inputs move the lockstep exchange on
+        oldest = min(self._first_stamp_ns if i is None else i.stamp_ns
+                     for i in self._inputs.values())
         if stamp - oldest > self._watchdog_ns and stamp != self._zeroed_stamp_ns:
             self._zeroed_stamp_ns = stamp  # answer the stamp once, so the simulation goes on
             self._zero(stamp, 'an input is older than watchdog_timeout_s')

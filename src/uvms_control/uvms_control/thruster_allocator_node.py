@@ -111,6 +111,15 @@ class ThrusterAllocatorNode(Node):
             return
         if self._last_stamp_ns is not None and stamp < self._last_stamp_ns:
             return  # an old command: the thrusters are already past it
+        ahead_ns = stamp - self.get_clock().now().nanoseconds
+        if ahead_ns > self._max_step_ns:
+            # Stamped beyond simulated time: no state asked for it (another publisher). It
+            # must not move the thruster time ahead, or the real commands would look old.
+            self.get_logger().warn(
+                f'ignored generalized force stamped {ahead_ns * 1e-9:.3f} s ahead of the clock',
+                throttle_duration_sec=1.0,
+            )
+            return
         dt_ns = 0 if self._last_stamp_ns is None else stamp - self._last_stamp_ns
         if dt_ns > self._max_step_ns:
             self.get_logger().warn(

@@ -122,7 +122,7 @@ class SimulatorNode(Node):
             raise SimParameterError(f'invalid parameter {name!r}: {exc}') from exc
 
     def _on_command(self, msg: ActuatorCommand) -> None:
-        """Keep a valid command; in lockstep, step once the one for the current state is in."""
+        """Keep a valid command; in lockstep only the one for the current state, then step."""
         try:
             command = conversions.actuator_command_arrays(
                 msg, self._plant.n_thrusters, self._plant.joint_names)
@@ -130,9 +130,18 @@ class SimulatorNode(Node):
             self.get_logger().error(f'rejected actuator command: {exc}',
                                     throttle_duration_sec=1.0)
             return
+        if self._settings.mode != 'lockstep':
+            self._command = command
+            return
+        if self._awaiting_since is None or command[0] != self._plant.t_ns:
+            # Not the answer the exchange waits for (an old or foreign stamp): kept out of
+            # the state, so that no other publisher can stall or steer the lockstep run.
+            self.get_logger().debug(
+                f'ignored actuator command stamped {command[0] * 1e-9:.6f} s, awaiting '
+                f'{self._plant.t_ns * 1e-9:.6f} s')
+            return
         self._command = command
-        if self._awaiting_since is not None and command[0] == self._plant.t_ns:
-            self._answered()
+        self._answered()
 
     def _on_kick(self) -> None:
         """Lockstep start: publish the initial state once the executor runs."""

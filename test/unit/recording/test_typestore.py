@@ -19,8 +19,20 @@ REPO = Path(__file__).resolve().parents[3]
 UVMS_MSG_FILES = sorted((REPO / 'src' / 'uvms_msgs' / 'msg').glob('*.msg'))
 
 
-def test_uvms_msgs_are_found_in_the_source_tree_without_ros() -> None:
-    """Without an ament index the .msg files come from src/uvms_msgs/msg."""
+def test_uvms_msgs_come_from_the_ament_index_of_the_built_interfaces() -> None:
+    """The .msg files the rosidl build installed (share/uvms_msgs/msg) are the ones used."""
+    from ament_index_python.packages import get_package_share_directory
+
+    directory = uvms_msgs_directory()
+    assert directory == Path(get_package_share_directory('uvms_msgs')) / 'msg'
+    assert sorted(p.name for p in directory.glob('*.msg')) == [p.name for p in UVMS_MSG_FILES]
+
+
+def test_uvms_msgs_are_found_in_the_source_tree_without_an_ament_index(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Without an ament index (nothing built or sourced) the files of src/uvms_msgs/msg serve."""
+    monkeypatch.setenv('AMENT_PREFIX_PATH', str(REPO / 'no-such-prefix'))
     assert uvms_msgs_directory() == REPO / 'src' / 'uvms_msgs' / 'msg'
 
 

@@ -1,0 +1,136 @@
+"""A lockstep graph flooded by another process with bad and foreign inputs is not stalled.
+
+Measured before the fix (issue 9): NaN wrenches and one-joint JointStates from another
+process made the controller answer foreign stamps and the simulator wait out its lockstep
+timeout every step (4 states in 8 s). Inputs that the exchange did not ask for are now
+ignored or rejected: the run goes on at speed, with no timeout and no non-finite command.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+from rosbags.highlevel import AnyReader
+from uvms_bringup.graph import build_graph, run_graph
+from uvms_bringup.scenario import load_scenario
+
+SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
+
+#: Publishes bad and foreign-stamped inputs on every topic of the lockstep exchange.
+FLOOD = textwrap.dedent("""
+    import math, sys, time
+    import rclpy
+    from geometry_msgs.msg import WrenchStamped
+    from sensor_msgs.msg import JointState
+    from uvms_msgs.msg import ActuatorCommand, GeneralizedForce
+    from uvms_common.ros_environment import ros_environment_defaults
+
+    ros_environment_defaults()
+    rclpy.init()
+    node = rclpy.create_node('flood', namespace='/uvms')
+    wrench = node.create_publisher(WrenchStamped, 'wrench', 10)
+    joints = node.create_publisher(JointState, 'joint_states', 10)
+    force = node.create_publisher(GeneralizedForce, 'command/generalized_force', 10)
+    actuators = node.create_publisher(ActuatorCommand, 'command/actuators', 10)
+    print('ready', flush=True)
+    end = time.monotonic() + float(sys.argv[1])
+    k = 0
+    while time.monotonic() < end:
+        k += 1
+        stamp_s = (k % 50) * 1e-3  # stamps the exchange may or may not be at
+        w = WrenchStamped()
+        w.header.stamp.nanosec = int(stamp_s * 1e9)
+        w.header.frame_id = 'ft_sensor_link'
+        w.wrench.force.x = math.nan
+        wrench.publish(w)
+        j = JointState(name=['joint_1'], position=[0.0], velocity=[0.0])
+        j.header.stamp.nanosec = int(stamp_s * 1e9)
+        joints.publish(j)
+        g = GeneralizedForce()  # a valid command, stamped 100 s ahead of the run
+        g.header.stamp.sec = 100
+        g.header.frame_id = 'base_link_frd'
+        g.vehicle_wrench.force.x = 50.0
+        g.joint_names = ['joint_1', 'joint_2', 'joint_3']
+        g.joint_torques = [0.0, 0.0, 0.0]
+        force.publish(g)
+        a = ActuatorCommand()  # valid but stamped at no state of the run
+        a.header.stamp.sec = 7
+        a.thrust = [200.0] * 8
+        a.joint_names = ['joint_1', 'joint_2', 'joint_3']
+        a.joint_torques = [0.0, 0.0, 0.0]
+        actuators.publish(a)
+        time.sleep(0.01)  # about 100 messages per second and topic, 400 in all
+    print('sent', k, flush=True)
+""")
+
+
+def test_flood_of_bad_and_foreign_inputs_does_not_stall_or_steer_lockstep(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """With another process flooding every input topic, the run keeps pace and stays clean."""
+    path = tmp_path / 'flooded.mcap'
+    scenario = load_scenario(SCENARIOS / 'case1_ke1e4.yaml').with_changes(duration_s=1.0)
+    graph = build_graph(scenario, 'lockstep', output_path=path)
+    flood = subprocess.Popen([sys.executable, '-c', FLOOD, '60'], stdout=subprocess.PIPE,
+                             text=True)
+    try:
+        assert flood.stdout is not None and flood.stdout.readline().strip() == 'ready'
+        time.sleep(1.0)  # discovery: the flood reaches the graph's subscriptions
+        result = run_graph(graph)
+        assert flood.poll() is None, 'the flood stopped before the run ended'
+    finally:
+        flood.terminate()
+        flood.communicate(timeout=10)
+
+    err = capfd.readouterr().err
+    assert 'rejected wrench' in err and 'rejected joint_states' in err  # the flood arrived
+    assert result.sim_time_s >= 1.0
+    assert result.lockstep_timeouts == 0
+    with AnyReader([path]) as reader:
+        topics = ('/uvms/command/actuators', '/uvms/command/generalized_force')
+        connections = [c for c in reader.connections if c.topic in topics]
+        count = 0
+        for connection, _, raw in reader.messages(connections=connections):
+            msg = reader.deserialize(raw, connection.msgtype)
+            values = (list(msg.thrust) if connection.topic.endswith('actuators')
+                      else [msg.vehicle_wrench.force.x, *msg.joint_torques])
+            assert all(math.isfinite(v) for v in values)
+            assert msg.header.stamp.sec < 2, 'a foreign stamp reached the recorded chain'
+            count += 1
+    # One command of each kind per 2 ms control period: nothing skipped, nothing foreign.
+    assert count >= 2 * 500
+
+
+def test_commands_of_the_graph_are_the_same_with_and_without_a_flood(tmp_path: Path) -> None:
+    """The flood changes nothing the graph computes: same actuator commands, byte for byte."""
+    scenario = load_scenario(SCENARIOS / 'case1_ke1e4.yaml').with_changes(duration_s=0.3)
+
+    def commands(path: Path, flood_s: float) -> list[bytes]:
+        graph = build_graph(scenario, 'lockstep', output_path=path)
+        flood = None
+        if flood_s > 0.0:
+            flood = subprocess.Popen([sys.executable, '-c', FLOOD, str(flood_s)],
+                                     stdout=subprocess.PIPE, text=True)
+            assert flood.stdout is not None and flood.stdout.readline().strip() == 'ready'
+            time.sleep(1.0)
+        try:
+            run_graph(graph)
+            assert flood is None or flood.poll() is None, 'the flood stopped too early'
+        finally:
+            if flood is not None:
+                flood.terminate()
+                flood.communicate(timeout=10)
+        with AnyReader([path]) as reader:
+            connections = [c for c in reader.connections if c.topic == '/uvms/command/actuators']
+            return [raw for _, _, raw in reader.messages(connections=connections)]
+
+    quiet = commands(tmp_path / 'quiet.mcap', 0.0)
+    flooded = commands(tmp_path / 'flooded.mcap', 60.0)
+    assert len(quiet) >= 150
+    assert flooded == quiet
