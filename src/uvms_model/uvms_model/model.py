@@ -87,6 +87,7 @@ class TaskSpaceTerms(NamedTuple):
         zeta: Bias zeta(q, q_dot) (9,) of eq. 19.
         B: Velocity transform B(q) (9, 9) of eq. 4.
         rot_ned_from_ee: ee_link axes in map_ned (3, 3).
+        q_dot: Generalized velocities (9,) of the state.
     """
 
     X: FloatArray
@@ -96,6 +97,7 @@ class TaskSpaceTerms(NamedTuple):
     zeta: FloatArray
     B: FloatArray
     rot_ned_from_ee: FloatArray
+    q_dot: FloatArray
 
 
 def _vector(name: str, value: ArrayLike, size: int) -> FloatArray:
@@ -400,7 +402,7 @@ class UvmsModel:
         ]  # M_ss is diagonal and constant: each slider carries its point mass only
         self._slider_mass_inverse = 1.0 / np.array(slider_masses)
         self._q_dfs = pin.neutral(dfs)
-        self._arm_q_dfs = [dfs.idx_qs[b] for b in bodies_dfs[1:]]
+        self._arm_q_dfs = tuple(int(dfs.idx_qs[b]) for b in bodies_dfs[1:])
 
         dyn = self._dyn
         data = dyn.createData()
@@ -633,6 +635,7 @@ class UvmsModel:
         buffer = np.zeros(self._forward.shape[1])
         self._velocity_buffer = buffer
         self._normal_first, self._normal_second = buffer[:n], buffer[n : 2 * n]
+        self._normals = buffer[: 2 * n].reshape(2, n)  # both normal speeds of every strip
         self._forms = buffer[2 * n :]
         self._speed = np.zeros(n)
         self._strip_gain = np.array(gains)
@@ -652,8 +655,7 @@ class UvmsModel:
             speed = np.hypot(self._normal_first, self._normal_second, out=self._speed)
             speed *= self._strip_gain
             speed += self._strip_offset
-            self._normal_first *= speed
-            self._normal_second *= speed
+            self._normals *= speed
             self._forms *= self._forms
             np.dot(self._back, buffer, out=self._force_flat)
         else:
@@ -711,23 +713,30 @@ class UvmsModel:
         pin.forwardKinematics(model, data, config, self._v_dyn)
         self._body_forces(None)
         tau = pin.rnea(model, data, config, self._v_dyn, self._zero_dyn, self._fext)
-        config_dfs = self._q_dfs
-        config_dfs[self._arm_q_dfs] = q[6:9]
-        pin.crba(self._dyn_dfs, self._dyn_dfs_data, config_dfs)
-        full = np.take(self._mass_upper, self._mass_take)
-        mass = full[:N_DOF, :N_DOF]
+        mass, scaled = self._mass(q[6:9])
         bias = tau[:N_DOF] + self._restoring_torque(q)
         if self._slider_mass_inverse.size:
-            coupling = full[:N_DOF, N_DOF:]
-            scaled = coupling * self._slider_mass_inverse
-            mass -= scaled.dot(coupling.T)
             bias -= scaled.dot(tau[N_DOF:])
         return mass, bias
+
+    def _mass(self, q_m: Sequence[float]) -> tuple[FloatArray, FloatArray]:
+        """M_b(q_m) by CRBA with the sliders eliminated, and M_rs M_ss^-1 (9, n_sliders)."""
+        config = self._q_dfs
+        i, j, k = self._arm_q_dfs
+        config[i], config[j], config[k] = q_m[0], q_m[1], q_m[2]
+        pin.crba(self._dyn_dfs, self._dyn_dfs_data, config)
+        full = np.take(self._mass_upper, self._mass_take)
+        mass = full[:N_DOF, :N_DOF]
+        coupling = full[:N_DOF, N_DOF:]
+        scaled = coupling * self._slider_mass_inverse
+        if self._slider_mass_inverse.size:
+            mass -= scaled.dot(coupling.T)
+        return mass, scaled
 
     def mass_matrix_body(self, q: ArrayLike) -> FloatArray:
         """M_b(q_m) (9, 9) of eq. 8: rigid bodies plus added mass, in quasi-velocities w."""
         q = self._check_q(q)
-        return self._mass_and_bias(q.tolist(), self._zero_v)[0]
+        return self._mass(q.tolist()[6:9])[0]
 
     def bias_body(self, q: ArrayLike, w: ArrayLike) -> FloatArray:
         """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (9,) of eq. 8, so M_b w_dot + bias = tau_b."""
@@ -1028,8 +1037,7 @@ class UvmsModel:
         """X, rot_ned_from_ee, J_w (3, 9) and J_w_dot w (3,) of the EE, map_ned, w-based."""
         self._pose_kinematics(q)
         model, data = self._kin, self._kin_data
-        velocity = np.asarray(w, dtype=float)
-        pin.forwardKinematics(model, data, self._q_kin, velocity, self._zero_v)
+        pin.forwardKinematics(model, data, self._q_kin, np.asarray(w, dtype=float), self._zero_v)
         pin.computeJointJacobians(model, data)
         placement = pin.updateFramePlacement(model, data, self._ee_frame)
         jac = pin.getFrameJacobian(model, data, self._ee_frame, pin.LOCAL_WORLD_ALIGNED)[:3]
@@ -1067,35 +1075,45 @@ class UvmsModel:
         q_dot = _vector('q_dot', q_dot, N_DOF)
         return self.task_space_terms(q, q_dot).J_dot_q_dot
 
-    def task_space_terms(self, q: ArrayLike, q_dot: ArrayLike) -> TaskSpaceTerms:
+    def task_space_terms(
+        self, q: ArrayLike, q_dot: ArrayLike | None = None, *, w: ArrayLike | None = None
+    ) -> TaskSpaceTerms:
         """X, J, J_dot q_dot (eq. 22-23), M, zeta (eq. 18-19) and B at one state, in one pass.
 
         Args:
             q: Generalized coordinates (9,), finite.
-            q_dot: Generalized velocities (9,), finite.
+            q_dot: Generalized velocities (9,), finite; or None with ``w``.
+            w: Quasi-velocities (9,) instead of ``q_dot`` (q_dot = B w, eq. 4).
 
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg.
         """
         q_list = np.asarray(q, dtype=float).tolist()
-        q_dot_list = np.asarray(q_dot, dtype=float).tolist()
         check_pitch(q_list[4])
         rot = _rotation(q_list[3], q_list[4], q_list[5])
-        w_list = self._w_from_q_dot(q_list, q_dot_list, rot)
-        w = np.array(w_list)
-        mass_b, bias_b = self._mass_and_bias(q_list, w)
+        b = self._velocity_transform(q_list)
+        if w is None:
+            q_dot_arr = np.asarray(q_dot, dtype=float)
+            w_list = self._w_from_q_dot(q_list, q_dot_arr.tolist(), rot)
+            w_arr = np.array(w_list)
+        else:
+            w_arr = np.asarray(w, dtype=float)
+            w_list = w_arr.tolist()
+            q_dot_arr = b.dot(w_arr)
+        mass_b, bias_b = self._mass_and_bias(q_list, w_arr)
         correction = np.array(self._b_inverse_b_dot_w(q_list, w_list))
         b_inv = self._velocity_transform_inverse(q_list)
-        x, rot_ee, jac_w, acc = self._ee_motion(q_list, w_list)
-        zeta = b_inv.T.dot(bias_b - mass_b.dot(correction))
+        x, rot_ee, jac_w, acc = self._ee_motion(q_list, w_arr)
+        b_inv_t = b_inv.T
         return TaskSpaceTerms(
             X=x,
             J=jac_w.dot(b_inv),
             J_dot_q_dot=acc - jac_w.dot(correction),
-            M=b_inv.T.dot(mass_b.dot(b_inv)),
-            zeta=zeta,
-            B=self._velocity_transform(q_list),
+            M=b_inv_t.dot(mass_b.dot(b_inv)),
+            zeta=b_inv_t.dot(bias_b - mass_b.dot(correction)),
+            B=b,
             rot_ned_from_ee=rot_ee,
+            q_dot=q_dot_arr,
         )
 
     # ------------------------------------------------------------------ poses and IK

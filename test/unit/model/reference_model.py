@@ -35,6 +35,7 @@ from uvms_model.hydrodynamics import (
     strip_nodes,
 )
 from uvms_model.kinematics import check_pitch
+from uvms_model.model import TaskSpaceTerms
 from uvms_model.parameters import UvmsParameters
 
 
@@ -1036,3 +1037,20 @@ class ReferenceModel:
             )
         result: FloatArray = np.arctan2(np.sin(qm), np.cos(qm))
         return result
+
+    def task_space_terms(
+        self, q: ArrayLike, q_dot: ArrayLike | None = None, *, w: ArrayLike | None = None
+    ) -> TaskSpaceTerms:
+        """The controller's terms by the separate calls the previous controller made."""
+        b = self.velocity_transform(q)
+        q_dot = b @ np.asarray(w, dtype=float) if q_dot is None else np.asarray(q_dot, float)
+        return TaskSpaceTerms(
+            X=self.ee_position(q),
+            J=self.ee_jacobian(q),
+            J_dot_q_dot=self.ee_jacobian_dot_qdot(q, q_dot),
+            M=self.mass_matrix(q),
+            zeta=self.bias(q, q_dot),
+            B=b,
+            rot_ned_from_ee=self.ee_rotation(q),
+            q_dot=q_dot,
+        )

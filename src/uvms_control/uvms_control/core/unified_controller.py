@@ -48,8 +48,12 @@ from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
 from uvms_control.core.parameters import ControllerParameters
 from uvms_control.core.reference import ForcePhase, ForceSetpoint, HalfCircleReference
-from uvms_control.core.task_space import TaskSpaceModel, inverse_3x3, task_space_model
-from uvms_model import ModelError, UvmsModel
+from uvms_control.core.task_space import (
+    TaskSpaceModel,
+    inverse_3x3,
+    task_space_model_from_terms,
+)
+from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -207,12 +211,10 @@ class UnifiedForceController:
         w = _finite_vector('w', w, self._n_dof)
         f_sensor = _finite_vector('f_sensor', f_sensor, 3)
         try:
-            B = self.model.velocity_transform(q)
-            X = self.model.ee_position(q)
-            rot_ned_from_ee = self.model.ee_rotation(q)
+            terms = self.model.task_space_terms(q, w=w)
         except ModelError as error:
             raise ControlInputError(str(error)) from error
-        return self._step(t, q, B @ w, rot_ned_from_ee @ f_sensor, X, B)
+        return self._step(t, q, terms, terms.rot_ned_from_ee.dot(f_sensor))
 
     def step(
         self, t: float, q: npt.ArrayLike, q_dot: npt.ArrayLike, f_e_ned: npt.ArrayLike
@@ -231,25 +233,19 @@ class UnifiedForceController:
         q = _finite_vector('q', q, self._n_dof)
         q_dot = _finite_vector('q_dot', q_dot, self._n_dof)
         f_e = _finite_vector('f_e_ned', f_e_ned, 3)
-        return self._step(t, q, q_dot, f_e, None, None)
+        try:
+            terms = self.model.task_space_terms(q, q_dot)
+        except ModelError as error:
+            raise ControlInputError(str(error)) from error
+        return self._step(t, q, terms, f_e)
 
     def _step(
-        self,
-        t: float,
-        q: FloatArray,
-        q_dot: FloatArray,
-        F_e: FloatArray,
-        X: FloatArray | None,
-        B: FloatArray | None,
+        self, t: float, q: FloatArray, terms: TaskSpaceTerms, F_e: FloatArray
     ) -> ControllerResult:
         if not math.isfinite(t):
             raise ControlInputError(f'time t = {t} s must be finite')
-        try:
-            ts = task_space_model(self.model, q, q_dot, X)
-            if B is None:
-                B = self.model.velocity_transform(q)
-        except ModelError as error:
-            raise ControlInputError(str(error)) from error
+        ts = task_space_model_from_terms(terms)
+        q_dot, B = terms.q_dot, terms.B
         if self._t0 is None:
             self._t0 = t
             self._t_prev = t
