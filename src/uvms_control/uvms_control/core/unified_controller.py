@@ -115,7 +115,10 @@ class ControllerResult:
 
 def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
     array = np.asarray(value, dtype=np.float64)
-    if array.shape != (size,) or not np.isfinite(array).all():
+    # A finite sum of plain floats is the cheap test; a huge finite sum may overflow: look again.
+    if array.shape != (size,) or (
+        not math.isfinite(sum(array.tolist())) and not np.isfinite(array).all()
+    ):
         raise ControlInputError(
             f'{name} must be {size} finite values, got {np.ravel(array).tolist()}'
         )
@@ -313,7 +316,7 @@ class UnifiedForceController:
                 a_c = W * U + (1.0 - W) * (inverse_3x3(M_hat) @ F_H_selected)
             tau += self._null_space_torque(ts, q, q_dot, a_c)
         tau_b = B.T @ tau
-        if not np.isfinite(tau_b).all():
+        if not math.isfinite(sum(tau_b.tolist())) and not np.isfinite(tau_b).all():
             raise ControlInputError(
                 f'the control law gave a non-finite command at q = {q.tolist()} '
                 '(kinematic singularity?)'
