@@ -1,10 +1,12 @@
-"""Benchmark of the controller and allocator steps: prints microseconds per call.
+"""Benchmark of the controller and allocator steps: microseconds per call, new and previous.
 
-Run: ``.venv/bin/python bench/bench_control.py [--repeat N]``. Targets (issue 4): a
-controller step at most 150 µs, an allocator step with thruster dynamics at most 50 µs. The
-controller step is split into the UVMS model evaluations it needs (uvms_model: M, ζ, J,
-J̇ q̇, forward kinematics) and the control law itself, so that it shows where the time goes.
-Figures only: this script asserts nothing.
+Run: ``.venv/bin/python bench/bench_control.py [--repeat N]``. Each row times the current
+code (the controller on the Pinocchio model of the URDF) and, in the same run, the previous
+implementation: the same control law on the previous pure-Python model
+(``test/unit/model/reference_model.py``, evaluated by the separate calls the controller made
+before one-pass ``task_space_terms``), and their ratio. The allocator did not change, so it
+is timed once. Targets (issue 10): a controller step at most 40 µs; an allocator step with
+thruster dynamics at most 50 µs (issue 4). Figures only: this script asserts nothing.
 """
 
 from __future__ import annotations
@@ -19,13 +21,14 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-for package in ('uvms_model', 'uvms_control'):
-    sys.path.insert(0, str(ROOT / 'src' / package))
+for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model'):
+    sys.path.insert(0, str(ROOT / folder))
 
+from reference_model import ReferenceModel  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
 from uvms_control.core.fuzzy_switch import FuzzySwitch  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
-from uvms_control.core.task_space import task_space_model  # noqa: E402
+from uvms_control.core.task_space import task_space_model_from_terms  # noqa: E402
 from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters  # noqa: E402
 from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
@@ -60,31 +63,46 @@ def main() -> None:
     parser.add_argument('--repeat', type=int, default=2000, help='calls per round (default 2000)')
     repeat = parser.parse_args().repeat
 
-    model = UvmsModel()
-    steps = []
+    model, previous = UvmsModel(), ReferenceModel()
+    rows: list[tuple[str, Callable[[], object], Callable[[], object] | None, float | None]] = []
     rot_ned_from_ee = model.ee_rotation(Q)
     for regime, normal_force in NORMAL_FORCES.items():
         force = rot_ned_from_ee.T @ np.array([normal_force, 0.0, 0.0])
-        controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
-        t = [0.0]
+        steps = []
+        for m in (model, previous):
+            params = ControllerParameters.from_flat_dict()
+            controller = UnifiedForceController(params, m)  # type: ignore[arg-type]
+            t = [0.0]
 
-        def controller_step(c=controller, t=t, f=force) -> None:  # type: ignore[no-untyped-def]
-            t[0] += 0.002
-            c.step_from_sensors(t[0], Q, W, f)
+            def controller_step(c=controller, t=t, f=force) -> None:  # type: ignore[no-untyped-def]
+                t[0] += 0.002
+                c.step_from_sensors(t[0], Q, W, f)
 
-        steps.append((f'controller step, {regime}', controller_step, 150.0))
+            steps.append(controller_step)
+        rows.append((f'controller step, {regime}', steps[0], steps[1], 40.0))
 
     q_dot = model.velocity_transform(Q) @ W
-    x_ee = model.ee_position(Q)
-
-    def model_evaluations() -> None:
-        model.velocity_transform(Q)
-        model.ee_position(Q)
-        model.ee_rotation(Q)
-        model.mass_matrix(Q)
-        model.bias(Q, q_dot)
-        model.ee_jacobian(Q)
-        model.ee_jacobian_dot_qdot(Q, q_dot)
+    terms = model.task_space_terms(Q, w=W)
+    rows.append(
+        (
+            '  of which the model: X, J, J_dot q_dot, M, zeta, B',
+            lambda: model.task_space_terms(Q, w=W),
+            lambda: previous.task_space_terms(Q, w=W),
+            None,
+        )
+    )
+    rows.append(
+        (
+            '  of which M~, zeta~, J+ (eq. 24-28)',
+            lambda: task_space_model_from_terms(terms),
+            None,
+            None,
+        )
+    )
+    switch = FuzzySwitch()
+    rows.append(
+        ('  of which the fuzzy switch W (two rules)', lambda: switch.weight(0.7, 0.0), None, None)
+    )
 
     layout = ThrusterLayout.from_parameters()
     allocator = ThrusterAllocator(
@@ -93,41 +111,29 @@ def main() -> None:
     tau_b = np.array([60.0, -20.0, 30.0, 4.0, -6.0, 8.0, 10.0, 20.0, -5.0])
     bank = ThrusterBank(ThrusterModelParameters(), layout.count)
     f_td = allocator.allocate(tau_b).thrust
-    switch = FuzzySwitch()
-
-    rows = [
-        *steps,
-        ('  of which UVMS model evaluations (uvms_model)', model_evaluations, None),
-        (
-            '  task-space model M~, zeta~ (eq. 27-28)',
-            lambda: task_space_model(model, Q, q_dot, x_ee),
-            None,
-        ),
-        ('  fuzzy switch W, two rules firing', lambda: switch.weight(0.7, 0.0), None),
+    rows += [
         (
             'allocator step at 500 Hz (eq. 10 + thruster dynamics, 2 ms)',
             lambda: allocator.step(tau_b, 0.002),
+            None,
             50.0,
         ),
-        ('allocator step at 1 kHz (1 ms)', lambda: allocator.step(tau_b, 0.001), 50.0),
-        (
-            '  of which allocation with saturation (eq. 10)',
-            lambda: allocator.allocate(tau_b),
-            None,
-        ),
-        ('  of which thruster dynamics, 8 thrusters, 1 ms', lambda: bank.step(f_td, 0.001), None),
+        ('allocator step at 1 kHz (1 ms)', lambda: allocator.step(tau_b, 0.001), None, 50.0),
+        ('  of which allocation (eq. 10)', lambda: allocator.allocate(tau_b), None, None),
+        ('  of which thruster dynamics, 8 thrusters', lambda: bank.step(f_td, 0.001), None, None),
     ]
-    print(f'{"hot path":62s} {"median µs":>10s} {"best µs":>9s} {"target µs":>10s}')
-    results = {}
-    for label, function, target in rows:
-        median, best = time_us(function, repeat)
-        results[label] = median
+    del q_dot
+    print(
+        f'{"hot path (median of 5 rounds, µs per call)":62s} {"now":>8s} {"previous":>9s} '
+        f'{"speed-up":>9s} {"target":>7s}'
+    )
+    for label, function, previous_function, target in rows:
+        now, _ = time_us(function, repeat)
+        before = time_us(previous_function, max(repeat // 4, 1))[0] if previous_function else None
+        before_text = f'{before:9.1f}' if before is not None else f'{"":9s}'
+        ratio_text = f'{before / now:8.2f}x' if before is not None else f'{"":9s}'
         target_text = f'{target:.0f}' if target is not None else ''
-        print(f'{label:62s} {median:10.1f} {best:9.1f} {target_text:>10s}')
-    model_part = results[rows[3][0]]
-    for label, _, _ in steps:
-        law = results[label] - model_part
-        print(f'{label}: control law without the model evaluations {law:.1f} µs')
+        print(f'{label:62s} {now:8.1f} {before_text} {ratio_text} {target_text:>7s}')
 
 
 if __name__ == '__main__':

@@ -1,26 +1,41 @@
-"""Per-call times of the UVMS model (uvms_model) next to Pinocchio's ABA on the same rigid bodies.
+"""Per-call times of the UVMS model (Pinocchio, from the URDF) against the previous one.
 
-Run: ``.venv/bin/python bench/bench_model.py [--repeat N]``. Prints the best of several
-rounds (microseconds per call), the target for one RK4 step (200 us, stretch 100 us), and the
-ratio to Pinocchio's ABA (C++) for the rigid bodies alone. A benchmark prints figures; it
-never asserts on time.
+Run: ``.venv/bin/python bench/bench_model.py [--repeat N]``. For each call it prints the best
+of several rounds (microseconds per call) of ``uvms_model.UvmsModel`` and of the previous
+pure-Python implementation (``test/unit/model/reference_model.py``, the tests' oracle), in
+the same run, and their ratio: mass matrix, bias, forward dynamics, one RK4 step, the
+controller's model set, one controller step (the same control law on either model) and one
+allocator step (unchanged code: timed once); then Pinocchio's plain ABA for scale. Targets
+(issue 10): an RK4 step of the full model and a controller step at most 40 us each. The
+machine is shared: figures move with its load, ratios much less. A benchmark prints figures;
+it never asserts on time.
 """
 
 from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import timeit
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
-from uvms_model.hydrodynamics import cylinder_inertia
-from uvms_model.kinematics import rot_ned_from_body
+import pinocchio as pin
 
-from uvms_model import UvmsModel, UvmsParameters
+ROOT = Path(__file__).resolve().parents[1]
+for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model'):
+    sys.path.insert(0, str(ROOT / folder))
 
-TARGET_STEP_US = 200.0
-STRETCH_STEP_US = 100.0
+from reference_model import ReferenceModel  # noqa: E402
+from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_control.core.parameters import ControllerParameters  # noqa: E402
+from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
+from uvms_model.thrusters import ThrusterLayout  # noqa: E402
+
+from uvms_model import UvmsModel, UvmsParameters  # noqa: E402
+
+TARGET_STEP_US = 40.0
 
 
 def per_call_us(func: Callable[[], object], number: int, repeat: int) -> float:
@@ -29,60 +44,15 @@ def per_call_us(func: Callable[[], object], number: int, repeat: int) -> float:
     return min(times) / number * 1e6
 
 
-def pinocchio_aba(
-    params: UvmsParameters,
-) -> Callable[[np.ndarray, np.ndarray, np.ndarray], object] | None:
-    """Pinocchio's ABA for the same rigid bodies, or None if pin is not installed."""
-    try:
-        import pinocchio as pin
-    except ImportError:
-        return None
-    model = pin.Model()
-    model.gravity = pin.Motion(np.array([0.0, 0.0, params.hydrodynamics.gravity_m_s2, 0, 0, 0]))
-    veh = params.vehicle
-    root = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), 'base')
-    model.appendBodyToJoint(
-        root,
-        pin.Inertia(veh.mass_kg, np.array(veh.center_of_gravity_m), np.diag(veh.inertia_kg_m2)),
-        pin.SE3.Identity(),
-    )
-    arm = params.arm
-    axes = np.array(arm.joint_axes).reshape(3, 3)
-    parent, placement = root, np.array(arm.mount_position_m)
-    for i in range(3):
-        length, radius, mass = arm.link_lengths_m[i], arm.link_radii_m[i], arm.link_masses_kg[i]
-        joint = model.addJoint(
-            parent,
-            pin.JointModelRevoluteUnaligned(axes[i]),
-            pin.SE3(np.eye(3), placement),
-            f'joint_{i + 1}',
-        )
-        model.appendBodyToJoint(
-            joint,
-            pin.Inertia(
-                mass, np.array([0.5 * length, 0.0, 0.0]), cylinder_inertia(mass, length, radius)
-            ),
-            pin.SE3.Identity(),
-        )
-        parent, placement = joint, np.array([length, 0.0, 0.0])
-    data = model.createData()
-
-    def aba(q: np.ndarray, w: np.ndarray, tau: np.ndarray) -> object:
-        quat = pin.Quaternion(rot_ned_from_body(q[3], q[4], q[5])).coeffs()
-        return pin.aba(model, data, np.concatenate((q[:3], quat, q[6:])), w, tau)
-
-    return aba
-
-
 def main() -> None:
-    """Time the model's calls and print a table."""
+    """Time the model's calls, new and previous, and print a table."""
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument('--repeat', type=int, default=40, help='rounds per figure (best kept)')
+    parser.add_argument('--repeat', type=int, default=20, help='rounds per figure (best kept)')
     parser.add_argument('--number', type=int, default=300, help='calls per round')
     args = parser.parse_args()
 
     params = UvmsParameters()
-    model = UvmsModel(params)
+    model, previous = UvmsModel(params), ReferenceModel(params)
     rng = np.random.default_rng(0)
     q = np.concatenate((rng.uniform(-1, 1, 3), [0.1, -0.2, 0.7], [0.0, 0.93, -1.57]))
     w = rng.normal(0.0, 0.3, 9)
@@ -90,66 +60,77 @@ def main() -> None:
     f_ee = np.array([-150.0, 0.0, 5.0])
     q_dot = model.velocity_transform(q) @ w
     dt = 1e-3
-    # Two states with different joint angles: alternating defeats the per-configuration cache,
-    # as in the stages of an RK4 step or one simulator step after another.
-    q_other = q + np.concatenate((np.zeros(6), [0.01, -0.02, 0.03]))
-    states = [q, q_other]
+    # Two states with different joint angles: alternating defeats the previous model's
+    # per-configuration cache, as the stages of an RK4 step or successive steps do.
+    states = [q, q + np.concatenate((np.zeros(6), [0.01, -0.02, 0.03]))]
     counter = [0]
 
     def alternate() -> np.ndarray:
         counter[0] ^= 1
         return states[counter[0]]
 
-    calls: list[tuple[str, Callable[[], object]]] = [
-        ('mass_matrix_body M_b(q)', lambda: model.mass_matrix_body(alternate())),
-        ('bias_body C_b w + D_b w + G_b', lambda: model.bias_body(alternate(), w)),
-        ('forward_dynamics w_dot', lambda: model.forward_dynamics(alternate(), w, tau_b, f_ee)),
-        ('step RK4', lambda: model.step(q, w, tau_b, f_ee, dt)),
-        (
-            'step semi-implicit Euler',
-            lambda: model.step(alternate(), w, tau_b, f_ee, dt, method='semi_implicit_euler'),
-        ),
-        ('mass_matrix M(q) (eq. 18) [cached q]', lambda: model.mass_matrix(q)),
-        ('bias zeta(q, q_dot) (eq. 19) [cached q]', lambda: model.bias(q, q_dot)),
-        ('ee_jacobian J (eq. 22) [cached q]', lambda: model.ee_jacobian(q)),
-        ('ee_jacobian_dot_qdot (eq. 23) [cached q]', lambda: model.ee_jacobian_dot_qdot(q, q_dot)),
-        (
-            'controller set: M, zeta, J, J_dot q_dot, X',
-            lambda: (
-                model.mass_matrix(alternate()),
-                model.bias(states[counter[0]], q_dot),
-                model.ee_jacobian(states[counter[0]]),
-                model.ee_jacobian_dot_qdot(states[counter[0]], q_dot),
-                model.ee_position(states[counter[0]]),
+    f_sensor = model.ee_rotation(q).T @ np.array([105.0, 0.0, 0.0])  # fuzzy hand-over
+
+    def controller_step(m: UvmsModel | ReferenceModel) -> Callable[[], object]:
+        controller = UnifiedForceController(ControllerParameters.from_flat_dict(), m)  # type: ignore[arg-type]
+        clock = [0.0]
+
+        def step() -> object:
+            clock[0] += 0.002
+            return controller.step_from_sensors(clock[0], q, w, f_sensor)
+
+        return step
+
+    layout = ThrusterLayout.from_parameters()
+    allocator = ThrusterAllocator(
+        AllocatorParameters(layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 200.0))
+    )
+
+    def calls(m: UvmsModel | ReferenceModel) -> list[tuple[str, Callable[[], object]]]:
+        return [
+            ('mass matrix M_b(q) (eq. 8)', lambda: m.mass_matrix_body(alternate())),
+            ('bias C_b w + D_b w + G_b (eq. 8)', lambda: m.bias_body(alternate(), w)),
+            ('forward dynamics w_dot', lambda: m.forward_dynamics(alternate(), w, tau_b, f_ee)),
+            ('one RK4 step of the full model', lambda: m.step(q, w, tau_b, f_ee, dt)),
+            (
+                'one semi-implicit Euler step',
+                lambda: m.step(alternate(), w, tau_b, f_ee, dt, method='semi_implicit_euler'),
             ),
-        ),
-    ]
+            (
+                "controller's set: X, J, J_dot q_dot, M, zeta, B",
+                lambda: m.task_space_terms(alternate(), q_dot),
+            ),
+            ('one controller step (eq. 2, 22-39)', controller_step(m)),
+            ('one allocator step (eq. 10-15, unchanged)', lambda: allocator.step(tau_b, 2e-3)),
+        ]
+
     print(
         f'uvms_model benchmark: Python {platform.python_version()}, numpy {np.__version__}, '
-        f'{platform.machine()}; best of {args.repeat} x {args.number} calls'
+        f'Pinocchio {pin.__version__}, {platform.machine()}; best of {args.repeat} x '
+        f'{args.number} calls (previous: 1/5 of the calls)'
     )
+    print(f'  {"call":<48s} {"Pinocchio":>10s} {"previous":>10s} {"speed-up":>9s}')
     results: dict[str, float] = {}
-    for name, func in calls:
-        results[name] = per_call_us(func, args.number, args.repeat)
-        print(f'  {name:<42s} {results[name]:9.1f} us')
+    for (name, new_call), (_, old_call) in zip(calls(model), calls(previous), strict=True):
+        new_us = per_call_us(new_call, args.number, args.repeat)
+        old_us = per_call_us(old_call, max(args.number // 5, 1), args.repeat)
+        if 'unchanged' in name:
+            old_us = new_us
+        results[name] = new_us
+        print(f'  {name:<48s} {new_us:8.1f} us {old_us:8.1f} us {old_us / new_us:8.2f}x')
 
-    aba = pinocchio_aba(params)
-    step_us = results['step RK4']
-    if aba is None:
-        print('  pinocchio not installed: no ABA reference')
-    else:
-        aba_us = per_call_us(lambda: aba(q, w, tau_b), args.number, args.repeat)
-        print(f'  {"pinocchio aba (rigid bodies, C++)":<42s} {aba_us:9.1f} us')
-        print(
-            f'  forward_dynamics / aba: {results["forward_dynamics w_dot"] / aba_us:6.1f}x; '
-            f'RK4 step / (4 aba): {step_us / (4 * aba_us):6.1f}x'
-        )
-    verdict = 'met' if step_us <= TARGET_STEP_US else 'MISSED'
-    stretch = 'met' if step_us <= STRETCH_STEP_US else 'not met'
-    print(
-        f'  RK4 step {step_us:.1f} us: target {TARGET_STEP_US:.0f} us {verdict}, '
-        f'stretch {STRETCH_STEP_US:.0f} us {stretch}'
+    rigid = model._dyn  # the rigid bodies with the added-mass sliders, for scale
+    data = rigid.createData()
+    config, velocity = pin.neutral(rigid), np.zeros(rigid.nv)
+    torque = np.zeros(rigid.nv)
+    aba_us = per_call_us(
+        lambda: pin.aba(rigid, data, config, velocity, torque), args.number, args.repeat
     )
+    print(f'  {"Pinocchio aba alone (12 joints, C++)":<48s} {aba_us:8.1f} us')
+    for name in ('one RK4 step of the full model', 'one controller step (eq. 2, 22-39)'):
+        step_us = results[name]
+        verdict = 'met' if step_us <= TARGET_STEP_US else 'MISSED'
+        print(f'  {name}: {step_us:.1f} us, target {TARGET_STEP_US:.0f} us {verdict}')
 
 
 if __name__ == '__main__':

@@ -108,7 +108,7 @@ def test_parameter_file_sections_for_one_node_are_merged() -> None:
     config = LAUNCH_FILE.parents[3] / 'config'
     robot = file_parameters(config / 'robot.yaml', 'controller', 'uvms')
     gains = file_parameters(config / 'controller.yaml', 'controller', 'uvms')
-    assert robot['vehicle.mass_kg'] == 530.0
+    assert robot['contact.stiffness_n_m'] == 10000.0
     assert gains['force.setpoint_n'] == 150.0
     assert 'rate_hz' not in gains  # the allocator's section
 

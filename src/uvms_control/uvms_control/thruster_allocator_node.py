@@ -30,7 +30,7 @@ from uvms_control.core.parameters import (
     validate_node_parameters,
 )
 from uvms_control.ros_parameters import declare_parameters
-from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters
+from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 
 
@@ -46,6 +46,9 @@ class ThrusterAllocatorNode(Node):
         try:
             uvms = UvmsParameters.from_flat_dict(robot)
             layout = ThrusterLayout.from_parameters(uvms.thrusters)
+            joint_names = load_description(
+                uvms.description.urdf_path, uvms.description.hydrodynamics_path
+            ).joint_names
         except ModelError as error:
             raise ControlParameterError(
                 'robot parameters', str(error), 'valid values (config/robot.yaml)'
@@ -55,17 +58,17 @@ class ThrusterAllocatorNode(Node):
             uvms.hydrodynamics.water_density_kg_m3,
         )
         torque_limits = np.asarray(values['allocator.max_joint_torque_n_m'], dtype=float)
-        if torque_limits.size != len(uvms.arm.joint_names):
+        if torque_limits.size != len(joint_names):
             raise ControlParameterError(
                 'allocator.max_joint_torque_n_m',
                 torque_limits.tolist(),
-                f'{len(uvms.arm.joint_names)} values, one per arm joint',
+                f'{len(joint_names)} values, one per arm joint',
             )
         limits = AllocatorParameters(
             layout.thrust_matrix(), layout.max_thrust_n, torque_limits, thruster
         )
         self.core = ThrusterAllocator(limits)
-        self._joint_names = tuple(uvms.arm.joint_names)
+        self._joint_names = joint_names
         self._lockstep = values['trigger_mode'] == 'lockstep'
         self._watchdog_ns = round(float(values['watchdog_timeout_s']) * 1e9)
         self._max_step_ns = round(float(values['max_step_s']) * 1e9)

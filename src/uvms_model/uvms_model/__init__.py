@@ -1,24 +1,30 @@
-"""Pure numpy/scipy model of the UVMS: kinematics, dynamics, hydrodynamics (paper sec. 3, 5.1)."""
+"""Model of the UVMS from its URDF: kinematics, Pinocchio dynamics, hydrodynamics (sec. 3, 5.1)."""
 
+from uvms_model.description import RobotDescription, load_description
 from uvms_model.errors import (
+    DescriptionError,
     ModelError,
     ParameterError,
     SingularAttitudeError,
     StateError,
     UnreachableError,
 )
-from uvms_model.model import FRAME_NAMES, UvmsModel
+from uvms_model.model import FRAME_NAMES, TaskSpaceTerms, UvmsModel
 from uvms_model.parameters import PARAMETER_SPECS, ParameterSpec, UvmsParameters
 
 __all__ = [
     'FRAME_NAMES',
     'PARAMETER_SPECS',
+    'DescriptionError',
     'ModelError',
     'ParameterError',
     'ParameterSpec',
+    'RobotDescription',
     'SingularAttitudeError',
     'StateError',
+    'TaskSpaceTerms',
     'UnreachableError',
     'UvmsModel',
     'UvmsParameters',
+    'load_description',
 ]

@@ -19,3 +19,7 @@ class SingularAttitudeError(ModelError):
 
 class UnreachableError(ModelError):
     """The inverse kinematics found no arm configuration that reaches the requested point."""
+
+
+class DescriptionError(ModelError):
+    """The robot description (URDF or hydrodynamics file) is missing, malformed or incomplete."""

@@ -1,9 +1,12 @@
-"""UVMS parameters: the paper's values (sec. 5.1) and documented choices for every gap it leaves.
+"""UVMS parameters that are not the robot's body: environment, switches, thrusters, sensor, wall.
 
-Each group is a frozen dataclass whose fields carry a description with the unit and the valid
-range; ``PARAMETER_SPECS`` lists them under flat dotted names (``vehicle.mass_kg``) with
-ROS-parameter-typed defaults, and ``config/robot.yaml`` holds the same values as a ROS 2
-parameter file. ``docs/model.md`` gives the source or the reason of every value.
+The robot itself (masses, dimensions, mount point, joint axes, frames) is its URDF, and its
+hydrodynamic parameters sit beside it (``uvms_description``); ``description.*`` says where
+they are. Each group here is a frozen dataclass whose fields carry a description with the
+unit and the valid range; ``PARAMETER_SPECS`` lists them under flat dotted names
+(``contact.stiffness_n_m``) with ROS-parameter-typed defaults, and ``config/robot.yaml`` holds
+the same values as a ROS 2 parameter file. ``docs/model.md`` gives the source or the reason of
+every value.
 """
 
 from __future__ import annotations
@@ -165,157 +168,25 @@ class _Group:
 
 
 @dataclass(frozen=True)
-class VehicleParameters(_Group):
-    """Vehicle hull: a prolate spheroid (paper sec. 5.1: 1.0 m long, 0.5 m high and wide)."""
+class DescriptionParameters(_Group):
+    """Where the robot description is: the URDF and the hydrodynamic parameters beside it.
 
-    _group = 'vehicle'
+    The URDF is the one source of the kinematics and inertia (masses, dimensions, mount
+    point, joint axes, frames); the hydrodynamics file holds added-mass models, drag
+    coefficients, buoyancy ratio and centre, keyed by link name. Empty: the files of the
+    uvms_description package (``urdf/uvms.urdf``, ``config/hydrodynamics.yaml``).
+    """
 
-    mass_kg: float = _param(530.0, 'Vehicle mass without the arm (kg); paper sec. 5.1.', 1e-3, 1e6)
-    length_m: float = _param(
-        1.0, 'Hull length 2a of the prolate spheroid (m); paper sec. 5.1.', 1e-2, 100.0
-    )
-    diameter_m: float = _param(
-        0.5, 'Hull diameter 2b (height = width) of the spheroid (m); paper sec. 5.1.', 1e-2, 100.0
-    )
-    inertia_kg_m2: tuple[float, ...] = _param(
-        (13.25, 33.125, 33.125),
-        'Principal moments of inertia Ixx, Iyy, Izz about the centre of gravity in '
-        'base_link_frd axes (kg m^2); default: uniform solid ellipsoid, m (b^2 + c^2) / 5.',
-        1e-6,
-        1e6,
-        length=3,
-    )
-    center_of_gravity_m: tuple[float, ...] = _param(
-        (0.0, 0.0, 0.05),
-        'Centre of gravity in base_link_frd, from the hull centre (m); default 0.05 m below '
-        'the centre of buoyancy for roll and pitch stability (paper: not given).',
-        -100.0,
-        100.0,
-        length=3,
-    )
-    center_of_buoyancy_m: tuple[float, ...] = _param(
-        (0.028, 0.0, 0.0),
-        'Centre of buoyancy of the hull in base_link_frd (m); default 2.8 cm forward of the '
-        'hull centre, which trims the UVMS level with the arm at its recommended start pose.',
-        -100.0,
-        100.0,
-        length=3,
-    )
-    buoyancy_ratio: float = _param(
-        1.0,
-        'Total buoyancy of the UVMS (hull + links) over its total weight; 1 = neutral. The '
-        "hull displacement is set to meet it (the paper's solid ellipsoid would give 0.26).",
-        0.0,
-        10.0,
-    )
-    linear_drag_translation_n_s_m: float = _param(
-        0.0, 'Linear drag of the hull in surge, sway, heave (N s/m); paper sec. 5.1.', 0.0, 1e7
-    )
-    linear_drag_rotation_n_m_s: float = _param(
-        0.81, 'Linear drag of the hull in roll, pitch, yaw (N m s/rad); paper sec. 5.1.', 0.0, 1e7
-    )
-    drag_coefficient_translation: float = _param(
-        1.05,
-        'Quadratic drag coefficient C_D of the hull in translation (-), with the projected '
-        'areas pi b^2 (surge) and pi a b (sway, heave); paper sec. 5.1.',
-        0.0,
-        100.0,
-    )
-    drag_coefficient_rotation: float = _param(
-        1.0,
-        'Quadratic drag coefficient C_D of the hull in rotation (-), applied by cross-flow '
-        'strips over the hull silhouette; paper sec. 5.1.',
-        0.0,
-        100.0,
-    )
+    _group = 'description'
 
-    def _check(self) -> None:
-        if self.length_m <= self.diameter_m:
-            raise ParameterError(
-                f'vehicle.length_m = {self.length_m!r} must exceed vehicle.diameter_m = '
-                f'{self.diameter_m!r}: the hull is a prolate spheroid'
-            )
-        ixx, iyy, izz = self.inertia_kg_m2
-        if ixx + iyy < izz or iyy + izz < ixx or izz + ixx < iyy:
-            raise ParameterError(
-                f'vehicle.inertia_kg_m2 = {list(self.inertia_kg_m2)!r} violates the triangle '
-                'inequality of principal moments of inertia'
-            )
-
-
-@dataclass(frozen=True)
-class ArmParameters(_Group):
-    """Three-link arm of cylinders (paper sec. 5.1); mount point and joint axes are choices."""
-
-    _group = 'arm'
-
-    joint_names: tuple[str, ...] = _param(
-        ('joint_1', 'joint_2', 'joint_3'), 'Names of the arm joints, base to tip.', length=3
+    urdf_path: str = _param(
+        '', "Path of the robot's URDF; empty for uvms_description's urdf/uvms.urdf."
     )
-    mount_position_m: tuple[float, ...] = _param(
-        (0.5, 0.0, 0.0),
-        "Position of joint 1 in base_link_frd (m); default: the hull's nose, on its axis.",
-        -100.0,
-        100.0,
-        length=3,
+    hydrodynamics_path: str = _param(
+        '',
+        'Path of the hydrodynamic parameters (YAML keyed by link name); empty for '
+        "uvms_description's config/hydrodynamics.yaml.",
     )
-    joint_axes: tuple[float, ...] = _param(
-        (0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0),
-        'Unit axis of each joint (flat, 3 per joint) in its parent link frame, which at q = 0 '
-        'is aligned with base_link_frd (-); default: z (yaw), y, y.',
-        -1.0,
-        1.0,
-        length=9,
-    )
-    link_lengths_m: tuple[float, ...] = _param(
-        (0.5, 0.5, 0.5),
-        "Link lengths along each link's x axis (m); paper sec. 5.1.",
-        1e-3,
-        100.0,
-        length=3,
-    )
-    link_radii_m: tuple[float, ...] = _param(
-        (0.05, 0.04, 0.035),
-        'Radii of the cylindrical links (m); paper sec. 5.1.',
-        1e-4,
-        10.0,
-        length=3,
-    )
-    link_masses_kg: tuple[float, ...] = _param(
-        (10.0, 8.0, 5.0),
-        'Link masses (kg), uniform solid cylinders; paper sec. 5.1.',
-        1e-3,
-        1e5,
-        length=3,
-    )
-    drag_coefficient: float = _param(
-        1.1,
-        'Cross-flow drag coefficient C_D of the links (-), applied by strips '
-        'dF = -1/2 rho C_D (2 r) |v_n| v_n dx; paper sec. 5.1.',
-        0.0,
-        100.0,
-    )
-
-    def _check(self) -> None:
-        for j in range(3):
-            axis = self.joint_axes[3 * j : 3 * j + 3]
-            norm = math.sqrt(sum(a * a for a in axis))
-            if abs(norm - 1.0) > 1e-3:
-                raise ParameterError(
-                    f'arm.joint_axes: axis of joint {j + 1} = {list(axis)!r} has norm '
-                    f'{norm:.6g}, expected a unit vector'
-                )
-        for i in range(3):
-            if self.link_lengths_m[i] <= 2.0 * self.link_radii_m[i]:
-                raise ParameterError(
-                    f'arm.link_lengths_m[{i}] = {self.link_lengths_m[i]!r} must exceed twice '
-                    f'arm.link_radii_m[{i}] = {self.link_radii_m[i]!r}: links are slender '
-                    'cylinders (strip theory)'
-                )
-        if len(set(self.joint_names)) != 3 or not all(self.joint_names):
-            raise ParameterError(
-                f'arm.joint_names = {list(self.joint_names)!r} must be three distinct names'
-            )
 
 
 @dataclass(frozen=True)
@@ -509,8 +380,7 @@ class IntegrationParameters(_Group):
 
 
 _GROUPS: dict[str, type[_Group]] = {
-    'vehicle': VehicleParameters,
-    'arm': ArmParameters,
+    'description': DescriptionParameters,
     'hydrodynamics': HydrodynamicsParameters,
     'thrusters': ThrusterParameters,
     'sensor': SensorParameters,
@@ -530,36 +400,20 @@ def _to_ros(value: Any) -> ParameterValue:
 class UvmsParameters:
     """All parameters of the UVMS model, grouped as in ``config/robot.yaml``."""
 
-    vehicle: VehicleParameters = field(default_factory=VehicleParameters)
-    arm: ArmParameters = field(default_factory=ArmParameters)
+    description: DescriptionParameters = field(default_factory=DescriptionParameters)
     hydrodynamics: HydrodynamicsParameters = field(default_factory=HydrodynamicsParameters)
     thrusters: ThrusterParameters = field(default_factory=ThrusterParameters)
     sensor: SensorParameters = field(default_factory=SensorParameters)
     contact: ContactParameters = field(default_factory=ContactParameters)
     integration: IntegrationParameters = field(default_factory=IntegrationParameters)
 
-    def __post_init__(self) -> None:
-        if self.hydrodynamics.buoyancy_enabled:
-            rho = self.hydrodynamics.water_density_kg_m3
-            links = sum(
-                rho * math.pi * r * r * length
-                for r, length in zip(self.arm.link_radii_m, self.arm.link_lengths_m, strict=True)
-            )
-            total = self.vehicle.mass_kg + sum(self.arm.link_masses_kg)
-            if self.vehicle.buoyancy_ratio * total < links:
-                raise ParameterError(
-                    f'vehicle.buoyancy_ratio = {self.vehicle.buoyancy_ratio!r} is below what '
-                    f'the links alone provide ({links / total:.4g}); valid range '
-                    f'[{links / total:.4g}, 10.0]'
-                )
-
     @classmethod
     def from_flat_dict(cls, values: Mapping[str, object]) -> UvmsParameters:
         """Build parameters from flat dotted names; names not given keep their defaults.
 
         Args:
-            values: Mapping such as ``{'vehicle.mass_kg': 530.0, 'arm.link_lengths_m':
-                [0.5, 0.5, 0.5]}``, with ROS parameter types (lists for arrays).
+            values: Mapping such as ``{'contact.stiffness_n_m': 1e5, 'sensor.force_range_n':
+                [400.0, 400.0, 400.0]}``, with ROS parameter types (lists for arrays).
 
         Returns:
             The validated parameters.

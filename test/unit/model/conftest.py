@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import pytest
 from model_oracles import PinocchioOracle, build_oracle
-
-from uvms_model import UvmsParameters
+from reference_model import ReferenceRobot
 
 
 @pytest.fixture(scope='module')
 def oracle() -> PinocchioOracle:
-    """Pinocchio oracle for the default parameters."""
-    return build_oracle(UvmsParameters())
+    """Hand-built Pinocchio model of the paper's rigid bodies."""
+    return build_oracle(ReferenceRobot())

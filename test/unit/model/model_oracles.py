@@ -1,4 +1,9 @@
-"""Oracles for the uvms_model tests: random states and a Pinocchio model of the same bodies."""
+"""Oracles for the uvms_model tests: random states and a hand-built Pinocchio model.
+
+The hand-built model takes the paper's numbers as ``reference_model.ReferenceRobot`` writes
+them out, not the URDF: it checks that the URDF, as Pinocchio reads it for uvms_model, holds
+the same bodies.
+"""
 
 from __future__ import annotations
 
@@ -7,10 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
+from reference_model import ReferenceRobot
 from uvms_model.hydrodynamics import cylinder_inertia
 from uvms_model.kinematics import rot_ned_from_body
-
-from uvms_model import UvmsParameters
 
 FloatArray = NDArray[np.float64]
 
@@ -69,11 +73,11 @@ class PinocchioOracle:
         ]
 
 
-def build_oracle(params: UvmsParameters) -> PinocchioOracle:
-    """Build the Pinocchio model of the rigid bodies of ``params`` (gravity +z in map_ned)."""
+def build_oracle(robot: ReferenceRobot, gravity_m_s2: float = 9.81) -> PinocchioOracle:
+    """Build the Pinocchio model of the rigid bodies of ``robot`` (gravity +z in map_ned)."""
     model = pin.Model()
-    model.gravity = pin.Motion(np.array([0.0, 0.0, params.hydrodynamics.gravity_m_s2, 0, 0, 0]))
-    vehicle = params.vehicle
+    model.gravity = pin.Motion(np.array([0.0, 0.0, gravity_m_s2, 0, 0, 0]))
+    vehicle = robot.vehicle
     root = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), 'base_link_frd')
     model.appendBodyToJoint(
         root,
@@ -82,7 +86,7 @@ def build_oracle(params: UvmsParameters) -> PinocchioOracle:
         ),
         pin.SE3.Identity(),
     )
-    arm = params.arm
+    arm = robot.arm
     axes = np.array(arm.joint_axes).reshape(3, 3)
     parent, placement = root, np.array(arm.mount_position_m)
     for i in range(3):

@@ -1,15 +1,20 @@
-"""uvms_model dynamics against Pinocchio 4 (CRBA, RNEA, body Jacobians) and quadrature."""
+"""uvms_model against a hand-built Pinocchio model of the paper's bodies, and quadrature."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pinocchio as pin
 import pytest
 from model_oracles import PinocchioOracle, random_state
+from reference_model import ReferenceRobot
 from scipy.integrate import quad
 from uvms_model.hydrodynamics import cylinder_added_mass, spheroid_added_mass
 
-from uvms_model import UvmsModel, UvmsParameters
+from uvms_model import UvmsModel, UvmsParameters, load_description
+
+ROBOT = ReferenceRobot()
 
 RIGID = UvmsParameters().without_hydrodynamics()
 ORACLE_STATES = range(200)
@@ -48,12 +53,11 @@ def test_rigid_bias_equals_pinocchio_rnea(
 
 def _added_masses(params: UvmsParameters) -> list[np.ndarray]:
     rho = params.hydrodynamics.water_density_kg_m3
-    vehicle = spheroid_added_mass(
-        0.5 * params.vehicle.length_m, 0.5 * params.vehicle.diameter_m, rho
-    )
+    hull = ROBOT.vehicle
+    vehicle = spheroid_added_mass(0.5 * hull.length_m, 0.5 * hull.diameter_m, rho)
     links = [
         cylinder_added_mass(length, radius, rho)
-        for length, radius in zip(params.arm.link_lengths_m, params.arm.link_radii_m, strict=True)
+        for length, radius in zip(ROBOT.arm.link_lengths_m, ROBOT.arm.link_radii_m, strict=True)
     ]
     return [vehicle, *links]
 
@@ -107,12 +111,12 @@ def test_gravity_and_buoyancy_equal_pinocchio_rnea_with_buoyancy_as_external_for
     model = UvmsModel(BUOYANT)
     g = BUOYANT.hydrodynamics.gravity_m_s2
     rho = BUOYANT.hydrodynamics.water_density_kg_m3
-    arm = BUOYANT.arm
+    arm = ROBOT.arm
     displaced = [model.hull_displaced_mass_kg] + [
         rho * np.pi * r**2 * length
         for length, r in zip(arm.link_lengths_m, arm.link_radii_m, strict=True)
     ]
-    centres = [np.array(BUOYANT.vehicle.center_of_buoyancy_m)] + [
+    centres = [np.array(ROBOT.vehicle.center_of_buoyancy_m)] + [
         np.array([0.5 * length, 0.0, 0.0]) for length in arm.link_lengths_m
     ]
     config = oracle.configuration(q)
@@ -141,7 +145,7 @@ def _link_drag_local(
 ) -> np.ndarray:
     """Cross-flow strip drag wrench of one link in its own frame, by adaptive quadrature."""
     gain = (
-        0.5 * params.hydrodynamics.water_density_kg_m3 * params.arm.drag_coefficient * 2 * radius
+        0.5 * params.hydrodynamics.water_density_kg_m3 * ROBOT.arm.drag_coefficient * 2 * radius
     )
 
     def strip(x: float, component: int) -> float:
@@ -160,14 +164,18 @@ def test_link_drag_equals_quadrature_of_cross_flow_strips(
 ) -> None:
     """Drag of the links is J_i^T of the integral of -1/2 rho C_D 2r |v_n| v_n dx (quad)."""
     q, w = random_state(seed)
-    params = DRAG_ONLY.updated(
-        {
-            'vehicle.linear_drag_rotation_n_m_s': 0.0,
-            'vehicle.drag_coefficient_translation': 0.0,
-            'vehicle.drag_coefficient_rotation': 0.0,
-        }
+    params = DRAG_ONLY
+    description = load_description()
+    no_hull_drag = dataclasses.replace(
+        description,
+        hull_hydrodynamics=dataclasses.replace(
+            description.hull_hydrodynamics,
+            linear_drag_rotation_n_m_s=0.0,
+            drag_coefficient_translation=0.0,
+            drag_coefficient_rotation=0.0,
+        ),
     )
-    drag_model = UvmsModel(params)
+    drag_model = UvmsModel(params, no_hull_drag)
     rigid = UvmsModel(params.updated({'hydrodynamics.drag_enabled': False}))
     actual = drag_model.bias_body(q, w) - rigid.bias_body(q, w)
     expected = np.zeros(9)
@@ -175,7 +183,7 @@ def test_link_drag_equals_quadrature_of_cross_flow_strips(
     jacobians = oracle.body_jacobians(q)
     for i in range(3):
         wrench = _link_drag_local(
-            motions[i + 1][0], params.arm.link_lengths_m[i], params.arm.link_radii_m[i], params
+            motions[i + 1][0], ROBOT.arm.link_lengths_m[i], ROBOT.arm.link_radii_m[i], params
         )
         expected -= jacobians[i + 1].T @ wrench
     _assert_relative(actual, expected, 1e-4)
@@ -187,7 +195,7 @@ def test_hull_drag_in_pure_surge_is_half_rho_cd_frontal_area_u_squared() -> None
     q = np.zeros(9)
     w = np.zeros(9)
     w[0] = -1.3
-    b = 0.5 * DRAG_ONLY.vehicle.diameter_m
+    b = 0.5 * ROBOT.vehicle.diameter_m
     expected = 0.5 * 1025.0 * 1.05 * np.pi * b**2 * 1.3**2
     rigid = UvmsModel(RIGID.updated({'hydrodynamics.gravity_m_s2': 0.0}))
     drag = model.bias_body(q, w) - rigid.bias_body(q, w)

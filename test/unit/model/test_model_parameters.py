@@ -1,4 +1,4 @@
-"""Parameters of uvms_model: paper defaults, flat names, validation and config/robot.yaml."""
+"""Parameters of uvms_model: defaults, flat names, validation and config/robot.yaml."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 import yaml
 from uvms_model.thrusters import ThrusterLayout
 
-from uvms_model import PARAMETER_SPECS, ParameterError, UvmsModel, UvmsParameters
+from uvms_model import PARAMETER_SPECS, ParameterError, UvmsParameters
 
 ROBOT_YAML = Path(__file__).resolve().parents[3] / 'config' / 'robot.yaml'
 
@@ -25,24 +25,19 @@ def _flatten(tree: dict[str, object], prefix: str = '') -> dict[str, object]:
     return flat
 
 
-def test_defaults_are_the_papers_uvms() -> None:
-    """Sec. 5.1: 530 kg, 1.0 x 0.5 m hull, links 0.5 m, radii 5/4/3.5 cm, masses 10/8/5 kg."""
+def test_defaults_are_the_papers_environment_and_wall() -> None:
+    """Sec. 5.1: wall at x = 1.7771 m, K_e = 1e4 N/m; sea water; the description's defaults."""
     p = UvmsParameters()
-    assert (p.vehicle.mass_kg, p.vehicle.length_m, p.vehicle.diameter_m) == (530.0, 1.0, 0.5)
-    assert p.arm.link_lengths_m == (0.5, 0.5, 0.5)
-    assert p.arm.link_radii_m == (0.05, 0.04, 0.035)
-    assert p.arm.link_masses_kg == (10.0, 8.0, 5.0)
-    assert (p.vehicle.linear_drag_translation_n_s_m, p.vehicle.linear_drag_rotation_n_m_s) == (
-        0.0,
-        0.81,
-    )
-    assert (p.vehicle.drag_coefficient_translation, p.vehicle.drag_coefficient_rotation) == (
-        1.05,
-        1.0,
-    )
-    assert p.arm.drag_coefficient == 1.1
     assert p.contact.wall_position_m == 1.7771
+    assert p.contact.stiffness_n_m == 1e4
     assert p.hydrodynamics.water_density_kg_m3 == 1025.0
+    assert (p.description.urdf_path, p.description.hydrodynamics_path) == ('', '')
+
+
+def test_no_parameter_repeats_what_the_urdf_holds() -> None:
+    """Masses, dimensions, mount point and joint axes are no ROS parameters (the URDF's)."""
+    names = {spec.name for spec in PARAMETER_SPECS}
+    assert not {name for name in names if name.split('.')[0] in ('vehicle', 'arm')}
 
 
 def test_flat_dict_round_trips() -> None:
@@ -70,34 +65,32 @@ def test_specs_list_every_parameter_with_ros_types_and_units() -> None:
 
 
 def test_integers_are_accepted_for_float_parameters() -> None:
-    """A YAML integer (530) is a valid float parameter."""
-    assert UvmsParameters.from_flat_dict({'vehicle.mass_kg': 530}).vehicle.mass_kg == 530.0
+    """A YAML integer (10000) is a valid float parameter."""
+    params = UvmsParameters.from_flat_dict({'contact.stiffness_n_m': 10000})
+    assert params.contact.stiffness_n_m == 10000.0
 
 
 def test_unknown_parameter_is_rejected_by_name() -> None:
-    """An unknown dotted name raises ParameterError naming it."""
-    with pytest.raises(ParameterError, match=r'vehicle\.masss_kg'):
-        UvmsParameters.from_flat_dict({'vehicle.masss_kg': 1.0})
+    """An unknown dotted name (one the URDF now holds, too) raises ParameterError naming it."""
+    with pytest.raises(ParameterError, match=r'vehicle\.mass_kg'):
+        UvmsParameters.from_flat_dict({'vehicle.mass_kg': 530.0})
 
 
 @pytest.mark.parametrize(
     ('name', 'value', 'pattern'),
     [
-        ('vehicle.mass_kg', -1.0, r'vehicle\.mass_kg = -1\.0 is out of range \[0\.001'),
+        ('contact.wall_position_m', -2e4, r'contact\.wall_position_m = -20000\.0 is out'),
         ('contact.stiffness_n_m', 0.0, r'contact\.stiffness_n_m = 0\.0 is out of range'),
         ('contact.stiffness_n_m', -1e4, r'contact\.stiffness_n_m'),
-        ('arm.link_masses_kg', [10.0, -8.0, 5.0], r'arm\.link_masses_kg'),
-        ('arm.link_lengths_m', [0.5, 0.5], r'arm\.link_lengths_m has 2 elements, expected 3'),
+        ('sensor.force_range_n', [400.0, -8.0, 5.0], r'sensor\.force_range_n'),
+        ('sensor.force_range_n', [1.0, 2.0], r'sensor\.force_range_n has 2 elements, expected 3'),
         ('thrusters.max_thrust_n', [200.0] * 7, r'thrusters\.max_thrust_n has 7 elements'),
         ('thrusters.positions_m', [0.0] * 10, r'thrusters\.positions_m has 10 elements'),
-        ('vehicle.mass_kg', float('nan'), r'vehicle\.mass_kg = nan must be finite'),
-        ('vehicle.mass_kg', 'heavy', r'vehicle\.mass_kg'),
+        ('contact.stiffness_n_m', float('nan'), r'contact\.stiffness_n_m = nan must be finite'),
+        ('contact.stiffness_n_m', 'stiff', r'contact\.stiffness_n_m'),
+        ('description.urdf_path', 3, r'description\.urdf_path = 3 must be a string'),
         ('hydrodynamics.drag_enabled', 1, r'hydrodynamics\.drag_enabled = 1 must be a bool'),
-        ('arm.joint_axes', [0.0, 0.0, 2.0, 0, 1, 0, 0, 1, 0], r'arm\.joint_axes'),
-        ('vehicle.length_m', 0.4, r'vehicle\.length_m = 0\.4 must exceed vehicle\.diameter_m'),
         ('integration.method', 'euler', r'integration\.method'),
-        ('arm.link_radii_m', [0.3, 0.04, 0.035], r'arm\.link_lengths_m\[0\] = 0\.5 must exceed'),
-        ('vehicle.buoyancy_ratio', 0.01, r'vehicle\.buoyancy_ratio = 0\.01 is below'),
     ],
 )
 def test_invalid_parameter_raises_a_value_error_naming_it(
@@ -140,11 +133,3 @@ def test_default_thruster_layout_has_eight_thrusters_within_limits() -> None:
     layout = ThrusterLayout.from_parameters(UvmsParameters().thrusters)
     assert layout.count == 8
     np.testing.assert_allclose(np.linalg.norm(layout.directions, axis=1), 1.0)
-
-
-def test_buoyancy_ratio_sets_total_buoyancy_over_weight() -> None:
-    """Hull displacement + link displacement = ratio x total mass (553 kg)."""
-    for ratio in (1.0, 1.02):
-        model = UvmsModel(UvmsParameters().updated({'vehicle.buoyancy_ratio': ratio}))
-        links = 1025.0 * np.pi * (0.05**2 + 0.04**2 + 0.035**2) * 0.5
-        assert model.hull_displaced_mass_kg + links == pytest.approx(ratio * 553.0, rel=1e-12)

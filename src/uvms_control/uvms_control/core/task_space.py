@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from uvms_model import UvmsModel
+from uvms_model import TaskSpaceTerms, UvmsModel
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -78,7 +78,7 @@ def task_space_model(
         model: the controller's UVMS model.
         q: generalized coordinates (9,).
         q_dot: generalized velocities (9,).
-        X: end-effector position if already known (saves one forward-kinematics pass).
+        X: unused (the model's one pass gives the end-effector position); kept for callers.
 
     Example:
         >>> model = UvmsModel()
@@ -87,25 +87,25 @@ def task_space_model(
         >>> bool(np.allclose(ts.J @ ts.J_pinv, np.eye(3)))
         True
     """
-    M = model.mass_matrix(q)
-    zeta = model.bias(q, q_dot)
-    J = model.ee_jacobian(q)
-    j_dot_q_dot = model.ee_jacobian_dot_qdot(q, q_dot)
-    if X is None:
-        X = model.ee_position(q)
-    Jt_pinv = inverse_3x3(J @ J.T) @ J
+    return task_space_model_from_terms(model.task_space_terms(q, q_dot))
+
+
+def task_space_model_from_terms(terms: TaskSpaceTerms) -> TaskSpaceModel:
+    """Eq. 24-28 from the model's terms at one state: J⁺, J̃⁺, M̃, ζ̃ and Ẋ = J q̇ (eq. 22)."""
+    J = terms.J
+    Jt_pinv = inverse_3x3(J.dot(J.T)).dot(J)
     J_pinv = Jt_pinv.T
-    M_tilde = Jt_pinv @ (M @ J_pinv)  # symmetric up to rounding (M is)
-    zeta_tilde = Jt_pinv @ zeta - M_tilde @ j_dot_q_dot
+    M_tilde = Jt_pinv.dot(terms.M.dot(J_pinv))  # symmetric up to rounding (M is)
+    zeta_tilde = Jt_pinv.dot(terms.zeta) - M_tilde.dot(terms.J_dot_q_dot)
     return TaskSpaceModel(
-        X=X,
-        X_dot=J @ q_dot,
+        X=terms.X,
+        X_dot=J.dot(terms.q_dot),
         J=J,
-        J_dot_q_dot=j_dot_q_dot,
+        J_dot_q_dot=terms.J_dot_q_dot,
         J_pinv=J_pinv,
         Jt_pinv=Jt_pinv,
-        M=M,
-        zeta=zeta,
+        M=terms.M,
+        zeta=terms.zeta,
         M_tilde=M_tilde,
         zeta_tilde=zeta_tilde,
     )

@@ -48,8 +48,12 @@ from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
 from uvms_control.core.parameters import ControllerParameters
 from uvms_control.core.reference import ForcePhase, ForceSetpoint, HalfCircleReference
-from uvms_control.core.task_space import TaskSpaceModel, inverse_3x3, task_space_model
-from uvms_model import ModelError, UvmsModel
+from uvms_control.core.task_space import (
+    TaskSpaceModel,
+    inverse_3x3,
+    task_space_model_from_terms,
+)
+from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -111,7 +115,10 @@ class ControllerResult:
 
 def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
     array = np.asarray(value, dtype=np.float64)
-    if array.shape != (size,) or not np.isfinite(array).all():
+    # A finite sum of plain floats is the cheap test; a huge finite sum may overflow: look again.
+    if array.shape != (size,) or (
+        not math.isfinite(sum(array.tolist())) and not np.isfinite(array).all()
+    ):
         raise ControlInputError(
             f'{name} must be {size} finite values, got {np.ravel(array).tolist()}'
         )
@@ -207,12 +214,10 @@ class UnifiedForceController:
         w = _finite_vector('w', w, self._n_dof)
         f_sensor = _finite_vector('f_sensor', f_sensor, 3)
         try:
-            B = self.model.velocity_transform(q)
-            X = self.model.ee_position(q)
-            rot_ned_from_ee = self.model.ee_rotation(q)
+            terms = self.model.task_space_terms(q, w=w)
         except ModelError as error:
             raise ControlInputError(str(error)) from error
-        return self._step(t, q, B @ w, rot_ned_from_ee @ f_sensor, X, B)
+        return self._step(t, q, terms, terms.rot_ned_from_ee.dot(f_sensor))
 
     def step(
         self, t: float, q: npt.ArrayLike, q_dot: npt.ArrayLike, f_e_ned: npt.ArrayLike
@@ -231,25 +236,19 @@ class UnifiedForceController:
         q = _finite_vector('q', q, self._n_dof)
         q_dot = _finite_vector('q_dot', q_dot, self._n_dof)
         f_e = _finite_vector('f_e_ned', f_e_ned, 3)
-        return self._step(t, q, q_dot, f_e, None, None)
+        try:
+            terms = self.model.task_space_terms(q, q_dot)
+        except ModelError as error:
+            raise ControlInputError(str(error)) from error
+        return self._step(t, q, terms, f_e)
 
     def _step(
-        self,
-        t: float,
-        q: FloatArray,
-        q_dot: FloatArray,
-        F_e: FloatArray,
-        X: FloatArray | None,
-        B: FloatArray | None,
+        self, t: float, q: FloatArray, terms: TaskSpaceTerms, F_e: FloatArray
     ) -> ControllerResult:
         if not math.isfinite(t):
             raise ControlInputError(f'time t = {t} s must be finite')
-        try:
-            ts = task_space_model(self.model, q, q_dot, X)
-            if B is None:
-                B = self.model.velocity_transform(q)
-        except ModelError as error:
-            raise ControlInputError(str(error)) from error
+        ts = task_space_model_from_terms(terms)
+        q_dot, B = terms.q_dot, terms.B
         if self._t0 is None:
             self._t0 = t
             self._t_prev = t
@@ -317,7 +316,7 @@ class UnifiedForceController:
                 a_c = W * U + (1.0 - W) * (inverse_3x3(M_hat) @ F_H_selected)
             tau += self._null_space_torque(ts, q, q_dot, a_c)
         tau_b = B.T @ tau
-        if not np.isfinite(tau_b).all():
+        if not math.isfinite(sum(tau_b.tolist())) and not np.isfinite(tau_b).all():
             raise ControlInputError(
                 f'the control law gave a non-finite command at q = {q.tolist()} '
                 '(kinematic singularity?)'

@@ -1,0 +1,33 @@
+"""ament_python build of uvms_description: the URDF, its hydrodynamics and mesh go to share/."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'uvms_description'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/urdf', glob('urdf/*.urdf')),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/meshes', glob('meshes/*.stl')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='UVMS developers',
+    maintainer_email='dev@uvms.local',
+    description=(
+        'Robot description of the UVMS (paper section 5.1): URDF, hydrodynamic parameters '
+        'keyed by link name, hull mesh.'
+    ),
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+        ],
+    },
+)
