@@ -1,136 +1,276 @@
-"""Real-time mode in one process: does the graph hold 1 kHz simulation and 500 Hz control?
+"""Real time across processes: does the graph hold 1 kHz simulation and 500 Hz control?
 
-Runs the graph in real time (wall-clock timers, the bundled runtime, one executor thread
-unless --threads)
-for 30 s of wall time and prints, for each node's timers, the period mean, its 99th
-percentile, its maximum and the share of missed periods (timer ticks that never ran
-because the callback came late; the simulator then catches up with extra steps), plus how
-far simulated time fell behind wall time.
-Timer callbacks are timed by wrapping them here; node code is not touched. It prints
-figures and asserts nothing.
+Starts one process per node as ``uvms launch`` does (``uvms_bringup.launcher``), in real
+time, and observes them from this process (an rclpy node of its own, started after the
+nodes): the arrival time (monotonic clock of this machine) and the stamp of every
+message on ``/clock`` (the simulator publishes it with its state every
+``steps_per_publish`` = 2 steps of 1 ms), ``/uvms/controller/state`` (the controller's
+500 Hz step; published only by a step that computed), ``/uvms/command/generalized_force``
+(every controller tick, held or zeroed commands included) and ``/uvms/command/actuators``
+(the allocator's 500 Hz tick). Controller and allocator run their timers on ``/clock``
+(``use_sim_time``), so they can at best follow the simulator.
+
+Printed per stream: the wall-clock period between arrivals (mean, p99, max; the
+simulator's per step: publication period / steps), the missed periods against the wall
+clock (1 - periods done / periods elapsed) and, for the /clock-driven nodes, against
+simulated time (1 - stamps / 2 ms slots), and each process's CPU use; then how far
+simulated time fell behind the wall clock. It prints figures and asserts nothing.
 
 Usage::
 
-    .venv/bin/python bench/bench_realtime.py [SCENARIO] [--seconds S]
+    .venv/bin/python bench/bench_realtime.py [SCENARIO] [--seconds S] [--only-simulator]
 """
 
 from __future__ import annotations
 
 import argparse
 import functools
+import os
+import random
 import sys
-import threading
+import tempfile
 import time
-from collections import defaultdict
-from collections.abc import Callable
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-for package in ('uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup', 'ros2_compat'):
+for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 
-import ros2_compat  # noqa: E402
-
-ros2_compat.activate()
-
-from uvms_bringup.graph import Graph, build_graph, run_graph  # noqa: E402
-from uvms_bringup.launch_helpers import resolve_scenario_path  # noqa: E402
+from uvms_bringup.launch_helpers import (  # noqa: E402
+    CONTROLLER,
+    SIMULATOR,
+    THRUSTER_ALLOCATOR,
+    resolve_scenario_path,
+)
+from uvms_bringup.launcher import Launcher, NodeProcess, plan_launch  # noqa: E402
 from uvms_bringup.scenario import load_scenario  # noqa: E402
+from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+
+#: Simulator step (ns) and its steps per publication (config/robot.yaml defaults).
+STEP_NS = 1_000_000
+STEPS_PER_PUBLISH = 2
+#: Nominal period (ns) of the controller's and the allocator's ticks (500 Hz).
+CONTROL_PERIOD_NS = 2_000_000
 
 
-class TimerLog:
-    """Start times (perf_counter, s) of each timer callback, keyed by node and period."""
+@dataclass(frozen=True)
+class Stream:
+    """One observed topic.
 
-    def __init__(self) -> None:
-        self.starts: dict[tuple[str, int], list[float]] = defaultdict(list)
-        self.busy_s: dict[tuple[str, int], float] = defaultdict(float)
-        self._lock = threading.Lock()
+    Attributes:
+        label: Row name in the table.
+        topic: Topic name.
+        node: Node that publishes it.
+        period_ns: Nominal period of what it times (ns).
+        per_publication: Periods per message (the simulator publishes every 2 steps).
+        sim_driven: Runs on /clock, so missed periods are also counted in simulated time.
+    """
 
-    def wrap(self, graph: Graph) -> None:
-        """Wrap every timer callback of the graph's nodes."""
-        for name, node in graph.nodes.items():
-            for timer in node.timers:
-                if timer.callback is not None:
-                    key = (name, int(timer.timer_period_ns))
-                    timer.callback = self._logged(key, timer.callback)
+    label: str
+    topic: str
+    node: str
+    period_ns: int
+    per_publication: int = 1
+    sim_driven: bool = False
 
-    def _logged(self, key: tuple[str, int], callback: Callable[[], Any]) -> Callable[[], Any]:
-        @functools.wraps(callback)
-        def logged() -> Any:
-            start = time.perf_counter()
-            try:
-                return callback()
-            finally:
-                with self._lock:
-                    self.starts[key].append(start)
-                    self.busy_s[key] += time.perf_counter() - start
 
-        return logged
+STREAMS = (
+    Stream('simulator step', '/clock', SIMULATOR.name, STEP_NS, STEPS_PER_PUBLISH),
+    Stream('simulator publish', '/clock', SIMULATOR.name, STEP_NS * STEPS_PER_PUBLISH),
+    Stream('controller step', '/uvms/controller/state', CONTROLLER.name, CONTROL_PERIOD_NS,
+           sim_driven=True),
+    Stream('controller tick', '/uvms/command/generalized_force', CONTROLLER.name,
+           CONTROL_PERIOD_NS, sim_driven=True),
+    Stream('allocator tick', '/uvms/command/actuators', THRUSTER_ALLOCATOR.name,
+           CONTROL_PERIOD_NS, sim_driven=True),
+)
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process so far (s), from /proc."""
+    try:
+        fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+    except OSError:
+        return float('nan')
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def stamp_ns(msg: Any) -> int:
+    """Stamp of a Clock message or of a message with a header (ns)."""
+    stamp = msg.clock if hasattr(msg, 'clock') else msg.header.stamp
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def row(stream: Stream, samples: Sequence[tuple[int, Any]], window_ns: int,
+        cpu_percent: float) -> str:
+    """One table row from (arrival ns, message) samples inside the window."""
+    if len(samples) < 3:
+        return f'  {stream.label:<18s} {stream.topic:<32s} fewer than 3 messages'
+    arrivals = np.array([t for t, _ in samples], dtype=np.int64)
+    stamps = np.array(sorted({stamp_ns(msg) for _, msg in samples}), dtype=np.int64)
+    periods_ms = np.diff(arrivals) * 1e-6 / stream.per_publication
+    nominal_ms = stream.period_ns * 1e-6
+    done = (len(samples) - 1) * stream.per_publication
+    missed_wall = max(0.0, 1.0 - done * stream.period_ns / window_ns) * 100.0
+    missed_sim = '-'
+    if stream.sim_driven:
+        slots = (stamps[-1] - stamps[0]) / stream.period_ns
+        missed_sim = f'{max(0.0, 1.0 - (len(stamps) - 1) / slots) * 100.0:6.1f}%'
+    return (f'  {stream.label:<18s} {stream.topic:<32s} {nominal_ms:7.3f} '
+            f'{periods_ms.mean():8.3f} {np.percentile(periods_ms, 99):8.3f} '
+            f'{periods_ms.max():8.3f} {missed_wall:6.1f}% {missed_sim:>7s} {cpu_percent:5.0f}%')
+
+
+def observe(launcher: Launcher, topics: dict[str, type], warmup_s: float, seconds: float,
+            domain_id: int) -> tuple[dict[str, list[tuple[int, bytes]]], int, int,
+                                     dict[str, float]]:
+    """Subscribe raw, wait for every topic plus the warm-up, record ``seconds`` of arrivals.
+
+    Returns:
+        Topic to (arrival ns, raw message), the window's start and end (monotonic ns), and
+        each node's CPU use over the window (% of one core).
+    """
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rclpy.signals import SignalHandlerOptions
+    from uvms_common.node_main import make_executor
+
+    context = Context()
+    rclpy.init(args=[], context=context, domain_id=domain_id,
+               signal_handler_options=SignalHandlerOptions.NO)
+    node = rclpy.create_node('bench_observer', context=context)
+    arrivals: dict[str, list[tuple[int, bytes]]] = {topic: [] for topic in topics}
+
+    def on_message(topic: str, data: bytes) -> None:
+        arrivals[topic].append((time.monotonic_ns(), data))
+
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    for topic, msg_class in topics.items():
+        node.create_subscription(msg_class, topic, functools.partial(on_message, topic), qos,
+                                 raw=True)
+    executor = make_executor('events', context)
+    executor.add_node(node)
+
+    def spin_until(condition: Any, timeout_s: float, what: str) -> None:
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            if time.monotonic() > deadline:
+                raise SystemExit(f'bench: {what} not within {timeout_s} s')
+            for process in launcher.processes:
+                if process.poll() is not None:
+                    raise SystemExit(f'bench: {process.name} ended with {process.status}')
+            executor.spin_once(timeout_sec=0.05)
+
+    try:
+        spin_until(lambda: all(arrivals.values()), 60.0, 'a message on every topic')
+        warm_end = time.monotonic() + warmup_s
+        spin_until(lambda: time.monotonic() > warm_end, warmup_s + 5.0, 'warm-up')
+        cpu_start = {p.name: cpu_seconds(p.popen.pid) for p in launcher.processes}
+        start_ns = time.monotonic_ns()
+        end = time.monotonic() + seconds
+        spin_until(lambda: time.monotonic() > end, seconds + 5.0, 'the measurement')
+        end_ns = time.monotonic_ns()
+        cpu = {p.name: 100.0 * (cpu_seconds(p.popen.pid) - cpu_start[p.name])
+               / ((end_ns - start_ns) * 1e-9) for p in launcher.processes}
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    return arrivals, start_ns, end_ns, cpu
 
 
 def main() -> None:
     """Run the benchmark and print its figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('scenario', nargs='?', default='case1_ke1e4')
-    parser.add_argument('--seconds', type=float, default=30.0, help='wall-clock duration')
-    parser.add_argument('--threads', type=int, default=1,
-                        help='executor threads (1: SingleThreadedExecutor, the default of '
-                             'uvms launch; more: MultiThreadedExecutor)')
+    parser.add_argument('--seconds', type=float, default=20.0,
+                        help='wall-clock seconds measured, after the warm-up')
+    parser.add_argument('--warmup', type=float, default=2.0,
+                        help='wall-clock seconds skipped once every topic has a message')
+    parser.add_argument('--only-simulator', action='store_true',
+                        help='start the simulator alone (what it can do without the others)')
+    parser.add_argument('--executor', choices=('events', 'single'), default=None,
+                        help="the nodes' executor (UVMS_EXECUTOR; default: events)")
     parser.add_argument('--integrator', choices=('rk4', 'semi_implicit_euler'), default=None,
                         help="simulator's integration.method (default: config/robot.yaml)")
     args = parser.parse_args()
+
+    ros_environment_defaults()
+    domain_id = int(os.environ.get('ROS_DOMAIN_ID') or random.randint(1, 100))
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
+    if args.executor:
+        env['UVMS_EXECUTOR'] = args.executor
     scenario = load_scenario(resolve_scenario_path(args.scenario))
     extra = {'simulator': {'integration.method': args.integrator}} if args.integrator else None
-    graph = build_graph(scenario, 'realtime', duration_s=args.seconds, extra_overrides=extra)
-    log = TimerLog()
-    log.wrap(graph)
-    deadline = [0.0]
-    lags_ms: list[float] = []
-    start = [0.0]
 
-    def watch(g: Graph) -> None:
-        now = time.monotonic()
-        if not deadline[0]:
-            deadline[0] = now + args.seconds * 1.5
-        sim_s = g.simulator.sim_time_ns * 1e-9
-        if sim_s > 0.0:
-            if not start[0]:
-                start[0] = now - sim_s
-            lags_ms.append(1e3 * (now - start[0] - sim_s))
-        if now > deadline[0]:
-            raise KeyboardInterrupt
+    from rosgraph_msgs.msg import Clock
 
-    result = run_graph(graph, on_spin=watch, threads=args.threads)
-    executor = 'SingleThreadedExecutor' if args.threads == 1 else (
-        f'MultiThreadedExecutor({args.threads})')
-    print(f'scenario          {scenario.name}, real time, one process, {executor}, '
-          f'integrator {args.integrator or "config/robot.yaml"}, {result.wall_time_s:.1f} s wall')
-    print(f'simulated         {result.sim_time_s:.2f} s '
-          f'(real-time factor {result.real_time_factor:.3f}; 1.000 = keeping up)')
-    # Lag of simulated time behind the wall clock, from its smallest value (the alignment
-    # of the two clocks at start-up is not observable from here).
-    lags = np.array(lags_ms) - min(lags_ms)
-    print(f'simulated time lag behind the wall clock: mean {lags.mean():.2f} ms, '
-          f'p99 {np.percentile(lags, 99):.2f} ms, max {lags.max():.2f} ms')
-    header = (f'  {"node":<20s} {"nominal":>9s} {"mean":>9s} {"p99":>9s} {"max":>9s} '
-              f'{"missed":>8s} {"busy":>6s}')
-    print('timer periods (ms):')
-    print(header)
-    for (name, period_ns), starts in sorted(log.starts.items()):
-        if len(starts) < 3:
-            continue
-        periods = np.diff(np.array(starts)) * 1e3
-        nominal = period_ns * 1e-6
-        span_s = starts[-1] - starts[0]
-        expected = span_s / (period_ns * 1e-9)
-        missed = max(0.0, 1.0 - (len(starts) - 1) / expected) * 100.0 if expected else 0.0
-        busy = 100.0 * log.busy_s[(name, period_ns)] / span_s if span_s else 0.0
-        print(f'  {name:<20s} {nominal:9.3f} {periods.mean():9.3f} '
-              f'{np.percentile(periods, 99):9.3f} {periods.max():9.3f} {missed:7.1f}% '
-              f'{busy:5.1f}%')
+    from uvms_msgs.msg import ActuatorCommand, ControllerState, GeneralizedForce
+
+    classes: dict[str, type] = {'/clock': Clock, '/uvms/controller/state': ControllerState,
+                                '/uvms/command/generalized_force': GeneralizedForce,
+                                '/uvms/command/actuators': ActuatorCommand}
+    streams = [s for s in STREAMS if not args.only_simulator or s.node == SIMULATOR.name]
+    topics = {s.topic: classes[s.topic] for s in streams}
+    with tempfile.TemporaryDirectory(prefix='uvms_bench_') as parameters_dir:
+        plans = plan_launch(scenario, 'realtime', Path(parameters_dir), log_level='warn',
+                            extra_overrides=extra)
+        if args.only_simulator:
+            plans = [plan for plan in plans if plan.spec is SIMULATOR]
+        # Started before this process creates its own DDS participant (and its threads).
+        launcher = Launcher(plans, env=env)
+        launcher.start()
+        try:
+            arrivals, start_ns, end_ns, cpu = observe(launcher, topics, args.warmup,
+                                                      args.seconds, domain_id)
+        finally:
+            launcher.stop()
+    report(args, scenario.name, streams, classes, arrivals, start_ns, end_ns, cpu,
+           launcher.processes)
+
+
+def report(args: argparse.Namespace, scenario: str, streams: Sequence[Stream],
+           classes: dict[str, type], arrivals: dict[str, list[tuple[int, bytes]]],
+           start_ns: int, end_ns: int, cpu: dict[str, float],
+           processes: Sequence[NodeProcess]) -> None:
+    """Print the table of periods and the lag of simulated time."""
+    from rclpy.serialization import deserialize_message
+
+    window = {topic: [(t, deserialize_message(data, classes[topic]))
+                      for t, data in samples if start_ns <= t <= end_ns]
+              for topic, samples in arrivals.items()}
+    window_ns = end_ns - start_ns
+    nodes = ', '.join(p.name for p in processes)
+    print(f'scenario {scenario}, real time, one process per node ({nodes}), executor '
+          f'{args.executor or os.environ.get("UVMS_EXECUTOR", "events")}, integrator '
+          f'{args.integrator or "config/robot.yaml"}; {window_ns * 1e-9:.1f} s measured after '
+          f'{args.warmup:g} s warm-up; {os.cpu_count()} CPUs')
+    print('periods (ms) from arrival times in a separate observer process; missed periods '
+          'against the wall clock and, for /clock-driven nodes, against simulated time')
+    print(f'  {"stream":<18s} {"topic":<32s} {"nominal":>7s} {"mean":>8s} {"p99":>8s} '
+          f'{"max":>8s} {"missed":>7s} {"sim":>7s} {"cpu":>6s}')
+    for stream in streams:
+        print(row(stream, window[stream.topic], window_ns, cpu.get(stream.node, float('nan'))))
+    clock = window['/clock']
+    if len(clock) >= 2:
+        wall_s = (clock[-1][0] - clock[0][0]) * 1e-9
+        sim_s = (stamp_ns(clock[-1][1]) - stamp_ns(clock[0][1])) * 1e-9
+        # Wall minus simulated time of each /clock arrival, from the window's first one.
+        lag_ms = np.array([(t - stamp_ns(msg)) * 1e-6 for t, msg in clock])
+        lag_ms -= lag_ms[0]
+        print(f'simulated {sim_s:.2f} s in {wall_s:.2f} s wall: real-time factor '
+              f'{sim_s / wall_s:.3f} (1.000 = keeping up); over the window simulated time fell '
+              f'{lag_ms[-1]:.0f} ms behind the wall clock (arrival jitter: p99 of the lag '
+              f'increments {np.percentile(np.diff(lag_ms), 99):.2f} ms)')
+    for process in processes:
+        if process.status not in (0, 130, None):
+            print(f'note: {process.name} ended with status {process.status}')
 
 
 if __name__ == '__main__':

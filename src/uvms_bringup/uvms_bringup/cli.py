@@ -79,10 +79,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument('--quiet', '-q', action='store_true',
                      help='no progress bar, only warnings and errors')
     launch = sub.add_parser(
-        'launch', help='run the graph in real time until Ctrl-C (or --duration)',
-        description='Run the graph on wall-clock timers. With ROS 2 sourced this starts the '
-                    'nodes as processes (ros2 launch uvms_bringup uvms.launch.py); without, '
-                    'in this process on the bundled runtime.')
+        'launch', help='run the graph, one process per node, in real time until Ctrl-C',
+        description='Start simulator, controller, thruster_allocator (and recorder with '
+                    '--output) each as its own process, as ros2 launch uvms_bringup '
+                    'uvms.launch.py would, on wall-clock timers by default. Ctrl-C or '
+                    'SIGTERM stops every node (exit 130); with --duration the run ends when '
+                    'the simulator reaches it (exit 0); a node that fails is named and the '
+                    'others are stopped (exit 1).')
     launch.add_argument('scenario', metavar='SCENARIO.yaml', nargs='?',
                         help='scenario file or name (default: the parameter files only)')
     launch.add_argument('--duration', type=_positive_seconds, metavar='S',
@@ -145,8 +148,24 @@ def _run(args: argparse.Namespace, stop: StopEvent) -> int:
 
 
 def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
-    """``uvms launch``: the graph in real time."""
-    return _run_in_process(args, args.mode, stop, progress=False)
+    """``uvms launch``: one process per node (``uvms_bringup.launcher``), real time by default."""
+    from uvms_bringup.launch_helpers import resolve_scenario_path
+    from uvms_bringup.launcher import LaunchError, launch_graph
+    from uvms_bringup.scenario import ScenarioError, load_scenario
+
+    try:
+        scenario = None
+        if args.scenario is not None:
+            scenario = load_scenario(resolve_scenario_path(args.scenario))
+            scenario = scenario.with_changes(duration_s=args.duration)
+        return launch_graph(scenario, args.mode, duration_s=args.duration,
+                            output_path=args.output, quiet=args.quiet, stop=stop)
+    except (ScenarioError, FileNotFoundError) as exc:
+        _error('launch', str(exc))
+        return EXIT_USAGE
+    except LaunchError as exc:
+        _error('launch', str(exc))
+        return EXIT_FAILURE
 
 
 def _run_in_process(
