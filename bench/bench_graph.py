@@ -1,56 +1,117 @@
-"""Lockstep speed of the whole graph with recording, and where the wall time goes.
+"""Lockstep speed of the whole graph with recording on genuine rclpy, and where the time goes.
 
-Runs a scenario (default: case1_ke1e4, its 20 s) through the in-process graph in lockstep
-with the recorder on, and prints the real-time factor (simulated s per wall s) and the
-share of wall time spent in each node's callbacks. Callbacks are timed by wrapping them
-here, from the outside; node code is not touched. A benchmark prints figures, it asserts
-nothing. Targets: at least 2x real time, stretch 5x.
+Runs a scenario (default: case1_ke1e4, its 20 s; 1 kHz simulator, 500 Hz control) through
+the in-process graph (``uvms_bringup.graph``) in lockstep with the recorder on, on the
+EventsExecutor and/or the SingleThreadedExecutor in this one process, and prints for each
+the real-time factor (simulated s per wall s) and the share of wall time spent in each
+node's callbacks, split into our code and ``publish`` (rclpy serialization and the rmw).
+Callbacks and publishers are timed by wrapping them here, from the outside
+(``Subscription.callback``, ``Timer.callback`` and ``Publisher.publish`` of each node are
+writable); node code is not touched. The rest of the wall time (executor, waiting, taking
+and deserializing messages, DDS delivery) is the middleware's.
+
+As a baseline the same simulated time runs through the pure cores in a plain loop, no ROS:
+``uvms_sim.plant.Plant``, ``UnifiedForceController`` and ``ThrusterAllocator``, built as
+the nodes build them from the nodes' own parameter values (a graph is built once to read
+them: parameter files plus scenario overrides), stepped as lockstep does: every control
+period observe -> controller step -> allocator step -> ``steps_per_publish`` plant steps.
+graph wall / plain wall is the middleware's cost (target <= 1.5). A benchmark prints
+figures, it asserts nothing; the machine's load average is printed with them.
 
 Usage::
 
-    .venv/bin/python bench/bench_graph.py [SCENARIO] [--duration S] [--output F.mcap]
+    .venv/bin/python bench/bench_graph.py [SCENARIO] [--duration S] [--executor KIND]
+        [--output F.mcap] [--integrator METHOD]
 """
 
 from __future__ import annotations
 
 import argparse
 import functools
+import os
 import sys
 import tempfile
 import time
 from collections import defaultdict
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 REPO = Path(__file__).resolve().parents[1]
-for package in ('uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup', 'ros2_compat'):
+for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 
-import ros2_compat  # noqa: E402
+from geometry_msgs.msg import PoseStamped  # noqa: E402
+from rclpy.serialization import deserialize_message  # noqa: E402
+from uvms_bringup.graph import Graph, RunResult, build_graph, run_graph  # noqa: E402
+from uvms_bringup.launch_helpers import (  # noqa: E402
+    CONTROLLER,
+    SIMULATOR,
+    THRUSTER_ALLOCATOR,
+    resolve_scenario_path,
+)
+from uvms_bringup.recording import open_recording  # noqa: E402
+from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
+from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_control.core.parameters import (  # noqa: E402
+    ALLOCATOR_PARAMETER_SPECS,
+    CONTROLLER_PARAMETER_SPECS,
+    ControllerParameters,
+    thruster_parameters_from_flat_dict,
+)
+from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
+from uvms_model.thrusters import ThrusterLayout  # noqa: E402
+from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings  # noqa: E402
+from uvms_sim.plant import Plant, initial_coordinates  # noqa: E402
 
-ros2_compat.activate()
+from uvms_model import (  # noqa: E402
+    PARAMETER_SPECS,
+    UvmsModel,
+    UvmsParameters,
+    load_description,
+)
 
-from uvms_bringup.graph import Graph, build_graph, run_graph  # noqa: E402
-from uvms_bringup.launch_helpers import resolve_scenario_path  # noqa: E402
-from uvms_bringup.scenario import load_scenario  # noqa: E402
+EXECUTORS = ('events', 'single')
+#: Longest accepted graph wall / plain-loop wall (the middleware's cost).
+TARGET_RATIO = 1.5
+#: The recorded end-effector pose, compared with the plain loop's last observation.
+EE_POSE_TOPIC = '/uvms/ee_pose'
 
 
 class CallbackTimer:
-    """Accumulates the wall time of every callback of each node (perf_counter, s)."""
+    """Accumulates the wall time (perf_counter, s) of each node's callbacks and publishes."""
 
     def __init__(self) -> None:
         self.seconds: dict[str, float] = defaultdict(float)
         self.calls: dict[str, int] = defaultdict(int)
+        self.publish_seconds: dict[str, float] = defaultdict(float)
+        self.publishes: dict[str, int] = defaultdict(int)
 
     def wrap(self, graph: Graph) -> None:
-        """Replace each subscription and timer callback of the graph's nodes by a timed one."""
+        """Replace each callback and publish of the graph's nodes by a timed one.
+
+        Raises:
+            RuntimeError: A node has no subscription or timer to time (a wrapping that would
+                silently measure nothing).
+        """
         for name, node in graph.nodes.items():
-            for entity in [*node.subscriptions, *node.timers]:
+            entities = [*node.subscriptions, *node.timers]
+            if not entities:
+                msg = f'node {name!r} has no subscription or timer to time'
+                raise RuntimeError(msg)
+            for entity in entities:
                 if entity.callback is not None:
                     entity.callback = self._timed(name, entity.callback)
+            for publisher in node.publishers:
+                # An instance attribute shadows Publisher.publish for the node's calls.
+                publisher.publish = self._timed_publish(name, publisher.publish)  # type: ignore[method-assign]
 
     def _timed(self, name: str, callback: Callable[..., Any]) -> Callable[..., Any]:
+        # functools.wraps keeps the signature that rclpy inspects (message, or message+info).
         @functools.wraps(callback)
         def timed(*args: Any) -> Any:
             start = time.perf_counter()
@@ -62,54 +123,295 @@ class CallbackTimer:
 
         return timed
 
+    def _timed_publish(self, name: str, publish: Callable[[Any], None]) -> Callable[[Any], None]:
+        def timed(msg: Any) -> None:
+            start = time.perf_counter()
+            try:
+                publish(msg)
+            finally:
+                self.publish_seconds[name] += time.perf_counter() - start
+                self.publishes[name] += 1
+
+        return timed
+
+
+@dataclass
+class GraphRun:
+    """One run of the graph on one executor."""
+
+    executor: str
+    build_s: float
+    result: RunResult
+    timer: CallbackTimer
+    recording_mb: float
+    p_ee_end: np.ndarray | None
+
+
+@dataclass
+class Cores:
+    """The pure cores of one run, built as the nodes build them, and the loop's settings."""
+
+    plant: Plant
+    controller: UnifiedForceController
+    allocator: ThrusterAllocator
+    settings: SimulatorSettings
+    values: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+@dataclass
+class PlainRun:
+    """The plain loop's wall time (s), control steps, last end-effector position (m).
+
+    ``core_s`` holds the wall time (s) of each core, keyed by the node that runs it.
+    """
+
+    wall_s: float
+    control_steps: int
+    sim_time_s: float
+    p_ee_end: np.ndarray
+    core_s: dict[str, float]
+
+
+def node_values(graph: Graph) -> dict[str, dict[str, Any]]:
+    """Every parameter of the simulator, controller and allocator, as plain Python values."""
+
+    def plain(value: Any) -> Any:
+        if isinstance(value, bool | int | float | str) or value is None:
+            return value
+        return [plain(item) for item in value]
+
+    return {
+        name: {key: plain(parameter.value)
+               for key, parameter in graph.nodes[name].get_parameters_by_prefix('').items()}
+        for name in (SIMULATOR.name, CONTROLLER.name, THRUSTER_ALLOCATOR.name)
+    }
+
+
+def build_cores(values: Mapping[str, Mapping[str, Any]]) -> Cores:
+    """Build plant, controller and allocator cores the way their nodes do, from their values.
+
+    Mirrors ``SimulatorNode``, ``ControllerNode`` and ``ThrusterAllocatorNode`` ``__init__``.
+    """
+    sim = values[SIMULATOR.name]
+    params = UvmsParameters.from_flat_dict({s.name: sim[s.name] for s in PARAMETER_SPECS})
+    settings = SimulatorSettings.from_values({s.name: sim[s.name] for s in SIMULATOR_PARAMETERS})
+    probe = Plant(params, [0.0] * 9, settings.physics_dt_ns)
+    q0 = initial_coordinates(probe.model, settings.vehicle_pose, settings.joint_positions,
+                             settings.ee_position if settings.arm_from_ee_position else None)
+    plant = Plant(params, q0, settings.physics_dt_ns, settings.wall_enabled,
+                  settings.wall_motion_start_force_n)
+
+    ctl = values[CONTROLLER.name]
+    gains = ControllerParameters.from_flat_dict(
+        {s.name: ctl[s.name] for s in CONTROLLER_PARAMETER_SPECS})
+    model = UvmsModel(UvmsParameters.from_flat_dict({s.name: ctl[s.name]
+                                                     for s in PARAMETER_SPECS}))
+    controller = UnifiedForceController(gains, model)
+
+    alloc = values[THRUSTER_ALLOCATOR.name]
+    uvms = UvmsParameters.from_flat_dict({s.name: alloc[s.name] for s in PARAMETER_SPECS})
+    layout = ThrusterLayout.from_parameters(uvms.thrusters)
+    joint_names = load_description(uvms.description.urdf_path,
+                                   uvms.description.hydrodynamics_path).joint_names
+    allocator_values = {s.name: alloc[s.name] for s in ALLOCATOR_PARAMETER_SPECS}
+    thruster = thruster_parameters_from_flat_dict(
+        {k: v for k, v in allocator_values.items() if k.startswith('thruster.')},
+        uvms.hydrodynamics.water_density_kg_m3)
+    torque_limits = np.asarray(allocator_values['allocator.max_joint_torque_n_m'], dtype=float)
+    if torque_limits.size != len(joint_names):
+        msg = (f'allocator.max_joint_torque_n_m has {torque_limits.size} values, '
+               f'expected {len(joint_names)}')
+        raise ValueError(msg)
+    allocator = ThrusterAllocator(AllocatorParameters(
+        layout.thrust_matrix(), layout.max_thrust_n, torque_limits, thruster))
+    return Cores(plant, controller, allocator, settings, dict(values))
+
+
+def run_plain_loop(cores: Cores) -> PlainRun:
+    """Step the cores as lockstep does, until the simulator's ``duration_s``.
+
+    Every control period: observe (all frames when /tf is due), controller step on the
+    observation (what joint_states, odometry and wrench carry), allocator step over the time
+    since the last command, then ``steps_per_publish`` plant steps on its output. It ends,
+    as the simulator does, once the state at ``duration_s`` has been answered.
+    """
+    plant, controller, allocator = cores.plant, cores.controller, cores.allocator
+    settings = cores.settings
+    if settings.duration_ns <= 0:
+        msg = 'the plain loop needs a positive duration_s'
+        raise ValueError(msg)
+    clock = time.perf_counter
+    plant_s = controller_s = allocator_s = 0.0
+    published = 0
+    last_stamp_ns: int | None = None
+    start = clock()
+    while True:
+        t0 = clock()
+        tf_due = bool(settings.publishes_per_tf) and published % settings.publishes_per_tf == 0
+        seen = plant.observe(all_frames=tf_due)
+        published += 1
+        t1 = clock()
+        result = controller.step_from_sensors(seen.t_ns * 1e-9, seen.q, seen.w,
+                                              seen.sensor_force)
+        t2 = clock()
+        dt_s = 0.0 if last_stamp_ns is None else (seen.t_ns - last_stamp_ns) * 1e-9
+        last_stamp_ns = seen.t_ns
+        output = allocator.step(result.tau_b, dt_s)
+        t3 = clock()
+        plant_s += t1 - t0
+        controller_s += t2 - t1
+        allocator_s += t3 - t2
+        if plant.t_ns >= settings.duration_ns:
+            break
+        for _ in range(settings.steps_per_publish):
+            plant.step(output.thrust, output.joint_torques)
+        plant_s += clock() - t3
+    wall_s = clock() - start
+    core_s = {SIMULATOR.name: plant_s, CONTROLLER.name: controller_s,
+              THRUSTER_ALLOCATOR.name: allocator_s}
+    return PlainRun(wall_s, published, plant.t_ns * 1e-9, seen.poses['ee_link'][0], core_s)
+
+
+def last_ee_position(path: Path) -> np.ndarray | None:
+    """The end-effector position (m, map_ned) of the recording's last ee_pose message."""
+    last = None
+    for message in open_recording(path).messages(topics=[EE_POSE_TOPIC]):
+        last = message
+    if last is None:
+        return None
+    pose = deserialize_message(last.data, PoseStamped).pose.position
+    return np.array((pose.x, pose.y, pose.z))
+
+
+def run_on(
+    kind: str,
+    scenario: Scenario,
+    output: Path,
+    extra: Mapping[str, Mapping[str, ParameterValue]] | None,
+) -> GraphRun:
+    """Build the graph with recording, time its callbacks, run it on one executor."""
+    start = time.perf_counter()
+    graph = build_graph(scenario, 'lockstep', output_path=output, extra_overrides=extra)
+    build_s = time.perf_counter() - start
+    timer = CallbackTimer()
+    timer.wrap(graph)
+    result = run_graph(graph, executor_kind=kind)
+    return GraphRun(kind, build_s, result, timer, output.stat().st_size / 1e6,
+                    last_ee_position(output))
+
+
+def print_graph_run(run: GraphRun, plain: PlainRun) -> None:
+    """Real-time factor, ratio to the plain loop and the table of where the wall time went."""
+    result, timer = run.result, run.timer
+    total = result.wall_time_s
+    ratio = total / plain.wall_s
+    verdict = 'within' if ratio <= TARGET_RATIO else 'OVER'
+    print(f'\n== {run.executor} executor ==')
+    print(f'graph build         {run.build_s:.2f} s wall')
+    print(f'run                 {total:.2f} s wall for {result.sim_time_s:.2f} s simulated')
+    print(f'real-time factor    {result.real_time_factor:.2f}x')
+    print(f'graph / plain loop  {ratio:.2f} ({verdict} the {TARGET_RATIO:g} target)')
+    print(f'recording           {run.recording_mb:.1f} MB; lockstep timeouts '
+          f'{result.lockstep_timeouts}')
+    if run.p_ee_end is not None:
+        gap = float(np.linalg.norm(run.p_ee_end - plain.p_ee_end))
+        print(f'last ee position    {np.round(run.p_ee_end, 6).tolist()} m '
+              f'(plain loop differs by {gap:.2e} m)')
+    header = (f'  {"where":<20}{"calls":>8}{"wall s":>8}{"share":>8}{"us/call":>9}'
+              f'{"publish s":>10}{"core s":>8}{"glue s":>8}')
+    rule = '  ' + '-' * (len(header) - 2)
+    print(header)
+    print(rule)
+    callbacks = publishes = cores = 0.0
+    for name in sorted(timer.seconds, key=lambda n: -timer.seconds[n]):
+        seconds, calls = timer.seconds[name], timer.calls[name]
+        pub_s = timer.publish_seconds[name]
+        core_s = plain.core_s.get(name, 0.0)
+        callbacks += seconds
+        publishes += pub_s
+        cores += core_s
+        print(f'  {name:<20}{calls:>8d}{seconds:>8.2f}{100 * seconds / total:>7.1f}%'
+              f'{1e6 * seconds / max(calls, 1):>9.1f}{pub_s:>10.2f}{core_s:>8.2f}'
+              f'{seconds - pub_s - core_s:>8.2f}')
+    rest = total - callbacks
+    print(rule)
+    rows = (
+        ('our cores', cores, 'as timed in the plain loop'),
+        ('our glue', callbacks - publishes - cores,
+         'conversions, node logic, recorder writes'),
+        ('publish', publishes, 'rclpy serialization + rmw write'),
+        ('executor + rest', rest, 'wait, take, deserialize, dispatch, DDS'),
+    )
+    for label, seconds, note in rows:
+        print(f'  {label:<20}{"":>8}{seconds:>8.2f}{100 * seconds / total:>7.1f}%   {note}')
+    middleware = publishes + rest
+    print(f'  {"middleware":<20}{"":>8}{middleware:>8.2f}{100 * middleware / total:>7.1f}%'
+          '   publish + executor + rest')
+
 
 def main() -> None:
     """Run the benchmark and print its figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('scenario', nargs='?', default='case1_ke1e4')
     parser.add_argument('--duration', type=float, default=None, help='simulated s')
-    parser.add_argument('--output', default=None, help='MCAP file (default: a temporary one)')
+    parser.add_argument('--executor', choices=(*EXECUTORS, 'both'), default='both',
+                        help='executor of the graph (default both, one after the other)')
+    parser.add_argument('--output', default=None,
+                        help='MCAP file (default: a temporary one; with both executors the '
+                             'last run keeps it)')
     parser.add_argument('--integrator', choices=('rk4', 'semi_implicit_euler'), default=None,
                         help="simulator's integration.method (default: config/robot.yaml)")
     args = parser.parse_args()
+    ros_environment_defaults()
     scenario = load_scenario(resolve_scenario_path(args.scenario))
     if args.duration is not None:
         scenario = scenario.with_changes(duration_s=args.duration)
+    extra = ({SIMULATOR.name: {'integration.method': args.integrator}}
+             if args.integrator else None)
+    kinds = EXECUTORS if args.executor == 'both' else (args.executor,)
+
+    probe = build_graph(scenario, 'lockstep', extra_overrides=extra)
+    try:
+        cores = build_cores(node_values(probe))
+    finally:
+        probe.destroy()
+    settings = cores.settings
+    integrator = cores.values[SIMULATOR.name]['integration.method']
+    load = ', '.join(f'{x:.2f}' for x in os.getloadavg())
+    print(f'scenario            {scenario.name}: {settings.duration_ns * 1e-9:g} s simulated, '
+          f'lockstep, recording on, integrator {integrator}')
+    print(f'rates               simulator {1e9 / settings.physics_dt_ns:g} Hz, control '
+          f'{1e9 / (settings.physics_dt_ns * settings.steps_per_publish):g} Hz, /tf every '
+          f'{settings.publishes_per_tf} states')
+    print(f'machine             {os.cpu_count()} CPUs, load average {load} (1, 5, 15 min)')
+
+    runs: list[GraphRun] = []
     with tempfile.TemporaryDirectory() as tmp:
-        output = Path(args.output) if args.output else Path(tmp) / 'bench.mcap'
-        build_start = time.perf_counter()
-        extra = ({'simulator': {'integration.method': args.integrator}}
-                 if args.integrator else None)
-        graph = build_graph(scenario, 'lockstep', output_path=output, extra_overrides=extra)
-        build_s = time.perf_counter() - build_start
-        timer = CallbackTimer()
-        timer.wrap(graph)
-        result = run_graph(graph)
-        size_mb = output.stat().st_size / 1e6
-    total = result.wall_time_s
-    integrator = args.integrator or 'config/robot.yaml'
-    print(f'scenario            {scenario.name} ({result.sim_time_s:.2f} s simulated, '
-          f'lockstep, recording on, integrator {integrator})')
-    print(f'graph build         {build_s:.2f} s wall')
-    print(f'run                 {total:.2f} s wall')
-    print(f'real-time factor    {result.real_time_factor:.2f}x (target >= 2x, stretch 5x)')
-    print(f'recording           {size_mb:.1f} MB')
-    print(f'lockstep timeouts   {result.lockstep_timeouts}')
-    print('share of wall time in callbacks:')
-    accounted = 0.0
-    for name in graph_order(timer):
-        seconds = timer.seconds[name]
-        accounted += seconds
-        per_call_us = 1e6 * seconds / max(timer.calls[name], 1)
-        print(f'  {name:<20s} {100 * seconds / total:5.1f} %  {seconds:7.2f} s  '
-              f'{timer.calls[name]:>8d} calls  {per_call_us:7.1f} us/call')
-    print(f'  {"executor + rest":<20s} {100 * (total - accounted) / total:5.1f} %  '
-          f'{total - accounted:7.2f} s')
+        for kind in kinds:
+            output = Path(args.output) if args.output else Path(tmp) / f'bench_{kind}.mcap'
+            runs.append(run_on(kind, scenario, output, extra))
+    plain = run_plain_loop(cores)
+    print(f'plain loop          {plain.wall_s:.2f} s wall for {plain.sim_time_s:.2f} s '
+          f'simulated ({plain.control_steps} control steps, '
+          f'{1e6 * plain.wall_s / plain.control_steps:.0f} us each), real-time factor '
+          f'{plain.sim_time_s / plain.wall_s:.2f}x')
+    print('                    ' + ', '.join(f'{name} core {seconds:.2f} s'
+                                              for name, seconds in plain.core_s.items()))
+    for run in runs:
+        print_graph_run(run, plain)
 
-
-def graph_order(timer: CallbackTimer) -> list[str]:
-    """Node names, most expensive first."""
-    return sorted(timer.seconds, key=lambda name: -timer.seconds[name])
+    print('\n== summary ==')
+    print(f'  {"":<14}{"wall s":>9}{"RTF":>8}{"/ plain":>9}')
+    print(f'  {"plain loop":<14}{plain.wall_s:>9.2f}{plain.sim_time_s / plain.wall_s:>7.2f}x'
+          f'{1.0:>9.2f}')
+    for run in runs:
+        wall = run.result.wall_time_s
+        print(f'  {run.executor:<14}{wall:>9.2f}{run.result.real_time_factor:>7.2f}x'
+              f'{wall / plain.wall_s:>9.2f}')
+    if len(runs) == 2:
+        events, single = runs
+        print(f'  events / single real-time factor: '
+              f'{events.result.real_time_factor / single.result.real_time_factor:.2f}')
 
 
 if __name__ == '__main__':
