@@ -184,8 +184,6 @@ def _run_in_process(
             scenario = scenario.with_changes(duration_s=args.duration,
                                              seed=getattr(args, 'seed', None))
         duration = args.duration if scenario is None else scenario.duration_s
-        if command == 'launch' and args.duration is None:
-            duration = 0.0
         if args.quiet:
             _quiet_logs()
         graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration)
@@ -207,9 +205,6 @@ def _run_graph_and_report(
 
     command = args.command
     bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
-    if command == 'launch' and not args.quiet:
-        print(f'uvms launch: {mode} graph running in this process; Ctrl-C stops it',
-              file=sys.stderr)
     try:
         result = run_graph(graph, progress=bar, stop=stop)
     except GraphError as exc:
