@@ -23,7 +23,7 @@ PURE_MODULES = sorted(
     ]
 )
 
-FORBIDDEN_ROOTS = {'rclpy', 'ros2_compat', 'launch', 'launch_ros', 'ament_index_python'}
+FORBIDDEN_ROOTS = {'rclpy', 'launch', 'launch_ros', 'ament_index_python'}
 
 
 def imported_roots(path: Path) -> set[str]:

@@ -2,8 +2,8 @@
 
 Frames: vehicle pose in ``map_ned`` (NED, z down), vehicle twist in ``base_link_frd``, the
 wrist wrench in ``ft_sensor_link`` (axes of ``ee_link``), the generalized force command in
-``base_link_frd``. Array fields are filled with ``array.array('d')``, which both the real
-rosidl classes and ros2_compat accept. Every reader validates sizes, frames and finiteness
+``base_link_frd``. Array fields are filled with ``array.array('d')``, which the rosidl
+classes take without a per-element check. Every reader validates sizes, frames and finiteness
 and raises `ControlInputError` naming the field.
 """
 
@@ -156,7 +156,7 @@ def _floats(values: npt.ArrayLike) -> array.array[float]:
 
 
 # The message builders take ``out``, a message an earlier call returned, to refill instead of
-# building a new one: rclpy serializes at publish (ros2_compat copies), so a node may keep
+# building a new one: rclpy serializes at publish, so a node may keep
 # one message per publisher. Frames and joint names are set when the message is built.
 
 
