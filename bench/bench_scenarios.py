@@ -4,8 +4,9 @@ Runs each scenario of config/scenarios (its full duration, 20 s simulated) as
 ``uvms run SCENARIO --output F.mcap`` in its own process, ``--jobs`` at a time (default 2,
 the development machine's cores), and prints the wall time of each run (process start to
 exit, start-up included), their serial sum (what one process after another would take) and
-the wall time of the whole batch. Target: the batch under 2 minutes on 2 cores. A benchmark
-prints figures, it asserts nothing.
+the wall time of the whole batch. Each run gets a ROS domain of its own (``ROS_DOMAIN_ID``
+200-231): two lockstep graphs in one domain would hear each other. Target: the batch under
+2 minutes on 2 cores. A benchmark prints figures, it asserts nothing.
 
 With ``--out DIR`` the recordings are kept; ``--plot`` then writes the figures of each
 (``uvms plot``, into DIR/NAME/), ``--docs-figures DIR`` copies the ones docs/results.md shows
@@ -44,6 +45,13 @@ from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 
 #: The batch target on the 2-core development machine (s).
 TARGET_S = 120.0
+#: Wall-clock limit of one run (s): a run past it is stopped and reported as failed.
+RUN_TIMEOUT_S = 600.0
+#: ROS_DOMAIN_IDs of the runs: the n-th run gets DOMAIN_BASE + n % DOMAIN_COUNT. Two lockstep
+#: graphs in one domain hear each other's commands (same node names, same stamps from
+#: t = 0) and stall; the test suite uses 0, 1-100 and 150-199.
+DOMAIN_BASE = 200
+DOMAIN_COUNT = 32
 #: The figures docs/results.md shows: ``uvms plot`` output (under --out) -> docs file name.
 DOCS_FIGURES = {
     'case1_ke1e4/trajectory_xz.png': 'case1_ke1e4_trajectory_xz.png',
@@ -110,22 +118,30 @@ def run_batch(jobs: list[Job], workers: int, duration_s: float | None = None) ->
     duration = [] if duration_s is None else ['--duration', f'{duration_s:g}']
     pending, running = list(jobs), []
     env = child_env()
+    started = 0
     batch_start = time.perf_counter()
     while pending or running:
         while pending and len(running) < workers:
             job = pending.pop(0)
+            domain = str(DOMAIN_BASE + started % DOMAIN_COUNT)
+            started += 1
             job.log = tempfile.TemporaryFile()
             job.start = time.perf_counter()
             job.process = subprocess.Popen(
                 uvms('run', str(SCENARIO_DIR / f'{job.name}.yaml'), '--output', str(job.output),
                      '--quiet', *duration),
-                stdout=subprocess.DEVNULL, stderr=job.log, env=env)
+                stdout=subprocess.DEVNULL, stderr=job.log, env={**env, 'ROS_DOMAIN_ID': domain})
             running.append(job)
         time.sleep(0.02)
         for job in list(running):
             assert job.process is not None and job.log is not None
             if job.process.poll() is None:
-                continue
+                if time.perf_counter() - job.start < RUN_TIMEOUT_S:
+                    continue
+                job.process.kill()
+                job.process.wait()
+                job.log.seek(0, os.SEEK_END)
+                job.log.write(f'\nstopped after {RUN_TIMEOUT_S:g} s wall'.encode())
             job.wall_s = time.perf_counter() - job.start
             running.remove(job)
             job.log.seek(0)
