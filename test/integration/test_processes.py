@@ -467,6 +467,23 @@ def test_a_failing_node_is_named_and_the_others_are_stopped(tmp_path: Path) -> N
     assert not any(alive(pid) for pid in _launch_pids(err))
 
 
+def test_a_scenario_key_no_node_declares_stops_the_launch_before_any_node(
+    tmp_path: Path,
+) -> None:
+    """A misspelt override would be ignored by the node: launch names it and starts nothing."""
+    scenario = tmp_path / 'typo.yaml'
+    scenario.write_text(yaml.safe_dump({
+        'name': 'typo', 'description': 'misspelt controller key', 'duration_s': 5.0,
+        'controller': {'control_rate_hzz': 500.0},
+    }))
+    process = start([str(BIN / 'uvms'), 'launch', str(scenario)])
+    err = finish(process, 40.0)
+    assert process.returncode == 2, err
+    assert "key 'controller.control_rate_hzz'" in err
+    assert 'did you mean control_rate_hz' in err
+    assert not _launch_pids(err)
+
+
 def test_a_node_killed_while_running_is_named_and_the_others_are_stopped(
     observer_factory: Callable[[Mapping[str, type]], Observer],
 ) -> None:
