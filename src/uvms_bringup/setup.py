@@ -34,7 +34,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'recorder = uvms_bringup.recorder_node:main',
+            'recorder = uvms_bringup.entry_points:recorder',
             'uvms = uvms_bringup.cli:main',
         ],
     },

@@ -733,3 +733,20 @@ def test_recorder_console_script_runs_alone_and_records(
                      if channel.topic == '/alone/joint_states']
     assert summary is not None
     assert positions == pytest.approx([0.01 * i for i in range(20)])
+
+
+@pytest.mark.parametrize('delay_s', [0.2, 0.5])
+@pytest.mark.parametrize('executable', ['simulator', 'controller'])
+def test_a_stop_while_the_node_still_imports_exits_cleanly(executable: str,
+                                                           delay_s: float) -> None:
+    """SIGINT in the first half second (rclpy, numpy, Pinocchio loading): status 0, no trace.
+
+    The console script installs its stop handlers before the node module's imports; a
+    launcher stopping a node it has just started must not print a KeyboardInterrupt.
+    """
+    process = start([str(BIN / executable), '--ros-args', '-r', '__ns:=/early_stop'])
+    time.sleep(delay_s)
+    returncode, _, err = stop(process)
+    assert returncode in CLEAN_STOP, err
+    assert 'Traceback' not in err
+    assert 'KeyboardInterrupt' not in err

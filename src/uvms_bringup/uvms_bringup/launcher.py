@@ -461,7 +461,7 @@ def launch_graph(
         _check_overrides(scenario, namespace, config)
     own_stop = None
     if stop is None:
-        from uvms_common.node_main import StopEvent
+        from uvms_common.stop_event import StopEvent
 
         stop = own_stop = StopEvent()
     try:
