@@ -73,14 +73,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     """Check the sweep, run it, and report."""
+    import rclpy.logging
+
     from uvms_bringup.graph import GraphError
     from uvms_bringup.scenario import ScenarioError
     from uvms_bringup.sweep_engine import SweepEngineError, run_sweep
     from uvms_bringup.sweep_file import SweepError, load_sweep
     from uvms_bringup.sweep_table import TableError
     from uvms_bringup.sweep_validate import check_sweep
-
-    import rclpy.logging
 
     # The nodes built to check the axes would log their start-up lines: only warnings.
     rclpy.logging.set_logger_level('uvms', rclpy.logging.LoggingSeverity.WARN)
