@@ -222,7 +222,7 @@ def _dispatch(
             while pending and free_domains:
                 point = pending.pop(0)
                 domain = free_domains.pop(0)
-                request = _request(sweep, scenario, point, duration_s)
+                request = point_request(sweep, scenario, point, duration_s)
                 in_flight[task.remote(request, domain, sweep.timeout_s)] = (point, domain)
             ready, _ = ray.wait(list(in_flight), num_returns=1, timeout=_WAIT_S)
             if stop is not None and stop.is_set():
@@ -241,7 +241,7 @@ def _dispatch(
         _cancel(ray, list(in_flight))
 
 
-def _request(
+def point_request(
     sweep: Sweep, scenario: Scenario, point: SweepPoint, duration_s: float
 ) -> dict[str, Any]:
     """What the point process needs: base scenario, its parameters, seed and duration."""

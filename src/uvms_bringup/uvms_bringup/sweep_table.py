@@ -27,6 +27,8 @@ TABLE_NAME = 'points.csv'
 FIXED_COLUMNS = ('status', 'reason', 'stable', 'wall_time_s', 'sim_time_s', 'finished_utc')
 #: Contact intervals from which a run counts as bouncing off the wall (unstable).
 UNSTABLE_CONTACTS = 2
+#: Peak force over F_d above which the contact force counts as surging (unstable).
+SURGE_RATIO = 2.0
 
 
 class TableError(RuntimeError):
@@ -40,11 +42,12 @@ def columns(sweep: Sweep) -> list[str]:
 
 
 def stability(metrics: Mapping[str, float | None]) -> str:
-    """``no`` if the contact force is not held, ``yes`` if it is, empty without contact.
+    """``no`` if the contact is not held steadily, ``yes`` if it is, empty without contact.
 
-    Unstable: the end effector bounced off the wall (``UNSTABLE_CONTACTS`` or more contact
-    intervals), or the force never stayed within the 5 % band around F_d (no settling time)
-    although the run reached the wall with a set-point.
+    Unstable: the end effector bounced (``UNSTABLE_CONTACTS`` or more contact intervals:
+    it lost the wall and hit it again), or the force surged past ``SURGE_RATIO`` F_d (an
+    oscillation that grows instead of settling). A force that stays below F_d without
+    settling (too soft a wall for the hand-over) is stable but shows no settling time.
     """
     contacts = metrics.get('contact_count') or 0.0
     if contacts <= 0.0:
@@ -52,7 +55,8 @@ def stability(metrics: Mapping[str, float | None]) -> str:
     if contacts >= UNSTABLE_CONTACTS:
         return 'no'
     desired = metrics.get('desired_force_N')
-    if desired and metrics.get('settling_time_s') is None:
+    peak = metrics.get('peak_force_N')
+    if desired and peak is not None and peak > SURGE_RATIO * desired:
         return 'no'
     return 'yes'
 
@@ -71,6 +75,9 @@ def read_table(directory: Path, sweep: Sweep) -> dict[str, dict[str, str]]:
             reader = csv.DictReader(file)
             header = list(reader.fieldnames or [])
             rows = [row for row in reader if row.get('point_id')]
+        for row in rows:  # derived, so that a table of an older definition is brought up to date
+            if row.get('status') == 'done':
+                row['stable'] = stability({key: metric_value(row, key) for key in METRIC_KEYS})
     except (OSError, csv.Error) as exc:
         raise TableError(f'{path}: cannot read the sweep table: {exc}') from exc
     if header != columns(sweep):
