@@ -113,9 +113,8 @@ def _heatmap(
     ax.set_title(_title(sweep, metric), fontsize=10)
     handles = [Patch(facecolor='0.6', hatch='xx', edgecolor='0.3', label='failed'),
                Patch(fill=False, hatch='//', edgecolor='red', label='unstable')]
-    ax.legend(handles=handles, loc='upper center', bbox_to_anchor=(0.5, -0.18), ncol=2,
-              fontsize=8, frameon=False)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.07, 1.0, 1.0))
+    fig.legend(handles=handles, loc='lower center', ncol=2, fontsize=8, frameon=False)
     fig.savefig(path, dpi=_DPI)
 
 

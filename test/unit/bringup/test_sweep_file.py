@@ -130,3 +130,24 @@ def test_progress_line_counts_points_and_estimates_the_rest() -> None:
     lines = stream.getvalue().splitlines()
     assert lines[0].startswith('[') and '5/10 points, 0 failed' in lines[0]
     assert '6/10 points, 1 failed' in lines[-1] and 'ETA' in lines[-1]
+
+
+def test_one_axis_sweep_draws_a_line_per_metric_with_failed_points(tmp_path: Path) -> None:
+    """One axis: figures/METRIC.png is a line plot; failed and unstable rows do not break it."""
+    from matplotlib.image import imread
+    from uvms_bringup.sweep_plots import draw_figures
+
+    text = VALID.replace('  simulator.contact.stiffness_n_m: {logspace: [1.0e+3, 1.0e+6, 4]}\n',
+                         '').replace('seeds: [1, 2]\n', '')
+    sweep = load_sweep(write(tmp_path, text))
+    points = sweep.points('case1_ke1e4', 0.5, 1)
+    rows = {
+        points[0].point_id: {'status': 'done', 'stable': 'yes', 'force_rms_error_N': '1.0',
+                             'overshoot_percent': '2.0'},
+        points[1].point_id: {'status': 'failed', 'reason': 'timeout'},
+        points[2].point_id: {'status': 'done', 'stable': 'no', 'force_rms_error_N': '9.0',
+                             'overshoot_percent': ''},
+    }
+    files = draw_figures(sweep, points, rows, tmp_path / 'out')
+    assert [f.name for f in files] == ['force_rms_error_N.png', 'overshoot_percent.png']
+    assert all(imread(f).shape[0] > 100 for f in files)
