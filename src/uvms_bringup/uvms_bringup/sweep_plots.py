@@ -4,7 +4,8 @@ Drawn on ``matplotlib.figure.Figure`` with the Agg canvas, without pyplot (as ``
 
 A cell (or a point of the line) is the mean of the metric over the seeds that ran. Cells
 where a seed failed are grey with a cross hatch (``xx``) and the label ``failed``; cells
-where a seed ran unstable (``sweep_table.stability``) carry a diagonal hatch (``//``); in
+where a seed ran unstable (``sweep_table.stability``) carry a diagonal hatch (``//``), and
+the colour scale spans the other cells (an unstable cell beyond it shows saturated); in
 line plots failed points are red crosses at the bottom and unstable ones open red circles.
 Sweeps over three or more axes get the table only.
 """
@@ -86,7 +87,12 @@ def _heatmap(
     fig = Figure(figsize=(1.2 + 0.9 * nx + 1.5, 1.2 + 0.6 * ny + 0.8))
     ax = fig.subplots()
     grid = np.ma.masked_invalid(mean.T)
-    image = ax.imshow(grid, origin='lower', aspect='auto', cmap='viridis')
+    # Colours span the stable cells, so that a diverged run does not flatten the map; the
+    # unstable cells beyond that range show saturated (their labels give the values).
+    steady = mean[np.isfinite(mean) & ~unstable]
+    limits = (float(steady.min()), float(steady.max())) if steady.size else (None, None)
+    image = ax.imshow(grid, origin='lower', aspect='auto', cmap='viridis', vmin=limits[0],
+                      vmax=limits[1])
     ax.set_facecolor('0.85')
     fig.colorbar(image, ax=ax, label=metric)
     for i in range(nx):
@@ -101,7 +107,8 @@ def _heatmap(
                                        edgecolor='red', linewidth=0.0))
             if np.isfinite(mean[i, j]) and nx * ny <= 100:
                 value = mean[i, j]
-                light = image.norm(value) < 0.5 if np.isfinite(image.norm(value)) else True
+                shade = float(np.clip(image.norm(value), 0.0, 1.0))
+                light = shade < 0.5 if np.isfinite(shade) else True
                 ax.text(i, j, f'{value:.3g}', ha='center', va='center', fontsize=7,
                         color='w' if light else 'k')
             elif not np.isfinite(mean[i, j]):
