@@ -247,3 +247,46 @@ def test_ctrl_c_stops_the_sweep_keeps_what_is_done_and_leaves_no_point_running(
     assert all(row['status'] == 'done' and row['point_id'] for row in rows)
     assert 're-run the same command to resume' in stderr
     assert point_processes() == []
+
+
+def free_port() -> int:
+    """A TCP port free on 127.0.0.1 right now."""
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(('127.0.0.1', 0))
+        return int(probe.getsockname()[1])
+
+
+def test_address_joins_an_existing_ray_cluster(tmp_path: Path) -> None:
+    """`--address` runs the points on a cluster started apart (`ray start --head`), left up.
+
+    The head runs in the foreground (``--block``) so that this test stops exactly the
+    processes it started. Token authentication is off on both sides (RAY_AUTH_MODE), as a
+    user of an authenticated cluster would instead give the driver the cluster's token.
+    """
+    port = free_port()
+    name, value = MARK.split('=')
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p), name: value,
+           'RAY_AUTH_MODE': 'disabled', 'RAY_USAGE_STATS_ENABLED': '0'}
+    ray_cli = Path(sys.executable).parent / 'ray'
+    head = subprocess.Popen(
+        [str(ray_cli), 'start', '--head', '--block', '--node-ip-address=127.0.0.1',
+         f'--port={port}', '--num-cpus=2', '--include-dashboard=false',
+         '--disable-usage-stats'], env=env, stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL)
+    try:
+        text = GRID.replace('record: true', 'record: false')
+        path = write(tmp_path, text)
+        process = subprocess.run(
+            [sys.executable, '-m', 'uvms_bringup.cli', 'sweep', str(path), '--out',
+             str(tmp_path / 'out'), '--address', f'127.0.0.1:{port}', '--quiet'],
+            capture_output=True, text=True, env=env, timeout=PROCESS_TIMEOUT_S)
+        assert process.returncode == 0, process.stderr
+        rows = read_rows(tmp_path / 'out')
+        assert sorted(row['status'] for row in rows) == ['done', 'done', 'failed', 'failed']
+        assert head.poll() is None  # the cluster is the user's: still running
+    finally:
+        head.send_signal(signal.SIGTERM)
+        head.wait(timeout=PROCESS_TIMEOUT_S)
+    assert point_processes() == []
