@@ -289,4 +289,8 @@ def test_address_joins_an_existing_ray_cluster(tmp_path: Path) -> None:
     finally:
         head.send_signal(signal.SIGTERM)
         head.wait(timeout=PROCESS_TIMEOUT_S)
+        # `ray start` leaves its address for later ray.init() calls; this one is gone.
+        current = Path('/tmp/ray/ray_current_cluster')
+        if current.is_file() and current.read_text().strip() == f'127.0.0.1:{port}':
+            current.unlink()
     assert point_processes() == []

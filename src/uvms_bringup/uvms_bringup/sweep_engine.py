@@ -101,7 +101,9 @@ def start_local_ray(workers: int) -> Any:
     """
     os.environ.update(LOCAL_RAY_ENVIRONMENT)
     ray = _import_ray()
-    ray.init(address=None, num_cpus=workers, num_gpus=0, include_dashboard=False,
+    # 'local' always starts a new instance: address=None would join a cluster that
+    # `ray start` left on this machine (its address file in /tmp/ray), bound as it is.
+    ray.init(address='local', num_cpus=workers, num_gpus=0, include_dashboard=False,
              _node_ip_address='127.0.0.1', object_store_memory=LOCAL_OBJECT_STORE_BYTES,
              log_to_driver=False, logging_level=logging.ERROR)
     return ray
