@@ -13,20 +13,24 @@ OUT ?= out
 SCENARIO ?= case1_ke1e4
 BIN := $(VENV)/bin
 
-.PHONY: demo test test-py312 setup clean
+.PHONY: demo test test-py312 setup clean sweeps
+
+#: The shipped sweeps whose maps docs/results.md shows (config/sweeps/NAME.yaml).
+SWEEPS ?= stiffness_model_error noise_filter
+SWEEP_WORKERS ?= 2
 
 setup: $(VENV)/.interfaces
 
 INTERFACES := $(shell find src/uvms_msgs interfaces -type f)
 
-# A virtualenv with genuine ROS 2 Jazzy from PyPI wheels, the project installed editable and
-# the pins of pyproject.toml; then our interface packages built into it with Jazzy's rosidl
+# A virtualenv with genuine ROS 2 Jazzy from PyPI wheels, the project installed editable with
+# its test and sweep (Ray) extras and the pins of pyproject.toml; then our interface packages built into it with Jazzy's rosidl
 # generators (rebuilt when a file of theirs changes).
 define make_venv
 	@tools/check-platform $(1)
 	$(1) -m venv $(2)
 	$(2)/bin/python -m pip install --quiet --upgrade pip
-	$(2)/bin/python -m pip install --quiet -e '.[test]'
+	$(2)/bin/python -m pip install --quiet -e '.[test,sweep]'
 	touch $(2)/.installed
 endef
 
@@ -48,6 +52,15 @@ demo: setup
 	$(BIN)/uvms run config/scenarios/$(SCENARIO).yaml --output $(OUT)/$(SCENARIO).mcap
 	$(BIN)/uvms plot $(OUT)/$(SCENARIO).mcap --out $(OUT)/$(SCENARIO)
 	$(BIN)/uvms report $(OUT)/$(SCENARIO).mcap
+
+# Every shipped sweep from scratch into docs/sweeps/NAME (points.csv, figures/*.png), on a
+# local Ray inside the loopback-only network namespace; about 15 min on 2 cores.
+sweeps: setup
+	for name in $(SWEEPS); do \
+	  rm -rf docs/sweeps/$$name && \
+	  tools/loopback-netns $(BIN)/uvms sweep config/sweeps/$$name.yaml --out docs/sweeps/$$name \
+	    --workers $(SWEEP_WORKERS) || exit $$?; \
+	done
 
 test: setup
 	$(BIN)/ruff check .

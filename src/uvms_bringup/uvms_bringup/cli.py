@@ -1,4 +1,4 @@
-"""The ``uvms`` command: run scenarios, launch the graph, replay, plot, report, doctor.
+"""The ``uvms`` command: run scenarios, launch the graph, replay, plot, report, sweep, doctor.
 
 Exit status: 0 success, 1 the run or the tool failed, 2 bad usage or a bad scenario file,
 130 interrupted (Ctrl-C). User errors are one line on stderr, never a traceback.
@@ -30,6 +30,8 @@ DELEGATED = {
                                       'the controller on it'),
     'plot': ('uvms_bringup.plots', "draw the paper's figures from a recording (PNG)"),
     'report': ('uvms_bringup.report', 'print the metrics of recordings'),
+    'sweep': ('uvms_bringup.sweep_cli', 'run a parameter sweep of a scenario on Ray and map '
+                                        'its metrics'),
     'doctor': ('uvms_bringup.doctor', 'show rclpy, rmw and DDS profile in use and check the '
                                       'messages'),
 }

@@ -378,3 +378,44 @@ def _check_override(
         msg = (f'{scenario.path}: key {key!r}: expected {expected}, got '
                f'{type(value).__name__} {value!r}')
         raise ScenarioError(msg)
+
+
+def declared_parameters(
+    specs: Sequence[NodeSpec] | None = None,
+    config: Path | None = None,
+    namespace: str = DEFAULT_NAMESPACE,
+) -> dict[str, dict[str, Parameter.Type]]:
+    """Every parameter each node declares after its parameter files, with its type.
+
+    The nodes are built once in a throwaway context (as ``check_scenario_overrides`` does);
+    sweeps use this to check their axes before any run.
+
+    Args:
+        specs: Nodes to read (simulator, controller and thruster allocator if None).
+        config: Directory of the parameter files (``config_dir()`` if None).
+        namespace: Namespace of the nodes.
+
+    Returns:
+        Node name to parameter name to declared type.
+
+    Raises:
+        GraphError: A node cannot be built from its parameter files.
+    """
+    specs = specs if specs is not None else graph_nodes(record=False)
+    config = config if config is not None else config_dir()
+    context = Context()
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    declared: dict[str, dict[str, Parameter.Type]] = {}
+    try:
+        for spec in specs:
+            node = _make_node(spec, {}, config, namespace, context)
+            try:
+                declared[spec.name] = {
+                    name: parameter.type_
+                    for name, parameter in node.get_parameters_by_prefix('').items()
+                }
+            finally:
+                node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+    return declared
