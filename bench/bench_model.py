@@ -119,7 +119,7 @@ def main() -> None:
         results[name] = new_us
         print(f'  {name:<48s} {new_us:8.1f} us {old_us:8.1f} us {old_us / new_us:8.2f}x')
 
-    rigid = model._dyn  # the rigid bodies with the added-mass sliders, for scale
+    rigid = model.dynamics.model  # the rigid bodies with the added-mass sliders, for scale
     data = rigid.createData()
     config, velocity = pin.neutral(rigid), np.zeros(rigid.nv)
     torque = np.zeros(rigid.nv)
