@@ -43,10 +43,7 @@ class FrameKinematics:
 
     def _pose(self, q: Sequence[float]) -> None:
         """Set the configuration (base pose from x, y, z and the Euler angles)."""
-        config = self._config
-        config[0:3] = q[0:3]
-        config[3:7] = quaternion_xyzw(q[3], q[4], q[5])
-        config[7:10] = q[6:9]
+        self._config[:] = (q[0], q[1], q[2], *quaternion_xyzw(q[3], q[4], q[5]), q[6], q[7], q[8])
 
     def frame(self, q: Sequence[float], name: str) -> tuple[FloatArray, FloatArray]:
         """(p_ned, rot_ned_from_frame) of one frame, by forward kinematics."""

@@ -9,6 +9,7 @@ integrates. The work is done by
 - ``uvms_model.body_dynamics``: M_b, the bias and w_dot of eq. 8 by CRBA, RNEA and ABA on the
   dynamic model (rigid bodies plus added mass, ``uvms_model.pinocchio_models``), with drag,
   net weights and the contact force as external forces (``uvms_model.body_forces``);
+- ``uvms_model.integration``: the fixed-step integrators;
 - ``uvms_model.coordinates``: B, B^-1 and their products in plain floats.
 """
 
@@ -37,6 +38,7 @@ from uvms_model.coordinates import (
 from uvms_model.description import EE_LINK, RobotDescription, load_description
 from uvms_model.errors import ModelError, StateError
 from uvms_model.frames import FrameKinematics
+from uvms_model.integration import rk4_step, semi_implicit_euler_step
 from uvms_model.kinematics import check_pitch
 from uvms_model.parameters import UvmsParameters
 from uvms_model.pinocchio_models import FRAME_NAMES, kinematic_model
@@ -249,13 +251,9 @@ class UvmsModel:
         self.dynamics.set_tau_b(tau_arr)
         dt = float(dt)
         if method == 'rk4':
-            q_new, w_new = self._rk4(q_list, w_arr, f, dt)
+            q_new, w_new = rk4_step(self.dynamics, self._g, q_list, w_arr.tolist(), f, dt)
         elif method == 'semi_implicit_euler':
-            rot = rotation(q_list[3], q_list[4], q_list[5])
-            f_body = None if f is None else mat_t_vec(rot, f)
-            w_dot = self.dynamics.w_dot(q_list[6:9], w_arr, self._gravity_body(rot), f_body)
-            w_new = w_arr + dt * w_dot[:N_DOF]
-            q_new = q_arr + dt * np.array(q_dot_from_w(q_list, w_new.tolist(), rot))
+            q_new, w_new = semi_implicit_euler_step(self.dynamics, self._g, q_list, w_arr, f, dt)
         else:
             raise ModelError(f"method = {method!r} must be 'rk4' or 'semi_implicit_euler'")
         if not math.isfinite(sum(q_new.tolist()) + sum(w_new.tolist())):
@@ -263,57 +261,6 @@ class UvmsModel:
                 f'the state diverged in one step of dt = {dt!r} s from q = {q_arr.tolist()!r}, '
                 f'w = {w_arr.tolist()!r}'
             )
-        return q_new, w_new
-
-    def _stage(
-        self, q: list[float], w: list[float], f_ned: list[float] | None
-    ) -> tuple[list[float], list[float]]:
-        """(q_dot, w_dot) of eq. 4 and eq. 8 at (q, w), as lists (w_dot may run longer)."""
-        rot = rotation(q[3], q[4], q[5])
-        g = self._g
-        f_body = None if f_ned is None else mat_t_vec(rot, f_ned)
-        w_dot = self.dynamics.w_dot(q[6:9], w, (g * rot[6], g * rot[7], g * rot[8]), f_body)
-        return q_dot_from_w(q, w, rot), w_dot.tolist()
-
-    def _rk4(
-        self, q: list[float], w_arr: FloatArray, f: list[float] | None, dt: float
-    ) -> tuple[FloatArray, FloatArray]:
-        """Classical fourth-order Runge-Kutta step of (q_dot, w_dot) = (B w, M_b^-1 (...)).
-
-        In plain floats: for 9-vectors a list comprehension costs less than the numpy calls
-        it replaces.
-        """
-        half = 0.5 * dt
-        w = w_arr.tolist()
-        p1, a1 = self._stage(q, w, f)
-        p2, a2 = self._stage(
-            [x + half * d for x, d in zip(q, p1, strict=True)],
-            [x + half * d for x, d in zip(w, a1, strict=False)],
-            f,
-        )
-        p3, a3 = self._stage(
-            [x + half * d for x, d in zip(q, p2, strict=True)],
-            [x + half * d for x, d in zip(w, a2, strict=False)],
-            f,
-        )
-        p4, a4 = self._stage(
-            [x + dt * d for x, d in zip(q, p3, strict=True)],
-            [x + dt * d for x, d in zip(w, a3, strict=False)],
-            f,
-        )
-        sixth = dt / 6.0
-        q_new = np.array(
-            [
-                x + sixth * (d1 + d4 + 2.0 * (d2 + d3))
-                for x, d1, d2, d3, d4 in zip(q, p1, p2, p3, p4, strict=True)
-            ]
-        )
-        w_new = np.array(
-            [
-                x + sixth * (d1 + d4 + 2.0 * (d2 + d3))
-                for x, d1, d2, d3, d4 in zip(w, a1, a2, a3, a4, strict=False)
-            ]
-        )
         return q_new, w_new
 
     # ------------------------------------------------------------------ generalized coordinates
