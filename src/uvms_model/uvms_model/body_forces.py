@@ -194,31 +194,33 @@ class BodyForces:
             rotated[6 * tip + r, force] = 1.0
             rotated[6 * tip + 3 : 6 * tip + 6, force] = skew(ee_offset)[:, r]
 
-        # Buffer: [linear | forms, first, second | forms again | speed, speed | rotated].
-        # One product fills the first four parts, hypot the speeds, and one
-        # elementwise product then makes [forms^2, |v_n| first, |v_n| second] in place.
+        # Buffer: [linear | forms, first, second | rotated | forms again, speed, speed].
+        # One product fills it up to the repeated forms (zeros where the rotated vectors
+        # go, written next), hypot the speeds, and one elementwise product then makes
+        # [forms^2, |v_n| first, |v_n| second] in place; ``back`` reads up to the rotated.
         n, n_forms, n_linear = len(gains), len(forms), len(linear)
-        forward = [c for c, _ in linear] + forms + strips_first + strips_second + forms
+        n_rotated = rotated.shape[1]
+        n_products = n_forms + 2 * n
+        forward = [c for c, _ in linear] + forms + strips_first + strips_second
+        forward += [np.zeros(n_rows)] * n_rotated + forms
         back = [c * d for c, d in linear] + scales
         back += [c * g for c, g in zip(strips_first, gains, strict=True)]
         back += [c * g for c, g in zip(strips_second, gains, strict=True)]
-        back += [np.zeros(n_rows)] * (n_forms + 2 * n)  # the multipliers
-        self._forward = np.column_stack(forward) if forward else np.zeros((n_rows, 0))
         self._back = np.ascontiguousarray(np.column_stack([*back, rotated]))
-        size = self._forward.shape[1]
-        self._buffer = np.zeros(self._back.shape[1])
-        self._products_in = self._buffer[:size]
-        products = slice(n_linear, n_linear + n_forms + 2 * n)
-        multipliers = slice(products.stop, products.stop + n_forms + 2 * n)
-        self._products = self._buffer[products]
-        self._multipliers = self._buffer[multipliers]
+        self._has_forward = n_linear + n_products > 0
+        self._forward = np.column_stack(forward) if self._has_forward else np.zeros((n_rows, 0))
+        self._buffer = np.zeros(self._back.shape[1] + n_products)
+        self._back_in = self._buffer[: self._back.shape[1]]
+        self._products_in = self._buffer[: self._forward.shape[1]]
+        self._products = self._buffer[n_linear : n_linear + n_products]
+        self._multipliers = self._buffer[n_linear + n_products + n_rotated :]
         self._first = self._buffer[n_linear + n_forms : n_linear + n_forms + n]
-        self._second = self._buffer[n_linear + n_forms + n : n_linear + n_forms + 2 * n]
-        speeds = self._buffer[multipliers.start + n_forms : multipliers.stop].reshape(2, n)
+        self._second = self._buffer[n_linear + n_forms + n : n_linear + n_products]
+        speeds = self._multipliers[n_forms:].reshape(2, n)
         self._speed, self._speed_again = speeds[0], speeds[1]
-        self._rotated = self._buffer[multipliers.stop :].reshape(4 * count, 2)
-        self._has_products = n_forms + n > 0
-        self._has_forward = size > 0
+        rotated_start = n_linear + n_products
+        self._rotated = self._buffer[rotated_start : rotated_start + n_rotated].reshape(-1, 2)
+        self._has_products = n_products > 0
         self._vectors = np.zeros((3, 2))  # [gravity direction, ee force] in base_link_frd
         self._vectors_flat = self._vectors.reshape(-1)
 
@@ -242,4 +244,4 @@ class BodyForces:
             f0, f1, f2 = f_ee_body
             self._vectors_flat[:] = (g0, f0, g1, f1, g2, f2)
         np.dot(self._rotations, self._vectors, out=self._rotated)
-        np.dot(self._back, self._buffer, out=self._forces)
+        np.dot(self._back, self._back_in, out=self._forces)
