@@ -11,7 +11,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uvms_model.body_dynamics import BodyDynamics
-from uvms_model.coordinates import N_DOF, mat_t_vec, q_dot_from_w, rotation
+from uvms_model.coordinates import (
+    N_DOF,
+    mat_t_vec,
+    q_dot_from_w,
+    rotation,
+    rotation_and_q_dot,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -20,10 +26,10 @@ def _stage(
     dynamics: BodyDynamics, g: float, q: list[float], w: list[float], f_ned: list[float] | None
 ) -> tuple[list[float], list[float]]:
     """(q_dot, w_dot) at (q, w) as lists (w_dot runs on into the sliders' accelerations)."""
-    rot = rotation(q[3], q[4], q[5])
+    rot, q_dot = rotation_and_q_dot(q, w)
     f_body = None if f_ned is None else mat_t_vec(rot, f_ned)
     w_dot = dynamics.w_dot(q[6:9], w, (g * rot[6], g * rot[7], g * rot[8]), f_body)
-    return q_dot_from_w(q, w, rot), w_dot.tolist()
+    return q_dot, w_dot.tolist()
 
 
 def rk4_step(
