@@ -126,7 +126,8 @@ def main() -> None:
     aba_us = per_call_us(
         lambda: pin.aba(rigid, data, config, velocity, torque), args.number, args.repeat
     )
-    print(f'  {"Pinocchio aba alone (12 joints, C++)":<48s} {aba_us:8.1f} us')
+    label = f'Pinocchio aba alone ({rigid.njoints - 1} joints, C++)'
+    print(f'  {label:<48s} {aba_us:8.1f} us')
     for name in ('one RK4 step of the full model', 'one controller step (eq. 2, 22-39)'):
         step_us = results[name]
         verdict = 'met' if step_us <= TARGET_STEP_US else 'MISSED'
