@@ -119,14 +119,15 @@ def main() -> None:
         results[name] = new_us
         print(f'  {name:<48s} {new_us:8.1f} us {old_us:8.1f} us {old_us / new_us:8.2f}x')
 
-    rigid = model._dyn  # the rigid bodies with the added-mass sliders, for scale
+    rigid = model.dynamics.model  # the rigid bodies with the added-mass sliders, for scale
     data = rigid.createData()
     config, velocity = pin.neutral(rigid), np.zeros(rigid.nv)
     torque = np.zeros(rigid.nv)
     aba_us = per_call_us(
         lambda: pin.aba(rigid, data, config, velocity, torque), args.number, args.repeat
     )
-    print(f'  {"Pinocchio aba alone (12 joints, C++)":<48s} {aba_us:8.1f} us')
+    label = f'Pinocchio aba alone ({rigid.njoints - 1} joints, C++)'
+    print(f'  {label:<48s} {aba_us:8.1f} us')
     for name in ('one RK4 step of the full model', 'one controller step (eq. 2, 22-39)'):
         step_us = results[name]
         verdict = 'met' if step_us <= TARGET_STEP_US else 'MISSED'

@@ -9,8 +9,9 @@ from uvms_model.errors import (
     StateError,
     UnreachableError,
 )
-from uvms_model.model import FRAME_NAMES, TaskSpaceTerms, UvmsModel
+from uvms_model.model import TaskSpaceTerms, UvmsModel
 from uvms_model.parameters import PARAMETER_SPECS, ParameterSpec, UvmsParameters
+from uvms_model.pinocchio_models import FRAME_NAMES
 
 __all__ = [
     'FRAME_NAMES',

@@ -1,12 +1,13 @@
 """Robot description of the UVMS: its URDF and the hydrodynamic parameters beside it.
 
 The URDF (``uvms_description/urdf/uvms.urdf``) is the one source of the kinematics and the
-rigid-body inertia; Pinocchio builds its model from the same text (``uvms_model.model``).
-This module reads what Pinocchio does not: the collision geometry that sizes the
-hydrodynamics (the hull ellipsoid, the link cylinders), and the hydrodynamic parameters in
-``uvms_description/config/hydrodynamics.yaml``, keyed by link name. It also checks what the
-model relies on before Pinocchio sees the file, so that a missing file, malformed XML, a
-broken tree or a missing frame stops start-up with one line naming the file and the element.
+rigid-body inertia; Pinocchio builds its models from the same text
+(``uvms_model.pinocchio_models``). This module reads what Pinocchio does not: the collision
+geometry that sizes the hydrodynamics (the hull ellipsoid, the link cylinders), and the
+hydrodynamic parameters in ``uvms_description/config/hydrodynamics.yaml``, keyed by link name.
+It also checks what the model relies on before Pinocchio sees the file, so that a missing
+file, malformed XML, a broken tree or a missing frame stops start-up with one line naming the
+file and the element.
 
 The URDF has no ellipsoid primitive: the hull is the mesh ``meshes/unit_sphere.stl`` (a
 sphere of diameter 1 m) scaled to the ellipsoid's diameters, ``scale="1.0 0.5 0.5"``.

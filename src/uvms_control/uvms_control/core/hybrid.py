@@ -97,6 +97,11 @@ class HybridLaw:
         result: FloatArray = self.I_minus_S @ (X_d_ddot + self.K_pv @ E_dot + self.K_pp @ E)
         return result
 
+    def position_linear_map(self) -> FloatArray:
+        """A (3, 9) with the position law's acceleration = A [ΔX; ΔẊ; Ẍ_d] (eq. 37)."""
+        result: FloatArray = self.I_minus_S @ np.hstack((self.K_pp, self.K_pv, np.eye(3)))
+        return result
+
     def force_acceleration(
         self,
         f_d: float,

@@ -44,6 +44,10 @@ class ImpedanceLaw:
         )
         return result
 
+    def linear_map(self) -> FloatArray:
+        """A (3, 12) with U = A [E; Ė; Ẍ_d; F_e] (eq. 30): [P⁻¹K, P⁻¹B_d, I, -P⁻¹]."""
+        return np.hstack((self._P_inv_K, self._P_inv_B, np.eye(3), -self._P_inv))
+
     @staticmethod
     def force(
         M_hat: FloatArray, zeta_hat: FloatArray, U: FloatArray, F_e: FloatArray

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,23 +113,35 @@ class HalfCircleReference:
             t: time since the reference started (s).
             start: X0, the starting end-effector position in map_ned (m).
         """
+        values = np.array(self.evaluate_floats(t, start.tolist())).reshape(3, 3)
+        return values[0], values[1], values[2]
+
+    def evaluate_floats(self, t: float, start: Sequence[float]) -> list[float]:
+        """``evaluate`` as nine plain floats [X_d, X_d_dot, X_d_ddot] (the control step's path)."""
         s, ds, dds = quintic_time_scaling((t - self.start_delay) / self.duration)
         s_dot = ds / self.duration
         s_ddot = dds / (self.duration * self.duration)
         angle = math.pi * s
         sin_a, cos_a = math.sin(angle), math.cos(angle)
         r = self.radius
-        # Position, velocity and acceleration along n and d, in plain floats (a hot path).
+        # Position, velocity and acceleration along n and d.
         p_n, p_d = r * sin_a, r * (1.0 - cos_a)
         v_n, v_d = r * math.pi * cos_a * s_dot, r * math.pi * sin_a * s_dot
         a_n = r * math.pi * (cos_a * s_ddot - math.pi * sin_a * s_dot * s_dot)
         a_d = r * math.pi * (sin_a * s_ddot + math.pi * cos_a * s_dot * s_dot)
-        n, d = self._n, self._d
-        return (
-            start + np.array([p_n * n[i] + p_d * d[i] for i in range(3)]),
-            np.array([v_n * n[i] + v_d * d[i] for i in range(3)]),
-            np.array([a_n * n[i] + a_d * d[i] for i in range(3)]),
-        )
+        (n0, n1, n2), (d0, d1, d2) = self._n, self._d
+        x0, x1, x2 = start
+        return [
+            x0 + (p_n * n0 + p_d * d0),
+            x1 + (p_n * n1 + p_d * d1),
+            x2 + (p_n * n2 + p_d * d2),
+            v_n * n0 + v_d * d0,
+            v_n * n1 + v_d * d1,
+            v_n * n2 + v_d * d2,
+            a_n * n0 + a_d * d0,
+            a_n * n1 + a_d * d1,
+            a_n * n2 + a_d * d2,
+        ]
 
 
 class ForcePhase(enum.IntEnum):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,28 +13,34 @@ from uvms_model import TaskSpaceTerms, UvmsModel
 FloatArray = npt.NDArray[np.float64]
 
 
+def inverse_3x3_floats(
+    a: Sequence[Sequence[float]],
+) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]:
+    """Inverse of a 3x3 matrix, given as nested sequences of floats, by its adjugate.
+
+    A singular matrix (the arm at a kinematic singularity) gives inf/nan, which the
+    controller rejects.
+    """
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    k = 1.0 / det if det != 0.0 else float('inf')
+    return (
+        (c00 * k, (a02 * a21 - a01 * a22) * k, (a01 * a12 - a02 * a11) * k),
+        (c01 * k, (a00 * a22 - a02 * a20) * k, (a02 * a10 - a00 * a12) * k),
+        (c02 * k, (a01 * a20 - a00 * a21) * k, (a00 * a11 - a01 * a10) * k),
+    )
+
+
 def inverse_3x3(a: FloatArray) -> FloatArray:
     """Inverse of a 3x3 matrix by its adjugate (cheaper than a general LU for one 3x3).
 
     The callers pass symmetric positive-definite matrices (J Jᵀ, M̃); a singular one (the arm
     at a kinematic singularity) gives inf/nan, which the controller rejects.
     """
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a.tolist()
-    c00 = a11 * a22 - a12 * a21
-    c01 = a12 * a20 - a10 * a22
-    c02 = a10 * a21 - a11 * a20
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    inv_det = 1.0 / det if det != 0.0 else float('inf')
-    return (
-        np.array(
-            [
-                [c00, a02 * a21 - a01 * a22, a01 * a12 - a02 * a11],
-                [c01, a00 * a22 - a02 * a20, a02 * a10 - a00 * a12],
-                [c02, a01 * a20 - a00 * a21, a00 * a11 - a01 * a10],
-            ]
-        )
-        * inv_det
-    )
+    return np.array(inverse_3x3_floats(a.tolist()))
 
 
 @dataclass(slots=True)
@@ -51,6 +58,7 @@ class TaskSpaceModel:
         zeta: joint-space bias ζ(q, q_dot) (9,), eq. 19.
         M_tilde: task-space inertia M̃ = J̃⁺ M J⁺ (3, 3) (kg), eq. 28.
         zeta_tilde: task-space bias ζ̃ = J̃⁺ ζ - M̃ J̇ q̇ (3,) (N), eq. 28.
+        Jt_pinv_zeta: J̃⁺ ζ (3,) (N), the first term of ζ̃.
     """
 
     X: FloatArray
@@ -63,6 +71,7 @@ class TaskSpaceModel:
     zeta: FloatArray
     M_tilde: FloatArray
     zeta_tilde: FloatArray
+    Jt_pinv_zeta: FloatArray
 
 
 def task_space_model(
@@ -96,7 +105,8 @@ def task_space_model_from_terms(terms: TaskSpaceTerms) -> TaskSpaceModel:
     Jt_pinv = inverse_3x3(J.dot(J.T)).dot(J)
     J_pinv = Jt_pinv.T
     M_tilde = Jt_pinv.dot(terms.M.dot(J_pinv))  # symmetric up to rounding (M is)
-    zeta_tilde = Jt_pinv.dot(terms.zeta) - M_tilde.dot(terms.J_dot_q_dot)
+    Jt_pinv_zeta = Jt_pinv.dot(terms.zeta)
+    zeta_tilde = Jt_pinv_zeta - M_tilde.dot(terms.J_dot_q_dot)
     return TaskSpaceModel(
         X=terms.X,
         X_dot=J.dot(terms.q_dot),
@@ -108,4 +118,5 @@ def task_space_model_from_terms(terms: TaskSpaceTerms) -> TaskSpaceModel:
         zeta=terms.zeta,
         M_tilde=M_tilde,
         zeta_tilde=zeta_tilde,
+        Jt_pinv_zeta=Jt_pinv_zeta,
     )

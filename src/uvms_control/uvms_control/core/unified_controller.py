@@ -50,7 +50,7 @@ from uvms_control.core.parameters import ControllerParameters
 from uvms_control.core.reference import ForcePhase, ForceSetpoint, HalfCircleReference
 from uvms_control.core.task_space import (
     TaskSpaceModel,
-    inverse_3x3,
+    inverse_3x3_floats,
     task_space_model_from_terms,
 )
 from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
@@ -174,8 +174,32 @@ class UnifiedForceController:
         self.n = self.hybrid.n
         self._n_list: list[float] = self.n.tolist()
         self._n_dof = model.n_dof
-        self._eye = np.eye(self._n_dof)
+        self._law_map = self._build_law_map()
+        self._S: list[list[float]] = self.hybrid.S.tolist()
+        self._I_minus_S: list[list[float]] = self.hybrid.I_minus_S.tolist()
+        self._null_stiffness: list[float] = np.broadcast_to(
+            params.null_space_stiffness, (self._n_dof,)
+        ).tolist()
+        self._null_damping: list[float] = np.broadcast_to(
+            params.null_space_damping, (self._n_dof,)
+        ).tolist()
         self.reset()
+
+    def _build_law_map(self) -> FloatArray:
+        """G (9, 19): the law accelerations from z = [X_d, Ẋ_d, Ẍ_d, F_e, X, Ẋ, a_f] at once.
+
+        (G z).reshape(3, 3) has the columns U (eq. 30), the position-law acceleration
+        (I - S)(Ẍ_d + K_pv ΔẊ + K_pp ΔX) (eq. 37) and the force-law acceleration a_f n
+        (eq. 39), so that one product M̂ V gives M̂ U, F_p and F_f.
+        """
+        impedance = self.impedance.linear_map()  # on [E, Ė, Ẍ_d, F_e]
+        position = self.hybrid.position_linear_map()  # on [E, Ė, Ẍ_d]
+        u = np.hstack((impedance, -impedance[:, :6], np.zeros((3, 1))))
+        a_p = np.hstack((position, np.zeros((3, 3)), -position[:, :6], np.zeros((3, 1))))
+        a_f = np.zeros((3, 19))
+        a_f[:, 18] = self.n
+        result: FloatArray = np.stack((u, a_p, a_f), axis=1).reshape(9, 19)
+        return result
 
     def reset(self) -> None:
         """Forget the start time, start position, posture and the integral and filter states."""
@@ -245,10 +269,10 @@ class UnifiedForceController:
     def _step(
         self, t: float, q: FloatArray, terms: TaskSpaceTerms, F_e: FloatArray
     ) -> ControllerResult:
+        """One step from the model's terms; 3-vectors in plain floats, 9-vectors in numpy."""
         if not math.isfinite(t):
             raise ControlInputError(f'time t = {t} s must be finite')
         ts = task_space_model_from_terms(terms)
-        q_dot, B = terms.q_dot, terms.B
         if self._t0 is None:
             self._t0 = t
             self._t_prev = t
@@ -259,17 +283,16 @@ class UnifiedForceController:
         dt = max(t - self._t_prev, 0.0)
         self._t_prev = max(t, self._t_prev)
         t_rel = t - self._t0
-        n = self.n
         p = self.params
 
-        X_d, X_dot_d, X_ddot_d = self.reference.evaluate(t_rel, self._X0)
-        X, X_dot = ts.X, ts.X_dot
+        reference = self.reference.evaluate_floats(t_rel, self._X0.tolist())
+        d0, d1, d2, w0, w1, w2 = reference[:6]
+        X, X_dot = ts.X.tolist(), ts.X_dot.tolist()
+        F_e_list = F_e.tolist()
         n0, n1, n2 = self._n_list
-        f0, f1, f2 = F_e.tolist()
-        v0, v1, v2 = X_dot.tolist()
-        x0, x1, x2 = X.tolist()
-        d0, d1, d2 = X_d.tolist()
-        w0, w1, w2 = X_dot_d.tolist()
+        f0, f1, f2 = F_e_list
+        v0, v1, v2 = X_dot
+        x0, x1, x2 = X
         f_normal = n0 * f0 + n1 * f1 + n2 * f2
         v_e = n0 * v0 + n1 * v1 + n2 * v2
         setpoint = self.force_setpoint.update(
@@ -286,14 +309,6 @@ class UnifiedForceController:
             W = self.fuzzy.weight(force_ratio, v_e)
         else:
             W = 1.0 if p.switch_mode == 'impedance' else 0.0
-
-        M_hat = ts.M_tilde if p.mass_scale == 1.0 else p.mass_scale * ts.M_tilde
-        zeta_hat = ts.zeta_tilde
-        E = X_d - X
-        E_dot = X_dot_d - X_dot
-        U = self.impedance.acceleration(E, E_dot, X_ddot_d, F_e)
-        F_IP = ImpedanceLaw.force(M_hat, zeta_hat, U, F_e)
-        a_p = self.hybrid.position_acceleration(E, E_dot, X_ddot_d)
         a_f = self.hybrid.force_acceleration(
             setpoint.f_d,
             setpoint.f_d_dot,
@@ -304,18 +319,43 @@ class UnifiedForceController:
             and W <= CONSTRAINED_WEIGHT
             and f_normal >= self.force_setpoint.contact_threshold,
         )
-        F_H, F_H_selected = self.hybrid.force(M_hat, zeta_hat, F_e, a_p, a_f)
-        F_c = W * F_IP + (1.0 - W) * F_H
 
-        tau = ts.J.T @ F_c
+        M_hat = ts.M_tilde if p.mass_scale == 1.0 else p.mass_scale * ts.M_tilde
+        zeta_hat = ts.zeta_tilde
+        # V = [U, (I - S)(Ẍ_d + K_pv ΔẊ + K_pp ΔX), a_f n] (eq. 30, 37, 39), then M̂ V.
+        V = self._law_map.dot([*reference, *F_e_list, *X, *X_dot, a_f]).reshape(3, 3)
+        (mu0, p0, g0), (mu1, p1, g1), (mu2, p2, g2) = M_hat.dot(V).tolist()
+        z0, z1, z2 = zeta_hat.tolist()
+        c0, c1, c2 = z0 + f0, z1 + f1, z2 + f2
+        # F_IP = M̂ U + ζ̂ + F_e (eq. 29); F_H = (I - S) F_p + S F_f + ζ̂ + F_e (eq. 35).
+        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = self._I_minus_S
+        (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = self._S
+        s0 = a00 * p0 + a01 * p1 + a02 * p2 + b00 * g0 + b01 * g1 + b02 * g2
+        s1 = a10 * p0 + a11 * p1 + a12 * p2 + b10 * g0 + b11 * g1 + b12 * g2
+        s2 = a20 * p0 + a21 * p1 + a22 * p2 + b20 * g0 + b21 * g1 + b22 * g2
+        F_IP = (mu0 + c0, mu1 + c1, mu2 + c2)
+        F_H = (s0 + c0, s1 + c1, s2 + c2)
+        H = 1.0 - W
+        F_c = (W * F_IP[0] + H * F_H[0], W * F_IP[1] + H * F_H[1], W * F_IP[2] + H * F_H[2])
+
         if p.null_space_enabled:
             # M̂ a_c = F_c - ζ̂ - F_e = W M̂ U + (1 - W) [(I - S) F_p + S F_f].
+            u0, u1, u2 = V[:, 0].tolist()
             if W == 1.0:
-                a_c = U
+                a_c = (u0, u1, u2)
             else:
-                a_c = W * U + (1.0 - W) * (inverse_3x3(M_hat) @ F_H_selected)
-            tau += self._null_space_torque(ts, q, q_dot, a_c)
-        tau_b = B.T @ tau
+                (k00, k01, k02), (k10, k11, k12), (k20, k21, k22) = inverse_3x3_floats(
+                    M_hat.tolist()
+                )
+                a_c = (
+                    W * u0 + H * (k00 * s0 + k01 * s1 + k02 * s2),
+                    W * u1 + H * (k10 * s0 + k11 * s1 + k12 * s2),
+                    W * u2 + H * (k20 * s0 + k21 * s1 + k22 * s2),
+                )
+            tau = self._torque_with_null_space(ts, M_hat, q, terms.q_dot, F_c, a_c)
+        else:
+            tau = ts.J.T.dot(F_c)  # eq. 26
+        tau_b = terms.B.T.dot(tau)
         if not math.isfinite(sum(tau_b.tolist())) and not np.isfinite(tau_b).all():
             raise ControlInputError(
                 f'the control law gave a non-finite command at q = {q.tolist()} '
@@ -327,19 +367,23 @@ class UnifiedForceController:
             phase = Phase.CONSTRAINED
         else:
             phase = Phase.CONTACT_TRANSITION
+        f_d = setpoint.f_d
+        vectors = np.array(
+            (reference[0:3], reference[3:6], F_c, F_IP, F_H, (f_d * n0, f_d * n1, f_d * n2))
+        )
         return ControllerResult(
             tau_b=tau_b,
             tau=tau,
             W=W,
-            X=X,
-            X_d=X_d,
-            X_dot=X_dot,
-            X_dot_d=X_dot_d,
+            X=ts.X,
+            X_d=vectors[0],
+            X_dot=ts.X_dot,
+            X_dot_d=vectors[1],
             F_e=F_e,
-            F_d=setpoint.f_d * n,
-            F_c=F_c,
-            F_IP=F_IP,
-            F_H=F_H,
+            F_d=vectors[5],
+            F_c=vectors[2],
+            F_IP=vectors[3],
+            F_H=vectors[4],
             v_e=v_e,
             force_ratio=force_ratio,
             phase=phase,
@@ -347,19 +391,47 @@ class UnifiedForceController:
             zeta_hat=zeta_hat,
         )
 
-    def _null_space_torque(
-        self, ts: TaskSpaceModel, q: FloatArray, q_dot: FloatArray, a_c: FloatArray
+    def _torque_with_null_space(
+        self,
+        ts: TaskSpaceModel,
+        M_hat: FloatArray,
+        q: FloatArray,
+        q_dot: FloatArray,
+        F_c: tuple[float, float, float],
+        a_c: tuple[float, float, float],
     ) -> FloatArray:
-        """τ_null = (I - J⁺J)(M̂_q J⁺ (a_c - J̇q̇) + ζ̂_q) + M̂_q (I - J⁺J) φ̈ (eq. 20, 24)."""
+        """τ = Jᵀ F_c + τ_null with τ_null = N r + M̂_q N φ̈, r = M̂_q J⁺ y + ζ (eq. 20, 24, 26).
+
+        N = I - J⁺ J and J⁺ J = Jᵀ J̃⁺, y = a_c - J̇ q̇. Collected:
+        τ = Jᵀ (F_c - J̃⁺ r) + ζ + M̂_q (φ̈ + J⁺ (y - J φ̈)), where J̃⁺ r = M̂ y + J̃⁺ ζ
+        (M̂ = s M̃ = J̃⁺ M̂_q J⁺): two 9 x 9 and three 3 x 9 products in all.
+        """
         p = self.params
-        error = self._q0 - q
+        q_list = q.tolist()
+        error = [a - b for a, b in zip(self._q0.tolist(), q_list, strict=True)]
         # Euler angles wrap: hold the attitude the short way round.
-        e3, e4, e5 = error[3:6].tolist()
-        if max(abs(e3), abs(e4), abs(e5)) > math.pi:
-            error[3:6] = (error[3:6] + math.pi) % (2.0 * math.pi) - math.pi
-        phi_ddot = p.null_space_stiffness * error - p.null_space_damping * q_dot
-        N = self._eye - ts.J_pinv @ ts.J
+        for k in (3, 4, 5):
+            if abs(error[k]) > math.pi:
+                error[k] = (error[k] + math.pi) % (2.0 * math.pi) - math.pi
+        phi_ddot = np.array(
+            [
+                k * e - d * v
+                for k, e, d, v in zip(
+                    self._null_stiffness, error, self._null_damping, q_dot.tolist(), strict=True
+                )
+            ]
+        )
+        j0, j1, j2 = ts.J_dot_q_dot.tolist()
+        y0, y1, y2 = a_c[0] - j0, a_c[1] - j1, a_c[2] - j2
+        e0, e1, e2 = ts.J.dot(phi_ddot).tolist()
+        (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = M_hat.tolist()
+        t0, t1, t2 = ts.Jt_pinv_zeta.tolist()
+        w3 = (
+            F_c[0] - (m00 * y0 + m01 * y1 + m02 * y2) - t0,
+            F_c[1] - (m10 * y0 + m11 * y1 + m12 * y2) - t1,
+            F_c[2] - (m20 * y0 + m21 * y1 + m22 * y2) - t2,
+        )
+        s9 = phi_ddot + ts.J_pinv.dot((y0 - e0, y1 - e1, y2 - e2))
         M_hat_q = ts.M if p.mass_scale == 1.0 else p.mass_scale * ts.M
-        row_space = M_hat_q @ (ts.J_pinv @ (a_c - ts.J_dot_q_dot)) + ts.zeta
-        result: FloatArray = N @ row_space + M_hat_q @ (N @ phi_ddot)
+        result: FloatArray = ts.J.T.dot(w3) + M_hat_q.dot(s9) + ts.zeta
         return result

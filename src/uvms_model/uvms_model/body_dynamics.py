@@ -1,0 +1,143 @@
+"""The UVMS's equations of motion in body form (paper eq. 8) on Pinocchio's compiled algorithms.
+
+M_b(q_m) w_dot + C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) = tau_b, in the quasi-velocities w of
+eq. 4. The dynamic model (``uvms_model.pinocchio_models``) is posed with its base at the origin
+of base_link_frd, so its "world" is the body frame and the attitude enters only through the
+gravity direction; drag, slider corrections, net weights and the end-effector force are its
+external forces (``uvms_model.body_forces``).
+
+Pinocchio's terse names, glossed: ``crba`` composite-rigid-body algorithm (mass matrix),
+``rnea`` recursive Newton-Euler (inverse dynamics), ``aba`` articulated-body algorithm
+(forward dynamics), ``fext`` external forces per joint in its local frame, ``oMi`` joint
+placements in the world (o: origin), ``v`` joint twists in their local frames.
+
+Speed: per evaluation a fixed handful of compiled calls on preallocated arrays, read and
+written through strided numpy views of Pinocchio's workspace (no per-call Pinocchio objects).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin  # type: ignore[import-untyped]
+from numpy.typing import NDArray
+
+from uvms_model.added_mass import AddedMass
+from uvms_model.body_forces import BodyForces
+from uvms_model.coordinates import N_DOF, Vec3
+from uvms_model.description import RobotDescription
+from uvms_model.parameters import HydrodynamicsParameters
+from uvms_model.pinocchio_models import dynamic_model, strided_rows
+
+FloatArray = NDArray[np.float64]
+
+
+class BodyDynamics:
+    """M_b, the bias of eq. 8 and w_dot at a state, on one preallocated Pinocchio workspace.
+
+    Not thread-safe. Arrays returned are new.
+
+    Args:
+        description: The robot description.
+        hydro: Hydrodynamic switches and constants.
+        kin: The kinematic model (the URDF as written).
+        added: Added mass of the hull and link_1..3 (None: none).
+    """
+
+    def __init__(
+        self,
+        description: RobotDescription,
+        hydro: HydrodynamicsParameters,
+        kin: pin.Model,
+        added: list[AddedMass | None],
+    ) -> None:
+        model, bodies, sliders = dynamic_model(description, kin, added)
+        self.model = model
+        """The Pinocchio model: rigid bodies, added mass (rigid part + sliders), no gravity."""
+        data = model.createData()
+        self._data = data
+        self._config = pin.neutral(model)  # base at the origin, identity attitude, always
+        self._arm_config = self._config[7:10]  # a view: the arm joints' angles
+        self._v = np.zeros(model.nv)
+        self._w = self._v[:N_DOF]  # views: the quasi-velocities w ...
+        self._tau = np.zeros(model.nv)
+        self._tau_b = self._tau[:N_DOF]  # ... and the generalized body forces tau_b
+        self._zero = np.zeros(model.nv)
+        self._fext = pin.StdVec_Force()
+        for _ in range(model.njoints):
+            self._fext.append(pin.Force.Zero())
+        pin.forwardKinematics(model, data, self._config, self._v)
+        n = model.njoints
+        self.forces = BodyForces(
+            description,
+            hydro,
+            added,
+            kin,
+            bodies,
+            strided_rows([data.v[k].vector for k in range(n)], 6),
+            strided_rows([data.oMi[k].rotation[:, 0] for k in range(n)], 12),
+            strided_rows([self._fext[k].vector for k in range(n)], 6),
+        )
+        # Sliders: M_ss is diagonal and constant (each carries its point mass only).
+        self._slider_mass_inverse = 1.0 / np.array([model.inertias[j].mass for j in sliders])
+        self._has_sliders = bool(sliders)
+
+    def set_tau_b(self, tau_b: FloatArray) -> None:
+        """Hold the generalized body forces tau_b (9,) for the following ``w_dot`` calls."""
+        self._tau_b[:] = tau_b
+
+    def w_dot(
+        self,
+        q_m: list[float],
+        w: FloatArray | list[float],
+        gravity_body: Vec3,
+        f_ee_body: Vec3 | None,
+    ) -> FloatArray:
+        """Accelerations of eq. 8 by ABA at (q_m, w) with the held tau_b: w_dot is ``[:9]``.
+
+        Args:
+            q_m: Arm joint angles (3,) (rad).
+            w: Quasi-velocities (9,).
+            gravity_body: Gravitational acceleration in base_link_frd (m/s^2).
+            f_ee_body: Force ON the end effector in base_link_frd (N), or None.
+
+        Returns:
+            A new array of the dynamic model's accelerations: w_dot (9,), then the sliders'.
+        """
+        self._arm_config[:] = q_m
+        self._w[:] = w
+        model, data = self.model, self._data
+        pin.forwardKinematics(model, data, self._config, self._v)
+        self.forces.apply(gravity_body, f_ee_body)
+        result: FloatArray = pin.aba(model, data, self._config, self._v, self._tau, self._fext)
+        return result
+
+    def mass(self, q_m: list[float]) -> tuple[FloatArray, FloatArray]:
+        """M_b(q_m) (9, 9) by CRBA with the sliders eliminated, and M_rs M_ss^-1 (9, n_s)."""
+        self._arm_config[:] = q_m
+        full = pin.crba(self.model, self._data, self._config)  # a new symmetric array
+        mass: FloatArray = full[:N_DOF, :N_DOF]
+        coupling = full[:N_DOF, N_DOF:]
+        scaled: FloatArray = coupling * self._slider_mass_inverse
+        if self._has_sliders:
+            mass -= scaled.dot(coupling.T)
+        return mass, scaled
+
+    def mass_and_bias(
+        self, q_m: list[float], w: FloatArray, gravity_body: Vec3
+    ) -> tuple[FloatArray, FloatArray]:
+        """M_b(q_m) and C_b w + D_b w + G_b (eq. 8): CRBA and RNEA, sliders eliminated.
+
+        With the sliders' rows s and the body rows r of the dynamic model's M and bias b,
+        eliminating the sliders' accelerations (they transmit no force) gives
+        M_b = M_rr - M_rs M_ss^-1 M_sr and bias = b_r - M_rs M_ss^-1 b_s (M_ss diagonal).
+        """
+        self._w[:] = w
+        mass, scaled = self.mass(q_m)  # poses the configuration too
+        model, data = self.model, self._data
+        pin.forwardKinematics(model, data, self._config, self._v)
+        self.forces.apply(gravity_body, None)
+        tau = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
+        bias: FloatArray = tau[:N_DOF]
+        if self._has_sliders:
+            bias -= scaled.dot(tau[N_DOF:])
+        return mass, bias
