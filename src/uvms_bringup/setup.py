@@ -35,6 +35,8 @@ setup(
     entry_points={
         'console_scripts': [
             'recorder = uvms_bringup.recorder_node:main',
+            'visualizer = uvms_bringup.visualizer_node:main',
+            'foxglove_server = uvms_bringup.foxglove_server_node:main',
             'uvms = uvms_bringup.cli:main',
         ],
     },

@@ -32,6 +32,8 @@ SCHEMAS = {
     '/uvms/thrusters/state': 'uvms_msgs/msg/ThrusterState',
     '/tf': 'tf2_msgs/msg/TFMessage',
     '/tf_static': 'tf2_msgs/msg/TFMessage',
+    '/robot_description': 'std_msgs/msg/String',
+    '/uvms/markers': 'visualization_msgs/msg/MarkerArray',
 }
 
 
