@@ -71,11 +71,13 @@ def test_node_actions_take_package_and_executable_from_the_graph_spec() -> None:
     [('simulator', 'uvms_sim', 'simulator'),
      ('controller', 'uvms_control', 'controller'),
      ('thruster_allocator', 'uvms_control', 'thruster_allocator'),
-     ('recorder', 'uvms_bringup', 'recorder')],
+     ('recorder', 'uvms_bringup', 'recorder'),
+     ('visualizer', 'uvms_bringup', 'visualizer'),
+     ('foxglove_server', 'uvms_bringup', 'foxglove_server')],
 )
 def test_graph_spec_names_the_console_scripts(name: str, package: str, executable: str) -> None:
     """Each node runs the console script its package's setup.py installs."""
-    spec = {s.name: s for s in graph_nodes(record=True)}[name]
+    spec = {s.name: s for s in graph_nodes(record=True, foxglove=True)}[name]
     assert (spec.package, spec.executable) == (package, executable)
     setup = (LAUNCH_FILE.parents[2] / package / 'setup.py').read_text(encoding='utf-8')
     assert f"'{executable} = " in setup
