@@ -7,6 +7,7 @@ compared with the recording the same run wrote.
 
 from __future__ import annotations
 
+import itertools
 import os
 import random
 import signal
@@ -20,10 +21,9 @@ from pathlib import Path
 
 import pinocchio as pin
 import pytest
+from foxglove_client import FoxgloveClient, connect_when_up
 from rosbags.highlevel import AnyReader
 from uvms_bringup.typestore import uvms_typestore
-
-from foxglove_client import FoxgloveClient, connect_when_up
 
 REPO = Path(__file__).resolve().parents[2]
 WRENCH = '/uvms/wrench'
@@ -137,7 +137,7 @@ def test_received_wrenches_decode_as_cdr_to_the_recorded_values(live: LiveRun) -
             assert (got.x, got.y, got.z) == (want.x, want.y, want.z), (stamp, part)
     # In order, one per control step (2 ms), none lost while the client was subscribed.
     assert stamps == sorted(stamps)
-    assert all(b - a == 2_000_000 for a, b in zip(stamps, stamps[1:], strict=False))
+    assert all(b - a == 2_000_000 for a, b in itertools.pairwise(stamps))
 
 
 def test_a_late_client_receives_the_latched_robot_description(live: LiveRun) -> None:

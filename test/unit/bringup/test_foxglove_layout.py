@@ -7,10 +7,11 @@ import re
 from typing import Any
 
 import pytest
-import uvms_description
 from rosbags.typesys.store import Nodetype
 from uvms_bringup.recorder_node import DEFAULT_TOPICS, parse_topic_spec
 from uvms_bringup.typestore import uvms_typestore
+
+import uvms_description
 
 LAYOUT = json.loads(uvms_description.foxglove_layout_path().read_text(encoding='utf-8'))
 #: The graph's topics (name -> type), relative names in the /uvms namespace.
