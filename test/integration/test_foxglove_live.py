@@ -182,3 +182,37 @@ def test_foxglove_host_without_foxglove_is_a_usage_error() -> None:
     output, _ = process.communicate(timeout=120.0)
     assert process.returncode == 2
     assert '--foxglove-host needs --foxglove' in output
+
+
+def test_launch_with_foxglove_serves_the_process_graph(tmp_path: Path) -> None:
+    """``uvms launch --foxglove``: a foxglove_server process serves the real-time graph."""
+    port = free_port()
+    env = dict(os.environ, ROS_DOMAIN_ID=str(random.SystemRandom().randint(101, 200)),
+               PYTHONUNBUFFERED='1')
+    process = subprocess.Popen(
+        [sys.executable, '-m', 'uvms_bringup.cli', 'launch', 'free_motion', '--foxglove',
+         str(port)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
+        cwd=REPO)
+    try:
+        client = connect_when_up(f'ws://127.0.0.1:{port}')
+        client.read_advertisements(set(ADVERTISED))
+        client.subscribe(WRENCH, '/tf_static')
+        received = client.messages({WRENCH: 5, '/tf_static': 1})
+        client.close()
+        process.send_signal(signal.SIGINT)
+        output, _ = process.communicate(timeout=120.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    store = uvms_typestore()
+    for _, payload in received[WRENCH]:
+        msg = store.deserialize_cdr(payload, 'geometry_msgs/msg/WrenchStamped')
+        assert msg.header.frame_id == 'ft_sensor_link'
+    ((_, payload),) = received['/tf_static']
+    static = store.deserialize_cdr(payload, 'tf2_msgs/msg/TFMessage')
+    assert {'map', 'map_ned'} <= {t.header.frame_id for t in static.transforms} | {
+        t.child_frame_id for t in static.transforms}
+    assert process.returncode == 130, output
+    assert '[foxglove_server-5]' in output
+    assert 'Traceback' not in output
