@@ -1,8 +1,9 @@
 """The ``visualizer`` node: markers of the wall, contact force, X_d and end-effector trail.
 
 It listens to /uvms/controller/state (X, X_d) and /uvms/contact (wall position, contact
-force) and publishes a visualization_msgs/MarkerArray on ``markers`` every
-1/``marker_rate_hz`` of *simulated* time, on the stamp of a controller state. The markers
+force, taken at the state's stamp) and publishes a visualization_msgs/MarkerArray on
+``markers`` every 1/``marker_rate_hz`` of *simulated* time, on the stamp of a controller
+state. The markers
 depend on message contents only, so lockstep runs stay deterministic; the hot path of the
 graph (simulator, controller, allocator) does not wait for this node.
 """
@@ -21,6 +22,7 @@ from visualization_msgs.msg import MarkerArray
 
 from uvms_bringup import conversions
 from uvms_bringup.marker_geometry import (
+    ContactHistory,
     MarkerGeometryError,
     MarkerSettings,
     Trail,
@@ -63,8 +65,7 @@ class VisualizerNode(Node):
         self._period_ns = round(1e9 / rate_hz)
         self._next_due_ns = 0
         self._trail = Trail(self._settings.trail_length)
-        self._force = (0.0, 0.0, 0.0)
-        self._wall_position_m = float('nan')
+        self._contacts = ContactHistory()
 
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._publisher = self.create_publisher(MarkerArray, 'markers', reliable)
@@ -74,9 +75,9 @@ class VisualizerNode(Node):
                                f'{rate_hz:g} Hz of simulated time, frame map_ned')
 
     def _on_contact(self, msg: ContactState) -> None:
-        """Keep the latest wall position and contact force."""
-        self._force = conversions.xyz(msg.force)
-        self._wall_position_m = float(msg.wall_position)
+        """Keep the wall position and contact force of the stamp."""
+        self._contacts.add(conversions.ns_from_time(msg.header.stamp),
+                           conversions.xyz(msg.force), float(msg.wall_position))
 
     def _on_state(self, msg: ControllerState) -> None:
         """Publish the markers when the state's stamp reaches the next marker instant."""
@@ -86,8 +87,9 @@ class VisualizerNode(Node):
         self._next_due_ns = (t_ns // self._period_ns + 1) * self._period_ns
         p_ee = conversions.xyz(msg.position)
         self._trail.append(p_ee)
-        scene = marker_scene(p_ee, conversions.xyz(msg.desired_position), self._force,
-                             self._wall_position_m, self._trail, self._settings)
+        force, wall_position_m = self._contacts.at(t_ns)
+        scene = marker_scene(p_ee, conversions.xyz(msg.desired_position), force,
+                             wall_position_m, self._trail, self._settings)
         self._publisher.publish(conversions.marker_array(scene, t_ns))
 
 

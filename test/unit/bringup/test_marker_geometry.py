@@ -10,6 +10,7 @@ from rclpy.serialization import serialize_message
 from uvms_bringup.conversions import NAMESPACES, marker_array
 from uvms_bringup.marker_geometry import (
     WALL_THICKNESS_M,
+    ContactHistory,
     MarkerGeometryError,
     MarkerSettings,
     Trail,
@@ -94,3 +95,14 @@ def test_without_a_wall_the_wall_marker_is_deleted() -> None:
     """A viewer removes the wall marker when the run has no wall."""
     scene = marker_scene([0.0] * 3, [0.0] * 3, [0.0] * 3, math.nan, Trail(2), SETTINGS)
     assert marker_array(scene, 0).markers[0].action == Marker.DELETE
+
+
+def test_contact_of_the_state_stamp_is_used_whatever_arrived_later() -> None:
+    """Exact stamp first; else the newest before it; else the oldest kept; else none."""
+    history = ContactHistory(capacity=3)
+    assert history.at(0) == ((0.0, 0.0, 0.0), pytest.approx(math.nan, nan_ok=True))
+    for k in range(1, 6):
+        history.add(k * 10, [float(k), 0.0, 0.0], 1.7 + k)
+    assert history.at(40) == ((4.0, 0.0, 0.0), 5.7)
+    assert history.at(45) == ((4.0, 0.0, 0.0), 5.7)
+    assert history.at(5) == ((3.0, 0.0, 0.0), 4.7)  # 10 and 20 were dropped (capacity 3)
