@@ -1,14 +1,18 @@
 """Lockstep speed of the whole graph with recording on genuine rclpy, and where the time goes.
 
 Runs a scenario (default: case1_ke1e4, its 20 s; 1 kHz simulator, 500 Hz control) through
-the in-process graph (``uvms_bringup.graph``) in lockstep with the recorder on, on the
-EventsExecutor and/or the SingleThreadedExecutor in this one process, and prints for each
-the real-time factor (simulated s per wall s) and the share of wall time spent in each
-node's callbacks, split into our code and ``publish`` (rclpy serialization and the rmw).
-Callbacks and publishers are timed by wrapping them here, from the outside
-(``Subscription.callback``, ``Timer.callback`` and ``Publisher.publish`` of each node are
-writable); node code is not touched. The rest of the wall time (executor, waiting, taking
-and deserializing messages, DDS delivery) is the middleware's.
+the in-process graph (``uvms_bringup.graph``, as ``uvms run`` does) in lockstep with the
+recorder on, on the EventsExecutor and/or the SingleThreadedExecutor in this one process,
+and prints for each the real-time factor (simulated s per wall s). Those headline runs are
+not instrumented.
+
+Where the time goes comes from one more run (EventsExecutor) whose callbacks and publishers
+are timed by wrapping them from the outside (``Subscription.callback``, ``Timer.callback``
+and ``Publisher.publish`` of each node are writable; node code is not touched): the share of
+wall time in each node's callbacks, split into our code and ``publish`` (rclpy serialization
+and the rmw). The rest of that run's wall time (executor, waiting, taking and deserializing
+messages, DDS delivery) is the middleware's. The wrappers cost time themselves; the table
+states how much longer the instrumented run took than the uninstrumented one.
 
 As a baseline the same simulated time runs through the pure cores in a plain loop, no ROS:
 ``uvms_sim.plant.Plant``, ``UnifiedForceController`` and ``ThrusterAllocator``, built as
@@ -18,15 +22,18 @@ period observe -> controller step -> allocator step -> ``steps_per_publish`` pla
 graph wall / plain wall is the middleware's cost (target <= 1.5). Each core is timed in
 the loop too; a node's "glue" is its callback time minus its publishes minus its core's
 plain-loop time (conversions, node logic, and any slowdown of the core inside the graph).
-The last end-effector position of the recording is compared with the plain loop's, as a
-check that both ran the same simulation. A benchmark prints figures, it asserts nothing; the
-machine's load average is printed with them. ROS_DOMAIN_ID: the environment's, else a
-random one of 101-149.
+Last, the middleware floor (``bench_middleware_floor.py``): the same message flow through
+stand-in nodes that do no work, per control period; plain loop + floor is the least any
+node code could take on this runtime, so (plain + floor) / plain bounds the ratio from
+below. The last end-effector position of the recording is compared with the plain loop's,
+as a check that both ran the same simulation. A benchmark prints figures, it asserts
+nothing; the machine's load average is printed with them. ROS_DOMAIN_ID: the
+environment's, else a random one of 101-149.
 
 Usage::
 
     .venv/bin/python bench/bench_graph.py [SCENARIO] [--duration S] [--executor KIND]
-        [--output F.mcap] [--integrator METHOD]
+        [--output F.mcap] [--integrator METHOD] [--no-breakdown]
 """
 
 from __future__ import annotations
@@ -47,9 +54,11 @@ from typing import Any
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 
+from bench_middleware_floor import run_floor  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
 from uvms_bringup.graph import Graph, RunResult, build_graph, run_graph  # noqa: E402
@@ -146,12 +155,12 @@ class CallbackTimer:
 
 @dataclass
 class GraphRun:
-    """One run of the graph on one executor."""
+    """One run of the graph on one executor (``timer`` None: not instrumented)."""
 
     executor: str
     build_s: float
     result: RunResult
-    timer: CallbackTimer
+    timer: CallbackTimer | None
     recording_mb: float
     p_ee_end: np.ndarray | None
 
@@ -297,21 +306,24 @@ def run_on(
     scenario: Scenario,
     output: Path,
     extra: Mapping[str, Mapping[str, ParameterValue]] | None,
+    instrumented: bool = False,
 ) -> GraphRun:
-    """Build the graph with recording, time its callbacks, run it on one executor."""
+    """Build the graph with recording, run it on one executor, its callbacks timed if asked."""
     start = time.perf_counter()
     graph = build_graph(scenario, 'lockstep', output_path=output, extra_overrides=extra)
     build_s = time.perf_counter() - start
-    timer = CallbackTimer()
-    timer.wrap(graph)
+    timer = None
+    if instrumented:
+        timer = CallbackTimer()
+        timer.wrap(graph)
     result = run_graph(graph, executor_kind=kind)
     return GraphRun(kind, build_s, result, timer, output.stat().st_size / 1e6,
                     last_ee_position(output))
 
 
 def print_graph_run(run: GraphRun, plain: PlainRun) -> None:
-    """Real-time factor, ratio to the plain loop and the table of where the wall time went."""
-    result, timer = run.result, run.timer
+    """Real-time factor and ratio to the plain loop of an uninstrumented run."""
+    result = run.result
     total = result.wall_time_s
     ratio = total / plain.wall_s
     verdict = 'within' if ratio <= TARGET_RATIO else 'OVER'
@@ -326,6 +338,19 @@ def print_graph_run(run: GraphRun, plain: PlainRun) -> None:
         gap = float(np.linalg.norm(run.p_ee_end - plain.p_ee_end))
         print(f'last ee position    {np.round(run.p_ee_end, 6).tolist()} m '
               f'(plain loop differs by {gap:.2e} m)')
+
+
+def print_breakdown(run: GraphRun, uninstrumented: GraphRun | None, plain: PlainRun) -> None:
+    """The table of where the wall time of an instrumented run went."""
+    timer = run.timer
+    assert timer is not None
+    total = run.result.wall_time_s
+    print(f'\n== where the time goes ({run.executor} executor, callbacks and publishes timed) ==')
+    line = f'instrumented run    {total:.2f} s wall'
+    if uninstrumented is not None:
+        extra = total / uninstrumented.result.wall_time_s - 1.0
+        line += f" ({100 * extra:+.0f}% against the uninstrumented run: the wrappers' cost)"
+    print(line)
     header = (f'  {"where":<20}{"calls":>8}{"wall s":>8}{"share":>8}{"us/call":>9}'
               f'{"publish s":>10}{"core s":>8}{"glue s":>8}')
     rule = '  ' + '-' * (len(header) - 2)
@@ -370,6 +395,8 @@ def main() -> None:
                              'last run keeps it)')
     parser.add_argument('--integrator', choices=('rk4', 'semi_implicit_euler'), default=None,
                         help="simulator's integration.method (default: config/robot.yaml)")
+    parser.add_argument('--no-breakdown', dest='breakdown', action='store_false',
+                        help='skip the instrumented run (where the time goes)')
     args = parser.parse_args()
     ros_environment_defaults()
     if not os.environ.get('ROS_DOMAIN_ID'):
@@ -398,24 +425,41 @@ def main() -> None:
           f'ROS_DOMAIN_ID {os.environ["ROS_DOMAIN_ID"]}')
 
     runs: list[GraphRun] = []
+    breakdown: GraphRun | None = None
     with tempfile.TemporaryDirectory() as tmp:
         for kind in kinds:
             output = Path(args.output) if args.output else Path(tmp) / f'bench_{kind}.mcap'
             runs.append(run_on(kind, scenario, output, extra))
+        if args.breakdown:
+            breakdown = run_on('events', scenario, Path(tmp) / 'bench_timed.mcap', extra,
+                               instrumented=True)
     plain = run_plain_loop(cores)
+    periods = plain.control_steps
+    floor_s, _ = run_floor(periods, 'events', recorder=True)
     print(f'plain loop          {plain.wall_s:.2f} s wall for {plain.sim_time_s:.2f} s '
           f'simulated ({plain.control_steps} control steps, '
           f'{1e6 * plain.wall_s / plain.control_steps:.0f} us each), real-time factor '
           f'{plain.sim_time_s / plain.wall_s:.2f}x')
     print('                    ' + ', '.join(f'{name} core {seconds:.2f} s'
                                               for name, seconds in plain.core_s.items()))
+    print(f'middleware floor    {floor_s:.2f} s wall for the same {periods} control periods '
+          f'through stand-in nodes that do no work (events executor, raw recorder sink): '
+          f'{1e6 * floor_s / periods:.0f} us per period')
+    print(f'                    least possible graph / plain loop: '
+          f'{(plain.wall_s + floor_s) / plain.wall_s:.2f}')
     for run in runs:
         print_graph_run(run, plain)
+    if breakdown is not None:
+        events = next((run for run in runs if run.executor == 'events'), None)
+        print_breakdown(breakdown, events, plain)
 
     print('\n== summary ==')
     print(f'  {"":<14}{"wall s":>9}{"RTF":>8}{"/ plain":>9}')
     print(f'  {"plain loop":<14}{plain.wall_s:>9.2f}{plain.sim_time_s / plain.wall_s:>7.2f}x'
           f'{1.0:>9.2f}')
+    floor_total = plain.wall_s + floor_s
+    print(f'  {"plain + floor":<14}{floor_total:>9.2f}{plain.sim_time_s / floor_total:>7.2f}x'
+          f'{floor_total / plain.wall_s:>9.2f}')
     for run in runs:
         wall = run.result.wall_time_s
         print(f'  {run.executor:<14}{wall:>9.2f}{run.result.real_time_factor:>7.2f}x'

@@ -34,9 +34,9 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'recorder = uvms_bringup.recorder_node:main',
-            'visualizer = uvms_bringup.visualizer_node:main',
-            'foxglove_server = uvms_bringup.foxglove_server_node:main',
+            'recorder = uvms_bringup.entry_points:recorder',
+            'visualizer = uvms_bringup.entry_points:visualizer',
+            'foxglove_server = uvms_bringup.entry_points:foxglove_server',
             'uvms = uvms_bringup.cli:main',
         ],
     },

@@ -23,8 +23,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'controller = uvms_control.controller_node:main',
-            'thruster_allocator = uvms_control.thruster_allocator_node:main',
+            'controller = uvms_control.entry_points:controller',
+            'thruster_allocator = uvms_control.entry_points:thruster_allocator',
         ],
     },
 )

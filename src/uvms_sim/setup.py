@@ -23,7 +23,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'simulator = uvms_sim.simulator_node:main',
+            'simulator = uvms_sim.entry_points:simulator',
         ],
     },
 )

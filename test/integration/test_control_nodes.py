@@ -18,6 +18,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from uvms_control.controller_node import ControllerNode
@@ -297,6 +298,33 @@ def test_timer_controller_zeroes_the_command_when_inputs_go_stale(harness: Harne
     assert np.any(tau_of(probe.commands[0]) != 0.0)
     harness.spin_for(0.3)
     np.testing.assert_array_equal(tau_of(probe.commands[-1]), 0.0)
+
+
+@pytest.mark.parametrize('node_class', [ControllerNode, ThrusterAllocatorNode])
+def test_timer_mode_keeps_its_rate_while_sim_time_stands_still(
+    harness: Harness, node_class: type[Node]
+) -> None:
+    """Timer mode ticks on the steady clock and stamps with /clock time: one /clock is enough.
+
+    A timer on /clock time would fire at most once per /clock message, so a burst of /clock
+    messages (a late simulator, a loaded machine) would drop control periods.
+    """
+    rates = {'control_rate_hz': 100.0} if node_class is ControllerNode else {'rate_hz': 100.0}
+    harness.add(node_class, trigger_mode='timer', use_sim_time=True, watchdog_timeout_s=5.0,
+                **rates)
+    probe = harness.probe
+    clock_pub = probe.node.create_publisher(Clock, '/clock', 10)
+    clock_pub.publish(Clock(clock=Time(sec=3)))
+    if node_class is ControllerNode:
+        probe.send_state(3_000_000_000, force=(1.0, 0.0, 0.0))
+    else:
+        probe.send_command(3_000_000_000, [1.0] * 9)
+    outputs = probe.commands if node_class is ControllerNode else probe.actuators
+
+    def ticks_at_3_s() -> int:
+        return sum(stamp_ns(m) == 3_000_000_000 for m in outputs)
+
+    assert harness.spin_until(lambda: ticks_at_3_s() >= 10), ticks_at_3_s()
 
 
 @pytest.mark.parametrize(

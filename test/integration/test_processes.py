@@ -468,6 +468,23 @@ def test_a_failing_node_is_named_and_the_others_are_stopped(tmp_path: Path) -> N
     assert not any(alive(pid) for pid in _launch_pids(err))
 
 
+def test_a_scenario_key_no_node_declares_stops_the_launch_before_any_node(
+    tmp_path: Path,
+) -> None:
+    """A misspelt override would be ignored by the node: launch names it and starts nothing."""
+    scenario = tmp_path / 'typo.yaml'
+    scenario.write_text(yaml.safe_dump({
+        'name': 'typo', 'description': 'misspelt controller key', 'duration_s': 5.0,
+        'controller': {'control_rate_hzz': 500.0},
+    }))
+    process = start([str(BIN / 'uvms'), 'launch', str(scenario)])
+    err = finish(process, 40.0)
+    assert process.returncode == 2, err
+    assert "key 'controller.control_rate_hzz'" in err
+    assert 'did you mean control_rate_hz' in err
+    assert not _launch_pids(err)
+
+
 def test_a_node_killed_while_running_is_named_and_the_others_are_stopped(
     observer_factory: Callable[[Mapping[str, type]], Observer],
 ) -> None:
@@ -717,3 +734,20 @@ def test_recorder_console_script_runs_alone_and_records(
                      if channel.topic == '/alone/joint_states']
     assert summary is not None
     assert positions == pytest.approx([0.01 * i for i in range(20)])
+
+
+@pytest.mark.parametrize('delay_s', [0.2, 0.5])
+@pytest.mark.parametrize('executable', ['simulator', 'controller'])
+def test_a_stop_while_the_node_still_imports_exits_cleanly(executable: str,
+                                                           delay_s: float) -> None:
+    """SIGINT in the first half second (rclpy, numpy, Pinocchio loading): status 0, no trace.
+
+    The console script installs its stop handlers before the node module's imports; a
+    launcher stopping a node it has just started must not print a KeyboardInterrupt.
+    """
+    process = start([str(BIN / executable), '--ros-args', '-r', '__ns:=/early_stop'])
+    time.sleep(delay_s)
+    returncode, _, err = stop(process)
+    assert returncode in CLEAN_STOP, err
+    assert 'Traceback' not in err
+    assert 'KeyboardInterrupt' not in err

@@ -13,8 +13,8 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from uvms_common.node_main import StopEvent
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.stop_event import StopEvent
 
 if TYPE_CHECKING:
     from uvms_bringup.graph import Graph

@@ -458,12 +458,16 @@ def launch_graph(
         request, 1 when a node ended by itself with an error (named on stderr).
 
     Raises:
+        ScenarioError: A scenario override names no parameter of its node or has the wrong
+            type (checked before any process starts: a node would ignore it silently).
         LaunchError: A node cannot be started (missing parameter file or executable).
     """
     ros_environment_defaults()
+    if scenario is not None:
+        _check_overrides(scenario, namespace, config)
     own_stop = None
     if stop is None:
-        from uvms_common.node_main import StopEvent
+        from uvms_common.stop_event import StopEvent
 
         stop = own_stop = StopEvent()
     try:
@@ -476,6 +480,16 @@ def launch_graph(
     finally:
         if own_stop is not None:
             own_stop.restore()
+
+
+def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) -> None:
+    """The scenario's overrides against what the nodes declare, as ``uvms run`` checks them."""
+    from uvms_bringup.graph import GraphError, check_scenario_overrides
+
+    try:
+        check_scenario_overrides(scenario, config=config, namespace=namespace)
+    except GraphError as exc:
+        raise LaunchError(str(exc)) from exc
 
 
 def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,

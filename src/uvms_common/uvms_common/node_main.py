@@ -6,18 +6,15 @@ traceback (``RCLError: Failed to publish: publisher's context is invalid``, meas
 Jazzy). So rclpy is initialised without its handlers; SIGINT and SIGTERM only set an event,
 the executor spins in short turns and checks it, and the node is destroyed before the
 context is shut down. The same holds before the executor exists: a signal during start-up
-stops the process after the node is built, without a traceback.
+stops the process without a traceback, before the node is built when it came during the
+imports (``uvms_common.node_entry``, the console scripts' entry).
 """
 
 from __future__ import annotations
 
 import os
-import signal
 import sys
-import threading
 from collections.abc import Callable, Sequence
-from types import FrameType
-from typing import Any
 
 import rclpy
 from rclpy.context import Context
@@ -26,41 +23,15 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.stop_event import StopEvent, active_stop_event
+
+__all__ = ['EXECUTORS', 'SPIN_TURN_S', 'StopEvent', 'make_executor', 'run_node',
+           'spin_until_stopped']
 
 #: Executors a node process can spin on; ``UVMS_EXECUTOR`` picks one (default ``events``).
 EXECUTORS = ('events', 'single')
 #: Longest wait of one executor turn before the stop event is checked again (s).
 SPIN_TURN_S = 0.1
-
-
-class StopEvent:
-    """Set by SIGINT or SIGTERM; restores the previous handlers on ``restore``."""
-
-    def __init__(self) -> None:
-        self._event = threading.Event()
-        self._previous: dict[int, Any] = {}
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._previous[sig] = signal.signal(sig, self._on_signal)
-        self.signal_number = 0
-
-    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
-        self.signal_number = signum
-        self._event.set()
-
-    def is_set(self) -> bool:
-        """Whether a stop signal arrived."""
-        return self._event.is_set()
-
-    def set(self) -> None:
-        """Ask the loop to stop (as a signal would)."""
-        self._event.set()
-
-    def restore(self) -> None:
-        """Put the handlers back that were installed before."""
-        for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
-        self._previous.clear()
 
 
 def make_executor(kind: str | None = None, context: Context | None = None) -> Executor:
@@ -124,9 +95,13 @@ def run_node(
         0 after ``finished``, a signal or an external shutdown, each ending in a clean
         shutdown (as Jazzy's demo nodes exit 0 on Ctrl-C); 1 after a start-up error or an
         error raised by a callback (logged with its type).
+
+    A ``StopEvent`` already installed (``uvms_common.node_entry``, before the node's
+    imports) is taken over, so a signal received during the imports counts too.
     """
     ros_environment_defaults()
-    stop = StopEvent()
+    earlier = active_stop_event()
+    stop = earlier if earlier is not None else StopEvent()
     rclpy.init(args=None if args is None else list(args),
                signal_handler_options=SignalHandlerOptions.NO)
     logger = rclpy.logging.get_logger(logger_name)
@@ -134,6 +109,8 @@ def run_node(
     executor: Executor | None = None
     status = 0
     try:
+        if stop.is_set():
+            return 0
         node = make_node()
         executor = make_executor()
         executor.add_node(node)
@@ -154,5 +131,6 @@ def run_node(
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-        stop.restore()
+        if stop is not earlier:
+            stop.restore()
     return status

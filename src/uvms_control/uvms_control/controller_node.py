@@ -5,7 +5,8 @@ Subscribes ``joint_states``, ``odometry`` and ``wrench``; publishes
 ``trigger_mode: lockstep`` computes once the three inputs with one stamp have arrived and
 stamps the command alike (a repeated stamp re-sends the same command); inputs are gathered
 per stamp, so inputs with other stamps (another publisher, a flood of bad messages) cannot
-stall the exchange. ``timer`` computes at ``control_rate_hz`` on the latest inputs. A
+stall the exchange. ``timer`` computes at ``control_rate_hz`` of the steady (wall) clock on
+the latest inputs and stamps with the node clock (``/clock`` time under ``use_sim_time``). A
 rejected input (NaN/Inf, wrong size or frame) is logged; at the stamp of a running lockstep
 exchange the last safe command is held; stale inputs (older than
 ``watchdog_timeout_s``: by stamp in lockstep, by node-clock arrival time in timer mode) give a
@@ -22,6 +23,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -150,7 +152,10 @@ class ControllerNode(Node):
                 msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos
             )
         if not self._lockstep:
-            self.create_timer(1.0 / float(node['control_rate_hz']), self._on_timer)
+            # The period runs on the steady clock: a timer on /clock time fires once per
+            # /clock message at most, so a burst of /clock drops control periods.
+            self.create_timer(1.0 / float(node['control_rate_hz']), self._on_timer,
+                              clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'unified force controller, {node["trigger_mode"]} trigger, '
             f'null space {"on" if gains.null_space_enabled else "off"}, W mode {gains.switch_mode}'

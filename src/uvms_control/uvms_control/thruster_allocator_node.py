@@ -3,8 +3,9 @@
 Subscribes ``command/generalized_force``; publishes ``command/actuators`` (actual thrusts
 after the thruster dynamics, motor torques) and ``thrusters/state``. ``trigger_mode:
 lockstep`` answers every command with its stamp, integrating the thrusters over the time
-between command stamps; ``timer`` steps at ``rate_hz`` on the latest command. A rejected
-command (NaN/Inf, wrong size, frame or joints) is logged and the last safe command is held;
+between command stamps; ``timer`` steps at ``rate_hz`` of the steady clock on the latest
+command, stamped with the node clock. A rejected command (NaN/Inf, wrong size, frame or
+joints) is logged and the last safe command is held;
 in timer mode a command older than ``watchdog_timeout_s`` (node clock) is replaced by zero,
 so the thrusters spin down and the motors go limp.
 """
@@ -15,6 +16,7 @@ import sys
 from typing import Any
 
 import numpy as np
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -88,7 +90,9 @@ class ThrusterAllocatorNode(Node):
             GeneralizedForce, 'command/generalized_force', self._on_command, qos
         )
         if not self._lockstep:
-            self.create_timer(self._period_s, self._on_timer)
+            # On the steady clock, as the controller's: /clock bursts must not drop periods.
+            self.create_timer(self._period_s, self._on_timer,
+                              clock=Clock(clock_type=ClockType.STEADY_TIME))
         c = self.core.thrusters.calibration
         self.get_logger().info(
             f'{layout.count} thrusters, {values["trigger_mode"]} trigger; calibrated blade area '

@@ -1,0 +1,266 @@
+"""The least genuine rclpy can cost for the lockstep graph's message flow, with no work in it.
+
+``bench_graph.py`` splits a lockstep run into our cores, our glue and the middleware. This
+bench measures the middleware alone: stand-in nodes with the graph's names, topics, types,
+QoS and lockstep chain, whose callbacks only publish the next prebuilt message, in one
+process and one executor as ``uvms run`` spins them:
+
+    simulator  -- /clock, joint_states, odometry, wrench, ee_pose, contact (+ /tf every 10)
+    controller -- on the 3 inputs of one stamp: command/generalized_force, controller/state
+    allocator  -- on the command: command/actuators, thrusters/state
+    simulator  -- on the actuator command: the next state (2 ms later)
+
+plus a raw subscriber to every topic standing in for the recorder (it keeps nothing), and
+``use_sim_time`` on controller, allocator and recorder (each then subscribes ``/clock``,
+as the real nodes do). Messages carry the real sizes (3 joints, 8 thrusters). The figure is
+the wall time per control period, and the same for the real graph scaled to it: the
+floor per period divided by the plain loop's per-period cost is the lowest
+graph / plain-loop ratio any node code could reach on this runtime (bench_graph's
+"graph / plain loop", target <= 1.5).
+
+Usage::
+
+    .venv/bin/python bench/bench_middleware_floor.py [--periods N] [--executor KIND]
+        [--no-recorder]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'src' / 'uvms_common'))
+
+import rclpy  # noqa: E402
+from builtin_interfaces.msg import Time  # noqa: E402
+from geometry_msgs.msg import PoseStamped, TransformStamped, WrenchStamped  # noqa: E402
+from nav_msgs.msg import Odometry  # noqa: E402
+from rclpy.context import Context  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from rclpy.signals import SignalHandlerOptions  # noqa: E402
+from rosgraph_msgs.msg import Clock  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+from tf2_msgs.msg import TFMessage  # noqa: E402
+from uvms_common.node_main import make_executor  # noqa: E402
+from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+
+from uvms_msgs.msg import (  # noqa: E402
+    ActuatorCommand,
+    ContactState,
+    ControllerState,
+    GeneralizedForce,
+    ThrusterState,
+)
+
+#: As the nodes create them (simulator_node.py, controller_node.py, ...).
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+PERIOD_NS = 2_000_000
+TF_EVERY = 10
+JOINTS = ['joint_1', 'joint_2', 'joint_3']
+THRUSTERS = 8
+#: Away from the test suite's ROS_DOMAIN_IDs (0, 1-100, 150-199).
+DOMAINS = (101, 149)
+
+
+def _stamp(t_ns: int) -> Time:
+    sec, nanosec = divmod(t_ns, 1_000_000_000)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+class FloorSimulator(Node):
+    """Publishes one state per actuator command, 2 ms after the last; the caller starts it."""
+
+    def __init__(self, context: Context, periods: int) -> None:
+        super().__init__('simulator', namespace='/uvms', context=context)
+        self.periods = periods
+        self.done = 0
+        self.t_ns = 0
+        self._clock_pub = self.create_publisher(Clock, '/clock', RELIABLE)
+        self._joints = self.create_publisher(JointState, 'joint_states', RELIABLE)
+        self._odom = self.create_publisher(Odometry, 'odometry', RELIABLE)
+        self._wrench = self.create_publisher(WrenchStamped, 'wrench', RELIABLE)
+        self._ee = self.create_publisher(PoseStamped, 'ee_pose', RELIABLE)
+        self._contact = self.create_publisher(ContactState, 'contact', RELIABLE)
+        self._tf = self.create_publisher(TFMessage, '/tf', QoSProfile(depth=100))
+        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command,
+                                 RELIABLE)
+        self._msgs: dict[str, Any] = {
+            'joints': JointState(name=JOINTS, position=[0.1] * 3, velocity=[0.2] * 3,
+                                 effort=[0.3] * 3),
+            'odom': Odometry(child_frame_id='base_link_frd'),
+            'wrench': WrenchStamped(),
+            'ee': PoseStamped(),
+            'contact': ContactState(),
+        }
+        self._msgs['odom'].header.frame_id = 'map_ned'
+        self._clock_msg = Clock()
+        self._tf_msg = TFMessage(transforms=[TransformStamped() for _ in range(6)])
+
+    def publish_state(self) -> None:
+        """Publish the state messages of ``t_ns``, as the simulator does each state."""
+        stamp = _stamp(self.t_ns)
+        self._clock_msg.clock = stamp
+        self._clock_pub.publish(self._clock_msg)
+        for key, pub in (('joints', self._joints), ('odom', self._odom),
+                         ('wrench', self._wrench), ('ee', self._ee),
+                         ('contact', self._contact)):
+            msg = self._msgs[key]
+            msg.header.stamp = stamp
+            pub.publish(msg)
+        if (self.t_ns // PERIOD_NS) % TF_EVERY == 0:
+            for transform in self._tf_msg.transforms:
+                transform.header.stamp = stamp
+            self._tf.publish(self._tf_msg)
+
+    def _on_command(self, msg: ActuatorCommand) -> None:
+        if msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec != self.t_ns:
+            return
+        self.done += 1
+        self.t_ns += PERIOD_NS
+        if self.done < self.periods:
+            self.publish_state()
+
+
+class FloorController(Node):
+    """On the three inputs of one stamp: one command and one state message."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__('controller', namespace='/uvms', context=context,
+                         parameter_overrides=[Parameter('use_sim_time', value=True)])
+        self._command = self.create_publisher(GeneralizedForce, 'command/generalized_force',
+                                              RELIABLE)
+        self._state = self.create_publisher(ControllerState, 'controller/state', RELIABLE)
+        self._command_msg = GeneralizedForce(joint_names=JOINTS, joint_torques=[0.0] * 3)
+        self._state_msg = ControllerState()
+        self._arrived: dict[int, int] = {}
+        for msg_type, topic in ((JointState, 'joint_states'), (Odometry, 'odometry'),
+                                (WrenchStamped, 'wrench')):
+            self.create_subscription(msg_type, topic, self._on_input, RELIABLE)
+
+    def _on_input(self, msg: Any) -> None:
+        stamp = msg.header.stamp
+        key = stamp.sec * 1_000_000_000 + stamp.nanosec
+        count = self._arrived.get(key, 0) + 1
+        if count < 3:
+            self._arrived[key] = count
+            return
+        del self._arrived[key]
+        self._command_msg.header.stamp = stamp
+        self._command.publish(self._command_msg)
+        self._state_msg.header.stamp = stamp
+        self._state.publish(self._state_msg)
+
+
+class FloorAllocator(Node):
+    """On each generalized force: one actuator command and one thruster state."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__('thruster_allocator', namespace='/uvms', context=context,
+                         parameter_overrides=[Parameter('use_sim_time', value=True)])
+        self._actuators = self.create_publisher(ActuatorCommand, 'command/actuators', RELIABLE)
+        self._state = self.create_publisher(ThrusterState, 'thrusters/state', RELIABLE)
+        self._actuator_msg = ActuatorCommand(thrust=[0.0] * THRUSTERS, joint_names=JOINTS,
+                                             joint_torques=[0.0] * 3)
+        zeros = [0.0] * THRUSTERS
+        self._state_msg = ThrusterState(desired_thrust=zeros, actual_thrust=zeros,
+                                        propeller_speed=zeros, reference_speed=zeros,
+                                        motor_current=zeros)
+        self.create_subscription(GeneralizedForce, 'command/generalized_force',
+                                 self._on_command, RELIABLE)
+
+    def _on_command(self, msg: GeneralizedForce) -> None:
+        self._actuator_msg.header.stamp = msg.header.stamp
+        self._actuators.publish(self._actuator_msg)
+        self._state_msg.header.stamp = msg.header.stamp
+        self._state.publish(self._state_msg)
+
+
+class FloorRecorder(Node):
+    """Raw subscriptions to every topic; the bytes are dropped."""
+
+    TOPICS = (
+        ('/clock', Clock), ('/tf', TFMessage), ('joint_states', JointState),
+        ('odometry', Odometry), ('wrench', WrenchStamped), ('ee_pose', PoseStamped),
+        ('contact', ContactState), ('command/generalized_force', GeneralizedForce),
+        ('controller/state', ControllerState), ('command/actuators', ActuatorCommand),
+        ('thrusters/state', ThrusterState),
+    )
+
+    def __init__(self, context: Context) -> None:
+        super().__init__('recorder', namespace='/uvms', context=context,
+                         parameter_overrides=[Parameter('use_sim_time', value=True)])
+        self.received = 0
+        for topic, msg_type in self.TOPICS:
+            qos = QoSProfile(depth=100) if topic == '/tf' else RELIABLE
+            self.create_subscription(msg_type, topic, self._on_message, qos, raw=True)
+
+    def _on_message(self, data: bytes) -> None:
+        self.received += 1
+
+
+def run_floor(periods: int, executor_kind: str, recorder: bool) -> tuple[float, int]:
+    """Wall seconds for ``periods`` control periods of the stand-in graph, messages recorded."""
+    context = Context()
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        sim = FloorSimulator(context, periods)
+        nodes: list[Node] = [sim, FloorController(context), FloorAllocator(context)]
+        sink = FloorRecorder(context) if recorder else None
+        if sink is not None:
+            nodes.append(sink)
+        executor = make_executor(executor_kind, context)
+        for node in nodes:
+            executor.add_node(node)
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline:  # let discovery match every pair first
+            executor.spin_once(timeout_sec=0.05)
+        sim.done, sim.t_ns = 0, 0
+        start = time.monotonic()
+        sim.publish_state()
+        while sim.done < periods:
+            executor.spin_once(timeout_sec=1.0)
+        wall_s = time.monotonic() - start
+        received = sink.received if sink is not None else 0
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+    return wall_s, received
+
+
+def main() -> None:
+    """Print the floor per control period for the chosen executor(s)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--periods', type=int, default=5000,
+                        help='control periods (2 ms of simulated time each); default 5000')
+    parser.add_argument('--executor', choices=('events', 'single', 'both'), default='both')
+    parser.add_argument('--no-recorder', action='store_true', help='leave the raw sink out')
+    args = parser.parse_args()
+    ros_environment_defaults()
+    if not os.environ.get('ROS_DOMAIN_ID'):
+        os.environ['ROS_DOMAIN_ID'] = str(random.SystemRandom().randint(*DOMAINS))
+    print(f'stand-in graph, {args.periods} control periods ({args.periods * 2e-3:g} s '
+          f'simulated), recorder {"off" if args.no_recorder else "raw sink"}; load average '
+          + ', '.join(f'{x:.2f}' for x in os.getloadavg()))
+    kinds = ('events', 'single') if args.executor == 'both' else (args.executor,)
+    for kind in kinds:
+        # The first (discovery-settled) run of a kind warms caches; the second is printed.
+        run_floor(min(args.periods, 500), kind, not args.no_recorder)
+        wall_s, received = run_floor(args.periods, kind, not args.no_recorder)
+        per_period_us = wall_s / args.periods * 1e6
+        print(f'{kind:7s} {wall_s:7.2f} s wall, {per_period_us:7.1f} us per control period '
+              f'(real-time factor {args.periods * 2e-3 / wall_s:5.2f}x with no work at all), '
+              f'{received} messages to the recorder')
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,52 @@
+"""SIGINT/SIGTERM as an event to poll, importable before anything heavy (no rclpy here).
+
+A process installs its ``StopEvent`` first, so that a signal during its imports (rclpy,
+numpy and Pinocchio take most of a second) stops it cleanly instead of raising
+``KeyboardInterrupt`` with a traceback from whatever module was loading.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from types import FrameType
+
+_active: list[StopEvent] = []
+
+
+class StopEvent:
+    """Set by SIGINT or SIGTERM; restores the previous handlers on ``restore``."""
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+        self._previous: dict[int, object] = {}
+        self.signal_number = 0
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._previous[sig] = signal.signal(sig, self._on_signal)
+            _active.append(self)
+
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        self.signal_number = signum
+        self._event.set()
+
+    def is_set(self) -> bool:
+        """Whether a stop signal arrived."""
+        return self._event.is_set()
+
+    def set(self) -> None:
+        """Ask the loop to stop (as a signal would)."""
+        self._event.set()
+
+    def restore(self) -> None:
+        """Put the handlers back that were installed before."""
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)  # type: ignore[arg-type]
+        self._previous.clear()
+        if self in _active:
+            _active.remove(self)
+
+
+def active_stop_event() -> StopEvent | None:
+    """The StopEvent whose handlers are installed in this process now, if any."""
+    return _active[-1] if _active else None
