@@ -35,6 +35,8 @@ setup(
     entry_points={
         'console_scripts': [
             'recorder = uvms_bringup.entry_points:recorder',
+            'visualizer = uvms_bringup.entry_points:visualizer',
+            'foxglove_server = uvms_bringup.entry_points:foxglove_server',
             'uvms = uvms_bringup.cli:main',
         ],
     },

@@ -32,6 +32,8 @@ SCHEMAS = {
     '/uvms/thrusters/state': 'uvms_msgs/msg/ThrusterState',
     '/tf': 'tf2_msgs/msg/TFMessage',
     '/tf_static': 'tf2_msgs/msg/TFMessage',
+    '/robot_description': 'std_msgs/msg/String',
+    '/uvms/markers': 'visualization_msgs/msg/MarkerArray',
 }
 
 
@@ -62,6 +64,8 @@ def stamps(path: Path) -> dict[str, list[int]]:
     result: dict[str, list[int]] = defaultdict(list)
     with AnyReader([path]) as reader:
         for connection, _, raw in reader.messages():
+            if connection.topic in ('/robot_description', '/uvms/markers'):
+                continue  # no header of their own
             msg = reader.deserialize(raw, connection.msgtype)
             stamp = msg.clock if connection.topic == '/clock' else (
                 msg.transforms[0].header.stamp if connection.topic.startswith('/tf')

@@ -71,11 +71,13 @@ def test_node_actions_take_package_and_executable_from_the_graph_spec() -> None:
     [('simulator', 'uvms_sim', 'simulator'),
      ('controller', 'uvms_control', 'controller'),
      ('thruster_allocator', 'uvms_control', 'thruster_allocator'),
-     ('recorder', 'uvms_bringup', 'recorder')],
+     ('recorder', 'uvms_bringup', 'recorder'),
+     ('visualizer', 'uvms_bringup', 'visualizer'),
+     ('foxglove_server', 'uvms_bringup', 'foxglove_server')],
 )
 def test_graph_spec_names_the_console_scripts(name: str, package: str, executable: str) -> None:
     """Each node runs the console script its package's setup.py installs."""
-    spec = {s.name: s for s in graph_nodes(record=True)}[name]
+    spec = {s.name: s for s in graph_nodes(record=True, foxglove=True)}[name]
     assert (spec.package, spec.executable) == (package, executable)
     setup = (LAUNCH_FILE.parents[2] / package / 'setup.py').read_text(encoding='utf-8')
     assert f"'{executable} = " in setup
@@ -128,3 +130,15 @@ def test_run_parameters_file_loads_back_into_a_node(tmp_path: Path) -> None:
         node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)
+
+
+def test_foxglove_server_joins_before_the_recorder_with_host_and_port() -> None:
+    """--foxglove adds foxglove_server, the recorder stays last; host and port are passed."""
+    names = [spec.name for spec in graph_nodes(record=True, foxglove=True)]
+    assert names[-2:] == ['foxglove_server', 'recorder']
+    assert 'foxglove_server' not in [spec.name for spec in graph_nodes(record=True)]
+    spec = graph_nodes(record=False, foxglove=True)[-1]
+    values = node_parameters(spec, None, 'lockstep', foxglove_address=('0.0.0.0', 9001))
+    assert (values['host'], values['port'], values['use_sim_time']) == ('0.0.0.0', 9001, True)
+    default = node_parameters(spec, None, 'lockstep')
+    assert (default['host'], default['port']) == ('127.0.0.1', 8765)

@@ -60,6 +60,8 @@ EXECUTABLES = (
     ('uvms_control', 'controller'),
     ('uvms_control', 'thruster_allocator'),
     ('uvms_bringup', 'recorder'),
+    ('uvms_bringup', 'visualizer'),
+    ('uvms_bringup', 'foxglove_server'),
     ('uvms_bringup', 'uvms'),
 )
 NAMESPACE = '/uvms'
@@ -323,6 +325,13 @@ def test_bringup_installs_the_repository_config_files(workspace: Workspace) -> N
     assert installed == expected
     for name in expected:
         assert (share / name).read_bytes() == (source / name).read_bytes(), name
+
+
+def test_description_installs_the_foxglove_layout(workspace: Workspace) -> None:
+    """The Foxglove layout lands in share/uvms_description/foxglove, unchanged."""
+    name = 'foxglove/uvms_layout.json'
+    installed = workspace.install / 'uvms_description' / 'share' / 'uvms_description' / name
+    assert installed.read_bytes() == (REPO / 'src' / 'uvms_description' / name).read_bytes()
 
 
 def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Workspace) -> None:

@@ -20,6 +20,7 @@ PURE_MODULES = sorted(
         ),
         SRC / 'uvms_bringup' / 'uvms_bringup' / 'analysis.py',
         SRC / 'uvms_bringup' / 'uvms_bringup' / 'recording.py',
+        SRC / 'uvms_bringup' / 'uvms_bringup' / 'marker_geometry.py',
     ]
 )
 

@@ -1,10 +1,11 @@
-r"""Launch the UVMS graph on ROS 2 Jazzy: simulator, controller, thruster allocator, recorder.
+r"""Launch the UVMS graph on ROS 2 Jazzy: simulator, controller, allocator, visualizer, recorder.
 
 Usage::
 
     ros2 launch uvms_bringup uvms.launch.py
     ros2 launch uvms_bringup uvms.launch.py scenario:=case1_ke1e4 mode:=lockstep \\
         output_path:=/tmp/case1.mcap
+    ros2 launch uvms_bringup uvms.launch.py foxglove:=true   # live view, ws://127.0.0.1:8765
 
 Each node is its own process in the namespace ``/uvms`` (``/clock``, ``/tf`` and
 ``/tf_static`` stay global), with the parameter files installed in
@@ -25,6 +26,8 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
+    FOXGLOVE_HOST,
+    FOXGLOVE_PORT,
     MODES,
     RECORDER,
     file_parameters,
@@ -45,6 +48,9 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     duration_s = float(LaunchConfiguration('duration').perform(context))
     output_path = LaunchConfiguration('output_path').perform(context)
     namespace = LaunchConfiguration('namespace').perform(context)
+    foxglove = LaunchConfiguration('foxglove').perform(context).lower() in ('true', '1')
+    foxglove_address = (LaunchConfiguration('foxglove_host').perform(context),
+                        int(LaunchConfiguration('foxglove_port').perform(context)))
     if mode not in MODES:
         msg = f"launch argument mode:={mode}: expected one of {', '.join(MODES)}"
         raise ValueError(msg)
@@ -53,8 +59,9 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
         scenario = load_scenario(resolve_scenario_path(scenario_arg, Path(config)))
     actions = []
     run_values = {}
-    for spec in graph_nodes(record=bool(output_path)):
-        overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None)
+    for spec in graph_nodes(record=bool(output_path), foxglove=foxglove):
+        overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
+                                    foxglove_address)
         if spec.uses_sim_time:
             overrides['use_sim_time'] = use_sim_time
         if spec is RECORDER:
@@ -111,6 +118,18 @@ def generate_launch_description() -> LaunchDescription:
         DeclareLaunchArgument(
             'namespace', default_value=DEFAULT_NAMESPACE,
             description='Namespace of the nodes and their topics.',
+        ),
+        DeclareLaunchArgument(
+            'foxglove', default_value='false', choices=['true', 'false'],
+            description='Start foxglove_server: the live view for the Foxglove app.',
+        ),
+        DeclareLaunchArgument(
+            'foxglove_port', default_value=str(FOXGLOVE_PORT),
+            description='TCP port of the Foxglove live view.',
+        ),
+        DeclareLaunchArgument(
+            'foxglove_host', default_value=FOXGLOVE_HOST,
+            description='Address the live view binds; 127.0.0.1 keeps it on this machine.',
         ),
         OpaqueFunction(function=_launch_nodes),
     ])

@@ -59,6 +59,43 @@ def _seed(text: str) -> int:
     return value
 
 
+def _port(text: str) -> int:
+    """Argparse type: a TCP port in [0, 65535] (0: any free port)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a TCP port number, got {text!r}') from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f'expected a TCP port in [0, 65535], got {value}')
+    return value
+
+
+def _add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--foxglove [PORT]`` and ``--foxglove-host HOST`` of run and launch."""
+    from uvms_bringup.launch_helpers import FOXGLOVE_HOST, FOXGLOVE_PORT
+
+    parser.add_argument(
+        '--foxglove', type=_port, nargs='?', const=FOXGLOVE_PORT, metavar='PORT',
+        help='serve the running graph to the Foxglove app on ws://127.0.0.1:PORT '
+             f'(default port {FOXGLOVE_PORT}; 0 picks a free one)')
+    parser.add_argument(
+        '--foxglove-host', metavar='HOST', default=None,
+        help=f'address the live view binds (default {FOXGLOVE_HOST}, this machine only); '
+             'another one makes it reachable from other machines (warned)')
+
+
+def _foxglove_address(args: argparse.Namespace) -> tuple[str, int] | None:
+    """(host, port) of the live view the flags ask for, or None."""
+    from uvms_bringup.launch_helpers import FOXGLOVE_HOST
+
+    if args.foxglove is None:
+        if args.foxglove_host is not None:
+            msg = '--foxglove-host needs --foxglove [PORT]'
+            raise ValueError(msg)
+        return None
+    return (args.foxglove_host or FOXGLOVE_HOST, args.foxglove)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of ``uvms``."""
     parser = argparse.ArgumentParser(
@@ -80,6 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="sensor noise seed (default: the scenario's)")
     run.add_argument('--quiet', '-q', action='store_true',
                      help='no progress bar, only warnings and errors')
+    _add_foxglove_arguments(run)
     launch = sub.add_parser(
         'launch', help='run the graph, one process per node, in real time until Ctrl-C',
         description='Start simulator, controller, thruster_allocator (and recorder with '
@@ -96,6 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
     launch.add_argument('--mode', choices=('realtime', 'lockstep'), default='realtime',
                         help='execution mode (default: realtime)')
     launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
+    _add_foxglove_arguments(launch)
     for name, (_, help_text) in DELEGATED.items():
         sub.add_parser(name, help=help_text, add_help=False)
     return parser
@@ -161,8 +200,9 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             scenario = load_scenario(resolve_scenario_path(args.scenario))
             scenario = scenario.with_changes(duration_s=args.duration)
         return launch_graph(scenario, args.mode, duration_s=args.duration,
-                            output_path=args.output, quiet=args.quiet, stop=stop)
-    except (ScenarioError, FileNotFoundError) as exc:
+                            output_path=args.output, quiet=args.quiet, stop=stop,
+                            foxglove=_foxglove_address(args))
+    except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))
         return EXIT_USAGE
     except LaunchError as exc:
@@ -188,8 +228,9 @@ def _run_in_process(
         duration = args.duration if scenario is None else scenario.duration_s
         if args.quiet:
             _quiet_logs()
-        graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration)
-    except (ScenarioError, FileNotFoundError) as exc:
+        graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration,
+                            foxglove=_foxglove_address(args))
+    except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error(command, str(exc))
         return EXIT_USAGE
     except GraphError as exc:

@@ -120,6 +120,7 @@ def build_graph(
     namespace: str = DEFAULT_NAMESPACE,
     config: Path | None = None,
     extra_overrides: Mapping[str, Mapping[str, ParameterValue]] | None = None,
+    foxglove: tuple[str, int] | None = None,
 ) -> Graph:
     """Build the nodes of the graph in a fresh rclpy context.
 
@@ -131,6 +132,8 @@ def build_graph(
         namespace: Namespace of the nodes.
         config: Directory of robot.yaml and controller.yaml (``config_dir()`` if None).
         extra_overrides: Further parameters per node name (tests, benchmarks).
+        foxglove: Host and port of a Foxglove live view (the ``foxglove_server`` node);
+            None runs without it.
 
     Raises:
         ScenarioError: A scenario override names no parameter of its node, or has the
@@ -140,11 +143,11 @@ def build_graph(
     config = config if config is not None else config_dir()
     if duration_s is None:
         duration_s = scenario.duration_s if scenario is not None else 0.0
-    specs = graph_nodes(record=output_path is not None)
+    specs = graph_nodes(record=output_path is not None, foxglove=foxglove is not None)
     overrides = {
         spec.name: {
             **node_parameters(spec, scenario, mode, duration_s,
-                              None if output_path is None else str(output_path)),
+                              None if output_path is None else str(output_path), foxglove),
             **(extra_overrides or {}).get(spec.name, {}),
         }
         for spec in specs

@@ -64,17 +64,31 @@ THRUSTER_ALLOCATOR = NodeSpec(
     'uvms_control.thruster_allocator_node', 'ThrusterAllocatorNode',
     ('robot.yaml', 'controller.yaml'),
 )
+VISUALIZER = NodeSpec(
+    'visualizer', 'uvms_bringup', 'visualizer', 'uvms_bringup.visualizer_node',
+    'VisualizerNode', (),
+)
+FOXGLOVE_SERVER = NodeSpec(
+    'foxglove_server', 'uvms_bringup', 'foxglove_server', 'uvms_bringup.foxglove_server_node',
+    'FoxgloveServerNode', (),
+)
 RECORDER = NodeSpec(
     'recorder', 'uvms_bringup', 'recorder', 'uvms_bringup.recorder_node', 'RecorderNode', (),
 )
 
-#: The nodes that always run, in start order; the recorder joins when there is an output.
-CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR)
+#: The nodes that always run, in start order; the Foxglove server joins for a live view and
+#: the recorder, last, when there is an output.
+CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, VISUALIZER)
+
+#: Default address of the Foxglove live view (loopback only; a wider bind is explicit).
+FOXGLOVE_HOST = '127.0.0.1'
+FOXGLOVE_PORT = 8765
 
 
-def graph_nodes(record: bool) -> tuple[NodeSpec, ...]:
-    """The nodes of a run, with the recorder when it records."""
-    return (*CORE_NODES, RECORDER) if record else CORE_NODES
+def graph_nodes(record: bool, foxglove: bool = False) -> tuple[NodeSpec, ...]:
+    """The nodes of a run: with the Foxglove server for a live view, the recorder last."""
+    return (*CORE_NODES, *((FOXGLOVE_SERVER,) if foxglove else ()),
+            *((RECORDER,) if record else ()))
 
 
 def node_parameters(
@@ -83,6 +97,7 @@ def node_parameters(
     mode: str,
     duration_s: float | None = None,
     output_path: str | None = None,
+    foxglove_address: tuple[str, int] | None = None,
 ) -> dict[str, ParameterValue]:
     """Parameters of one node beyond its parameter files: scenario overrides and mode.
 
@@ -93,6 +108,7 @@ def node_parameters(
         duration_s: Simulated time after which the simulator stops stepping; None or 0 runs
             forever.
         output_path: MCAP file of the recorder.
+        foxglove_address: Host and port of the Foxglove server (default ones if None).
 
     Returns:
         Parameter name to value; later entries win over the parameter files.
@@ -110,6 +126,10 @@ def node_parameters(
         values['duration_s'] = float(duration_s or 0.0)
     elif spec in (CONTROLLER, THRUSTER_ALLOCATOR):
         values[TRIGGER_PARAMETER] = TRIGGER[mode]
+    elif spec is FOXGLOVE_SERVER:
+        host, port = foxglove_address or (FOXGLOVE_HOST, FOXGLOVE_PORT)
+        values['host'] = host
+        values['port'] = int(port)
     elif spec is RECORDER:
         if output_path is not None:
             values['output_path'] = output_path

@@ -172,6 +172,7 @@ def plan_launch(
     log_level: str | None = None,
     extra_overrides: Mapping[str, Mapping[str, Any]] | None = None,
     bin_dir: Path | None = None,
+    foxglove: tuple[str, int] | None = None,
 ) -> list[NodeProcessSpec]:
     """The node processes of a launch, with one generated parameter file each.
 
@@ -186,9 +187,11 @@ def plan_launch(
         log_level: ``--log-level`` of every node (e.g. ``warn``), None for the default.
         extra_overrides: Further parameters per node name (tests, benchmarks).
         bin_dir: Directory of the console scripts (that of ``sys.executable`` if None).
+        foxglove: Host and port of a Foxglove live view (``foxglove_server``); None: none.
 
     Returns:
-        The processes in start order: simulator, controller, thruster allocator, recorder.
+        The processes in start order: simulator, controller, thruster allocator,
+        visualizer, foxglove_server (for a live view), recorder.
 
     Raises:
         LaunchError: A parameter file of ``config/`` is missing.
@@ -198,9 +201,9 @@ def plan_launch(
     fq_prefix = f'/{namespace.strip("/")}'
     run_values: dict[str, dict[str, Any]] = {}
     plans: list[NodeProcessSpec] = []
-    for spec in graph_nodes(record=output is not None):
+    for spec in graph_nodes(record=output is not None, foxglove=foxglove is not None):
         overrides: dict[str, Any] = {
-            **node_parameters(spec, scenario, mode, duration_s, output),
+            **node_parameters(spec, scenario, mode, duration_s, output, foxglove),
             **(extra_overrides or {}).get(spec.name, {}),
         }
         files = [config / file for file in spec.parameter_files]
@@ -431,6 +434,7 @@ def launch_graph(
     quiet: bool = False,
     stop: StopRequest | None = None,
     config: Path | None = None,
+    foxglove: tuple[str, int] | None = None,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -446,6 +450,8 @@ def launch_graph(
         stop: Set by SIGINT/SIGTERM (``uvms``'s ``StopEvent``); a ``StopEvent`` of its own
             is installed if None.
         config: Directory of the parameter files (``config_dir()`` if None).
+        foxglove: Host and port of a Foxglove live view (a ``foxglove_server`` process);
+            None starts none.
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -468,7 +474,7 @@ def launch_graph(
         with tempfile.TemporaryDirectory(prefix='uvms_launch_') as parameters_dir:
             plans = plan_launch(scenario, mode, Path(parameters_dir), duration_s=duration_s,
                                 output_path=output_path, namespace=namespace, config=config,
-                                log_level='warn' if quiet else None)
+                                log_level='warn' if quiet else None, foxglove=foxglove)
             launcher = Launcher(plans)
             return _run(launcher, stop, mode, duration_s, quiet)
     finally:

@@ -44,6 +44,8 @@ DEFAULT_TOPICS = (
     'thrusters/state:uvms_msgs/msg/ThrusterState',
     '/tf:tf2_msgs/msg/TFMessage',
     '/tf_static:tf2_msgs/msg/TFMessage',
+    '/robot_description:std_msgs/msg/String',
+    'markers:visualization_msgs/msg/MarkerArray',
 )
 
 COMPRESSIONS = ('zstd', 'lz4', 'none')
@@ -88,10 +90,11 @@ def message_class(type_name: str) -> type[Any]:
 def publisher_qos(topic: str) -> QosDescription:
     """QoS the graph's publishers offer on a topic, as tf2_ros and our nodes publish.
 
-    /tf_static is latched (reliable, transient local, depth 1), /tf reliable with depth 100;
-    every other graph publisher is reliable, volatile, keep last 10 (rclpy's default).
+    /tf_static and /robot_description are latched (reliable, transient local, depth 1, as
+    tf2_ros and robot_state_publisher offer them), /tf reliable with depth 100; every other
+    graph publisher is reliable, volatile, keep last 10 (rclpy's default).
     """
-    if topic.endswith('/tf_static'):
+    if topic.endswith(('/tf_static', '/robot_description')):
         return QosDescription(durability='transient_local', depth=1)
     if topic.endswith('/tf'):
         return QosDescription(depth=100)

@@ -22,6 +22,8 @@ HYDRODYNAMICS_FILE = 'config/hydrodynamics.yaml'
 """Hydrodynamic parameters keyed by link name, relative to the share directory."""
 HULL_MESH_FILE = 'meshes/unit_sphere.stl'
 """Sphere of diameter 1 m that the URDF scales into the ellipsoidal hull."""
+FOXGLOVE_LAYOUT_FILE = 'foxglove/uvms_layout.json'
+"""Foxglove layout: 3-D view, F_e with F_d, W, position errors (relative to the share dir)."""
 
 
 def share_directory() -> Path:
@@ -65,3 +67,8 @@ def urdf_path() -> Path:
 def hydrodynamics_path() -> Path:
     """Path of the hydrodynamic parameters beside the URDF (``config/hydrodynamics.yaml``)."""
     return share_directory() / HYDRODYNAMICS_FILE
+
+
+def foxglove_layout_path() -> Path:
+    """Path of the Foxglove layout (``share/uvms_description/foxglove/uvms_layout.json``)."""
+    return share_directory() / FOXGLOVE_LAYOUT_FILE

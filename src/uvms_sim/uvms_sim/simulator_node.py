@@ -19,6 +19,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 from uvms_common.node_main import run_node
 
@@ -71,6 +72,12 @@ class SimulatorNode(Node):
                 depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
             self._static_tf_pub.publish(
                 conversions.static_tf_message(0, self._plant.frame_poses()))
+        # The URDF the plant was built from, latched as robot_state_publisher offers it, so
+        # that RViz, Foxglove and a recording draw the robot.
+        self._description_pub = self.create_publisher(String, '/robot_description', QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
         self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
         self._messages = conversions.StateMessages(self._plant.joint_names)
 
