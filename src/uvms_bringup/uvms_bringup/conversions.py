@@ -8,6 +8,8 @@ publication to the next, so a viewer replaces it instead of adding one.
 
 from __future__ import annotations
 
+import struct
+
 from builtin_interfaces.msg import Duration, Time
 from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA, Header
@@ -42,6 +44,28 @@ def time_from_ns(t_ns: int) -> Time:
     """builtin_interfaces/Time from integer nanoseconds."""
     sec, nanosec = divmod(int(t_ns), 1_000_000_000)
     return Time(sec=sec, nanosec=nanosec)
+
+
+#: CDR encapsulation identifiers (XCDR1, OMG DDS-XTypes 7.6.3.1.2): big and little endian.
+_CDR_BE, _CDR_LE = 0x00, 0x01
+
+
+def header_stamp_ns(cdr: bytes) -> int:
+    """Stamp (ns) of a serialized message whose first field is a std_msgs/Header.
+
+    A raw subscription's bytes: the 4-byte encapsulation header, then Header.stamp as
+    int32 sec and uint32 nanosec at offsets 4 and 8 (both 4-byte aligned). Reading the stamp
+    alone spares deserializing a message that is then not used.
+
+    Raises:
+        ValueError: Fewer than 12 bytes, or not plain CDR (the encapsulation named).
+    """
+    if len(cdr) < 12 or cdr[0] != 0 or cdr[1] not in (_CDR_BE, _CDR_LE):
+        msg = (f'not a CDR message with a header: {len(cdr)} bytes, encapsulation '
+               f'{bytes(cdr[:2]).hex()}')
+        raise ValueError(msg)
+    sec, nanosec = struct.unpack_from('<iI' if cdr[1] == _CDR_LE else '>iI', cdr, 4)
+    return int(sec) * 1_000_000_000 + int(nanosec)
 
 
 def ns_from_time(stamp: Time) -> int:

@@ -19,9 +19,12 @@ import math
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
+
+T = TypeVar('T')
 
 FloatArray = NDArray[np.float64]
 
@@ -129,28 +132,27 @@ class Trail:
         return len(self._points)
 
 
-class ContactHistory:
-    """The contact (force, wall position) of the last few stamps, looked up by stamp.
+class ContactHistory(Generic[T]):
+    """The contacts of the last few stamps (any payload, e.g. serialized), looked up by stamp.
 
     The markers of a controller state stamped t use the contact stamped t when it has
     arrived, so that their content does not depend on which of the two topics arrived
     first (lockstep across processes); otherwise the newest contact before t (timer mode,
-    where the stamps differ), else the oldest kept, else no force and no wall.
+    where the stamps differ), else the oldest kept, else none.
     """
 
     def __init__(self, capacity: int = 64) -> None:
-        self._by_stamp: dict[int, tuple[tuple[float, float, float], float]] = {}
+        self._by_stamp: dict[int, T] = {}
         self._capacity = capacity
 
-    def add(self, stamp_ns: int, force_ned: Sequence[float], wall_position_m: float) -> None:
-        """Keep one contact: the force on the wall (N, map_ned) and the wall position (m)."""
-        force = (float(force_ned[0]), float(force_ned[1]), float(force_ned[2]))
-        self._by_stamp[stamp_ns] = (force, float(wall_position_m))
+    def add(self, stamp_ns: int, contact: T) -> None:
+        """Keep the contact of one stamp, dropping the oldest beyond the capacity."""
+        self._by_stamp[stamp_ns] = contact
         while len(self._by_stamp) > self._capacity:
             del self._by_stamp[min(self._by_stamp)]
 
-    def at(self, stamp_ns: int) -> tuple[tuple[float, float, float], float]:
-        """(force (N), wall position (m)) for a stamp, as the class docstring says."""
+    def at(self, stamp_ns: int) -> T | None:
+        """The contact for a stamp, as the class docstring says; None if none was kept."""
         if stamp_ns in self._by_stamp:
             return self._by_stamp[stamp_ns]
         before = [stamp for stamp in self._by_stamp if stamp <= stamp_ns]
@@ -158,7 +160,7 @@ class ContactHistory:
             return self._by_stamp[max(before)]
         if self._by_stamp:
             return self._by_stamp[min(self._by_stamp)]
-        return (0.0, 0.0, 0.0), math.nan
+        return None
 
 
 def marker_scene(

@@ -3,13 +3,15 @@
 It listens to /uvms/controller/state (X, X_d) and /uvms/contact (wall position, contact
 force, taken at the state's stamp) and publishes a visualization_msgs/MarkerArray on
 ``markers`` every 1/``marker_rate_hz`` of *simulated* time, on the stamp of a controller
-state. The markers
-depend on message contents only, so lockstep runs stay deterministic; the hot path of the
-graph (simulator, controller, allocator) does not wait for this node.
+state. Both arrive at the control rate (500 Hz) but are used at the marker rate (20 Hz), so
+they are subscribed raw and only the ones used are deserialized. The markers depend on
+message contents only, so lockstep runs stay deterministic; the hot path of the graph
+(simulator, controller, allocator) does not wait for this node.
 """
 
 from __future__ import annotations
 
+import math
 import sys
 from typing import Any
 
@@ -17,6 +19,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from uvms_common.node_main import run_node
 from visualization_msgs.msg import MarkerArray
 
@@ -65,30 +68,43 @@ class VisualizerNode(Node):
         self._period_ns = round(1e9 / rate_hz)
         self._next_due_ns = 0
         self._trail = Trail(self._settings.trail_length)
-        self._contacts = ContactHistory()
+        self._contacts: ContactHistory[bytes] = ContactHistory()
 
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._publisher = self.create_publisher(MarkerArray, 'markers', reliable)
-        self.create_subscription(ContactState, 'contact', self._on_contact, reliable)
-        self.create_subscription(ControllerState, 'controller/state', self._on_state, reliable)
+        self.create_subscription(ContactState, 'contact', self._on_contact, reliable, raw=True)
+        self.create_subscription(ControllerState, 'controller/state', self._on_state, reliable,
+                                 raw=True)
         self.get_logger().info(f'markers on {self.resolve_topic_name("markers")} at '
                                f'{rate_hz:g} Hz of simulated time, frame map_ned')
 
-    def _on_contact(self, msg: ContactState) -> None:
-        """Keep the wall position and contact force of the stamp."""
-        self._contacts.add(conversions.ns_from_time(msg.header.stamp),
-                           conversions.xyz(msg.force), float(msg.wall_position))
+    def _on_contact(self, data: bytes) -> None:
+        """Keep the serialized contact of its stamp."""
+        try:
+            self._contacts.add(conversions.header_stamp_ns(data), data)
+        except ValueError as exc:
+            self.get_logger().error(f'ignored contact: {exc}', throttle_duration_sec=5.0)
 
-    def _on_state(self, msg: ControllerState) -> None:
+    def _on_state(self, data: bytes) -> None:
         """Publish the markers when the state's stamp reaches the next marker instant."""
-        t_ns = conversions.ns_from_time(msg.header.stamp)
+        try:
+            t_ns = conversions.header_stamp_ns(data)
+        except ValueError as exc:
+            self.get_logger().error(f'ignored controller state: {exc}', throttle_duration_sec=5.0)
+            return
         if t_ns < self._next_due_ns:
             return
         self._next_due_ns = (t_ns // self._period_ns + 1) * self._period_ns
-        p_ee = conversions.xyz(msg.position)
+        state = deserialize_message(data, ControllerState)
+        p_ee = conversions.xyz(state.position)
         self._trail.append(p_ee)
-        force, wall_position_m = self._contacts.at(t_ns)
-        scene = marker_scene(p_ee, conversions.xyz(msg.desired_position), force,
+        force: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        wall_position_m = math.nan
+        contact_cdr = self._contacts.at(t_ns)
+        if contact_cdr is not None:
+            contact = deserialize_message(contact_cdr, ContactState)
+            force, wall_position_m = conversions.xyz(contact.force), float(contact.wall_position)
+        scene = marker_scene(p_ee, conversions.xyz(state.desired_position), force,
                              wall_position_m, self._trail, self._settings)
         self._publisher.publish(conversions.marker_array(scene, t_ns))
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
-from uvms_bringup.conversions import NAMESPACES, marker_array
+from uvms_bringup.conversions import NAMESPACES, header_stamp_ns, marker_array
 from uvms_bringup.marker_geometry import (
     WALL_THICKNESS_M,
     ContactHistory,
@@ -19,6 +19,8 @@ from uvms_bringup.marker_geometry import (
 )
 from uvms_bringup.typestore import uvms_typestore
 from visualization_msgs.msg import Marker
+
+from uvms_msgs.msg import ContactState, ControllerState
 
 SETTINGS = MarkerSettings()
 
@@ -99,10 +101,28 @@ def test_without_a_wall_the_wall_marker_is_deleted() -> None:
 
 def test_contact_of_the_state_stamp_is_used_whatever_arrived_later() -> None:
     """Exact stamp first; else the newest before it; else the oldest kept; else none."""
-    history = ContactHistory(capacity=3)
-    assert history.at(0) == ((0.0, 0.0, 0.0), pytest.approx(math.nan, nan_ok=True))
+    history: ContactHistory[tuple[float, float]] = ContactHistory(capacity=3)
+    assert history.at(0) is None
     for k in range(1, 6):
-        history.add(k * 10, [float(k), 0.0, 0.0], 1.7 + k)
-    assert history.at(40) == ((4.0, 0.0, 0.0), 5.7)
-    assert history.at(45) == ((4.0, 0.0, 0.0), 5.7)
-    assert history.at(5) == ((3.0, 0.0, 0.0), 4.7)  # 10 and 20 were dropped (capacity 3)
+        history.add(k * 10, (float(k), 1.7 + k))
+    assert history.at(40) == (4.0, 5.7)
+    assert history.at(45) == (4.0, 5.7)
+    assert history.at(5) == (3.0, 4.7)  # 10 and 20 were dropped (capacity 3)
+
+
+@pytest.mark.parametrize('stamp', [(0, 0), (3, 999_999_999), (2_000_000_000, 1)])
+def test_stamp_read_from_raw_bytes_equals_the_header_stamp(stamp: tuple[int, int]) -> None:
+    """The visualizer's raw read of a stamp matches the stamp rclpy serialized."""
+    state = ControllerState()
+    state.header.stamp.sec, state.header.stamp.nanosec = stamp
+    contact = ContactState()
+    contact.header.stamp.sec, contact.header.stamp.nanosec = stamp
+    for msg in (state, contact):
+        assert header_stamp_ns(serialize_message(msg)) == stamp[0] * 1_000_000_000 + stamp[1]
+
+
+@pytest.mark.parametrize('data', [b'', b'\x00\x01\x00\x00\x01', b'\x00\x07' + bytes(20)])
+def test_stamp_of_bytes_that_are_no_stamped_cdr_is_refused(data: bytes) -> None:
+    """Too short or another encapsulation: a ValueError naming the encapsulation."""
+    with pytest.raises(ValueError, match='encapsulation'):
+        header_stamp_ns(data)
