@@ -10,7 +10,9 @@ process and one executor as ``uvms run`` spins them:
     allocator  -- on the command: command/actuators, thrusters/state
     simulator  -- on the actuator command: the next state (2 ms later)
 
-plus a raw subscriber to every topic standing in for the recorder (it keeps nothing), and
+plus a visualizer (raw subscriptions to contact and controller/state, an empty MarkerArray
+on markers every 10th period: 20 Hz of simulated time, as the real one), a raw subscriber
+to every topic standing in for the recorder (it keeps nothing), and
 ``use_sim_time`` on controller, allocator and recorder (each then subscribes ``/clock``,
 as the real nodes do). Messages carry the real sizes (3 joints, 8 thrusters). The figure is
 the wall time per control period, and the same for the real graph scaled to it: the
@@ -51,6 +53,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 from uvms_common.node_main import make_executor  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+from visualization_msgs.msg import MarkerArray  # noqa: E402
 
 from uvms_msgs.msg import (  # noqa: E402
     ActuatorCommand,
@@ -183,6 +186,25 @@ class FloorAllocator(Node):
         self._state.publish(self._state_msg)
 
 
+class FloorVisualizer(Node):
+    """Raw contact and controller state in; an empty MarkerArray every 10th state."""
+
+    def __init__(self, context: Context) -> None:
+        super().__init__('visualizer', namespace='/uvms', context=context,
+                         parameter_overrides=[Parameter('use_sim_time', value=True)])
+        self._markers = self.create_publisher(MarkerArray, 'markers', RELIABLE)
+        self._states = 0
+        self.create_subscription(ContactState, 'contact', lambda data: None, RELIABLE,
+                                 raw=True)
+        self.create_subscription(ControllerState, 'controller/state', self._on_state,
+                                 RELIABLE, raw=True)
+
+    def _on_state(self, data: bytes) -> None:
+        self._states += 1
+        if self._states % TF_EVERY == 0:
+            self._markers.publish(MarkerArray())
+
+
 class FloorRecorder(Node):
     """Raw subscriptions to every topic; the bytes are dropped."""
 
@@ -191,7 +213,7 @@ class FloorRecorder(Node):
         ('odometry', Odometry), ('wrench', WrenchStamped), ('ee_pose', PoseStamped),
         ('contact', ContactState), ('command/generalized_force', GeneralizedForce),
         ('controller/state', ControllerState), ('command/actuators', ActuatorCommand),
-        ('thrusters/state', ThrusterState),
+        ('thrusters/state', ThrusterState), ('markers', MarkerArray),
     )
 
     def __init__(self, context: Context) -> None:
@@ -212,7 +234,8 @@ def run_floor(periods: int, executor_kind: str, recorder: bool) -> tuple[float, 
     rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     try:
         sim = FloorSimulator(context, periods)
-        nodes: list[Node] = [sim, FloorController(context), FloorAllocator(context)]
+        nodes: list[Node] = [sim, FloorController(context), FloorAllocator(context),
+                             FloorVisualizer(context)]
         sink = FloorRecorder(context) if recorder else None
         if sink is not None:
             nodes.append(sink)
