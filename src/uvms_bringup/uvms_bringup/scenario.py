@@ -154,7 +154,7 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         ScenarioError: See ``load_scenario``.
     """
     if not isinstance(data, dict):
-        msg = f'{path}: expected a mapping of scenario keys, got {_kind(data)}'
+        msg = f'{path}: expected a mapping of scenario keys, got {yaml_kind(data)}'
         raise ScenarioError(msg)
     for key in data:
         if key not in _KNOWN_KEYS:
@@ -172,13 +172,13 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
     paper = _string(data, 'paper', path) if 'paper' in data else None
     duration = data['duration_s']
     if isinstance(duration, bool) or not isinstance(duration, int | float):
-        raise ScenarioError(_type_error(path, 'duration_s', 'number (float, s)', duration))
+        raise ScenarioError(type_error_message(path, 'duration_s', 'number (float, s)', duration))
     if not (math.isfinite(duration) and duration > 0.0):
         msg = f"{path}: key 'duration_s': expected a positive number of seconds, got {duration}"
         raise ScenarioError(msg)
     seed = data.get('seed', 0)
     if isinstance(seed, bool) or not isinstance(seed, int):
-        raise ScenarioError(_type_error(path, 'seed', 'int >= 0', seed))
+        raise ScenarioError(type_error_message(path, 'seed', 'int >= 0', seed))
     if not 0 <= seed <= _MAX_SEED:
         msg = f"{path}: key 'seed': expected an int in [0, {_MAX_SEED}], got {seed}"
         raise ScenarioError(msg)
@@ -188,7 +188,7 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
             continue
         section = data[node]
         if not isinstance(section, dict):
-            raise ScenarioError(_type_error(path, node, 'mapping of parameters', section))
+            raise ScenarioError(type_error_message(path, node, 'mapping of parameters', section))
         flat: dict[str, ParameterValue] = {}
         _flatten(section, node, '', flat, path)
         overrides[node] = flat
@@ -242,23 +242,23 @@ def _parameter_value(value: Any, key_path: str, path: Path) -> ParameterValue:
             return list(value)
         msg = f'{path}: key {key_path!r}: expected a list of one type ({expected}), got {value}'
         raise ScenarioError(msg)
-    raise ScenarioError(_type_error(path, key_path, expected, value))
+    raise ScenarioError(type_error_message(path, key_path, expected, value))
 
 
 def _string(data: dict[str, Any], key: str, path: Path) -> str:
     """Read a string field."""
     value = data[key]
     if not isinstance(value, str):
-        raise ScenarioError(_type_error(path, key, 'str', value))
+        raise ScenarioError(type_error_message(path, key, 'str', value))
     return value
 
 
-def _type_error(path: Path, key: str, expected: str, value: Any) -> str:
-    """Message for a value of the wrong type."""
-    return f'{path}: key {key!r}: expected {expected}, got {_kind(value)} {value!r}'
+def type_error_message(path: Path, key: str, expected: str, value: Any) -> str:
+    """Message for a value of the wrong type (scenario and sweep files)."""
+    return f'{path}: key {key!r}: expected {expected}, got {yaml_kind(value)} {value!r}'
 
 
-def _kind(value: Any) -> str:
+def yaml_kind(value: Any) -> str:
     """Human name of a YAML value's type."""
     if value is None:
         return 'null'

@@ -44,6 +44,8 @@ from uvms_bringup.scenario import (
     _Loader,
     _parameter_value,
 )
+from uvms_bringup.scenario import type_error_message as _type_error
+from uvms_bringup.scenario import yaml_kind as _kind
 
 #: Node sections an axis may vary (the recorder's parameters change no result).
 AXIS_NODES = tuple(node for node in NODE_SECTIONS if node != 'recorder')
@@ -381,18 +383,6 @@ def _string(data: Mapping[str, Any], key: str, path: Path) -> str:
         raise SweepError(_type_error(path, key, 'str', value))
     return value
 
-
-def _type_error(path: Path, key: str, expected: str, value: Any) -> str:
-    """Message for a value of the wrong type."""
-    return f'{path}: key {key!r}: expected {expected}, got {_kind(value)} {value!r}'
-
-
-def _kind(value: Any) -> str:
-    """Human name of a YAML value's type."""
-    if value is None:
-        return 'null'
-    return {bool: 'bool', int: 'int', float: 'float', str: 'str', list: 'list',
-            dict: 'mapping'}.get(type(value), type(value).__name__)
 
 
 def axis_labels(axis: Axis) -> list[str]:
