@@ -104,9 +104,12 @@ def test_signal_stops_a_looping_replay_process_cleanly(
             recorder.write('/uvms/wrench', data, k * 50_000_000)
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([*map(str, SOURCES), env.get('PYTHONPATH', '')])
+    # A replay keeps an inherited SIG_IGN (a background job); this test wants SIGINT delivered
+    # even when the suite itself runs as such a job.
     process = subprocess.Popen(
         [sys.executable, '-m', 'uvms_bringup.replay', str(path), '--loop'],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         _wait_for_output(process, 'replaying', timeout_s=60.0)

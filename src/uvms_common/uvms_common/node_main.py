@@ -12,6 +12,7 @@ imports (``uvms_common.node_entry``, the console scripts' entry).
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -32,6 +33,9 @@ __all__ = ['EXECUTORS', 'SPIN_TURN_S', 'StopEvent', 'make_executor', 'run_node',
 EXECUTORS = ('events', 'single')
 #: Longest wait of one executor turn before the stop event is checked again (s).
 SPIN_TURN_S = 0.1
+#: Teardown time after which every thread's stack is written to stderr (s); below the
+#: launcher's 5 s between SIGINT and SIGTERM.
+TEARDOWN_REPORT_S = 4.0
 
 
 def make_executor(kind: str | None = None, context: Context | None = None) -> Executor:
@@ -126,11 +130,16 @@ def run_node(
         logger.fatal(f'{type(exc).__name__}: {exc}')
         status = 1
     finally:
+        # A teardown stuck in the middleware (seen once in CI under load: a node that took
+        # neither SIGINT nor SIGTERM and was killed) then leaves every thread's stack on
+        # stderr for the bug report; the launcher's SIGTERM and SIGKILL still follow.
+        faulthandler.dump_traceback_later(TEARDOWN_REPORT_S, file=sys.__stderr__ or sys.stderr)
         if executor is not None:
             executor.shutdown()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+        faulthandler.cancel_dump_traceback_later()
         if stop is not earlier:
             stop.restore()
     return status
