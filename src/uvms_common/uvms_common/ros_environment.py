@@ -5,7 +5,7 @@ launch file, the tests and the benchmarks, before ``rclpy.init`` creates a DDS p
 variable is set only where the user has not set it: a user's own choice always wins.
 
 - ``FASTRTPS_DEFAULT_PROFILES_FILE``: the project's Fast DDS profile
-  (``uvms_common/fastdds_loopback.xml``): shared memory plus UDPv4 restricted to 127.0.0.1,
+  (``uvms_common/fastdds_loopback.xml``): UDPv4 restricted to 127.0.0.1 (no shared memory),
   no builtin transports, discovery by unicast to 127.0.0.1.
 - ``ROS_AUTOMATIC_DISCOVERY_RANGE``: ``SYSTEM_DEFAULT``, which leaves transports and
   discovery to that profile. ``LOCALHOST`` would not keep the traffic on loopback:
