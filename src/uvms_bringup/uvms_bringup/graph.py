@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
+import rclpy.logging
 from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
@@ -353,12 +354,20 @@ def check_scenario_overrides(
     rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     try:
         for spec in to_check:
-            node = _make_node(spec, {}, config, namespace, context)
+            # The throwaway node's start-up lines would read as the run's own (e.g. "lockstep
+            # trigger" before a real-time launch): only its warnings and errors are shown.
+            logger = f'{namespace.strip("/").replace("/", ".")}.{spec.name}'.lstrip('.')
+            level = rclpy.logging.get_logger_level(logger)
+            rclpy.logging.set_logger_level(logger, rclpy.logging.LoggingSeverity.WARN)
             try:
-                for name, value in scenario.overrides[spec.name].items():
-                    _check_override(scenario, spec.name, node, name, value)
+                node = _make_node(spec, {}, config, namespace, context)
+                try:
+                    for name, value in scenario.overrides[spec.name].items():
+                        _check_override(scenario, spec.name, node, name, value)
+                finally:
+                    node.destroy_node()
             finally:
-                node.destroy_node()
+                rclpy.logging.set_logger_level(logger, level)
     finally:
         rclpy.try_shutdown(context=context)
 
