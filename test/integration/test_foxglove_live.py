@@ -178,7 +178,7 @@ def test_port_in_use_leaves_the_run_unchanged_with_one_log_line(tmp_path: Path) 
 
 def test_foxglove_host_without_foxglove_is_a_usage_error() -> None:
     """--foxglove-host alone names the missing flag and exits 2."""
-    process = start_run('case1_ke1e4', '--foxglove-host', '0.0.0.0')
+    process = start_run('case1_ke1e4', '--foxglove-host', '192.0.2.1')
     output, _ = process.communicate(timeout=120.0)
     assert process.returncode == 2
     assert '--foxglove-host needs --foxglove' in output

@@ -138,7 +138,7 @@ def test_foxglove_server_joins_before_the_recorder_with_host_and_port() -> None:
     assert names[-2:] == ['foxglove_server', 'recorder']
     assert 'foxglove_server' not in [spec.name for spec in graph_nodes(record=True)]
     spec = graph_nodes(record=False, foxglove=True)[-1]
-    values = node_parameters(spec, None, 'lockstep', foxglove_address=('0.0.0.0', 9001))
-    assert (values['host'], values['port'], values['use_sim_time']) == ('0.0.0.0', 9001, True)
+    values = node_parameters(spec, None, 'lockstep', foxglove_address=('192.0.2.1', 9001))
+    assert (values['host'], values['port'], values['use_sim_time']) == ('192.0.2.1', 9001, True)
     default = node_parameters(spec, None, 'lockstep')
     assert (default['host'], default['port']) == ('127.0.0.1', 8765)

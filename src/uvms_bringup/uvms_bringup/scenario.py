@@ -127,17 +127,27 @@ def load_scenario(path: str | Path) -> Scenario:
             the key and the expected type.
     """
     path = Path(path)
+    return parse_scenario(read_yaml_file(path, 'scenario file', ScenarioError), path)
+
+
+def read_yaml_file(path: Path, what: str, error: type[Exception]) -> Any:
+    """The YAML document of a file (1e4 read as a float), or ``error`` naming file and cause.
+
+    Args:
+        path: The file.
+        what: What the file is, for the message (``scenario file``, ``sweep file``).
+        error: Exception type to raise (the caller's package error).
+    """
     try:
         text = path.read_text(encoding='utf-8')
     except OSError as exc:
-        msg = f'{path}: cannot read the scenario file: {exc.strerror or exc}'
-        raise ScenarioError(msg) from exc
+        msg = f'{path}: cannot read the {what}: {exc.strerror or exc}'
+        raise error(msg) from exc
     try:
-        data = yaml.load(text, Loader=_Loader)  # a SafeLoader subclass
+        return yaml.load(text, Loader=_Loader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         msg = f'{path}: not valid YAML: {exc}'
-        raise ScenarioError(msg) from exc
-    return parse_scenario(data, path)
+        raise error(msg) from exc
 
 
 def parse_scenario(data: Any, path: Path) -> Scenario:

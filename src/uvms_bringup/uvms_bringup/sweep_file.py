@@ -33,7 +33,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from uvms_bringup.report import COLUMNS
 from uvms_bringup.scenario import (
@@ -41,8 +40,8 @@ from uvms_bringup.scenario import (
     NODE_SECTIONS,
     ParameterValue,
     ScenarioError,
-    _Loader,
     _parameter_value,
+    read_yaml_file,
 )
 from uvms_bringup.scenario import type_error_message as _type_error
 from uvms_bringup.scenario import yaml_kind as _kind
@@ -176,17 +175,7 @@ def load_sweep(path: str | Path) -> Sweep:
             or holds a value of the wrong type; the message names the file and the key.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding='utf-8')
-    except OSError as exc:
-        msg = f'{path}: cannot read the sweep file: {exc.strerror or exc}'
-        raise SweepError(msg) from exc
-    try:
-        data = yaml.load(text, Loader=_Loader)  # a SafeLoader subclass reading 1e4 as a float
-    except yaml.YAMLError as exc:
-        msg = f'{path}: not valid YAML: {exc}'
-        raise SweepError(msg) from exc
-    return parse_sweep(data, path)
+    return parse_sweep(read_yaml_file(path, 'sweep file', SweepError), path)
 
 
 def parse_sweep(data: Any, path: Path) -> Sweep:

@@ -27,6 +27,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from tf2_msgs.msg import TFMessage
 from uvms_model.contact import ContactState as ContactTruth
+from uvms_model.coordinates import quaternion_xyzw
 
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim.errors import CommandError
@@ -70,15 +71,7 @@ def quaternion_from_rpy(
     roll: float, pitch: float, yaw: float
 ) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w) of rot_ned_from_body = Rz(yaw) Ry(pitch) Rx(roll) (ZYX)."""
-    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
-    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
-    return (
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-        cr * cp * cy + sr * sp * sy,
-    )
+    return quaternion_xyzw(roll, pitch, yaw)
 
 
 def quaternion_from_rotation(rot: FloatArray) -> tuple[float, float, float, float]:
