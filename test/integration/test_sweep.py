@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from uvms_bringup.sweep_engine import SweepSummary, run_sweep, start_local_ray
+from uvms_bringup.sweep_engine import SweepSummary, point_request, run_sweep, start_local_ray
 from uvms_bringup.sweep_file import METRIC_KEYS, Sweep, load_sweep
 from uvms_bringup.sweep_table import TABLE_NAME
 from uvms_bringup.sweep_validate import check_sweep
@@ -190,6 +190,41 @@ def test_point_past_its_timeout_fails_with_reason_timeout_and_is_killed(
     (row,) = read_rows(tmp_path / 'out')
     assert summary.failed == 1
     assert (row['status'], row['reason']) == ('failed', 'timeout')
+    assert point_processes() == []
+
+
+def test_point_asked_to_stop_is_killed_and_reported_interrupted(tmp_path: Path) -> None:
+    """`should_stop` True (the sweep's Ctrl-C): the child is killed, the outcome says so."""
+    from uvms_bringup.sweep_engine import DOMAIN_IDS
+    from uvms_bringup.sweep_point import STOP_POLL_S, execute_point
+
+    text = GRID.replace('duration_s: 0.3', 'duration_s: 30.0').replace(
+        f'{MASS}: [1.0, 20.0]', f'{MASS}: [1.0]').replace(f'{K_E}: [1.0e+4, 1.0e+5]',
+                                                         f'{K_E}: [1.0e+4]')
+    sweep, scenario = sweep_of(write(tmp_path, text))
+    (point,) = sweep.points(scenario.name, 30.0, scenario.seed)
+    request = point_request(sweep, scenario, point, 30.0)
+    asked: list[float] = []
+
+    def should_stop() -> bool:
+        asked.append(time.monotonic())
+        return len(asked) >= 3
+
+    name, value = MARK.split('=')
+    saved = os.environ.get(name)
+    os.environ[name] = value
+    try:
+        start = time.monotonic()
+        outcome = execute_point(request, DOMAIN_IDS[-1], 120.0, should_stop=should_stop)
+        took = time.monotonic() - start
+    finally:
+        if saved is None:
+            os.environ.pop(name)
+        else:
+            os.environ[name] = saved
+    assert (outcome['status'], outcome['reason']) == ('interrupted', 'interrupted')
+    assert len(asked) == 3
+    assert took < 3 * STOP_POLL_S + 5.0  # a 30 s run, stopped at the third question
     assert point_processes() == []
 
 

@@ -5,6 +5,12 @@ Each point is one Ray task (one CPU, no retries) that supervises the point's own
 each a ROS_DOMAIN_ID that no other running point has, records every finished point in
 DIR/points.csv at once, and skips points whose row says ``done`` (resume).
 
+Ctrl-C sets a flag held by a small actor (``StopFlag``) that every running task polls; each
+stops its point process and returns. ``ray.cancel`` is only the last resort for a task that
+has not returned after ``CANCEL_GRACE_S``: in Ray 2.60 a cancellation that races with the
+task's own reply aborts the driver ("Tried to complete task that was not pending",
+ray-project/ray#54798), which a sweep stopped mid-point hit in CI.
+
 Local Ray (no ``--address``), as measured with Ray 2.60 (docs/sweeps.md):
 ``RAY_USAGE_STATS_ENABLED=0``; ``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0``, which makes Ray take
 127.0.0.1 as its address instead of probing 8.8.8.8:53 for it; the node address 127.0.0.1,
@@ -52,8 +58,10 @@ LOCAL_RAY_ENVIRONMENT = {
 }
 #: Object store of a local Ray (bytes): recordings pass through it, a few MB each.
 LOCAL_OBJECT_STORE_BYTES = 256 * 2**20
-#: Wall time given to cancelled tasks to stop their point processes before a forced kill (s).
+#: Wall time given to stopped tasks to end their point processes before a forced kill (s).
 CANCEL_GRACE_S = 5.0
+#: Wall-clock limit of one task's question to the StopFlag actor (s); no answer: go on.
+_STOP_ASK_TIMEOUT_S = 5.0
 #: Wall-clock period at which the driver checks for Ctrl-C while points run (s).
 _WAIT_S = 0.5
 
@@ -129,6 +137,37 @@ def _import_ray() -> Any:
                'it)')
         raise SweepEngineError(msg) from exc
     return ray
+
+
+class StopFlag:
+    """A flag the driver sets on Ctrl-C and the running point tasks poll (a Ray actor)."""
+
+    def __init__(self) -> None:
+        """Not set."""
+        self._set = False
+
+    def set(self) -> None:
+        """Ask every running point to stop."""
+        self._set = True
+
+    def is_set(self) -> bool:
+        """Whether the sweep is stopping."""
+        return self._set
+
+
+def point_task(
+    request: Mapping[str, Any], domain_id: int, timeout_s: float, stop_flag: Any
+) -> dict[str, Any]:
+    """The Ray task of one point: ``execute_point``, stopped when ``stop_flag`` is set."""
+    import ray
+
+    def should_stop() -> bool:
+        try:
+            return bool(ray.get(stop_flag.is_set.remote(), timeout=_STOP_ASK_TIMEOUT_S))
+        except (ray.exceptions.GetTimeoutError, ray.exceptions.RayActorError):
+            return False
+
+    return execute_point(request, domain_id, timeout_s, should_stop=should_stop)
 
 
 def run_sweep(
@@ -214,7 +253,8 @@ def _dispatch(
     on_outcome: Callable[[Mapping[str, Any]], None] | None,
 ) -> None:
     """Keep ``capacity`` point tasks in flight until all ran or a stop arrives."""
-    task = ray.remote(num_cpus=1, max_retries=0)(execute_point)
+    task = ray.remote(num_cpus=1, max_retries=0)(point_task)
+    stop_flag = ray.remote(num_cpus=0)(StopFlag).remote()
     duration_s = sweep.duration_s if sweep.duration_s is not None else scenario.duration_s
     pending = list(todo)
     free_domains = list(DOMAIN_IDS[:capacity])
@@ -225,7 +265,8 @@ def _dispatch(
                 point = pending.pop(0)
                 domain = free_domains.pop(0)
                 request = point_request(sweep, scenario, point, duration_s)
-                in_flight[task.remote(request, domain, sweep.timeout_s)] = (point, domain)
+                ref = task.remote(request, domain, sweep.timeout_s, stop_flag)
+                in_flight[ref] = (point, domain)
             ready, _ = ray.wait(list(in_flight), num_returns=1, timeout=_WAIT_S)
             if stop is not None and stop.is_set():
                 raise KeyboardInterrupt
@@ -240,7 +281,9 @@ def _dispatch(
                     on_outcome(outcome)
     except KeyboardInterrupt:
         summary.interrupted = True
-        _cancel(ray, list(in_flight))
+        _stop_in_flight(ray, stop_flag, in_flight, sweep, out_dir, points, rows, summary)
+    finally:
+        ray.kill(stop_flag)
 
 
 def point_request(
@@ -285,14 +328,26 @@ def _record(
     write_table(out_dir, sweep, _ordered(points, rows))
 
 
-def _cancel(ray: Any, refs: list[Any]) -> None:
-    """Cancel running point tasks: each stops its process; force-kill what is left."""
-    for ref in refs:
-        ray.cancel(ref, force=False)
+def _stop_in_flight(
+    ray: Any, stop_flag: Any, in_flight: Mapping[Any, tuple[SweepPoint, int]], sweep: Sweep,
+    out_dir: Path, points: Sequence[SweepPoint], rows: dict[str, dict[str, str]],
+    summary: SweepSummary,
+) -> None:
+    """Stop the running points, keep those done meanwhile, and force-kill what is left.
+
+    A point that failed while the sweep stopped is not recorded: the stop may be its cause,
+    and the next run tries it again either way.
+    """
+    stop_flag.set.remote()
     deadline = time.monotonic() + CANCEL_GRACE_S
-    left = refs
+    left = list(in_flight)
     while left and time.monotonic() < deadline:
-        _, left = ray.wait(left, num_returns=len(left), timeout=0.2)
+        ready, left = ray.wait(left, num_returns=len(left), timeout=0.2)
+        for ref in ready:
+            point, _ = in_flight[ref]
+            outcome = _outcome(ray, ref, point)
+            if outcome['status'] == 'done':
+                _record(sweep, out_dir, point, outcome, points, rows, summary)
     for ref in left:
         ray.cancel(ref, force=True)
 

@@ -21,7 +21,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -32,13 +32,20 @@ from uvms_common.ros_environment import ros_environment_defaults
 ERROR_PREFIX = 'uvms sweep point: error: '
 #: Lines of a failed point's log kept for DIR/logs (the rest is start-up noise).
 LOG_TAIL_LINES = 40
-#: Wall-clock poll period of the supervisor (s): how soon a cancellation is seen.
+#: Wall-clock poll period of the supervisor (s): how soon the child's end is seen.
 _POLL_S = 0.1
+#: Wall-clock period at which the supervisor asks ``should_stop`` (s): how soon a stop is seen.
+STOP_POLL_S = 0.5
+#: Outcome status of a point stopped by the sweep before it finished (not written to the table).
+INTERRUPTED = 'interrupted'
 #: Linux prctl option: signal sent to this process when its parent dies.
 _PR_SET_PDEATHSIG = 1
 
 
-def execute_point(request: Mapping[str, Any], domain_id: int, timeout_s: float) -> dict[str, Any]:
+def execute_point(
+    request: Mapping[str, Any], domain_id: int, timeout_s: float,
+    should_stop: Callable[[], bool] | None = None,
+) -> dict[str, Any]:
     """Run one point in a child process and return its outcome.
 
     Args:
@@ -46,9 +53,12 @@ def execute_point(request: Mapping[str, Any], domain_id: int, timeout_s: float) 
             dotted parameter name to value), ``point_id`` and ``record`` (return the MCAP).
         domain_id: ROS_DOMAIN_ID of the child: no two concurrent points share one.
         timeout_s: Wall-clock limit of the child, start-up included (s).
+        should_stop: Asked every ``STOP_POLL_S`` while the child runs; True kills the child
+            and returns the outcome ``interrupted`` (the sweep's Ctrl-C).
 
     Returns:
-        ``point_id``, ``status`` (``done`` or ``failed``), ``reason`` (empty when done),
+        ``point_id``, ``status`` (``done``, ``failed`` or ``interrupted``), ``reason``
+        (empty when done),
         ``wall_time_s``, ``sim_time_s``, ``metrics`` (column key to value or None),
         ``mcap`` (bytes, when ``record`` and done), ``log`` (the child's last lines).
     """
@@ -73,12 +83,14 @@ def execute_point(request: Mapping[str, Any], domain_id: int, timeout_s: float) 
                 stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=env,
                 start_new_session=True)
             try:
-                status = _wait(child, start + timeout_s)
+                status, stopped = _wait(child, start + timeout_s, should_stop)
             finally:
                 _kill(child)
         lines = files['log'].read_text(encoding='utf-8', errors='replace').splitlines()
         outcome['log'] = '\n'.join(lines[-LOG_TAIL_LINES:])
-        if status is None:
+        if stopped:
+            outcome.update(status=INTERRUPTED, reason=INTERRUPTED)
+        elif status is None:
             outcome['reason'] = 'timeout'
         elif status != 0 or not files['result'].is_file():
             outcome['reason'] = _error_line(lines, status)
@@ -92,14 +104,21 @@ def execute_point(request: Mapping[str, Any], domain_id: int, timeout_s: float) 
     return outcome
 
 
-def _wait(child: subprocess.Popen[bytes], deadline: float) -> int | None:
-    """Exit status of the child, or None at the deadline (wall clock, monotonic)."""
+def _wait(
+    child: subprocess.Popen[bytes], deadline: float, should_stop: Callable[[], bool] | None
+) -> tuple[int | None, bool]:
+    """Exit status of the child (None at the deadline, monotonic), and whether it was stopped."""
+    next_ask = time.monotonic() + STOP_POLL_S
     while time.monotonic() < deadline:
         status = child.poll()
         if status is not None:
-            return status
+            return status, False
+        if should_stop is not None and time.monotonic() >= next_ask:
+            if should_stop():
+                return None, True
+            next_ask = time.monotonic() + STOP_POLL_S
         time.sleep(_POLL_S)
-    return child.poll()
+    return child.poll(), False
 
 
 def _kill(child: subprocess.Popen[bytes]) -> None:
