@@ -19,7 +19,7 @@ BIN := $(VENV)/bin
 SWEEPS ?= stiffness_model_error noise_filter
 SWEEP_WORKERS ?= 2
 
-setup: $(VENV)/.interfaces
+setup: $(VENV)/.interfaces $(VENV)/.kernels
 
 INTERFACES := $(shell find src/uvms_msgs interfaces -type f)
 
@@ -48,6 +48,17 @@ $(VENV_312)/.interfaces: $(VENV_312)/.installed $(INTERFACES) tools/build_interf
 	$(VENV_312)/bin/python tools/build_interfaces.py
 	touch $@
 
+# The hot path's Numba kernels compiled into their cache once, not by the first nodes to start.
+KERNEL_SOURCES := $(wildcard src/uvms_model/uvms_model/*.py src/uvms_control/uvms_control/core/*.py)
+
+$(VENV)/.kernels: $(VENV)/.installed $(KERNEL_SOURCES) tools/compile_kernels.py
+	$(VENV)/bin/python tools/compile_kernels.py
+	touch $@
+
+$(VENV_312)/.kernels: $(VENV_312)/.installed $(KERNEL_SOURCES) tools/compile_kernels.py
+	$(VENV_312)/bin/python tools/compile_kernels.py
+	touch $@
+
 demo: setup
 	$(BIN)/uvms run config/scenarios/$(SCENARIO).yaml --output $(OUT)/$(SCENARIO).mcap
 	$(BIN)/uvms plot $(OUT)/$(SCENARIO).mcap --out $(OUT)/$(SCENARIO)
@@ -72,7 +83,7 @@ test-py312:
 ifeq ($(PYTHON_312),)
 	@echo 'make test: no Python 3.12 interpreter found; the suite ran on Python 3.11 only'
 else
-	$(MAKE) --no-print-directory $(VENV_312)/.interfaces
+	$(MAKE) --no-print-directory $(VENV_312)/.interfaces $(VENV_312)/.kernels
 	tools/loopback-netns $(VENV_312)/bin/pytest -q -m 'not colcon'
 endif
 

@@ -1,4 +1,4 @@
-"""Per-call times of the UVMS model (Pinocchio, from the URDF) against the previous one.
+"""Per-call times of the UVMS model (Pinocchio + Numba kernels) against the previous one.
 
 Run: ``.venv/bin/python bench/bench_model.py [--repeat N]``. For each call it prints the best
 of several rounds (microseconds per call) of ``uvms_model.UvmsModel`` and of the previous
@@ -20,6 +20,7 @@ import timeit
 from collections.abc import Callable
 from pathlib import Path
 
+import numba
 import numpy as np
 import pinocchio as pin
 
@@ -106,10 +107,10 @@ def main() -> None:
 
     print(
         f'uvms_model benchmark: Python {platform.python_version()}, numpy {np.__version__}, '
-        f'Pinocchio {pin.__version__}, {platform.machine()}; best of {args.repeat} x '
-        f'{args.number} calls (previous: 1/5 of the calls)'
+        f'Pinocchio {pin.__version__}, Numba {numba.__version__}, {platform.machine()}; '
+        f'best of {args.repeat} x {args.number} calls (previous: 1/5 of the calls)'
     )
-    print(f'  {"call":<48s} {"Pinocchio":>10s} {"previous":>10s} {"speed-up":>9s}')
+    print(f'  {"call":<48s} {"now":>10s} {"previous":>10s} {"speed-up":>9s}')
     results: dict[str, float] = {}
     for (name, new_call), (_, old_call) in zip(calls(model), calls(previous), strict=True):
         new_us = per_call_us(new_call, args.number, args.repeat)

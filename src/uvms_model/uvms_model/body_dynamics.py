@@ -56,7 +56,7 @@ class BodyDynamics:
         data = model.createData()
         self._data = data
         self._config = pin.neutral(model)  # base at the origin, identity attitude, always
-        self._arm_config = self._config[7:10]  # a view: the arm joints' angles
+        self._arm_config: FloatArray = self._config[7:10]  # a view: the arm joints' angles
         self._v = np.zeros(model.nv)
         self._w = self._v[:N_DOF]  # views: the quasi-velocities w ...
         self._tau = np.zeros(model.nv)
@@ -80,6 +80,29 @@ class BodyDynamics:
         # Sliders: M_ss is diagonal and constant (each carries its point mass only).
         self._slider_mass_inverse = 1.0 / np.array([model.inertias[j].mass for j in sliders])
         self._has_sliders = bool(sliders)
+
+    @property
+    def arm_angles(self) -> FloatArray:
+        """The arm joints' angles (3,) of the posed configuration: a view to write into."""
+        return self._arm_config
+
+    @property
+    def quasi_velocities(self) -> FloatArray:
+        """The quasi-velocities w (9,) of the posed state: a view to write into."""
+        return self._w
+
+    def accelerations_as_posed(self, vectors: FloatArray) -> FloatArray:
+        """ABA at the state written into ``arm_angles`` and ``quasi_velocities`` (w_dot: ``[:9]``).
+
+        Args:
+            vectors: (3, 2) gravitational acceleration (m/s^2) and the force ON the end
+                effector (N), both in base_link_frd, as columns.
+        """
+        model, data = self.model, self._data
+        pin.forwardKinematics(model, data, self._config, self._v)
+        self.forces.apply_vectors(vectors)
+        result: FloatArray = pin.aba(model, data, self._config, self._v, self._tau, self._fext)
+        return result
 
     def set_tau_b(self, tau_b: FloatArray) -> None:
         """Hold the generalized body forces tau_b (9,) for the following ``w_dot`` calls."""
@@ -121,6 +144,27 @@ class BodyDynamics:
         if self._has_sliders:
             mass -= scaled.dot(coupling.T)
         return mass, scaled
+
+    @property
+    def slider_mass_inverse(self) -> FloatArray:
+        """M_ss^-1 (n_s,): the sliders' inverse point masses (M_ss is diagonal, constant)."""
+        return self._slider_mass_inverse
+
+    def full_mass_and_bias(
+        self, q_m: list[float], w: FloatArray, gravity_body: Vec3
+    ) -> tuple[FloatArray, FloatArray]:
+        """The dynamic model's M (nv, nv) and bias (nv,) by CRBA and RNEA, sliders kept.
+
+        Rows and columns past the ninth are the sliders'; ``mass_and_bias`` eliminates them.
+        """
+        self._w[:] = w
+        self._arm_config[:] = q_m
+        model, data = self.model, self._data
+        full = pin.crba(model, data, self._config)  # a new symmetric array
+        pin.forwardKinematics(model, data, self._config, self._v)
+        self.forces.apply(gravity_body, None)
+        tau: FloatArray = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
+        return full, tau
 
     def mass_and_bias(
         self, q_m: list[float], w: FloatArray, gravity_body: Vec3

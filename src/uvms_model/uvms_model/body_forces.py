@@ -12,15 +12,18 @@ and link_1..3 at the posed state (after forward kinematics):
   h = m c_g - rho V c_b, along the gravity direction in the body frame;
 - the force on the end effector (contact), applied at ``ee_link``.
 
-Speed: all of it is three matrix products and two elementwise passes on preallocated
-arrays. ``twists @ forward`` gives every strip's two normal speeds, every linear form p_i . nu
-of the slider corrections (each written sum_i lambda_i (p_i . nu)^2 by the eigen-decomposition
-of its symmetric matrix) and the hull's linear-drag speeds; the body rotations applied to the
-gravity direction and the end-effector force (both in base_link_frd) give their components in
-every body frame; one ``back @ (...)`` maps all of it to the bodies' forces.
+Speed: one compiled kernel (``external_forces``, Numba) on preallocated arrays. Every column
+of the linear maps touches one body, so each is kept as (body, six numbers): the twists give
+every strip's two normal speeds, every linear form p_i . nu of the slider corrections (each
+written sum_i lambda_i (p_i . nu)^2 by the eigen-decomposition of its symmetric matrix) and the
+hull's linear-drag speeds; the body rotations applied to the gravity direction and the
+end-effector force (both in base_link_frd) give their components in every body frame; the
+``back`` columns map all of it to the bodies' forces.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pinocchio as pin  # type: ignore[import-untyped]
@@ -31,6 +34,7 @@ from uvms_model.coordinates import Vec3
 from uvms_model.description import ROOT_LINK, RobotDescription
 from uvms_model.errors import DescriptionError, ModelError
 from uvms_model.hydrodynamics import hull_quadratic_drag
+from uvms_model.jit import kernel
 from uvms_model.kinematics import skew
 from uvms_model.parameters import HydrodynamicsParameters
 
@@ -194,33 +198,16 @@ class BodyForces:
             rotated[6 * tip + r, force] = 1.0
             rotated[6 * tip + 3 : 6 * tip + 6, force] = skew(ee_offset)[:, r]
 
-        # Buffer: [linear | forms, first, second | rotated | forms again, speed, speed].
-        # One product fills it up to the repeated forms (zeros where the rotated vectors
-        # go, written next), hypot the speeds, and one elementwise product then makes
-        # [forms^2, |v_n| first, |v_n| second] in place; ``back`` reads up to the rotated.
-        n, n_forms, n_linear = len(gains), len(forms), len(linear)
-        n_rotated = rotated.shape[1]
-        n_products = n_forms + 2 * n
+        # Every column of these maps touches one body's six rows: kept as (body, 6 numbers).
+        self._n_linear, self._n_forms, self._n_strips = len(linear), len(forms), len(gains)
         forward = [c for c, _ in linear] + forms + strips_first + strips_second
-        forward += [np.zeros(n_rows)] * n_rotated + forms
         back = [c * d for c, d in linear] + scales
         back += [c * g for c, g in zip(strips_first, gains, strict=True)]
         back += [c * g for c, g in zip(strips_second, gains, strict=True)]
-        self._back = np.ascontiguousarray(np.column_stack([*back, rotated]))
-        self._has_forward = n_linear + n_products > 0
-        self._forward = np.column_stack(forward) if self._has_forward else np.zeros((n_rows, 0))
-        self._buffer = np.zeros(self._back.shape[1] + n_products)
-        self._back_in = self._buffer[: self._back.shape[1]]
-        self._products_in = self._buffer[: self._forward.shape[1]]
-        self._products = self._buffer[n_linear : n_linear + n_products]
-        self._multipliers = self._buffer[n_linear + n_products + n_rotated :]
-        self._first = self._buffer[n_linear + n_forms : n_linear + n_forms + n]
-        self._second = self._buffer[n_linear + n_forms + n : n_linear + n_products]
-        speeds = self._multipliers[n_forms:].reshape(2, n)
-        self._speed, self._speed_again = speeds[0], speeds[1]
-        rotated_start = n_linear + n_products
-        self._rotated = self._buffer[rotated_start : rotated_start + n_rotated].reshape(-1, 2)
-        self._has_products = n_products > 0
+        back += list(rotated.T)
+        self._forward_body, self._forward = body_columns(forward, count)
+        self._back_body, self._back = body_columns(back, count)
+        self._values = np.zeros(len(back))
         self._vectors = np.zeros((3, 2))  # [gravity direction, ee force] in base_link_frd
         self._vectors_flat = self._vectors.reshape(-1)
 
@@ -231,17 +218,83 @@ class BodyForces:
             gravity_body: Gravitational acceleration in base_link_frd (m/s^2).
             f_ee_body: Force ON the end effector in base_link_frd (N), or None.
         """
-        if self._has_forward:
-            np.dot(self._twists, self._forward, out=self._products_in)
-            if self._has_products:
-                np.hypot(self._first, self._second, out=self._speed)
-                self._speed_again[:] = self._speed
-                self._products *= self._multipliers
         g0, g1, g2 = gravity_body
         if f_ee_body is None:
             self._vectors_flat[:] = (g0, 0.0, g1, 0.0, g2, 0.0)
         else:
             f0, f1, f2 = f_ee_body
             self._vectors_flat[:] = (g0, f0, g1, f1, g2, f2)
-        np.dot(self._rotations, self._vectors, out=self._rotated)
-        np.dot(self._back, self._back_in, out=self._forces)
+        self.apply_vectors(self._vectors)
+
+    def apply_vectors(self, vectors: FloatArray) -> None:
+        """``apply`` with [gravity direction, ee force] (3, 2), base_link_frd, as one array."""
+        external_forces(
+            self._twists, self._rotations, vectors, self._forward_body, self._forward,
+            self._back_body, self._back, self._n_linear, self._n_forms, self._n_strips,
+            self._values, self._forces,
+        )  # fmt: skip
+
+
+def body_columns(columns: list[FloatArray], n_bodies: int) -> tuple[NDArray[np.intp], FloatArray]:
+    """Columns of (6 n_bodies) rows, each nonzero in one body's six rows, as (body, 6 numbers).
+
+    Raises:
+        ModelError: If a column touches two bodies.
+    """
+    bodies = np.zeros(len(columns), dtype=np.intp)
+    entries = np.zeros((len(columns), 6))
+    for j, column in enumerate(columns):
+        blocks = np.reshape(column, (n_bodies, 6))
+        touched = np.flatnonzero(np.any(blocks != 0.0, axis=1))
+        if len(touched) > 1:
+            raise ModelError(f'force map column {j} acts on bodies {touched.tolist()}')
+        bodies[j] = touched[0] if len(touched) else 0
+        entries[j] = blocks[bodies[j]]
+    return bodies, entries
+
+
+@kernel
+def external_forces(
+    twists: FloatArray, rotations: FloatArray, vectors: FloatArray,
+    forward_body: NDArray[np.intp], forward: FloatArray,
+    back_body: NDArray[np.intp], back: FloatArray,
+    n_linear: int, n_forms: int, n_strips: int, values: FloatArray, forces: FloatArray,
+) -> None:
+    """The bodies' external forces (``forces``, 6 per body) from their twists and rotations.
+
+    ``values``, in the order of the ``back`` columns: the hull's linear-drag speeds, the
+    squared linear forms (p_i . nu)^2 of the slider corrections, |v_n| v_n of every strip
+    (two normal directions), then the rotated vectors ``rotations @ vectors`` (gravity
+    direction and ee force in each body frame, 4 rows a body, the translation row unused).
+    Then ``forces = sum_j back_j values_j`` (drag gains, eigenvalues and net weights are in
+    ``back``).
+    """
+    for j in range(n_linear + n_forms + 2 * n_strips):
+        base = 6 * forward_body[j]
+        total = 0.0
+        for i in range(6):
+            total += twists[base + i] * forward[j, i]
+        values[j] = total
+    for j in range(n_linear, n_linear + n_forms):
+        values[j] = values[j] * values[j]
+    first = n_linear + n_forms
+    for j in range(first, first + n_strips):
+        a, b = values[j], values[j + n_strips]
+        speed = math.sqrt(a * a + b * b)
+        values[j] = speed * a
+        values[j + n_strips] = speed * b
+    start = first + 2 * n_strips
+    for row in range(rotations.shape[0]):
+        for column in range(2):
+            values[start + 2 * row + column] = (
+                rotations[row, 0] * vectors[0, column]
+                + rotations[row, 1] * vectors[1, column]
+                + rotations[row, 2] * vectors[2, column]
+            )
+    forces[:] = 0.0
+    for j in range(values.shape[0]):
+        base = 6 * back_body[j]
+        value = values[j]
+        if value != 0.0:
+            for i in range(6):
+                forces[base + i] += back[j, i] * value

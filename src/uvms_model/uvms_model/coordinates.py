@@ -97,36 +97,6 @@ def q_dot_from_w(q: Sequence[float], w: Sequence[float], rot: Mat3) -> list[floa
     ]
 
 
-def rotation_and_q_dot(q: Sequence[float], w: Sequence[float]) -> tuple[Mat3, list[float]]:
-    """(rot_ned_from_body, q_dot = B(q) w) at once, sharing the trigonometry (an RK4 stage).
-
-    Raises:
-        SingularAttitudeError: Near pitch = +-90 deg, where J2 is singular.
-    """
-    phi, theta, psi = q[3], q[4], q[5]
-    c5 = check_pitch(theta, 'q (during integration)')
-    c4, s4 = math.cos(phi), math.sin(phi)
-    s5 = math.sin(theta)
-    c6, s6 = math.cos(psi), math.sin(psi)
-    rot = (
-        c5 * c6, -s6 * c4 + s4 * s5 * c6, s4 * s6 + s5 * c4 * c6,
-        s6 * c5, c4 * c6 + s4 * s5 * s6, -s4 * c6 + s5 * s6 * c4,
-        -s5, s4 * c5, c4 * c5,
-    )  # fmt: skip
-    t5 = s5 / c5
-    p, qq, r = w[3], w[4], w[5]
-    a = s4 * qq + c4 * r
-    return rot, [
-        *mat_vec(rot, w),
-        p + a * t5,
-        c4 * qq - s4 * r,
-        a / c5,
-        w[6],
-        w[7],
-        w[8],
-    ]
-
-
 def w_from_q_dot(q: Sequence[float], q_dot: Sequence[float], rot: Mat3) -> list[float]:
     """Quasi-velocities w = B^-1 q_dot = [R^T p_dot; J2^-1 eta_dot; q_m_dot] (any pitch)."""
     c4, s4 = math.cos(q[3]), math.sin(q[3])

@@ -27,9 +27,7 @@ from uvms_model.body_dynamics import BodyDynamics
 from uvms_model.coordinates import (
     N_DOF,
     Vec3,
-    b_inverse_b_dot_w,
     mat_t_vec,
-    q_dot_from_w,
     rotation,
     velocity_transform,
     velocity_transform_inverse,
@@ -38,7 +36,8 @@ from uvms_model.coordinates import (
 from uvms_model.description import EE_LINK, RobotDescription, load_description
 from uvms_model.errors import ModelError, StateError
 from uvms_model.frames import FrameKinematics
-from uvms_model.integration import rk4_step, semi_implicit_euler_step
+from uvms_model.generalized_terms import generalized_terms
+from uvms_model.integration import Rk4Integrator, semi_implicit_euler_step
 from uvms_model.kinematics import check_pitch
 from uvms_model.parameters import UvmsParameters
 from uvms_model.pinocchio_models import FRAME_NAMES, kinematic_model
@@ -142,6 +141,7 @@ class UvmsModel:
         self.hull_displaced_mass_kg = self.dynamics.forces.hull_displaced_mass_kg
         """Mass of water displaced by the hull (kg), set by the hull's ``buoyancy_ratio``."""
         self._g = hydro.gravity_m_s2
+        self._rk4 = Rk4Integrator(self.dynamics, self._g)
 
     def _gravity_body(self, rot: Sequence[float]) -> Vec3:
         """Gravitational acceleration (m/s^2) in base_link_frd: g R^T e_z (NED: z down)."""
@@ -251,7 +251,7 @@ class UvmsModel:
         self.dynamics.set_tau_b(tau_arr)
         dt = float(dt)
         if method == 'rk4':
-            q_new, w_new = rk4_step(self.dynamics, self._g, q_list, w_arr.tolist(), f, dt)
+            q_new, w_new = self._rk4.step(q_arr, w_arr, f, dt)
         elif method == 'semi_implicit_euler':
             q_new, w_new = semi_implicit_euler_step(self.dynamics, self._g, q_list, w_arr, f, dt)
         else:
@@ -355,31 +355,26 @@ class UvmsModel:
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg.
         """
-        q_list = np.asarray(q, dtype=float).tolist()
+        q_arr = np.asarray(q, dtype=float)
+        q_list = q_arr.tolist()
+        check_pitch(q_list[4])
         rot = rotation(q_list[3], q_list[4], q_list[5])
-        b = velocity_transform(q_list, rot)  # checks the pitch
         if w is None:
-            q_dot_arr = np.asarray(q_dot, dtype=float)
-            w_list = w_from_q_dot(q_list, q_dot_arr.tolist(), rot)
-            w_arr = np.array(w_list)
+            w_arr = np.array(w_from_q_dot(q_list, np.asarray(q_dot, dtype=float).tolist(), rot))
         else:
             w_arr = np.asarray(w, dtype=float)
-            w_list = w_arr.tolist()
-            q_dot_arr = np.array(q_dot_from_w(q_list, w_list, rot))
-        mass_b, bias_b = self.dynamics.mass_and_bias(
-            q_list[6:9], w_arr, self._gravity_body(rot)
-        )
-        correction = np.array(b_inverse_b_dot_w(q_list, w_list))
-        b_inv = velocity_transform_inverse(q_list, rot)
+        dynamics = self.dynamics
+        mass, bias = dynamics.full_mass_and_bias(q_list[6:9], w_arr, self._gravity_body(rot))
         x, rot_ee, jac_w, acc = self.frames.ee_motion(q_list, w_arr)
-        b_inv_t = b_inv.T
-        bias_b -= mass_b.dot(correction)
+        jac, j_dot_q_dot, mass_q, zeta, b, q_dot_arr = generalized_terms(
+            q_arr, w_arr, mass, bias, dynamics.slider_mass_inverse, jac_w, acc
+        )
         return TaskSpaceTerms(
             X=x,
-            J=jac_w.dot(b_inv),
-            J_dot_q_dot=acc - jac_w.dot(correction),
-            M=b_inv_t.dot(mass_b.dot(b_inv)),
-            zeta=b_inv_t.dot(bias_b),
+            J=jac,
+            J_dot_q_dot=j_dot_q_dot,
+            M=mass_q,
+            zeta=zeta,
             B=b,
             rot_ned_from_ee=rot_ee,
             q_dot=q_dot_arr,

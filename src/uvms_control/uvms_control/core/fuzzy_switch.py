@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
+from uvms_model.jit import kernel
 
 from uvms_control.core.errors import ControlParameterError
 
@@ -109,9 +110,37 @@ class Trapezoid:
 
     def scalar(self, x: float) -> float:
         """Membership degree of one value (no numpy: the controller's per-step path)."""
-        rise = (x - self.a) / (self.b - self.a) if self.b > self.a else float(x >= self.a)
-        fall = (self.d - x) / (self.d - self.c) if self.d > self.c else float(x <= self.d)
-        return min(max(min(rise, fall), 0.0), 1.0)
+        return float(trapezoid_membership(self.a, self.b, self.c, self.d, x))
+
+
+@kernel
+def trapezoid_membership(a: float, b: float, c: float, d: float, x: float) -> float:
+    """Degree of x in the trapezoid with feet a, d and shoulders b, c (compiled)."""
+    if b > a:
+        rise = (x - a) / (b - a)
+    else:
+        rise = 1.0 if x >= a else 0.0
+    if d > c:
+        fall = (d - x) / (d - c)
+    else:
+        fall = 1.0 if x <= d else 0.0
+    return min(max(min(rise, fall), 0.0), 1.0)
+
+
+@kernel
+def rule_strengths_scalar(
+    corners: FloatArray, force_ratio: float, normal_velocity: float
+) -> tuple[float, float, float]:
+    """The three rules' strengths at one sample (sec. 4.3), min for AND (compiled).
+
+    ``corners`` rows (a, b, c, d): FS, FM, FL on the force ratio, then VS, VF on the velocity.
+    Rules: FS and VF -> WL; FM -> WM; FL and VS -> WS.
+    """
+    m = np.empty(5)
+    for k in range(5):
+        x = force_ratio if k < 3 else normal_velocity
+        m[k] = trapezoid_membership(corners[k, 0], corners[k, 1], corners[k, 2], corners[k, 3], x)
+    return min(m[0], m[4]), m[1], min(m[2], m[3])
 
 
 def _default_force_small() -> Trapezoid:
@@ -304,6 +333,8 @@ class FuzzySwitch:
         p = self.params
         # Output sets in rule order: rule 1 -> WL, rule 2 -> WM, rule 3 -> WS.
         self._outputs = (p.weight_large, p.weight_medium, p.weight_small)
+        inputs = (p.force_small, p.force_medium, p.force_large, p.velocity_slow, p.velocity_fast)
+        self._input_corners = np.array([[s.a, s.b, s.c, s.d] for s in inputs])
         corners = np.array([[s.a, s.b, s.c, s.d] for s in self._outputs])
         self._lo = float(corners[:, 0].min())
         self._hi = float(corners[:, 3].max())
@@ -387,16 +418,9 @@ class FuzzySwitch:
             force_ratio: F_e/F_d, the normal contact force over the desired force (-).
             normal_velocity: v_e, end-effector speed toward the environment (m/s).
         """
-        p = self.params
-        fs = p.force_small.scalar(force_ratio)
-        fm = p.force_medium.scalar(force_ratio)
-        fl = p.force_large.scalar(force_ratio)
-        strengths = (
-            min(fs, p.velocity_fast.scalar(normal_velocity)),
-            fm,
-            min(fl, p.velocity_slow.scalar(normal_velocity)),
+        return self.defuzzify_scalar(
+            rule_strengths_scalar(self._input_corners, force_ratio, normal_velocity)
         )
-        return self.defuzzify_scalar(strengths)
 
     def defuzzify_scalar(self, strengths: Sequence[float]) -> float:
         """Weight W from the three rule strengths, exactly, in plain floats.

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from uvms_model.jit import kernel
 
 from uvms_model import TaskSpaceTerms, UvmsModel
 
@@ -101,18 +102,15 @@ def task_space_model(
 
 def task_space_model_from_terms(terms: TaskSpaceTerms) -> TaskSpaceModel:
     """Eq. 24-28 from the model's terms at one state: J⁺, J̃⁺, M̃, ζ̃ and Ẋ = J q̇ (eq. 22)."""
-    J = terms.J
-    Jt_pinv = inverse_3x3(J.dot(J.T)).dot(J)
-    J_pinv = Jt_pinv.T
-    M_tilde = Jt_pinv.dot(terms.M.dot(J_pinv))  # symmetric up to rounding (M is)
-    Jt_pinv_zeta = Jt_pinv.dot(terms.zeta)
-    zeta_tilde = Jt_pinv_zeta - M_tilde.dot(terms.J_dot_q_dot)
+    Jt_pinv, M_tilde, zeta_tilde, Jt_pinv_zeta, X_dot = task_space_products(
+        terms.J, terms.M, terms.zeta, terms.J_dot_q_dot, terms.q_dot
+    )
     return TaskSpaceModel(
         X=terms.X,
-        X_dot=J.dot(terms.q_dot),
-        J=J,
+        X_dot=X_dot,
+        J=terms.J,
         J_dot_q_dot=terms.J_dot_q_dot,
-        J_pinv=J_pinv,
+        J_pinv=Jt_pinv.T,
         Jt_pinv=Jt_pinv,
         M=terms.M,
         zeta=terms.zeta,
@@ -120,3 +118,77 @@ def task_space_model_from_terms(terms: TaskSpaceTerms) -> TaskSpaceModel:
         zeta_tilde=zeta_tilde,
         Jt_pinv_zeta=Jt_pinv_zeta,
     )
+
+
+@kernel
+def task_space_products(
+    J: FloatArray, M: FloatArray, zeta: FloatArray, J_dot_q_dot: FloatArray, q_dot: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """J̃⁺ = (J Jᵀ)⁻¹ J, M̃ = J̃⁺ M J̃⁺ᵀ, ζ̃ = J̃⁺ ζ - M̃ J̇ q̇ (eq. 27-28), J̃⁺ ζ and Ẋ = J q̇.
+
+    New arrays. A singular J Jᵀ (the arm at a kinematic singularity) gives inf/nan, which the
+    controller rejects.
+    """
+    n = J.shape[1]
+    jjt = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            total = 0.0
+            for k in range(n):
+                total += J[i, k] * J[j, k]
+            jjt[i, j] = total
+    inverse = adjugate_inverse_3x3(jjt)
+    pinv = np.zeros((3, n))  # J̃⁺ (3, n)
+    for i in range(3):
+        for k in range(n):
+            pinv[i, k] = (
+                inverse[i, 0] * J[0, k] + inverse[i, 1] * J[1, k] + inverse[i, 2] * J[2, k]
+            )
+    m_pinv_t = np.zeros((n, 3))  # M J̃⁺ᵀ
+    for i in range(n):
+        for j in range(3):
+            total = 0.0
+            for k in range(n):
+                total += M[i, k] * pinv[j, k]
+            m_pinv_t[i, j] = total
+    m_tilde = np.zeros((3, 3))
+    pinv_zeta = np.zeros(3)
+    x_dot = np.zeros(3)
+    for i in range(3):
+        for j in range(3):
+            total = 0.0
+            for k in range(n):
+                total += pinv[i, k] * m_pinv_t[k, j]
+            m_tilde[i, j] = total
+        for k in range(n):
+            pinv_zeta[i] += pinv[i, k] * zeta[k]
+            x_dot[i] += J[i, k] * q_dot[k]
+    zeta_tilde = np.zeros(3)
+    for i in range(3):
+        zeta_tilde[i] = pinv_zeta[i] - (
+            m_tilde[i, 0] * J_dot_q_dot[0]
+            + m_tilde[i, 1] * J_dot_q_dot[1]
+            + m_tilde[i, 2] * J_dot_q_dot[2]
+        )
+    return pinv, m_tilde, zeta_tilde, pinv_zeta, x_dot
+
+
+@kernel
+def adjugate_inverse_3x3(a: FloatArray) -> FloatArray:
+    """Inverse of a 3x3 array by its adjugate; inf/nan for a singular one (compiled)."""
+    c00 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
+    c01 = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
+    c02 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
+    det = a[0, 0] * c00 + a[0, 1] * c01 + a[0, 2] * c02
+    k = 1.0 / det if det != 0.0 else np.inf
+    result = np.empty((3, 3))
+    result[0, 0] = c00 * k
+    result[0, 1] = (a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2]) * k
+    result[0, 2] = (a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]) * k
+    result[1, 0] = c01 * k
+    result[1, 1] = (a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0]) * k
+    result[1, 2] = (a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]) * k
+    result[2, 0] = c02 * k
+    result[2, 1] = (a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1]) * k
+    result[2, 2] = (a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]) * k
+    return result

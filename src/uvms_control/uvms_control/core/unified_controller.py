@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from uvms_model.jit import kernel
 
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.fuzzy_switch import FuzzySwitch
@@ -177,12 +178,10 @@ class UnifiedForceController:
         self._law_map = self._build_law_map()
         self._S: list[list[float]] = self.hybrid.S.tolist()
         self._I_minus_S: list[list[float]] = self.hybrid.I_minus_S.tolist()
-        self._null_stiffness: list[float] = np.broadcast_to(
-            params.null_space_stiffness, (self._n_dof,)
-        ).tolist()
-        self._null_damping: list[float] = np.broadcast_to(
-            params.null_space_damping, (self._n_dof,)
-        ).tolist()
+        self._null_gains = np.array((
+            np.broadcast_to(params.null_space_stiffness, (self._n_dof,)),
+            np.broadcast_to(params.null_space_damping, (self._n_dof,)),
+        ))  # fmt: skip
         self.reset()
 
     def _build_law_map(self) -> FloatArray:
@@ -406,32 +405,53 @@ class UnifiedForceController:
         τ = Jᵀ (F_c - J̃⁺ r) + ζ + M̂_q (φ̈ + J⁺ (y - J φ̈)), where J̃⁺ r = M̂ y + J̃⁺ ζ
         (M̂ = s M̃ = J̃⁺ M̂_q J⁺): two 9 x 9 and three 3 x 9 products in all.
         """
-        p = self.params
-        q_list = q.tolist()
-        error = [a - b for a, b in zip(self._q0.tolist(), q_list, strict=True)]
-        # Euler angles wrap: hold the attitude the short way round.
-        for k in (3, 4, 5):
-            if abs(error[k]) > math.pi:
-                error[k] = (error[k] + math.pi) % (2.0 * math.pi) - math.pi
-        phi_ddot = np.array(
-            [
-                k * e - d * v
-                for k, e, d, v in zip(
-                    self._null_stiffness, error, self._null_damping, q_dot.tolist(), strict=True
-                )
-            ]
-        )
-        j0, j1, j2 = ts.J_dot_q_dot.tolist()
-        y0, y1, y2 = a_c[0] - j0, a_c[1] - j1, a_c[2] - j2
-        e0, e1, e2 = ts.J.dot(phi_ddot).tolist()
-        (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = M_hat.tolist()
-        t0, t1, t2 = ts.Jt_pinv_zeta.tolist()
-        w3 = (
-            F_c[0] - (m00 * y0 + m01 * y1 + m02 * y2) - t0,
-            F_c[1] - (m10 * y0 + m11 * y1 + m12 * y2) - t1,
-            F_c[2] - (m20 * y0 + m21 * y1 + m22 * y2) - t2,
-        )
-        s9 = phi_ddot + ts.J_pinv.dot((y0 - e0, y1 - e1, y2 - e2))
-        M_hat_q = ts.M if p.mass_scale == 1.0 else p.mass_scale * ts.M
-        result: FloatArray = ts.J.T.dot(w3) + M_hat_q.dot(s9) + ts.zeta
-        return result
+        tau = np.empty(self._n_dof)
+        null_space_torque(
+            ts.J, ts.Jt_pinv, ts.J_dot_q_dot, ts.M, ts.zeta, ts.Jt_pinv_zeta, M_hat,
+            self.params.mass_scale, q, self._q0, q_dot, self._null_gains,
+            np.array((*F_c, *a_c)), tau,
+        )  # fmt: skip
+        return tau
+
+
+@kernel
+def null_space_torque(
+    J: FloatArray, Jt_pinv: FloatArray, J_dot_q_dot: FloatArray, M: FloatArray,
+    zeta: FloatArray, Jt_pinv_zeta: FloatArray, M_hat: FloatArray, mass_scale: float,
+    q: FloatArray, q0: FloatArray, q_dot: FloatArray, gains: FloatArray,
+    commands: FloatArray, tau: FloatArray,
+) -> None:
+    """τ = Jᵀ (F_c - M̂ y - J̃⁺ ζ) + ζ + M̂_q (φ̈ + J⁺ (y - J φ̈)) into ``tau`` (eq. 20, 24, 26).
+
+    y = a_c - J̇ q̇, φ̈ = K_n (q_0 - q) - D_n q̇ with the attitude error taken the short way
+    round, M̂_q = s M; ``gains`` rows are K_n and D_n, ``commands`` is [F_c, a_c].
+    """
+    n = q.shape[0]
+    phi_ddot = np.empty(n)
+    for k in range(n):
+        error = q0[k] - q[k]
+        if 3 <= k <= 5 and abs(error) > math.pi:  # Euler angles wrap
+            error = (error + math.pi) % (2.0 * math.pi) - math.pi
+        phi_ddot[k] = gains[0, k] * error - gains[1, k] * q_dot[k]
+    y = np.empty(3)
+    w3 = np.empty(3)
+    r3 = np.empty(3)
+    for i in range(3):
+        y[i] = commands[3 + i] - J_dot_q_dot[i]
+        e = 0.0
+        for k in range(n):
+            e += J[i, k] * phi_ddot[k]
+        r3[i] = y[i] - e
+    for i in range(3):
+        w3[i] = commands[i] - Jt_pinv_zeta[i]
+        for j in range(3):
+            w3[i] -= M_hat[i, j] * y[j]
+    s9 = np.empty(n)
+    for k in range(n):
+        s9[k] = phi_ddot[k] + Jt_pinv[0, k] * r3[0] + Jt_pinv[1, k] * r3[1] + Jt_pinv[2, k] * r3[2]
+    for i in range(n):
+        total = zeta[i] + J[0, i] * w3[0] + J[1, i] * w3[1] + J[2, i] * w3[2]
+        inertial = 0.0
+        for k in range(n):
+            inertial += M[i, k] * s9[k]
+        tau[i] = total + mass_scale * inertial
