@@ -142,6 +142,19 @@ class UvmsModel:
         """Mass of water displaced by the hull (kg), set by the hull's ``buoyancy_ratio``."""
         self._g = hydro.gravity_m_s2
         self._rk4 = Rk4Integrator(self.dynamics, self._g)
+        self._load_kernels()
+
+    def _load_kernels(self) -> None:
+        """Run every compiled kernel once at rest, so no later call pays its loading.
+
+        A process's first call of a Numba kernel loads it from the cache (about 0.3 s for all
+        of them, a few s to compile when the cache is cold): at construction, not in the
+        first control period of a real-time run.
+        """
+        rest = np.zeros(N_DOF)
+        self.step(rest, rest, rest, (0.0, 0.0, 0.0), 1e-3)
+        self.step(rest, rest, rest, None, 1e-3)
+        self.task_space_terms(rest, w=rest)
 
     def _gravity_body(self, rot: Sequence[float]) -> Vec3:
         """Gravitational acceleration (m/s^2) in base_link_frd: g R^T e_z (NED: z down)."""

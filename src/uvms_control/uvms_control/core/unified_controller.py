@@ -35,6 +35,7 @@ first step (vehicle pose and arm posture). With ``null_space_enabled = False`` t
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import math
 from dataclasses import dataclass
@@ -182,6 +183,11 @@ class UnifiedForceController:
             np.broadcast_to(params.null_space_stiffness, (self._n_dof,)),
             np.broadcast_to(params.null_space_damping, (self._n_dof,)),
         ))  # fmt: skip
+        # Load the compiled kernels now (``UvmsModel._load_kernels``), not in the first period.
+        self.reset()
+        rest = np.zeros(self._n_dof)
+        with contextlib.suppress(ControlInputError):  # then the first real step says why
+            self.step(0.0, rest, rest, np.zeros(3))
         self.reset()
 
     def _build_law_map(self) -> FloatArray:
