@@ -27,11 +27,6 @@ Mat3 = tuple[float, float, float, float, float, float, float, float, float]
 """A 3x3 matrix as a row-major 9-tuple."""
 
 
-def cross(a: Sequence[float], b: Sequence[float]) -> Vec3:
-    """Cross product a x b of two 3-vectors given as Python sequences."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
 def rotation(phi: float, theta: float, psi: float) -> Mat3:
     """rot_ned_from_body (J1 of sec. 3.2) as a row-major 9-tuple."""
     c4, s4 = math.cos(phi), math.sin(phi)
@@ -110,34 +105,6 @@ def w_from_q_dot(q: Sequence[float], q_dot: Sequence[float], rot: Mat3) -> list[
         q_dot[6],
         q_dot[7],
         q_dot[8],
-    ]
-
-
-def b_inverse_b_dot_w(q: Sequence[float], w: Sequence[float]) -> list[float]:
-    """B^-1 B_dot w (9,) = [omega x v; J2^-1 J2_dot omega; 0] with eta_dot = J2 omega.
-
-    Raises:
-        SingularAttitudeError: Near pitch = +-90 deg.
-    """
-    c4, s4 = math.cos(q[3]), math.sin(q[3])
-    c5 = check_pitch(q[4])
-    s5 = math.sin(q[4])
-    w1, w2 = w[4], w[5]
-    a = s4 * w1 + c4 * w2
-    b = c4 * w1 - s4 * w2
-    phi_dot = w[3] + a * s5 / c5
-    theta_dot = b
-    u0 = phi_dot * b * s5 / c5 + theta_dot * a / (c5 * c5)
-    u1 = -phi_dot * a
-    u2 = phi_dot * b / c5 + theta_dot * s5 * a / (c5 * c5)
-    return [
-        *cross(w[3:6], w[0:3]),
-        u0 - s5 * u2,
-        c4 * u1 + s4 * c5 * u2,
-        -s4 * u1 + c4 * c5 * u2,
-        0.0,
-        0.0,
-        0.0,
     ]
 
 

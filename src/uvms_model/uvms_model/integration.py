@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from uvms_model.body_dynamics import BodyDynamics
 from uvms_model.coordinates import N_DOF, mat_t_vec, q_dot_from_w, rotation
 from uvms_model.jit import kernel
-from uvms_model.kinematics import SINGULAR_COS_PITCH, check_pitch
+from uvms_model.kinematics import check_pitch
 
 FloatArray = NDArray[np.float64]
 
@@ -65,8 +65,7 @@ class Rk4Integrator:
         for stage, h in enumerate((0.0, 0.5 * dt, 0.5 * dt, dt)):
             theta = rk4_stage_input(state, slopes, stage, w_dot, h, self._g, self._force,
                                     has_force, arm, velocities, vectors)
-            if abs(math.cos(theta)) < SINGULAR_COS_PITCH:
-                check_pitch(theta, 'q (during integration)')
+            check_pitch(theta, 'q (during integration)')
             w_dot = dynamics.accelerations_as_posed(vectors)
         result = np.empty(2 * N_DOF)
         rk4_combine(state, slopes, w_dot, dt, result)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,34 +13,13 @@ from uvms_model import TaskSpaceTerms, UvmsModel
 FloatArray = npt.NDArray[np.float64]
 
 
-def inverse_3x3_floats(
-    a: Sequence[Sequence[float]],
-) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]:
-    """Inverse of a 3x3 matrix, given as nested sequences of floats, by its adjugate.
-
-    A singular matrix (the arm at a kinematic singularity) gives inf/nan, which the
-    controller rejects.
-    """
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
-    c00 = a11 * a22 - a12 * a21
-    c01 = a12 * a20 - a10 * a22
-    c02 = a10 * a21 - a11 * a20
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    k = 1.0 / det if det != 0.0 else float('inf')
-    return (
-        (c00 * k, (a02 * a21 - a01 * a22) * k, (a01 * a12 - a02 * a11) * k),
-        (c01 * k, (a00 * a22 - a02 * a20) * k, (a02 * a10 - a00 * a12) * k),
-        (c02 * k, (a01 * a20 - a00 * a21) * k, (a00 * a11 - a01 * a10) * k),
-    )
-
-
 def inverse_3x3(a: FloatArray) -> FloatArray:
     """Inverse of a 3x3 matrix by its adjugate (cheaper than a general LU for one 3x3).
 
-    The callers pass symmetric positive-definite matrices (J Jᵀ, M̃); a singular one (the arm
-    at a kinematic singularity) gives inf/nan, which the controller rejects.
+    The callers pass symmetric positive-definite matrices (J Jᵀ, M̃, M̂); a singular one (the
+    arm at a kinematic singularity) gives inf/nan, which the controller rejects.
     """
-    return np.array(inverse_3x3_floats(a.tolist()))
+    return adjugate_inverse_3x3(np.asarray(a, dtype=np.float64))
 
 
 @dataclass(slots=True)

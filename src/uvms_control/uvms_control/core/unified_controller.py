@@ -52,7 +52,7 @@ from uvms_control.core.parameters import ControllerParameters
 from uvms_control.core.reference import ForcePhase, ForceSetpoint, HalfCircleReference
 from uvms_control.core.task_space import (
     TaskSpaceModel,
-    inverse_3x3_floats,
+    inverse_3x3,
     task_space_model_from_terms,
 )
 from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
@@ -349,9 +349,9 @@ class UnifiedForceController:
             if W == 1.0:
                 a_c = (u0, u1, u2)
             else:
-                (k00, k01, k02), (k10, k11, k12), (k20, k21, k22) = inverse_3x3_floats(
-                    M_hat.tolist()
-                )
+                (k00, k01, k02), (k10, k11, k12), (k20, k21, k22) = inverse_3x3(
+                    M_hat
+                ).tolist()
                 a_c = (
                     W * u0 + H * (k00 * s0 + k01 * s1 + k02 * s2),
                     W * u1 + H * (k10 * s0 + k11 * s1 + k12 * s2),
