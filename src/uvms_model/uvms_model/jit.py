@@ -1,8 +1,8 @@
 """Numba's ``njit`` for the hot path, typed for mypy and cached on disk.
 
-The kernels compile on first use in a process and are cached beside their module (or in
-NUMBA_CACHE_DIR where that is read-only), so a node starts on the cached machine code after the
-first run on a machine. ``UVMS_NO_JIT=1`` runs the same functions as plain Python, for a
+The kernels compile on first use and are cached beside their module in ``__pycache__`` (where
+that is read-only, in Numba's user-wide cache directory; NUMBA_CACHE_DIR overrides both), so a
+node starts on the cached machine code after the first run on a machine. ``UVMS_NO_JIT=1`` runs the same functions as plain Python, for a
 debugger or a line profiler; results agree to rounding.
 """
 
