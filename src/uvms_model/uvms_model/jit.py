@@ -3,8 +3,8 @@
 The kernels compile on first use and are cached beside their module in ``__pycache__`` (where
 that is read-only, in Numba's user-wide cache directory; NUMBA_CACHE_DIR overrides both), so a
 node starts on the cached machine code after the first run on a machine. ``UVMS_NO_JIT=1``
-runs the same functions as plain Python, for a
-debugger or a line profiler; results agree to rounding.
+runs the same functions as plain Python, for a debugger or a line profiler; results agree to
+rounding.
 """
 
 from __future__ import annotations
