@@ -25,6 +25,7 @@ from uvms_model.added_mass import AddedMass
 from uvms_model.body_forces import BodyForces
 from uvms_model.coordinates import N_DOF, Vec3
 from uvms_model.description import RobotDescription
+from uvms_model.jit import kernel
 from uvms_model.parameters import HydrodynamicsParameters
 from uvms_model.pinocchio_models import dynamic_model, strided_rows
 
@@ -79,7 +80,6 @@ class BodyDynamics:
         )
         # Sliders: M_ss is diagonal and constant (each carries its point mass only).
         self._slider_mass_inverse = 1.0 / np.array([model.inertias[j].mass for j in sliders])
-        self._has_sliders = bool(sliders)
 
     @property
     def arm_angles(self) -> FloatArray:
@@ -134,54 +134,47 @@ class BodyDynamics:
         result: FloatArray = pin.aba(model, data, self._config, self._v, self._tau, self._fext)
         return result
 
-    def mass(self, q_m: list[float]) -> tuple[FloatArray, FloatArray]:
-        """M_b(q_m) (9, 9) by CRBA with the sliders eliminated, and M_rs M_ss^-1 (9, n_s)."""
+    def mass(self, q_m: list[float]) -> FloatArray:
+        """M_b(q_m) (9, 9) by CRBA with the sliders eliminated (``eliminate_sliders``)."""
         self._arm_config[:] = q_m
         full = pin.crba(self.model, self._data, self._config)  # a new symmetric array
-        mass: FloatArray = full[:N_DOF, :N_DOF]
-        coupling = full[:N_DOF, N_DOF:]
-        scaled: FloatArray = coupling * self._slider_mass_inverse
-        if self._has_sliders:
-            mass -= scaled.dot(coupling.T)
-        return mass, scaled
+        return eliminate_sliders(full, self._zero, self._slider_mass_inverse)[0]
 
-    @property
-    def slider_mass_inverse(self) -> FloatArray:
-        """M_ss^-1 (n_s,): the sliders' inverse point masses (M_ss is diagonal, constant)."""
-        return self._slider_mass_inverse
-
-    def full_mass_and_bias(
+    def mass_and_bias(
         self, q_m: list[float], w: FloatArray, gravity_body: Vec3
     ) -> tuple[FloatArray, FloatArray]:
-        """The dynamic model's M (nv, nv) and bias (nv,) by CRBA and RNEA, sliders kept.
-
-        Rows and columns past the ninth are the sliders'; ``mass_and_bias`` eliminates them.
-        """
+        """M_b(q_m) and C_b w + D_b w + G_b (eq. 8): CRBA and RNEA, sliders eliminated."""
         self._w[:] = w
         self._arm_config[:] = q_m
         model, data = self.model, self._data
         full = pin.crba(model, data, self._config)  # a new symmetric array
         pin.forwardKinematics(model, data, self._config, self._v)
         self.forces.apply(gravity_body, None)
-        tau: FloatArray = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
-        return full, tau
-
-    def mass_and_bias(
-        self, q_m: list[float], w: FloatArray, gravity_body: Vec3
-    ) -> tuple[FloatArray, FloatArray]:
-        """M_b(q_m) and C_b w + D_b w + G_b (eq. 8): CRBA and RNEA, sliders eliminated.
-
-        With the sliders' rows s and the body rows r of the dynamic model's M and bias b,
-        eliminating the sliders' accelerations (they transmit no force) gives
-        M_b = M_rr - M_rs M_ss^-1 M_sr and bias = b_r - M_rs M_ss^-1 b_s (M_ss diagonal).
-        """
-        self._w[:] = w
-        mass, scaled = self.mass(q_m)  # poses the configuration too
-        model, data = self.model, self._data
-        pin.forwardKinematics(model, data, self._config, self._v)
-        self.forces.apply(gravity_body, None)
         tau = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
-        bias: FloatArray = tau[:N_DOF]
-        if self._has_sliders:
-            bias -= scaled.dot(tau[N_DOF:])
-        return mass, bias
+        return eliminate_sliders(full, tau, self._slider_mass_inverse)
+
+
+@kernel
+def eliminate_sliders(
+    mass_full: FloatArray, bias_full: FloatArray, slider_mass_inverse: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """M_b and bias_b of eq. 8 from the dynamic model's M and bias, the sliders eliminated.
+
+    With the sliders' rows s (past the body rows r) and M_ss diagonal, eliminating their
+    accelerations (they transmit no force) gives M_b = M_rr - M_rs M_ss⁻¹ M_sr and
+    bias_b = b_r - M_rs M_ss⁻¹ b_s. New arrays; compiled.
+    """
+    n = mass_full.shape[0] - slider_mass_inverse.shape[0]
+    mass_b = np.empty((n, n))
+    bias_b = np.empty(n)
+    for i in range(n):
+        total = bias_full[i]
+        for s in range(slider_mass_inverse.shape[0]):
+            total -= mass_full[i, n + s] * slider_mass_inverse[s] * bias_full[n + s]
+        bias_b[i] = total
+        for j in range(n):
+            total = mass_full[i, j]
+            for s in range(slider_mass_inverse.shape[0]):
+                total -= mass_full[i, n + s] * slider_mass_inverse[s] * mass_full[j, n + s]
+            mass_b[i, j] = total
+    return mass_b, bias_b

@@ -8,15 +8,20 @@ than the dynamics themselves.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 
 from uvms_model.body_dynamics import BodyDynamics
-from uvms_model.coordinates import N_DOF, mat_t_vec, q_dot_from_w, rotation
+from uvms_model.coordinates import (
+    N_DOF,
+    mat_t_vec,
+    rotation,
+    velocity_transform,
+    velocity_transforms,
+)
 from uvms_model.jit import kernel
 from uvms_model.kinematics import check_pitch
+from uvms_model.loop_products import matvec
 
 FloatArray = NDArray[np.float64]
 
@@ -84,47 +89,24 @@ def rk4_stage_input(
     (``w_dot_before``, the dynamics' accelerations) completes row stage - 1 first. Writes the
     arm angles into ``arm``, w into ``w_out``, and into ``vectors`` the gravitational
     acceleration g R^T e_z and the force R^T f_ned in base_link_frd (R = rot_ned_from_body,
-    J1 of sec. 3.2, ZYX). Returns the stage's pitch (the caller guards J2's singularity).
+    J1 of sec. 3.2). Returns the stage's pitch (the caller guards J2's singularity).
     """
     n = arm.shape[0] + 6
     k = slopes[max(stage - 1, 0)]
     if stage > 0:
-        for i in range(n):
-            k[n + i] = w_dot_before[i]
-    x = np.empty(2 * n)
-    for i in range(2 * n):
-        x[i] = state[i] + h * k[i] if stage > 0 else state[i]
-    c4, s4 = math.cos(x[3]), math.sin(x[3])
-    c5, s5 = math.cos(x[4]), math.sin(x[4])
-    c6, s6 = math.cos(x[5]), math.sin(x[5])
-    r = (
-        c5 * c6, -s6 * c4 + s4 * s5 * c6, s4 * s6 + s5 * c4 * c6,
-        s6 * c5, c4 * c6 + s4 * s5 * s6, -s4 * c6 + s5 * s6 * c4,
-        -s5, s4 * c5, c4 * c5,
-    )  # fmt: skip
-    u, v, ww, p, q, rr = x[n], x[n + 1], x[n + 2], x[n + 3], x[n + 4], x[n + 5]
-    out = slopes[stage]
-    out[0] = r[0] * u + r[1] * v + r[2] * ww
-    out[1] = r[3] * u + r[4] * v + r[5] * ww
-    out[2] = r[6] * u + r[7] * v + r[8] * ww
-    a = s4 * q + c4 * rr
-    out[3] = p + a * s5 / c5
-    out[4] = c4 * q - s4 * rr
-    out[5] = a / c5
-    for i in range(6, n):
-        out[i] = x[n + i]
-        arm[i - 6] = x[i]
-    for i in range(n):
-        w_out[i] = x[n + i]
-    vectors[0, 0], vectors[1, 0], vectors[2, 0] = g * r[6], g * r[7], g * r[8]
-    if has_force:
-        f0, f1, f2 = f_ned[0], f_ned[1], f_ned[2]
-        vectors[0, 1] = r[0] * f0 + r[3] * f1 + r[6] * f2
-        vectors[1, 1] = r[1] * f0 + r[4] * f1 + r[7] * f2
-        vectors[2, 1] = r[2] * f0 + r[5] * f1 + r[8] * f2
-    else:
-        vectors[0, 1], vectors[1, 1], vectors[2, 1] = 0.0, 0.0, 0.0
-    theta: float = x[4]
+        k[n:] = w_dot_before[:n]
+    x = state + h * k if stage > 0 else state.copy()
+    q, w = x[:n], x[n:]
+    b, _ = velocity_transforms(q)
+    slopes[stage, :n] = matvec(b, w)
+    arm[:] = q[6:]
+    w_out[:] = w
+    rot = b[:3, :3]
+    for i in range(3):
+        vectors[i, 0] = g * rot[2, i]
+        force = rot[0, i] * f_ned[0] + rot[1, i] * f_ned[1] + rot[2, i] * f_ned[2]
+        vectors[i, 1] = force if has_force else 0.0
+    theta: float = q[4]
     return theta
 
 
@@ -153,7 +135,7 @@ def semi_implicit_euler_step(
 ) -> tuple[FloatArray, FloatArray]:
     """One semi-implicit (symplectic) Euler step: w first, then q with the new w.
 
-    Args: as ``rk4_step``, with w as an array.
+    Args: as ``Rk4Integrator.step``, with the dynamics and g, q as a list.
 
     Raises:
         SingularAttitudeError: At pitch +-90 deg.
@@ -162,5 +144,6 @@ def semi_implicit_euler_step(
     f_body = None if f_ned is None else mat_t_vec(rot, f_ned)
     w_dot = dynamics.w_dot(q[6:9], w, (g * rot[6], g * rot[7], g * rot[8]), f_body)
     w_new: FloatArray = w + dt * w_dot[:N_DOF]
-    q_new: FloatArray = np.asarray(q) + dt * np.array(q_dot_from_w(q, w_new.tolist(), rot))
+    q_arr = np.asarray(q)
+    q_new: FloatArray = q_arr + dt * velocity_transform(q_arr, 'q (during integration)').dot(w_new)
     return q_new, w_new

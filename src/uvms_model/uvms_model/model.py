@@ -31,7 +31,6 @@ from uvms_model.coordinates import (
     rotation,
     velocity_transform,
     velocity_transform_inverse,
-    w_from_q_dot,
 )
 from uvms_model.description import EE_LINK, RobotDescription, load_description
 from uvms_model.errors import ModelError, StateError
@@ -169,7 +168,7 @@ class UvmsModel:
     def mass_matrix_body(self, q: ArrayLike) -> FloatArray:
         """M_b(q_m) (9, 9) of eq. 8: rigid bodies plus added mass, in quasi-velocities w."""
         q = self._check_q(q)
-        return self.dynamics.mass(q.tolist()[6:9])[0]
+        return self.dynamics.mass(q.tolist()[6:9])
 
     def bias_body(self, q: ArrayLike, w: ArrayLike) -> FloatArray:
         """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (9,) of eq. 8, so M_b w_dot + bias = tau_b."""
@@ -285,8 +284,7 @@ class UvmsModel:
             SingularAttitudeError: Near pitch = +-90 deg.
             StateError: If q is not a finite (9,) vector.
         """
-        q_list = self._check_q(q).tolist()
-        return velocity_transform(q_list, rotation(q_list[3], q_list[4], q_list[5]))
+        return velocity_transform(self._check_q(q))
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """M(q) = B^-T M_b B^-1 (9, 9) in generalized coordinates (eq. 18).
@@ -294,10 +292,10 @@ class UvmsModel:
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
         """
-        q_list = self._check_q(q).tolist()
-        check_pitch(q_list[4])
-        b_inv = velocity_transform_inverse(q_list, rotation(q_list[3], q_list[4], q_list[5]))
-        mass = self.dynamics.mass(q_list[6:9])[0]
+        q_arr = self._check_q(q)
+        check_pitch(float(q_arr[4]))
+        b_inv = velocity_transform_inverse(q_arr)
+        mass = self.dynamics.mass(q_arr.tolist()[6:9])
         result: FloatArray = b_inv.T.dot(mass.dot(b_inv))
         return result
 
@@ -331,10 +329,10 @@ class UvmsModel:
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
         """
-        q_list = self._check_q(q).tolist()
-        check_pitch(q_list[4])
-        jac_w = self.frames.ee_motion(q_list, None)[2]
-        b_inv = velocity_transform_inverse(q_list, rotation(q_list[3], q_list[4], q_list[5]))
+        q_arr = self._check_q(q)
+        check_pitch(float(q_arr[4]))
+        jac_w = self.frames.ee_motion(q_arr.tolist(), None)[2]
+        b_inv = velocity_transform_inverse(q_arr)
         result: FloatArray = jac_w.dot(b_inv)
         return result
 
@@ -373,14 +371,13 @@ class UvmsModel:
         check_pitch(q_list[4])
         rot = rotation(q_list[3], q_list[4], q_list[5])
         if w is None:
-            w_arr = np.array(w_from_q_dot(q_list, np.asarray(q_dot, dtype=float).tolist(), rot))
+            w_arr = velocity_transform_inverse(q_arr).dot(np.asarray(q_dot, dtype=float))
         else:
             w_arr = np.asarray(w, dtype=float)
-        dynamics = self.dynamics
-        mass, bias = dynamics.full_mass_and_bias(q_list[6:9], w_arr, self._gravity_body(rot))
+        mass, bias = self.dynamics.mass_and_bias(q_list[6:9], w_arr, self._gravity_body(rot))
         x, rot_ee, jac_w, acc = self.frames.ee_motion(q_list, w_arr)
         jac, j_dot_q_dot, mass_q, zeta, b, q_dot_arr = generalized_terms(
-            q_arr, w_arr, mass, bias, dynamics.slider_mass_inverse, jac_w, acc
+            q_arr, w_arr, mass, bias, jac_w, acc
         )
         return TaskSpaceTerms(
             X=x,

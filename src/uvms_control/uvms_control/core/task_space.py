@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 from uvms_model.jit import kernel
+from uvms_model.loop_products import matmul, matvec
 
 from uvms_model import TaskSpaceTerms, UvmsModel
 
@@ -107,47 +108,11 @@ def task_space_products(
     New arrays. A singular J Jᵀ (the arm at a kinematic singularity) gives inf/nan, which the
     controller rejects.
     """
-    n = J.shape[1]
-    jjt = np.zeros((3, 3))
-    for i in range(3):
-        for j in range(3):
-            total = 0.0
-            for k in range(n):
-                total += J[i, k] * J[j, k]
-            jjt[i, j] = total
-    inverse = adjugate_inverse_3x3(jjt)
-    pinv = np.zeros((3, n))  # J̃⁺ (3, n)
-    for i in range(3):
-        for k in range(n):
-            pinv[i, k] = (
-                inverse[i, 0] * J[0, k] + inverse[i, 1] * J[1, k] + inverse[i, 2] * J[2, k]
-            )
-    m_pinv_t = np.zeros((n, 3))  # M J̃⁺ᵀ
-    for i in range(n):
-        for j in range(3):
-            total = 0.0
-            for k in range(n):
-                total += M[i, k] * pinv[j, k]
-            m_pinv_t[i, j] = total
-    m_tilde = np.zeros((3, 3))
-    pinv_zeta = np.zeros(3)
-    x_dot = np.zeros(3)
-    for i in range(3):
-        for j in range(3):
-            total = 0.0
-            for k in range(n):
-                total += pinv[i, k] * m_pinv_t[k, j]
-            m_tilde[i, j] = total
-        for k in range(n):
-            pinv_zeta[i] += pinv[i, k] * zeta[k]
-            x_dot[i] += J[i, k] * q_dot[k]
-    zeta_tilde = np.zeros(3)
-    for i in range(3):
-        zeta_tilde[i] = pinv_zeta[i] - (
-            m_tilde[i, 0] * J_dot_q_dot[0]
-            + m_tilde[i, 1] * J_dot_q_dot[1]
-            + m_tilde[i, 2] * J_dot_q_dot[2]
-        )
+    pinv = matmul(adjugate_inverse_3x3(matmul(J, J.T)), J)  # J̃⁺ (3, n)
+    m_tilde = matmul(pinv, matmul(M, pinv.T))
+    pinv_zeta = matvec(pinv, zeta)
+    zeta_tilde = pinv_zeta - matvec(m_tilde, J_dot_q_dot)
+    x_dot = matvec(J, q_dot)
     return pinv, m_tilde, zeta_tilde, pinv_zeta, x_dot
 
 

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 from uvms_model.jit import kernel
+from uvms_model.loop_products import matvec
 
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.fuzzy_switch import FuzzySwitch
@@ -432,32 +433,12 @@ def null_space_torque(
     y = a_c - J̇ q̇, φ̈ = K_n (q_0 - q) - D_n q̇ with the attitude error taken the short way
     round, M̂_q = s M; ``gains`` rows are K_n and D_n, ``commands`` is [F_c, a_c].
     """
-    n = q.shape[0]
-    phi_ddot = np.empty(n)
-    for k in range(n):
-        error = q0[k] - q[k]
-        if 3 <= k <= 5 and abs(error) > math.pi:  # Euler angles wrap
-            error = (error + math.pi) % (2.0 * math.pi) - math.pi
-        phi_ddot[k] = gains[0, k] * error - gains[1, k] * q_dot[k]
-    y = np.empty(3)
-    w3 = np.empty(3)
-    r3 = np.empty(3)
-    for i in range(3):
-        y[i] = commands[3 + i] - J_dot_q_dot[i]
-        e = 0.0
-        for k in range(n):
-            e += J[i, k] * phi_ddot[k]
-        r3[i] = y[i] - e
-    for i in range(3):
-        w3[i] = commands[i] - Jt_pinv_zeta[i]
-        for j in range(3):
-            w3[i] -= M_hat[i, j] * y[j]
-    s9 = np.empty(n)
-    for k in range(n):
-        s9[k] = phi_ddot[k] + Jt_pinv[0, k] * r3[0] + Jt_pinv[1, k] * r3[1] + Jt_pinv[2, k] * r3[2]
-    for i in range(n):
-        total = zeta[i] + J[0, i] * w3[0] + J[1, i] * w3[1] + J[2, i] * w3[2]
-        inertial = 0.0
-        for k in range(n):
-            inertial += M[i, k] * s9[k]
-        tau[i] = total + mass_scale * inertial
+    error = q0 - q
+    for k in (3, 4, 5):  # Euler angles wrap: hold the attitude the short way round
+        if abs(error[k]) > math.pi:
+            error[k] = (error[k] + math.pi) % (2.0 * math.pi) - math.pi
+    phi_ddot = gains[0] * error - gains[1] * q_dot
+    y = commands[3:] - J_dot_q_dot
+    w3 = commands[:3] - matvec(M_hat, y) - Jt_pinv_zeta
+    s9 = phi_ddot + matvec(Jt_pinv.T, y - matvec(J, phi_ddot))
+    tau[:] = matvec(J.T, w3) + mass_scale * matvec(M, s9) + zeta
