@@ -13,11 +13,13 @@ import time
 
 
 def main() -> int:
-    """Call every kernel once through the public model and controller API."""
+    """Call every kernel once through the public model, controller and allocator API."""
     start = time.monotonic()
     import numpy as np
+    from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
     from uvms_control.core.parameters import ControllerParameters
     from uvms_control.core.unified_controller import UnifiedForceController
+    from uvms_model.thrusters import ThrusterLayout
 
     from uvms_model import UvmsModel
 
@@ -30,6 +32,10 @@ def main() -> int:
     controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
     controller.step_from_sensors(0.0, q, np.zeros(9), np.zeros(3))
     controller.step(0.002, q, np.zeros(9), np.array([100.0, 0.0, 0.0]))
+    layout = ThrusterLayout.from_parameters()
+    allocator = ThrusterAllocator(AllocatorParameters(
+        layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 100.0)))
+    allocator.step(np.ones(9), 0.002)
     took_s = time.monotonic() - start
     print(f'compile_kernels: the hot path is compiled and cached ({took_s:.1f} s)')
     return 0

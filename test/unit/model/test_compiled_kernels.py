@@ -15,7 +15,8 @@ import textwrap
 
 import numpy as np
 
-#: Runs in both processes: RK4 steps, the controller's model set and controller steps.
+#: Runs in both processes: RK4 steps, the controller's model set, controller steps and
+#: allocator steps (saturation and thruster dynamics).
 PROBE = textwrap.dedent("""
     import json, sys
     import numpy as np
@@ -23,10 +24,15 @@ PROBE = textwrap.dedent("""
     from uvms_control.core.parameters import ControllerParameters
     from uvms_control.core.unified_controller import UnifiedForceController
     from uvms_model.integration import rk4_stage_input
+    from uvms_model.thrusters import ThrusterLayout
+    from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
 
     rng = np.random.default_rng(3)
     model = UvmsModel()
     controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
+    layout = ThrusterLayout.from_parameters()
+    allocator = ThrusterAllocator(AllocatorParameters(layout.thrust_matrix(),
+                                                      layout.max_thrust_n, np.full(3, 50.0)))
     out = []
     for k in range(20):
         q = np.concatenate((rng.uniform(-1, 1, 3), rng.uniform(-0.4, 0.4, 3),
@@ -38,9 +44,15 @@ PROBE = textwrap.dedent("""
         terms = model.task_space_terms(q, w=w)
         result = controller.step_from_sensors(0.002 * k, q, w, rng.uniform(0.0, 160.0) *
                                               np.array([1.0, 0.0, 0.0]))
+        # Large enough to saturate some steps, with some long steps (several Euler sub-steps).
+        output = allocator.step(rng.normal(0.0, 400.0, 9), 0.002 if k % 3 else 0.011)
         out += [*q_new, *w_new, *terms.M.ravel(), *terms.zeta, *terms.J.ravel(),
-                *terms.J_dot_q_dot, *result.tau_b, result.W]
-    json.dump({'values': out, 'compiled': hasattr(rk4_stage_input, 'py_func')},
+                *terms.J_dot_q_dot, *result.tau_b, result.W, *output.thrust,
+                *output.joint_torques, *output.propeller_speed, *output.motor_current,
+                output.allocation.saturation_scale, output.allocation.joint_scale]
+    from uvms_control.core.thruster_kernels import euler_step_bank
+    compiled = hasattr(rk4_stage_input, 'py_func') and hasattr(euler_step_bank, 'py_func')
+    json.dump({'values': out, 'compiled': compiled},
               sys.stdout)
 """)
 
@@ -56,7 +68,7 @@ def probe(no_jit: bool) -> tuple[np.ndarray, bool]:
 
 
 def test_compiled_kernels_agree_with_their_python_source() -> None:
-    """Dynamics, task-space terms and the controller's command: compiled = interpreted."""
+    """Dynamics, task-space terms, controller and allocator outputs: compiled = interpreted."""
     compiled, was_compiled = probe(no_jit=False)
     interpreted, was_interpreted = probe(no_jit=True)
     assert was_compiled and not was_interpreted

@@ -22,11 +22,57 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
+from uvms_model.jit import kernel
 
 from uvms_control.core.errors import ControlInputError, ControlParameterError
 from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
 
 FloatArray = npt.NDArray[np.float64]
+
+
+@kernel
+def _scale_into_limits(values: FloatArray, inv_limit: FloatArray) -> float:
+    """Scale ``values`` in place by the largest s in (0, 1] that keeps each |v_i| s <= limit_i.
+
+    Returns:
+        s (1.0 when every value is within its limit).
+    """
+    worst = 0.0
+    for i in range(values.size):
+        worst = max(worst, abs(values[i]) * inv_limit[i])
+    if worst <= 1.0:
+        return 1.0
+    scale = 1.0 / worst
+    for i in range(values.size):
+        values[i] *= scale
+    return scale
+
+
+@kernel
+def saturate_allocation(
+    tau: FloatArray,
+    thrust: FloatArray,
+    inv_limit: FloatArray,
+    joints: FloatArray,
+    inv_joint: FloatArray,
+) -> tuple[bool, float, float]:
+    """Scale thrusts F_td = T⁺ tau_v and motor torques tau_q into their limits, in place.
+
+    ``thrust`` holds T⁺ tau_v on entry (eq. 10; E⁺ = blockdiag(T⁺, I_n) since E is block
+    diagonal); the motor torques tau_b[6:] are copied into ``joints``. Each part is scaled
+    by its own factor (see the module docstring).
+
+    Returns:
+        (False, 1, 1) with nothing scaled if tau holds a NaN or Inf; else (True, thrust
+        scale, joint scale).
+    """
+    for i in range(tau.size):
+        if not np.isfinite(tau[i]):
+            return False, 1.0, 1.0
+    scale = _scale_into_limits(thrust, inv_limit)
+    for i in range(joints.size):
+        joints[i] = tau[6 + i]
+    return True, scale, _scale_into_limits(joints, inv_joint)
 
 
 @dataclass(frozen=True)
@@ -184,6 +230,10 @@ class ThrusterAllocator:
                 f'a current that holds the largest thrust limit {largest} N forward and '
                 f'reverse (it holds {reachable:.1f} N)',
             )
+        # Load the compiled kernels now (a cache load, or a compilation on a cold cache), not
+        # in the first control period of a real-time run; dt = 0 leaves the thrusters at rest.
+        self.step(np.zeros(6 + self._n), 0.0)
+        self.reset()
 
     @property
     def pseudo_inverse(self) -> FloatArray:
@@ -197,37 +247,29 @@ class ThrusterAllocator:
         """Stop the thrusters (zero speed, current and flow)."""
         self.thrusters.reset()
 
-    def _check(self, tau_b: npt.ArrayLike) -> FloatArray:
-        tau = np.asarray(tau_b, dtype=np.float64)
-        if tau.shape != (6 + self._n,) or not np.all(np.isfinite(tau)):
-            raise ControlInputError(
-                f'tau_b must be {6 + self._n} finite values, got {np.ravel(tau).tolist()}'
-            )
-        return tau
-
     def allocate(self, tau_b: npt.ArrayLike) -> AllocationResult:
         """Desired thrusts and motor torques for tau_b (9,) (eq. 10), saturated by scaling.
 
         Raises:
             ControlInputError: if tau_b is not a finite (6 + n,) vector.
         """
-        tau = self._check(tau_b)
-        thrust = self._t_pinv @ tau[:6]
-        worst = float(np.max(np.abs(thrust) * self._inv_limit))
-        scale = 1.0 if worst <= 1.0 else 1.0 / worst
-        if scale < 1.0:
-            thrust *= scale
-        joints = tau[6:].copy()
-        worst_joint = float(np.max(np.abs(joints) * self._inv_joint))
-        joint_scale = 1.0 if worst_joint <= 1.0 else 1.0 / worst_joint
-        if joint_scale < 1.0:
-            joints *= joint_scale
-        return AllocationResult(
-            thrust=thrust,
-            joint_torques=joints,
-            achieved_wrench=self._t @ thrust,
-            saturation_scale=scale,
-            joint_scale=joint_scale,
+        tau = np.asarray(tau_b, dtype=np.float64)
+        if tau.shape == (6 + self._n,):
+            # The matrix products stay numpy's (BLAS): the same sums, to the last bit, as
+            # before the saturation moved into a kernel.
+            thrust, joints = self._t_pinv @ tau[:6], np.empty(self._n)
+            ok, scale, joint_scale = saturate_allocation(tau, thrust, self._inv_limit, joints,
+                                                         self._inv_joint)
+            if ok:
+                return AllocationResult(
+                    thrust=thrust,
+                    joint_torques=joints,
+                    achieved_wrench=self._t @ thrust,
+                    saturation_scale=scale,
+                    joint_scale=joint_scale,
+                )
+        raise ControlInputError(
+            f'tau_b must be {6 + self._n} finite values, got {np.ravel(tau).tolist()}'
         )
 
     def step(self, tau_b: npt.ArrayLike, dt: float) -> AllocatorOutput:

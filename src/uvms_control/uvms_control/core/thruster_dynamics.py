@@ -40,6 +40,12 @@ import numpy as np
 import numpy.typing as npt
 
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.thruster_kernels import (
+    blade_element,
+    euler_step_bank,
+    state_derivative,
+    thruster_constants,
+)
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -250,7 +256,7 @@ def _with_max_step(
 
 
 class ThrusterBank:
-    """A set of identical thrusters integrated together (vectorised eq. 11-15).
+    """A set of identical thrusters integrated together (eq. 11-15, compiled per thruster).
 
     Example:
         >>> bank = ThrusterBank(ThrusterModelParameters(), count=2)
@@ -276,21 +282,26 @@ class ThrusterBank:
         self._r07 = 0.7 * radius
         duct_area = math.pi * radius * radius
         half_rho_a = 0.5 * p.water_density * c.blade_area
-        self._lift_k = (
-            half_rho_a * p.lift_coefficient_max,
-            half_rho_a * p.lift_coefficient_max * c.reverse_lift_factor,
+        self.constants = thruster_constants(
+            r07=self._r07,
+            lift_k_forward=half_rho_a * p.lift_coefficient_max,
+            lift_k_reverse=half_rho_a * p.lift_coefficient_max * c.reverse_lift_factor,
+            drag_k=half_rho_a * p.drag_coefficient_max,
+            sin2p=math.sin(2.0 * p.pitch_angle),
+            cos2p=math.cos(2.0 * p.pitch_angle),
+            duct_mass=p.water_density * duct_area * p.duct_length * p.duct_added_mass_ratio,
+            duct_loss=p.water_density * duct_area * p.momentum_flux_coefficient,
+            inv_sqrt_alpha_2_forward=1.0 / math.sqrt(c.alpha_2[0]),
+            inv_sqrt_alpha_2_reverse=1.0 / math.sqrt(c.alpha_2[1]),
+            ff_gain_forward=c.alpha_1[0] / p.motor_torque_constant,
+            ff_gain_reverse=c.alpha_1[1] / p.motor_torque_constant,
+            ff_friction=p.motor_viscous_friction / p.motor_torque_constant,
+            speed_feedback_gain=p.speed_feedback_gain,
+            max_motor_current=p.max_motor_current,
+            motor_torque_constant=p.motor_torque_constant,
+            motor_viscous_friction=p.motor_viscous_friction,
+            motor_inertia=p.motor_inertia,
         )
-        self._drag_k = half_rho_a * p.drag_coefficient_max
-        self._sin2p = math.sin(2.0 * p.pitch_angle)
-        self._cos2p = math.cos(2.0 * p.pitch_angle)
-        self._duct_mass = p.water_density * duct_area * p.duct_length * p.duct_added_mass_ratio
-        self._duct_loss = p.water_density * duct_area * p.momentum_flux_coefficient
-        self._inv_sqrt_alpha_2 = (1.0 / math.sqrt(c.alpha_2[0]), 1.0 / math.sqrt(c.alpha_2[1]))
-        self._ff_gain = (
-            c.alpha_1[0] / p.motor_torque_constant,
-            c.alpha_1[1] / p.motor_torque_constant,
-        )
-        self._ff_friction = p.motor_viscous_friction / p.motor_torque_constant
         self.omega = np.zeros(count)
         self.u_p = np.zeros(count)
         self.omega_r = np.zeros(count)
@@ -311,50 +322,18 @@ class ThrusterBank:
             a[:] = 0.0
 
     def blade_forces(self, omega: FloatArray, u_p: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Thrust T (N) and shaft torque Q (N m) of the blade element at 0.7 R (eq. 14-15).
-
-        Written without trigonometric calls: with V² = u_p² + V_t², cos 2β = (V_t² - u_p²)/V²
-        and sin 2β = 2 u_p V_t / V², so V² sin 2α and V² cos 2α are polynomials.
-        """
-        v_t = self._r07 * omega
-        uu = u_p * u_p
-        tt = v_t * v_t
-        c2b = tt - uu  # V² cos 2β
-        s2b = 2.0 * u_p * v_t  # V² sin 2β
-        # ½ρA C_Lmax V² sin 2α, with C_Lmax scaled by η_r in reverse rotation.
-        lift = (self._sin2p * c2b - self._cos2p * s2b) * np.where(
-            omega >= 0.0, self._lift_k[0], self._lift_k[1]
-        )
-        # ½ρA C_Dmax V² (1 - cos 2α).
-        drag = self._drag_k * (uu + tt - self._cos2p * c2b - self._sin2p * s2b)
-        inv_v = 1.0 / np.maximum(np.sqrt(uu + tt), 1e-9)  # L and D vanish as V², so T, Q -> 0
-        thrust = (lift * v_t - drag * u_p) * inv_v  # L cos β - D sin β
-        torque = self._r07 * (lift * u_p + drag * v_t) * inv_v  # 0.7 R (L sin β + D cos β)
+        """Thrust T (N) and shaft torque Q (N m) of the blade element at 0.7 R (eq. 14-15)."""
+        forces = [blade_element(self.constants, float(w), float(u))
+                  for w, u in zip(np.ravel(omega), np.ravel(u_p), strict=True)]
+        thrust, torque = np.array(forces, dtype=np.float64).reshape(-1, 2).T
         return thrust, torque
-
-    def _driver(self, f_td: FloatArray, omega: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Reference speed Ω_r (eq. 11) and motor current i_m (eq. 12, sign-corrected)."""
-        forward = f_td >= 0.0
-        omega_r = np.where(forward, self._inv_sqrt_alpha_2[0], -self._inv_sqrt_alpha_2[1])
-        omega_r *= np.sqrt(np.abs(f_td))
-        current = np.where(forward, self._ff_gain[0], self._ff_gain[1]) * f_td
-        current += self._ff_friction * omega_r
-        current += self.params.speed_feedback_gain * (omega_r - omega)
-        np.minimum(current, self.params.max_motor_current, out=current)
-        np.maximum(current, -self.params.max_motor_current, out=current)
-        return omega_r, current
 
     def derivatives(self, state: FloatArray, f_td: FloatArray) -> FloatArray:
         """Time derivative of the stacked state [Ω..., u_p...] for desired thrusts f_td."""
         n = f_td.size
-        omega, u_p = state[:n], state[n:]
-        _, current = self._driver(f_td, omega)
-        thrust, torque = self.blade_forces(omega, u_p)
-        p = self.params
-        omega_dot = (
-            p.motor_torque_constant * current - p.motor_viscous_friction * omega - torque
-        ) / p.motor_inertia
-        u_dot = (thrust - self._duct_loss * u_p * np.abs(u_p)) / self._duct_mass
+        rates = [state_derivative(self.constants, float(f), float(w), float(u))
+                 for f, w, u in zip(f_td, state[:n], state[n:], strict=True)]
+        omega_dot, u_dot = np.array(rates, dtype=np.float64).reshape(-1, 2).T
         return np.concatenate([omega_dot, u_dot])
 
     def steady_current(self, thrust: float) -> float:
@@ -392,37 +371,13 @@ class ThrusterBank:
             ControlInputError: if f_td has the wrong size or is not finite, or dt < 0.
         """
         f_td = np.asarray(f_td, dtype=np.float64)
-        if f_td.shape != (self.count,) or not np.all(np.isfinite(f_td)):
+        if not (math.isfinite(dt) and dt >= 0.0):
+            raise ControlInputError(f'time step dt = {dt} s must be finite and >= 0')
+        if f_td.shape != (self.count,) or not euler_step_bank(
+            self.constants, f_td, float(dt), self.calibration.max_step, self.omega, self.u_p,
+            self.omega_r, self.motor_current, self.thrust, self.torque,
+        ):
             raise ControlInputError(
                 f'desired thrusts must be {self.count} finite values, got {f_td.tolist()}'
             )
-        if not (math.isfinite(dt) and dt >= 0.0):
-            raise ControlInputError(f'time step dt = {dt} s must be finite and >= 0')
-        p = self.params
-        omega, u_p = self.omega, self.u_p
-        substeps = max(1, math.ceil(dt / self.calibration.max_step)) if dt > 0.0 else 0
-        h = dt / max(substeps, 1)
-        k_omega = h / p.motor_inertia
-        k_u = h / self._duct_mass
-        omega_r, current = self._driver(f_td, omega)
-        # self.thrust and self.torque always hold the blade forces of the current state, so
-        # each sub-step evaluates the blade element once.
-        thrust, torque = self.thrust, self.torque
-        for i in range(substeps):
-            if i > 0:
-                omega_r, current = self._driver(f_td, omega)
-                thrust, torque = self.blade_forces(omega, u_p)
-            omega_next = omega + k_omega * (
-                p.motor_torque_constant * current - p.motor_viscous_friction * omega - torque
-            )
-            u_p = u_p + k_u * (thrust - self._duct_loss * u_p * np.abs(u_p))
-            omega = omega_next
-        if substeps:
-            thrust, torque = self.blade_forces(omega, u_p)
-        self.omega[:] = omega
-        self.u_p[:] = u_p
-        self.omega_r[:] = omega_r
-        self.motor_current[:] = current
-        self.thrust[:] = thrust
-        self.torque[:] = torque
         return self.thrust
