@@ -5,7 +5,8 @@ of several rounds (microseconds per call) of ``uvms_model.UvmsModel`` and of the
 pure-Python implementation (``test/unit/model/reference_model.py``, the tests' oracle), in
 the same run, and their ratio: mass matrix, bias, forward dynamics, one RK4 step, the
 controller's model set, one controller step (the same control law on either model) and one
-allocator step (unchanged code: timed once); then Pinocchio's plain ABA for scale. Targets
+allocator step (the previous numpy allocator, ``test/unit/control/reference_allocator.py``);
+then Pinocchio's plain ABA for scale. Targets
 (issue 10): an RK4 step of the full model and a controller step at most 40 us each. The
 machine is shared: figures move with its load, ratios much less. A benchmark prints figures;
 it never asserts on time.
@@ -25,9 +26,11 @@ import numpy as np
 import pinocchio as pin
 
 ROOT = Path(__file__).resolve().parents[1]
-for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model'):
+for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model',
+               'test/unit/control'):
     sys.path.insert(0, str(ROOT / folder))
 
+from reference_allocator import ReferenceAllocator  # noqa: E402
 from reference_model import ReferenceModel  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
@@ -83,11 +86,11 @@ def main() -> None:
         return step
 
     layout = ThrusterLayout.from_parameters()
-    allocator = ThrusterAllocator(
-        AllocatorParameters(layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 200.0))
-    )
+    limits = AllocatorParameters(layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 200.0))
 
-    def calls(m: UvmsModel | ReferenceModel) -> list[tuple[str, Callable[[], object]]]:
+    def calls(
+        m: UvmsModel | ReferenceModel, allocator: ThrusterAllocator | ReferenceAllocator
+    ) -> list[tuple[str, Callable[[], object]]]:
         return [
             ('mass matrix M_b(q) (eq. 8)', lambda: m.mass_matrix_body(alternate())),
             ('bias C_b w + D_b w + G_b (eq. 8)', lambda: m.bias_body(alternate(), w)),
@@ -102,7 +105,7 @@ def main() -> None:
                 lambda: m.task_space_terms(alternate(), q_dot),
             ),
             ('one controller step (eq. 2, 22-39)', controller_step(m)),
-            ('one allocator step (eq. 10-15, unchanged)', lambda: allocator.step(tau_b, 2e-3)),
+            ('one allocator step (eq. 10-15)', lambda: allocator.step(tau_b, 2e-3)),
         ]
 
     print(
@@ -112,11 +115,12 @@ def main() -> None:
     )
     print(f'  {"call":<48s} {"now":>10s} {"previous":>10s} {"speed-up":>9s}')
     results: dict[str, float] = {}
-    for (name, new_call), (_, old_call) in zip(calls(model), calls(previous), strict=True):
+    for (name, new_call), (_, old_call) in zip(
+        calls(model, ThrusterAllocator(limits)), calls(previous, ReferenceAllocator(limits)),
+        strict=True,
+    ):
         new_us = per_call_us(new_call, args.number, args.repeat)
         old_us = per_call_us(old_call, max(args.number // 5, 1), args.repeat)
-        if 'unchanged' in name:
-            old_us = new_us
         results[name] = new_us
         print(f'  {name:<48s} {new_us:8.1f} us {old_us:8.1f} us {old_us / new_us:8.2f}x')
 
