@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import io
 import os
 import signal
+import struct
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
+from mcap.exceptions import McapError
 from mcap.reader import make_reader
+from mcap.records import Chunk
+from mcap.stream_reader import StreamReader
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
@@ -26,16 +31,31 @@ def start_cli(*args: str) -> subprocess.Popen[str]:
                             env=env, cwd=REPO)
 
 
-def wait_for_chunk(path: Path, process: subprocess.Popen[str], timeout_s: float = 30.0) -> None:
-    """Wait until the recording exists and then grows: the graph is running and recording."""
+def written_chunks(path: Path) -> int:
+    """Complete chunks in a recording being written (0 while it has none, or no file)."""
+    if not path.exists():
+        return 0
+    chunks = 0
+    try:
+        for record in StreamReader(io.BytesIO(path.read_bytes()), emit_chunks=True).records:
+            chunks += isinstance(record, Chunk)
+    except (McapError, EOFError, struct.error):
+        pass  # the writer's last record is not complete yet
+    return chunks
+
+
+def wait_for_chunk(path: Path, process: subprocess.Popen[str], timeout_s: float = 60.0) -> None:
+    """Wait until the recording holds a complete chunk: the graph runs and its messages land.
+
+    The file grows before any message is written (header, schemas, channels), so its size
+    alone does not say that the graph runs; on a slow machine a signal sent then finds no
+    message recorded yet.
+    """
     deadline = time.monotonic() + timeout_s
-    first_size = None
-    while first_size is None or path.stat().st_size <= first_size:
+    while not written_chunks(path):
         assert process.poll() is None, process.communicate()[1]
-        assert time.monotonic() < deadline, 'the recording did not grow'
-        if first_size is None and path.exists():
-            first_size = path.stat().st_size
-        time.sleep(0.05)
+        assert time.monotonic() < deadline, 'no chunk was recorded'
+        time.sleep(0.1)
 
 
 @pytest.mark.parametrize(
