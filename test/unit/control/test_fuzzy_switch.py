@@ -89,11 +89,9 @@ def test_surface_is_continuous(switch: FuzzySwitch, axis: int) -> None:
         )
         return float(np.max(np.abs(np.diff(switch.surface(ratios, velocities), axis=axis))))
 
-    # A 4x finer grid: a continuous surface's largest jump shrinks about 4x (3.96x measured),
-    # a discontinuity's stays put.
-    coarse, fine = largest_jump(1), largest_jump(4)
+    coarse, fine = largest_jump(1), largest_jump(10)
     assert coarse < 0.05
-    assert fine < coarse / 2.5
+    assert fine < coarse / 5.0
 
 
 def test_surface_stays_within_unit_interval(switch: FuzzySwitch) -> None:

@@ -279,11 +279,10 @@ class ThrusterBank:
         self.calibration = calibration if calibration is not None else calibrate(params)
         p, c = params, self.calibration
         radius = p.propeller_diameter / 2.0
-        self._r07 = 0.7 * radius
         duct_area = math.pi * radius * radius
         half_rho_a = 0.5 * p.water_density * c.blade_area
         self.constants = thruster_constants(
-            r07=self._r07,
+            r07=0.7 * radius,
             lift_k_forward=half_rho_a * p.lift_coefficient_max,
             lift_k_reverse=half_rho_a * p.lift_coefficient_max * c.reverse_lift_factor,
             drag_k=half_rho_a * p.drag_coefficient_max,
@@ -359,7 +358,7 @@ class ThrusterBank:
         c = self.calibration
         index = 0 if thrust >= 0.0 else 1
         omega = math.copysign(math.sqrt(abs(thrust) / c.alpha_2[index]), thrust)
-        return omega, c.flow_ratio[index] * self._r07 * omega
+        return omega, c.flow_ratio[index] * float(self.constants[0]['r07']) * omega
 
     def step(self, f_td: FloatArray, dt: float) -> FloatArray:
         """Advance every thruster by dt (s) under desired thrusts f_td (N); return thrusts.
