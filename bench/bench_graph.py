@@ -68,7 +68,6 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
     THRUSTER_ALLOCATOR,
     resolve_scenario_path,
 )
-from uvms_bringup.recording import open_recording  # noqa: E402
 from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
@@ -80,6 +79,7 @@ from uvms_control.core.parameters import (  # noqa: E402
 )
 from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
+from uvms_recording.recording import open_recording  # noqa: E402
 from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings  # noqa: E402
 from uvms_sim.plant import Plant, initial_coordinates  # noqa: E402
 

@@ -93,7 +93,7 @@ class Job:
 
 def uvms(*args: str) -> list[str]:
     """The ``uvms`` command line run by this interpreter (works in a bare checkout too)."""
-    return [sys.executable, '-m', 'uvms_bringup.cli', *args]
+    return [sys.executable, '-m', 'uvms_cli.cli', *args]
 
 
 def child_env() -> dict[str, str]:

@@ -26,7 +26,7 @@ from nav_msgs.msg import Odometry  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
-from uvms_bringup.typestore import uvms_typestore  # noqa: E402
+from uvms_recording.typestore import uvms_typestore  # noqa: E402
 
 from uvms_msgs.msg import ControllerState  # noqa: E402
 

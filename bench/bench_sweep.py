@@ -50,12 +50,12 @@ def main() -> int:
     args = parser.parse_args()
 
     # Imported here, before anything imports ray: start_local_ray sets Ray's environment.
-    from uvms_bringup.sweep_file import load_sweep
-    from uvms_bringup.sweep_point import execute_point
-    from uvms_bringup.sweep_validate import check_sweep
     from uvms_common.ros_environment import ros_environment_defaults
+    from uvms_sweep.point import execute_point
+    from uvms_sweep.sweep_file import load_sweep
+    from uvms_sweep.validate import check_sweep
 
-    from uvms_bringup import sweep_engine
+    from uvms_sweep import engine as sweep_engine
 
     ros_environment_defaults()
     with tempfile.TemporaryDirectory(prefix='bench-sweep-') as tmp:

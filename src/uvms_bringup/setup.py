@@ -28,16 +28,8 @@ setup(
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
     description=(
-        'Bringup of the UVMS stack: launch file, the uvms command line (run, launch, '
-        'replay, plot, report, doctor), MCAP recorder and replay.'
+        'Bringup of the UVMS stack: the launch file, the configuration and scenarios, the '
+        'in-process lockstep graph and the one-process-per-node launcher.'
     ),
     license='Apache-2.0',
-    entry_points={
-        'console_scripts': [
-            'recorder = uvms_bringup.entry_points:recorder',
-            'visualizer = uvms_bringup.entry_points:visualizer',
-            'foxglove_server = uvms_bringup.entry_points:foxglove_server',
-            'uvms = uvms_bringup.cli:main',
-        ],
-    },
 )

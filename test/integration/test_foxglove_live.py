@@ -23,7 +23,7 @@ import pinocchio as pin
 import pytest
 from foxglove_client import FoxgloveClient, connect_when_up
 from rosbags.highlevel import AnyReader
-from uvms_bringup.typestore import uvms_typestore
+from uvms_recording.typestore import uvms_typestore
 
 REPO = Path(__file__).resolve().parents[2]
 WRENCH = '/uvms/wrench'
@@ -48,7 +48,7 @@ def start_run(*args: str) -> subprocess.Popen[str]:
     """``uvms run`` in a child process on a DDS domain of its own."""
     env = dict(os.environ, ROS_DOMAIN_ID=str(random.SystemRandom().randint(101, 200)),
                PYTHONUNBUFFERED='1')
-    return subprocess.Popen([sys.executable, '-m', 'uvms_bringup.cli', 'run', *args],
+    return subprocess.Popen([sys.executable, '-m', 'uvms_cli.cli', 'run', *args],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env=env, cwd=REPO)
 
@@ -190,7 +190,7 @@ def test_launch_with_foxglove_serves_the_process_graph(tmp_path: Path) -> None:
     env = dict(os.environ, ROS_DOMAIN_ID=str(random.SystemRandom().randint(101, 200)),
                PYTHONUNBUFFERED='1')
     process = subprocess.Popen(
-        [sys.executable, '-m', 'uvms_bringup.cli', 'launch', 'free_motion', '--foxglove',
+        [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'free_motion', '--foxglove',
          str(port)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
         cwd=REPO)
     try:

@@ -11,7 +11,7 @@ from rosbags.highlevel import AnyReader
 from uvms_bringup.graph import GraphError, RunResult, build_graph, run_graph
 from uvms_bringup.scenario import Scenario, load_scenario
 
-from uvms_bringup import cli
+from uvms_cli import cli
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 DURATION_S = 0.5

@@ -7,7 +7,7 @@ from uvms_bringup.graph import check_scenario_overrides
 from uvms_bringup.launch_helpers import SIMULATOR
 from uvms_bringup.scenario import ScenarioError, load_scenario
 
-from uvms_bringup import cli
+from uvms_cli import cli
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 PAPER_SCENARIOS = ('free_motion', 'case1_ke1e4', 'case1_ke1e5', 'case2_noise',

@@ -23,10 +23,10 @@ SOURCES = [REPO / 'src' / name for name in
 
 
 def start_cli(*args: str) -> subprocess.Popen[str]:
-    """Start `python -m uvms_bringup.cli ARGS` (genuine rclpy of this venv)."""
+    """Start `python -m uvms_cli.cli ARGS` (genuine rclpy of this venv)."""
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([*map(str, SOURCES), env.get('PYTHONPATH', '')])
-    return subprocess.Popen([sys.executable, '-m', 'uvms_bringup.cli', *args],
+    return subprocess.Popen([sys.executable, '-m', 'uvms_cli.cli', *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=env, cwd=REPO)
 

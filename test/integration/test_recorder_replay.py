@@ -23,12 +23,12 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
 from uvms_bringup.graph import build_graph, run_graph
-from uvms_bringup.recorder_node import DEFAULT_TOPICS, RecorderNode
-from uvms_bringup.recording import McapRecorder, open_recording
-from uvms_bringup.replay import ReplayNode, ReplayOptions
 from uvms_bringup.scenario import load_scenario
+from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
+from uvms_recording.recording import McapRecorder, open_recording
+from uvms_recording.replay import ReplayNode, ReplayOptions
 
-from uvms_bringup import replay
+from uvms_recording import replay
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
@@ -36,12 +36,12 @@ SOURCES = [REPO / 'src' / name for name in
 
 
 def _start_recorder(*parameters: str) -> subprocess.Popen[str]:
-    """Start `python -m uvms_bringup.recorder_node` with -p parameters."""
+    """Start `python -m uvms_recording.recorder_node` with -p parameters."""
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([*map(str, SOURCES), env.get('PYTHONPATH', '')])
     arguments = [item for parameter in parameters for item in ('-p', parameter)]
     return subprocess.Popen(
-        [sys.executable, '-m', 'uvms_bringup.recorder_node', '--ros-args',
+        [sys.executable, '-m', 'uvms_recording.recorder_node', '--ros-args',
          '-r', '__ns:=/uvms', *arguments],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
     )
@@ -107,7 +107,7 @@ def test_signal_stops_a_looping_replay_process_cleanly(
     # A replay keeps an inherited SIG_IGN (a background job); this test wants SIGINT delivered
     # even when the suite itself runs as such a job.
     process = subprocess.Popen(
-        [sys.executable, '-m', 'uvms_bringup.replay', str(path), '--loop'],
+        [sys.executable, '-m', 'uvms_recording.replay', str(path), '--loop'],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )

@@ -22,12 +22,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from uvms_bringup.sweep_engine import SweepSummary, point_request, run_sweep, start_local_ray
-from uvms_bringup.sweep_file import METRIC_KEYS, Sweep, load_sweep
-from uvms_bringup.sweep_table import TABLE_NAME
-from uvms_bringup.sweep_validate import check_sweep
+from uvms_sweep.engine import SweepSummary, point_request, run_sweep, start_local_ray
+from uvms_sweep.sweep_file import METRIC_KEYS, Sweep, load_sweep
+from uvms_sweep.table import TABLE_NAME
+from uvms_sweep.validate import check_sweep
 
-from uvms_bringup import report, sweep_cli
+from uvms_analysis import report
+from uvms_sweep import cli as sweep_cli
 
 K_E = 'simulator.contact.stiffness_n_m'
 MASS = 'controller.model.mass_scale'
@@ -75,7 +76,7 @@ def point_processes() -> list[int]:
             environ = (entry / 'environ').read_bytes().split(b'\0')
         except OSError:
             continue
-        if b'uvms_bringup.sweep_point' in cmdline and MARK.encode() in environ:
+        if b'uvms_sweep.point' in cmdline and MARK.encode() in environ:
             pids.append(int(entry.name))
     return pids
 
@@ -195,8 +196,8 @@ def test_point_past_its_timeout_fails_with_reason_timeout_and_is_killed(
 
 def test_point_asked_to_stop_is_killed_and_reported_interrupted(tmp_path: Path) -> None:
     """`should_stop` True (the sweep's Ctrl-C): the child is killed, the outcome says so."""
-    from uvms_bringup.sweep_engine import DOMAIN_IDS
-    from uvms_bringup.sweep_point import STOP_POLL_S, execute_point
+    from uvms_sweep.engine import DOMAIN_IDS
+    from uvms_sweep.point import STOP_POLL_S, execute_point
 
     text = GRID.replace('duration_s: 0.3', 'duration_s: 30.0').replace(
         f'{MASS}: [1.0, 20.0]', f'{MASS}: [1.0]').replace(f'{K_E}: [1.0e+4, 1.0e+5]',
@@ -247,7 +248,7 @@ def test_bad_sweep_file_stops_the_command_naming_the_key(tmp_path: Path) -> None
     """A wrong value type exits 2 with one line naming file and key, before Ray starts."""
     path = write(tmp_path, GRID.replace('timeout_s: 120.0', 'timeout_s: soon'))
     process = subprocess.run(
-        [sys.executable, '-m', 'uvms_bringup.cli', 'sweep', str(path), '--out',
+        [sys.executable, '-m', 'uvms_cli.cli', 'sweep', str(path), '--out',
          str(tmp_path / 'out')], capture_output=True, text=True, timeout=PROCESS_TIMEOUT_S)
     assert process.returncode == 2
     assert process.stderr.strip().splitlines() == [
@@ -266,7 +267,7 @@ def test_ctrl_c_stops_the_sweep_keeps_what_is_done_and_leaves_no_point_running(
     name, value = MARK.split('=')
     env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p), name: value}
     process = subprocess.Popen(
-        [sys.executable, '-m', 'uvms_bringup.cli', 'sweep', str(path), '--out', str(out),
+        [sys.executable, '-m', 'uvms_cli.cli', 'sweep', str(path), '--out', str(out),
          '--workers', '2', '--quiet'], stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + PROCESS_TIMEOUT_S
     # A point done and another running: the check for left-over processes sees running ones.
@@ -314,7 +315,7 @@ def test_address_joins_an_existing_ray_cluster(tmp_path: Path) -> None:
         text = GRID.replace('record: true', 'record: false')
         path = write(tmp_path, text)
         process = subprocess.run(
-            [sys.executable, '-m', 'uvms_bringup.cli', 'sweep', str(path), '--out',
+            [sys.executable, '-m', 'uvms_cli.cli', 'sweep', str(path), '--out',
              str(tmp_path / 'out'), '--address', f'127.0.0.1:{port}', '--quiet'],
             capture_output=True, text=True, env=env, timeout=PROCESS_TIMEOUT_S)
         assert process.returncode == 0, process.stderr

@@ -46,8 +46,9 @@ pytestmark = pytest.mark.colcon
 
 REPO = Path(__file__).resolve().parents[2]
 #: The packages of src/, each built by colcon (interfaces/tf2_msgs carries a COLCON_IGNORE).
-PACKAGES = ('uvms_bringup', 'uvms_common', 'uvms_control', 'uvms_description', 'uvms_model',
-            'uvms_msgs', 'uvms_sim')
+PACKAGES = ('uvms_analysis', 'uvms_bringup', 'uvms_cli', 'uvms_common', 'uvms_control',
+            'uvms_description', 'uvms_model', 'uvms_msgs', 'uvms_recording', 'uvms_sim',
+            'uvms_sweep', 'uvms_viz')
 #: Longest time the build may take (s); the packages build in about 40 s on 2 cores.
 BUILD_TIMEOUT_S = 600.0
 #: colcon on this interpreter (as the venv's ``colcon`` script would): colcon runs setup.py
@@ -59,10 +60,10 @@ EXECUTABLES = (
     ('uvms_sim', 'simulator'),
     ('uvms_control', 'controller'),
     ('uvms_control', 'thruster_allocator'),
-    ('uvms_bringup', 'recorder'),
-    ('uvms_bringup', 'visualizer'),
-    ('uvms_bringup', 'foxglove_server'),
-    ('uvms_bringup', 'uvms'),
+    ('uvms_recording', 'recorder'),
+    ('uvms_viz', 'visualizer'),
+    ('uvms_viz', 'foxglove_server'),
+    ('uvms_cli', 'uvms'),
 )
 NAMESPACE = '/uvms'
 #: A domain of its own, so that no other DDS graph on this machine answers for ours.
@@ -211,7 +212,7 @@ def node_command(workspace: Workspace, name: str, recording: Path) -> list[str]:
         'simulator': ('uvms_sim', [*robot, '-p', 'mode:=realtime']),
         'controller': ('uvms_control', control),
         'thruster_allocator': ('uvms_control', control),
-        'recorder': ('uvms_bringup', ['-p', f'output_path:={recording}']),
+        'recorder': ('uvms_recording', ['-p', f'output_path:={recording}']),
     }
     package, ros_args = arguments[name]
     executable = workspace.install / package / 'lib' / package / name
@@ -346,7 +347,8 @@ def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Work
         'from uvms_common.ros_environment import loopback_profile_path',
         'modules = {name: importlib.import_module(name).__file__ for name in (',
         "    'uvms_common', 'uvms_description', 'uvms_model', 'uvms_sim', 'uvms_control',",
-        "    'uvms_bringup',",
+        "    'uvms_bringup', 'uvms_recording', 'uvms_analysis', 'uvms_viz', 'uvms_sweep',",
+        "    'uvms_cli',",
         "    'uvms_msgs.msg')}",
         "prefixes = {name: get_package_prefix(name) for name in ('uvms_bringup', 'uvms_msgs',",
         "                                                        'rclpy')}",

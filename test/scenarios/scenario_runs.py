@@ -2,7 +2,7 @@
 
 A scenario run is the whole node graph in lockstep (``uvms run SCENARIO --output F.mcap``),
 recorded to MCAP in a session temporary directory and read back with
-``uvms_bringup.analysis``. The runs are CPU-bound Python, so they go to separate processes:
+``uvms_analysis.analysis``. The runs are CPU-bound Python, so they go to separate processes:
 when the first scenario fixture is requested, every scenario that the selected tests need is
 started, at most ``WORKERS`` at a time in the order the tests use them, and each fixture
 then waits only for its own run.
@@ -17,7 +17,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from uvms_bringup.analysis import Run, RunMetrics, compute_metrics, load_run
+from uvms_analysis.analysis import Run, RunMetrics, compute_metrics, load_run
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 #: Concurrent scenario processes: the CI machine has two cores.
@@ -39,8 +39,8 @@ class ScenarioResult:
     Attributes:
         name: Scenario name (file stem in config/scenarios).
         path: The MCAP recording.
-        run: Its series (``uvms_bringup.analysis.load_run``).
-        metrics: Its metrics (``uvms_bringup.analysis.compute_metrics``).
+        run: Its series (``uvms_analysis.analysis.load_run``).
+        metrics: Its metrics (``uvms_analysis.analysis.compute_metrics``).
     """
 
     name: str
@@ -110,7 +110,7 @@ class ScenarioRuns:
             self._running[name] = self._start(name)
 
     def _start(self, name: str) -> subprocess.Popen[bytes]:
-        command = [sys.executable, '-m', 'uvms_bringup.cli', 'run',
+        command = [sys.executable, '-m', 'uvms_cli.cli', 'run',
                    str(SCENARIO_DIR / f'{name}.yaml'), '--output', str(self._path(name)),
                    '--quiet']
         if name in SHORTENED_S:

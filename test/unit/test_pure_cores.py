@@ -8,7 +8,8 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / 'src'
 
 #: Modules that must stay free of ROS: the model, the controller and allocator cores, the
-#: simulator's plant, and the offline analysis and recording code.
+#: simulator's plant, the whole analysis package, the MCAP writer and reader, and the marker
+#: geometry.
 PURE_MODULES = sorted(
     [
         *(SRC / 'uvms_model' / 'uvms_model').rglob('*.py'),
@@ -18,9 +19,9 @@ PURE_MODULES = sorted(
             for path in (SRC / 'uvms_sim' / 'uvms_sim').rglob('*.py')
             if not path.name.endswith('_node.py') and path.name != 'conversions.py'
         ),
-        SRC / 'uvms_bringup' / 'uvms_bringup' / 'analysis.py',
-        SRC / 'uvms_bringup' / 'uvms_bringup' / 'recording.py',
-        SRC / 'uvms_bringup' / 'uvms_bringup' / 'marker_geometry.py',
+        *(SRC / 'uvms_analysis' / 'uvms_analysis').rglob('*.py'),
+        SRC / 'uvms_recording' / 'uvms_recording' / 'recording.py',
+        SRC / 'uvms_viz' / 'uvms_viz' / 'marker_geometry.py',
     ]
 )
 
@@ -41,7 +42,7 @@ def imported_roots(path: Path) -> set[str]:
 def test_pure_core_modules_exist() -> None:
     """The model and controller cores are where the layout says they are."""
     names = {path.relative_to(SRC).parts[0] for path in PURE_MODULES if path.exists()}
-    assert {'uvms_model', 'uvms_control', 'uvms_sim', 'uvms_bringup'} <= names
+    assert {'uvms_model', 'uvms_control', 'uvms_sim', 'uvms_analysis', 'uvms_recording'} <= names
 
 
 @pytest.mark.parametrize('path', PURE_MODULES, ids=lambda p: str(p.relative_to(SRC)))

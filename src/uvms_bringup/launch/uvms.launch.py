@@ -26,8 +26,6 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
-    FOXGLOVE_HOST,
-    FOXGLOVE_PORT,
     MODES,
     RECORDER,
     file_parameters,
@@ -37,6 +35,7 @@ from uvms_bringup.launch_helpers import (
     resolve_scenario_path,
 )
 from uvms_bringup.scenario import load_scenario
+from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
 
 def _launch_nodes(context: LaunchContext) -> list[Node]:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
 from uvms_bringup.scenario import ParameterValue, Scenario
 
@@ -65,25 +66,20 @@ THRUSTER_ALLOCATOR = NodeSpec(
     ('robot.yaml', 'controller.yaml'),
 )
 VISUALIZER = NodeSpec(
-    'visualizer', 'uvms_bringup', 'visualizer', 'uvms_bringup.visualizer_node',
+    'visualizer', 'uvms_viz', 'visualizer', 'uvms_viz.visualizer_node',
     'VisualizerNode', (),
 )
 FOXGLOVE_SERVER = NodeSpec(
-    'foxglove_server', 'uvms_bringup', 'foxglove_server', 'uvms_bringup.foxglove_server_node',
+    'foxglove_server', 'uvms_viz', 'foxglove_server', 'uvms_viz.foxglove_server_node',
     'FoxgloveServerNode', (),
 )
 RECORDER = NodeSpec(
-    'recorder', 'uvms_bringup', 'recorder', 'uvms_bringup.recorder_node', 'RecorderNode', (),
+    'recorder', 'uvms_recording', 'recorder', 'uvms_recording.recorder_node', 'RecorderNode', (),
 )
 
 #: The nodes that always run, in start order; the Foxglove server joins for a live view and
 #: the recorder, last, when there is an output.
 CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, VISUALIZER)
-
-#: Default address of the Foxglove live view (loopback only; a wider bind is explicit).
-FOXGLOVE_HOST = '127.0.0.1'
-FOXGLOVE_PORT = 8765
-
 
 def graph_nodes(record: bool, foxglove: bool = False) -> tuple[NodeSpec, ...]:
     """The nodes of a run: with the Foxglove server for a live view, the recorder last."""

@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from uvms_bringup.recording import McapRecorder, run_metadata
-from uvms_bringup.typestore import uvms_typestore
+from uvms_recording.recording import McapRecorder, run_metadata
+from uvms_recording.typestore import uvms_typestore
 
 #: Sample period of every synthetic topic (s).
 DT = 0.002

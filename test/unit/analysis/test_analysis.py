@@ -1,4 +1,4 @@
-"""Tests of uvms_bringup.analysis: metrics on signals with known answers, and recording loading."""
+"""uvms_analysis.analysis: metrics on signals with known answers, and recording loading."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from analysis_recordings import (
     YAW_MAX,
 )
 from scipy.spatial.transform import Rotation
-from uvms_bringup.analysis import (
+from uvms_analysis.analysis import (
     AnalysisError,
     ContactSeries,
     ControllerSeries,

@@ -1,12 +1,12 @@
-"""Tests of `uvms plot` (uvms_bringup.plots): the PNG files it writes."""
+"""Tests of `uvms plot` (uvms_analysis.plots): the PNG files it writes."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
-from uvms_bringup.analysis import load_run
-from uvms_bringup.plots import RECORDING_FIGURES, figure_force_response, main
+from uvms_analysis.analysis import load_run
+from uvms_analysis.plots import RECORDING_FIGURES, figure_force_response, main
 
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 

@@ -1,4 +1,4 @@
-"""Tests of `uvms report` (uvms_bringup.report): rows, values, formats and errors."""
+"""Tests of `uvms report` (uvms_analysis.report): rows, values, formats and errors."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import io
 from pathlib import Path
 
 import pytest
-from uvms_bringup.report import main
+from uvms_analysis.report import main
 
 
 def run_report(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:

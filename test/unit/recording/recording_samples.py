@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from uvms_bringup.typestore import uvms_typestore
+from uvms_recording.typestore import uvms_typestore
 
 #: (topic, type) of the graph topics the fixtures produce, as the recorder names them.
 GRAPH_TOPICS = (

@@ -12,14 +12,14 @@ from mcap.writer import Writer
 from recording_samples import GRAPH_TOPICS, graph_messages, make_cdr
 from rosbags.rosbag2 import StoragePlugin
 from rosbags.rosbag2 import Writer as Rosbag2Writer
-from uvms_bringup.recording import (
+from uvms_recording.recording import (
     McapRecorder,
     RecordingError,
     RecordingTruncatedWarning,
     open_recording,
     read_recording,
 )
-from uvms_bringup.typestore import uvms_typestore
+from uvms_recording.typestore import uvms_typestore
 
 N_STEPS = 200
 

@@ -14,7 +14,7 @@ from mcap.stream_reader import StreamReader
 from recording_samples import GRAPH_TOPICS, graph_messages, make_message
 from rosbags.highlevel import AnyReader
 from rosbags.interfaces import QosDurability, QosReliability
-from uvms_bringup.recording import (
+from uvms_recording.recording import (
     RUN_METADATA_NAME,
     McapRecorder,
     QosDescription,
@@ -22,7 +22,7 @@ from uvms_bringup.recording import (
     open_recording,
     run_metadata,
 )
-from uvms_bringup.typestore import type_hash, uvms_typestore
+from uvms_recording.typestore import type_hash, uvms_typestore
 
 N_STEPS = 50
 
@@ -52,7 +52,7 @@ def test_header_declares_the_ros2_profile(recorded: tuple[Path, list]) -> None:
     with path.open('rb') as stream:
         header = make_reader(stream).get_header()
     assert header.profile == 'ros2'
-    assert header.library.startswith('uvms_bringup/')
+    assert header.library.startswith('uvms_recording/')
 
 
 def test_schemas_are_ros2msg_with_the_full_definition(recorded: tuple[Path, list]) -> None:

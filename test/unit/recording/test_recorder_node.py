@@ -22,8 +22,8 @@ from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
-from uvms_bringup.recorder_node import DEFAULT_TOPICS, RecorderNode
-from uvms_bringup.recording import RUN_METADATA_NAME, RecordingError, open_recording
+from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
+from uvms_recording.recording import RUN_METADATA_NAME, RecordingError, open_recording
 
 from uvms_msgs.msg import ControllerState
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from recording_samples import GRAPH_TOPICS, graph_messages, make_message
-from uvms_bringup.recording import McapRecorder, RecordedMessage, ReplayError, open_recording
-from uvms_bringup.replay import (
+from uvms_recording.recording import McapRecorder, RecordedMessage, ReplayError, open_recording
+from uvms_recording.replay import (
     Deviation,
     ReplayOptions,
     RerunReport,
@@ -16,7 +16,7 @@ from uvms_bringup.replay import (
     play_messages,
     select_topics,
 )
-from uvms_bringup.typestore import uvms_typestore
+from uvms_recording.typestore import uvms_typestore
 
 
 class FakeClock:

@@ -1,4 +1,4 @@
-"""Tests of uvms_bringup.typestore: Jazzy + uvms_msgs types, schemas and type hashes."""
+"""Tests of uvms_recording.typestore: Jazzy + uvms_msgs types, schemas and type hashes."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 from rosbags.typesys import get_types_from_msg
-from uvms_bringup.typestore import (
+from uvms_recording.typestore import (
     InterfaceError,
     message_definition,
     normalize_type_name,

@@ -1,0 +1,769 @@
+"""Offline analysis of a UVMS recording: numpy time series and the paper's performance metrics.
+
+Time base: every series is indexed by its messages' header stamps (simulated time in lockstep
+runs), in seconds since the earliest stamp among the loaded topics, so ``t = 0`` is the start
+of the recording and all topics share one clock. ``load_run(..., time_source='log')`` uses the
+MCAP log times instead (for recordings whose publishers left the stamps empty).
+
+The metric functions are pure: numpy arrays in, numbers out. The contact force along the wall
+normal is the x component of ``F_e`` in ``map_ned`` (the wall is a plane normal to x), signed
+so that pushing towards the desired force is positive.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+from uvms_recording.recording import (
+    RUN_METADATA_NAME,
+    RecordedMessage,
+    RecordingError,
+    open_recording,
+)
+from uvms_recording.typestore import uvms_typestore
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+TOPIC_CONTROLLER_STATE = '/uvms/controller/state'
+TOPIC_CONTACT = '/uvms/contact'
+TOPIC_ODOMETRY = '/uvms/odometry'
+TOPIC_EE_POSE = '/uvms/ee_pose'
+TOPIC_THRUSTERS = '/uvms/thrusters/state'
+
+#: The topics that ``load_run`` turns into series.
+ANALYSIS_TOPICS = (
+    TOPIC_CONTROLLER_STATE,
+    TOPIC_CONTACT,
+    TOPIC_ODOMETRY,
+    TOPIC_EE_POSE,
+    TOPIC_THRUSTERS,
+)
+
+#: Band around F_d within which the force counts as settled (fraction of |F_d|).
+SETTLING_BAND = 0.05
+#: Shortest stay inside the band that counts as settled (s); shorter stays are crossings.
+SETTLING_MIN_HOLD_S = 0.2
+#: Window after first contact in which the impact peak is taken (s).
+IMPACT_WINDOW_S = 0.5
+#: Samples before this time are excluded from the free-motion tracking error (s): the start-up
+#: transient of the controller is not tracking performance.
+TRACKING_START_S = 1.0
+#: Normal force above which the end effector counts as in contact when a recording has no
+#: ground-truth contact topic (N); well above the 0.1 N sensor noise of Case II.
+CONTACT_FORCE_THRESHOLD_N = 1.0
+
+
+class AnalysisError(Exception):
+    """A recording cannot be read or lacks what an analysis needs."""
+
+
+# --------------------------------------------------------------------------------------------
+# Time series
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ControllerSeries:
+    """ControllerState samples: task-space vectors (n, 3) in map_ned, scalars (n,).
+
+    Attributes:
+        t: Time (s).
+        W: Fuzzy switching weight in [0, 1] (eq. 2).
+        phase: Task phase (ControllerState.PHASE_*).
+        F_e: Measured contact force exerted by the end effector (N).
+        F_d: Desired contact force (N).
+        X: End-effector position (m).
+        X_d: Desired end-effector position (m).
+        X_dot: End-effector velocity (m/s).
+        X_dot_d: Desired end-effector velocity (m/s).
+        v_e: End-effector velocity along the wall normal (m/s).
+        F_c: Blended control force (N, eq. 2).
+        F_IP: Impedance controller output (N, eq. 31).
+        F_H: Hybrid position/force controller output (N, eq. 35).
+    """
+
+    t: FloatArray
+    W: FloatArray
+    phase: npt.NDArray[np.uint8]
+    F_e: FloatArray
+    F_d: FloatArray
+    X: FloatArray
+    X_d: FloatArray
+    X_dot: FloatArray
+    X_dot_d: FloatArray
+    v_e: FloatArray
+    F_c: FloatArray
+    F_IP: FloatArray
+    F_H: FloatArray
+
+
+@dataclass(frozen=True)
+class ContactSeries:
+    """Ground-truth contact samples from the simulator.
+
+    Attributes:
+        t: Time (s).
+        in_contact: True while the end effector penetrates the wall.
+        force: Force exerted by the end effector on the wall (N), (n, 3) in map_ned.
+        penetration: Penetration depth (m).
+        wall_position: Wall surface position along map_ned x (m).
+        wall_velocity: Wall speed along map_ned x (m/s).
+    """
+
+    t: FloatArray
+    in_contact: BoolArray
+    force: FloatArray
+    penetration: FloatArray
+    wall_position: FloatArray
+    wall_velocity: FloatArray
+
+
+@dataclass(frozen=True)
+class OdometrySeries:
+    """Vehicle odometry samples: pose in map_ned, twist in base_link_frd.
+
+    Attributes:
+        t: Time (s).
+        position: Vehicle origin in map_ned (m), (n, 3).
+        quaternion: Orientation of base_link_frd in map_ned, (n, 4) as (x, y, z, w).
+        rpy: Roll, pitch, yaw (rad), ZYX Euler angles, (n, 3).
+        linear_velocity: Body linear velocity (m/s), (n, 3).
+        angular_velocity: Body angular rates (rad/s), (n, 3).
+    """
+
+    t: FloatArray
+    position: FloatArray
+    quaternion: FloatArray
+    rpy: FloatArray
+    linear_velocity: FloatArray
+    angular_velocity: FloatArray
+
+
+@dataclass(frozen=True)
+class PoseSeries:
+    """End-effector pose samples in map_ned.
+
+    Attributes:
+        t: Time (s).
+        position: End-effector position (m), (n, 3).
+        quaternion: Orientation of ee_link, (n, 4) as (x, y, z, w).
+    """
+
+    t: FloatArray
+    position: FloatArray
+    quaternion: FloatArray
+
+
+@dataclass(frozen=True)
+class ThrusterSeries:
+    """ThrusterState samples, arrays (n, p) indexed by thruster (NaN where a sample lacks one).
+
+    Attributes:
+        t: Time (s).
+        desired_thrust: Allocated thrust F_td,v (N, eq. 10).
+        actual_thrust: Thrust produced by the thruster model (N, eq. 15).
+        propeller_speed: Propeller angular velocity Ω (rad/s).
+        reference_speed: Reference angular velocity Ω_r (rad/s, eq. 11).
+        motor_current: Motor current i_m (A, eq. 12).
+        saturation_scale: Factor by which the wrench was scaled to respect limits, (n,).
+    """
+
+    t: FloatArray
+    desired_thrust: FloatArray
+    actual_thrust: FloatArray
+    propeller_speed: FloatArray
+    reference_speed: FloatArray
+    motor_current: FloatArray
+    saturation_scale: FloatArray
+
+
+@dataclass(frozen=True)
+class Run:
+    """One recording as time series; a topic absent from the recording is None.
+
+    Attributes:
+        name: Run name: the 'scenario' of the recording's 'uvms' metadata, else the file stem.
+        path: The recording file, if it came from one.
+        controller: /uvms/controller/state.
+        contact: /uvms/contact (ground truth).
+        odometry: /uvms/odometry.
+        ee_pose: /uvms/ee_pose.
+        thrusters: /uvms/thrusters/state.
+        metadata: The recording's metadata records, by record name.
+        time_origin_ns: Stamp (or log time) of t = 0 (ns).
+        problem: What was lost if the recording was cut short, else None.
+    """
+
+    name: str
+    path: Path | None = None
+    controller: ControllerSeries | None = None
+    contact: ContactSeries | None = None
+    odometry: OdometrySeries | None = None
+    ee_pose: PoseSeries | None = None
+    thrusters: ThrusterSeries | None = None
+    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
+    time_origin_ns: int = 0
+    problem: str | None = None
+
+
+# --------------------------------------------------------------------------------------------
+# Pure metrics on arrays
+# --------------------------------------------------------------------------------------------
+
+
+def contact_intervals(in_contact: BoolArray) -> list[tuple[int, int]]:
+    """Index ranges ``[start, stop)`` of the runs of consecutive in-contact samples.
+
+    Example: ``contact_intervals(np.array([0, 1, 1, 0, 1], bool)) == [(1, 3), (4, 5)]``.
+    """
+    flags = np.concatenate(([False], np.asarray(in_contact, dtype=bool), [False]))
+    edges = np.flatnonzero(np.diff(flags.astype(np.int8)))
+    return [(int(start), int(stop)) for start, stop in zip(edges[::2], edges[1::2], strict=True)]
+
+
+def first_contact_time(t: FloatArray, in_contact: BoolArray) -> float | None:
+    """Time of the first in-contact sample (s), None if the run never touches."""
+    hits = np.flatnonzero(in_contact)
+    return float(t[hits[0]]) if hits.size else None
+
+
+def contact_duration(t: FloatArray, in_contact: BoolArray) -> float:
+    """Total time in contact (s).
+
+    Each interval lasts from its first in-contact sample to the first sample after it that is
+    out of contact (or to the last sample if the run ends in contact).
+    """
+    total = 0.0
+    for start, stop in contact_intervals(in_contact):
+        end = stop if stop < len(t) else len(t) - 1
+        total += float(t[end] - t[start])
+    return total
+
+
+def peak(
+    t: FloatArray, values: FloatArray, t_from: float = -math.inf, t_to: float = math.inf
+) -> tuple[float, float] | None:
+    """Largest value in the window ``t_from <= t <= t_to`` and its time: ``(t_peak, value)``.
+
+    Returns None if no sample lies in the window.
+    """
+    mask = (t >= t_from) & (t <= t_to)
+    if not mask.any():
+        return None
+    index = int(np.flatnonzero(mask)[np.argmax(values[mask])])
+    return float(t[index]), float(values[index])
+
+
+def overshoot_percent(peak_value: float, reference: float) -> float:
+    """Percent overshoot of a peak over a set-point: ``max(0, 100 (peak - ref) / |ref|)``."""
+    if reference == 0.0:
+        raise ValueError('overshoot is undefined for a zero reference')
+    return max(0.0, 100.0 * (peak_value - reference) / abs(reference))
+
+
+def settling_time(
+    t: FloatArray,
+    values: FloatArray,
+    reference: float,
+    t_start: float,
+    t_end: float,
+    band: float = SETTLING_BAND,
+    min_hold_s: float = SETTLING_MIN_HOLD_S,
+) -> float | None:
+    """Time from ``t_start`` until ``values`` stay within ``±band·|reference|`` up to ``t_end``.
+
+    The settling instant is the earliest sample in ``[t_start, t_end]`` from which every
+    sample up to ``t_end`` is inside the band. Returns None (not settled) if the sample at
+    ``t_end`` is outside the band or the final stay is shorter than ``min_hold_s``.
+    """
+    window = np.flatnonzero((t >= t_start) & (t <= t_end))
+    if window.size == 0:
+        return None
+    inside = np.abs(values[window] - reference) <= band * abs(reference)
+    if not inside[-1]:
+        return None
+    outside = np.flatnonzero(~inside)
+    first_settled = window[outside[-1] + 1] if outside.size else window[0]
+    if t[window[-1]] - t[first_settled] < min_hold_s:
+        return None
+    return float(t[first_settled] - t_start)
+
+
+def last_time_in_band(
+    t: FloatArray,
+    values: FloatArray,
+    reference: float,
+    t_start: float,
+    t_end: float,
+    band: float = SETTLING_BAND,
+) -> float | None:
+    """Last time in ``[t_start, t_end]`` at which ``values`` lie within ``±band·|reference|``.
+
+    This ends the constrained phase: after it the end effector releases the wall and the
+    force leaves the band for good. None if the force is never in the band.
+    """
+    mask = (t >= t_start) & (t <= t_end) & (np.abs(values - reference) <= band * abs(reference))
+    hits = np.flatnonzero(mask)
+    return float(t[hits[-1]]) if hits.size else None
+
+
+def rms(values: FloatArray) -> float:
+    """Root mean square of the samples (NaN for no samples)."""
+    values = np.asarray(values, dtype=np.float64)
+    return float(np.sqrt(np.mean(values**2))) if values.size else math.nan
+
+
+def hold(t_query: FloatArray, t: FloatArray, values: npt.NDArray[Any]) -> npt.NDArray[Any]:
+    """Zero-order hold: the latest sample of ``values`` at or before each query time.
+
+    Queries before the first sample take the first sample.
+    """
+    index = np.searchsorted(t, t_query, side='right') - 1
+    return np.asarray(values)[np.clip(index, 0, len(t) - 1)]
+
+
+def quaternion_to_rpy(quaternion: FloatArray) -> FloatArray:
+    """Roll, pitch, yaw (rad, ZYX Euler as the paper's J1) from quaternions (x, y, z, w).
+
+    Example: a quarter turn about z, ``(0, 0, sin(π/4), cos(π/4))``, gives ``(0, 0, π/2)``.
+    """
+    q = np.asarray(quaternion, dtype=np.float64).reshape(-1, 4)
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    roll = np.arctan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2.0 * (w * y - z * x), -1.0, 1.0))
+    yaw = np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return np.stack([roll, pitch, yaw], axis=1)
+
+
+def rotation_angle_from(quaternion_0: FloatArray, quaternion: FloatArray) -> FloatArray:
+    """Angle of the rotation from ``quaternion_0`` to each of ``quaternion`` (rad, in [0, π]).
+
+    This is the attitude excursion independent of the Euler-angle convention:
+    ``2 acos(|q0 · q|)`` for unit quaternions.
+    """
+    q0 = np.asarray(quaternion_0, dtype=np.float64)
+    q = np.asarray(quaternion, dtype=np.float64).reshape(-1, 4)
+    q0 = q0 / np.linalg.norm(q0)
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    angle: FloatArray = 2.0 * np.arccos(np.clip(np.abs(q @ q0), 0.0, 1.0))
+    return angle
+
+
+def max_norm_from_start(position: FloatArray) -> float:
+    """Largest distance of a trajectory (n, 3) from its first point (m)."""
+    position = np.asarray(position, dtype=np.float64)
+    return float(np.max(np.linalg.norm(position - position[0], axis=1)))
+
+
+def max_abs_or_none(values: FloatArray) -> float | None:
+    """Largest absolute value, None for no samples."""
+    return float(np.max(np.abs(values))) if np.size(values) else None
+
+
+# --------------------------------------------------------------------------------------------
+# Metrics of a run
+# --------------------------------------------------------------------------------------------
+
+ForceSource = Literal['auto', 'contact', 'controller']
+
+
+@dataclass(frozen=True)
+class RunMetrics:
+    """Performance metrics of one run; None where a metric does not apply (n/a).
+
+    Forces are the normal (x) component; position errors are ``X_d - X`` of the controller
+    state; times are from the start of the recording.
+
+    Attributes:
+        name: Run name.
+        force_source: Which force the force metrics use: 'contact' (simulator ground truth)
+            or 'controller' (measured F_e); None without a force signal.
+        desired_force: Force set-point F_d (N): median of F_d,x while in contact.
+        first_contact_time: Time of the first contact (s).
+        contact_count: Number of separate contact intervals (1 = no bounce).
+        contact_duration: Total time in contact (s).
+        peak_force: Largest normal force of the run (N).
+        overshoot: Overshoot of the peak over F_d (%), 0 if the peak stays below F_d.
+        impact_peak_force: Largest normal force within 0.5 s of first contact (N).
+        settling_time: From first contact until the force stays within 5 % of F_d (s).
+        force_rms_error: RMS of F_e - F_d in the constrained phase after settling (N).
+        max_error_y_contact: Largest |Y_d - Y| while in contact (m).
+        max_error_z_contact: Largest |Z_d - Z| while in contact (m).
+        max_error_y: Largest |Y_d - Y| over the run (m).
+        max_error_z: Largest |Z_d - Z| over the run (m).
+        tracking_error: Largest ``‖X_d - X‖`` out of contact after the first second (m).
+        vehicle_displacement: Largest distance of the vehicle from its start position (m).
+        vehicle_rotation: Largest attitude change from the start attitude (rad).
+    """
+
+    name: str
+    force_source: str | None = None
+    desired_force: float | None = None
+    first_contact_time: float | None = None
+    contact_count: int = 0
+    contact_duration: float | None = None
+    peak_force: float | None = None
+    overshoot: float | None = None
+    impact_peak_force: float | None = None
+    settling_time: float | None = None
+    force_rms_error: float | None = None
+    max_error_y_contact: float | None = None
+    max_error_z_contact: float | None = None
+    max_error_y: float | None = None
+    max_error_z: float | None = None
+    tracking_error: float | None = None
+    vehicle_displacement: float | None = None
+    vehicle_rotation: float | None = None
+
+
+@dataclass(frozen=True)
+class NormalForce:
+    """The normal contact force signal a run's force metrics use.
+
+    Attributes:
+        source: 'contact' (ground truth) or 'controller' (measured F_e).
+        t: Time (s).
+        force: Normal force (N), signed so that F_d is positive.
+        in_contact: Contact flag per sample.
+    """
+
+    source: str
+    t: FloatArray
+    force: FloatArray
+    in_contact: BoolArray
+
+
+def desired_normal_force(run: Run) -> float | None:
+    """Force set-point F_d,x (N): median of the controller's F_d,x while in contact.
+
+    Without contact samples the median over the whole run; None without a controller state.
+    """
+    if run.controller is None or run.controller.t.size == 0:
+        return None
+    f_d = run.controller.F_d[:, 0]
+    in_contact = controller_contact_mask(run)
+    return float(np.median(f_d[in_contact] if in_contact.any() else f_d))
+
+
+def controller_contact_mask(run: Run) -> BoolArray:
+    """Contact flag at the controller's samples.
+
+    From the ground truth (zero-order hold) if recorded, else ``|F_e,x|`` above 1 N.
+    """
+    if run.controller is None:
+        return np.zeros(0, dtype=bool)
+    if run.contact is not None and run.contact.t.size:
+        return np.asarray(hold(run.controller.t, run.contact.t, run.contact.in_contact), bool)
+    return np.asarray(np.abs(run.controller.F_e[:, 0]) > CONTACT_FORCE_THRESHOLD_N)
+
+
+def normal_force(run: Run, source: ForceSource = 'auto') -> NormalForce | None:
+    """The normal force signal: ground truth if recorded ('auto'), else the measured F_e.
+
+    The sign is flipped when F_d,x < 0 so that the force towards the set-point is positive.
+    """
+    f_d = desired_normal_force(run)
+    sign = -1.0 if f_d is not None and f_d < 0.0 else 1.0
+    use_contact = source == 'contact' or (source == 'auto' and run.contact is not None)
+    if use_contact:
+        if run.contact is None or run.contact.t.size == 0:
+            return None
+        c = run.contact
+        return NormalForce('contact', c.t, sign * c.force[:, 0], c.in_contact)
+    if run.controller is None or run.controller.t.size == 0:
+        return None
+    ctrl = run.controller
+    return NormalForce('controller', ctrl.t, sign * ctrl.F_e[:, 0], controller_contact_mask(run))
+
+
+def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
+    """All metrics of a run (see RunMetrics); force metrics are None for a run without contact."""
+    values: dict[str, Any] = {'name': run.name}
+    f_d = desired_normal_force(run)
+    values['desired_force'] = f_d
+    force = normal_force(run, force_source)
+    if force is not None:
+        values['force_source'] = force.source
+        values.update(_force_metrics(force, None if f_d is None else abs(f_d)))
+    if run.controller is not None and run.controller.t.size:
+        values.update(_position_metrics(run))
+    if run.odometry is not None and run.odometry.t.size:
+        values['vehicle_displacement'] = max_norm_from_start(run.odometry.position)
+        values['vehicle_rotation'] = float(
+            np.max(rotation_angle_from(run.odometry.quaternion[0], run.odometry.quaternion))
+        )
+    return RunMetrics(**values)
+
+
+def _force_metrics(force: NormalForce, f_d: float | None) -> dict[str, Any]:
+    """Contact timing and force-response metrics of a normal force signal."""
+    t, f = force.t, force.force
+    intervals = contact_intervals(force.in_contact)
+    values: dict[str, Any] = {'contact_count': len(intervals)}
+    t_contact = first_contact_time(t, force.in_contact)
+    if t_contact is None:
+        return values
+    values['first_contact_time'] = t_contact
+    values['contact_duration'] = contact_duration(t, force.in_contact)
+    overall = peak(t, f)
+    impact = peak(t, f, t_contact, t_contact + IMPACT_WINDOW_S)
+    values['peak_force'] = None if overall is None else overall[1]
+    values['impact_peak_force'] = None if impact is None else impact[1]
+    if f_d is None or f_d == 0.0:
+        return values
+    if overall is not None:
+        values['overshoot'] = overshoot_percent(overall[1], f_d)
+    # The constrained phase runs from first contact to the end of the last contact interval,
+    # minus the release, where the force falls out of the band for good.
+    last_stop = intervals[-1][1]
+    t_contact_end = float(t[min(last_stop, len(t) - 1)])
+    t_end = last_time_in_band(t, f, f_d, t_contact, t_contact_end)
+    if t_end is None:
+        return values
+    t_settle = settling_time(t, f, f_d, t_contact, t_end)
+    values['settling_time'] = t_settle
+    if t_settle is not None:
+        settled = (t >= t_contact + t_settle) & (t <= t_end)
+        values['force_rms_error'] = rms(f[settled] - f_d)
+    return values
+
+
+def _position_metrics(run: Run) -> dict[str, Any]:
+    """Largest Y/Z errors (in contact and overall) and the free-motion tracking error."""
+    assert run.controller is not None
+    ctrl = run.controller
+    error = ctrl.X_d - ctrl.X
+    in_contact = controller_contact_mask(run)
+    free = (~in_contact) & (ctrl.t >= TRACKING_START_S)
+    return {
+        'max_error_y': max_abs_or_none(error[:, 1]),
+        'max_error_z': max_abs_or_none(error[:, 2]),
+        'max_error_y_contact': max_abs_or_none(error[in_contact, 1]),
+        'max_error_z_contact': max_abs_or_none(error[in_contact, 2]),
+        'tracking_error': (
+            float(np.max(np.linalg.norm(error[free], axis=1))) if free.any() else None
+        ),
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# From messages to series
+# --------------------------------------------------------------------------------------------
+
+
+def _stamp_ns(msg: Any) -> int:
+    """Header stamp of a message (ns)."""
+    stamp = msg.header.stamp
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def _vec3(msgs: Sequence[Any], name: str) -> FloatArray:
+    """Stack a Vector3/Point field of every message into (n, 3)."""
+    return _xyz(getattr(msg, name) for msg in msgs)
+
+
+def _quat(quaternions: Iterable[Any]) -> FloatArray:
+    """Stack Quaternion messages into (n, 4) as (x, y, z, w)."""
+    return np.array([(q.x, q.y, q.z, q.w) for q in quaternions], dtype=np.float64).reshape(-1, 4)
+
+
+def _scalars(msgs: Sequence[Any], name: str, dtype: type = np.float64) -> npt.NDArray[Any]:
+    """One scalar field of every message as (n,)."""
+    return np.array([getattr(msg, name) for msg in msgs], dtype=dtype)
+
+
+def _ragged(msgs: Sequence[Any], name: str) -> FloatArray:
+    """A float64[] field of every message as (n, p), NaN-padded to the longest array."""
+    rows = [np.asarray(getattr(msg, name), dtype=np.float64) for msg in msgs]
+    width = max((row.size for row in rows), default=0)
+    out = np.full((len(rows), width), np.nan)
+    for i, row in enumerate(rows):
+        out[i, : row.size] = row
+    return out
+
+
+def controller_series(t: FloatArray, msgs: Sequence[Any]) -> ControllerSeries:
+    """ControllerState messages (uvms_msgs/msg/ControllerState) as a series."""
+    return ControllerSeries(
+        t=t,
+        W=_scalars(msgs, 'weight'),
+        phase=_scalars(msgs, 'phase', np.uint8),
+        F_e=_vec3(msgs, 'contact_force'),
+        F_d=_vec3(msgs, 'desired_force'),
+        X=_vec3(msgs, 'position'),
+        X_d=_vec3(msgs, 'desired_position'),
+        X_dot=_vec3(msgs, 'velocity'),
+        X_dot_d=_vec3(msgs, 'desired_velocity'),
+        v_e=_scalars(msgs, 'normal_velocity'),
+        F_c=_vec3(msgs, 'command_force'),
+        F_IP=_vec3(msgs, 'impedance_force'),
+        F_H=_vec3(msgs, 'hybrid_force'),
+    )
+
+
+def contact_series(t: FloatArray, msgs: Sequence[Any]) -> ContactSeries:
+    """ContactState messages (uvms_msgs/msg/ContactState) as a series."""
+    return ContactSeries(
+        t=t,
+        in_contact=_scalars(msgs, 'in_contact', np.bool_),
+        force=_vec3(msgs, 'force'),
+        penetration=_scalars(msgs, 'penetration'),
+        wall_position=_scalars(msgs, 'wall_position'),
+        wall_velocity=_scalars(msgs, 'wall_velocity'),
+    )
+
+
+def _xyz(vectors: Iterable[Any]) -> FloatArray:
+    """Stack objects with x, y, z fields (Point, Vector3) into (n, 3)."""
+    return np.array([(v.x, v.y, v.z) for v in vectors], dtype=np.float64).reshape(-1, 3)
+
+
+def odometry_series(t: FloatArray, msgs: Sequence[Any]) -> OdometrySeries:
+    """Odometry messages (nav_msgs/msg/Odometry) as a series."""
+    quaternion = _quat(msg.pose.pose.orientation for msg in msgs)
+    return OdometrySeries(
+        t=t,
+        position=_xyz(msg.pose.pose.position for msg in msgs),
+        quaternion=quaternion,
+        rpy=quaternion_to_rpy(quaternion),
+        linear_velocity=_xyz(msg.twist.twist.linear for msg in msgs),
+        angular_velocity=_xyz(msg.twist.twist.angular for msg in msgs),
+    )
+
+
+def pose_series(t: FloatArray, msgs: Sequence[Any]) -> PoseSeries:
+    """PoseStamped messages (geometry_msgs/msg/PoseStamped) as a series."""
+    return PoseSeries(
+        t=t,
+        position=_xyz(msg.pose.position for msg in msgs),
+        quaternion=_quat(msg.pose.orientation for msg in msgs),
+    )
+
+
+def thruster_series(t: FloatArray, msgs: Sequence[Any]) -> ThrusterSeries:
+    """ThrusterState messages (uvms_msgs/msg/ThrusterState) as a series."""
+    return ThrusterSeries(
+        t=t,
+        desired_thrust=_ragged(msgs, 'desired_thrust'),
+        actual_thrust=_ragged(msgs, 'actual_thrust'),
+        propeller_speed=_ragged(msgs, 'propeller_speed'),
+        reference_speed=_ragged(msgs, 'reference_speed'),
+        motor_current=_ragged(msgs, 'motor_current'),
+        saturation_scale=_scalars(msgs, 'saturation_scale'),
+    )
+
+
+_SERIES_BUILDERS = {
+    TOPIC_CONTROLLER_STATE: ('controller', controller_series),
+    TOPIC_CONTACT: ('contact', contact_series),
+    TOPIC_ODOMETRY: ('odometry', odometry_series),
+    TOPIC_EE_POSE: ('ee_pose', pose_series),
+    TOPIC_THRUSTERS: ('thrusters', thruster_series),
+}
+
+
+def run_from_messages(
+    name: str,
+    messages: Iterable[tuple[str, int, Any]],
+    time_source: Literal['header', 'log'] = 'header',
+    path: Path | None = None,
+    metadata: dict[str, dict[str, str]] | None = None,
+    problem: str | None = None,
+) -> Run:
+    """Build a Run from decoded messages ``(topic, log_time_ns, msg)`` of the analysis topics.
+
+    Messages of other topics are ignored. Each topic is sorted by its time; t = 0 is the
+    earliest time among the analysis topics.
+    """
+    per_topic: dict[str, list[tuple[int, Any]]] = {}
+    for topic, log_time_ns, msg in messages:
+        if topic in _SERIES_BUILDERS:
+            time_ns = _stamp_ns(msg) if time_source == 'header' else int(log_time_ns)
+            per_topic.setdefault(topic, []).append((time_ns, msg))
+    origin_ns = min((min(ns for ns, _ in items) for items in per_topic.values()), default=0)
+    series: dict[str, Any] = {}
+    for topic, items in per_topic.items():
+        items.sort(key=lambda item: item[0])
+        offsets_ns = np.array([ns for ns, _ in items], dtype=np.int64) - origin_ns
+        t = offsets_ns.astype(np.float64) * 1e-9
+        attribute, builder = _SERIES_BUILDERS[topic]
+        series[attribute] = builder(t, [msg for _, msg in items])
+    return Run(
+        name=name,
+        path=path,
+        metadata=dict(metadata or {}),
+        time_origin_ns=origin_ns,
+        problem=problem,
+        **series,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Reading a recording
+# --------------------------------------------------------------------------------------------
+
+
+def run_name(path: Path, metadata: dict[str, dict[str, str]]) -> str:
+    """Run name: the 'scenario' entry of the 'uvms' metadata record, else the file stem."""
+    scenario = metadata.get(RUN_METADATA_NAME, {}).get('scenario', '').strip()
+    return scenario or path.stem
+
+
+def load_run(path: str | Path, time_source: Literal['header', 'log'] = 'header') -> Run:
+    """Read a recording (MCAP, ros2 profile) into a Run of numpy series.
+
+    A file cut short by a crash is read up to its last complete chunk; ``Run.problem`` then
+    says what was lost.
+
+    Args:
+        path: The recording.
+        time_source: 'header' (message header stamps, default) or 'log' (MCAP log times).
+
+    Raises:
+        AnalysisError: The file is missing, not a ROS 2 MCAP recording, damaged, or holds
+            none of the analysis topics.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise AnalysisError(f'{path}: no such file')
+    try:
+        recording = open_recording(path)
+        typestore = uvms_typestore()
+        messages = [
+            (message.topic, message.log_time_ns, _decode(typestore, message))
+            for message in recording.messages(ANALYSIS_TOPICS)
+        ]
+    except RecordingError as exc:
+        raise AnalysisError(str(exc)) from exc
+    if not messages:
+        topics = ', '.join(ANALYSIS_TOPICS)
+        raise AnalysisError(f'{path}: the recording holds none of the topics {topics}')
+    return run_from_messages(
+        run_name(path, recording.metadata),
+        messages,
+        time_source=time_source,
+        path=path,
+        metadata=recording.metadata,
+        problem=recording.problem,
+    )
+
+
+def _decode(typestore: Typestore, message: RecordedMessage) -> Any:
+    """Deserialize one recorded message, naming topic and type if its bytes do not fit."""
+    try:
+        return typestore.deserialize_cdr(message.data, message.type_name)
+    # rosbags raises assorted errors (struct, index, key, its own) on bytes that do not fit.
+    except Exception as exc:
+        raise RecordingError(
+            f'a message on {message.topic} cannot be decoded as {message.type_name} ({exc})'
+        ) from exc

@@ -1,0 +1,278 @@
+"""The ``uvms`` command: run scenarios, launch the graph, replay, plot, report, sweep, doctor.
+
+Exit status: 0 success, 1 the run or the tool failed, 2 bad usage or a bad scenario file,
+130 interrupted (Ctrl-C). User errors are one line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import math
+import sys
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.stop_event import StopEvent
+
+if TYPE_CHECKING:
+    from uvms_bringup.graph import Graph
+
+EXIT_OK = 0
+EXIT_FAILURE = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+#: Subcommands handed over whole to another module's ``main(argv) -> int``.
+DELEGATED = {
+    'replay': ('uvms_recording.replay', 'publish a recording back onto its topics, or re-run '
+                                      'the controller on it'),
+    'plot': ('uvms_analysis.plots', "draw the paper's figures from a recording (PNG)"),
+    'report': ('uvms_analysis.report', 'print the metrics of recordings'),
+    'sweep': ('uvms_sweep.cli', 'run a parameter sweep of a scenario on Ray and map '
+                                        'its metrics'),
+    'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '
+                                      'messages'),
+}
+
+
+def _positive_seconds(text: str) -> float:
+    """Argparse type: a finite number of seconds > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number of seconds, got {text!r}') from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f'expected a number of seconds > 0, got {text!r}')
+    return value
+
+
+def _seed(text: str) -> int:
+    """Argparse type: an integer seed in [0, 2^31 - 1]."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
+    if not 0 <= value <= 2**31 - 1:
+        raise argparse.ArgumentTypeError(f'expected an integer in [0, 2147483647], got {value}')
+    return value
+
+
+def _port(text: str) -> int:
+    """Argparse type: a TCP port in [0, 65535] (0: any free port)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a TCP port number, got {text!r}') from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f'expected a TCP port in [0, 65535], got {value}')
+    return value
+
+
+def _add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--foxglove [PORT]`` and ``--foxglove-host HOST`` of run and launch."""
+    from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
+
+    parser.add_argument(
+        '--foxglove', type=_port, nargs='?', const=FOXGLOVE_PORT, metavar='PORT',
+        help='serve the running graph to the Foxglove app on ws://127.0.0.1:PORT '
+             f'(default port {FOXGLOVE_PORT}; 0 picks a free one)')
+    parser.add_argument(
+        '--foxglove-host', metavar='HOST', default=None,
+        help=f'address the live view binds (default {FOXGLOVE_HOST}, this machine only); '
+             'another one makes it reachable from other machines (warned)')
+
+
+def _foxglove_address(args: argparse.Namespace) -> tuple[str, int] | None:
+    """(host, port) of the live view the flags ask for, or None."""
+    from uvms_viz.foxglove_defaults import FOXGLOVE_HOST
+
+    if args.foxglove is None:
+        if args.foxglove_host is not None:
+            msg = '--foxglove-host needs --foxglove [PORT]'
+            raise ValueError(msg)
+        return None
+    return (args.foxglove_host or FOXGLOVE_HOST, args.foxglove)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``uvms``."""
+    parser = argparse.ArgumentParser(
+        prog='uvms',
+        description='UVMS unified force control stack: run the node graph on a scenario, '
+                    'launch it in real time, and analyse recordings.',
+    )
+    sub = parser.add_subparsers(dest='command', metavar='COMMAND')
+    run = sub.add_parser(
+        'run', help='run a scenario in lockstep (deterministic, as fast as possible)',
+        description='Run the whole graph (simulator, controller, thruster allocator, '
+                    'recorder) in one process, in lockstep on simulated time.')
+    run.add_argument('scenario', metavar='SCENARIO.yaml',
+                     help='scenario file, or a name of config/scenarios/NAME.yaml')
+    run.add_argument('--duration', type=_positive_seconds, metavar='S',
+                     help="simulated seconds to run (default: the scenario's duration_s)")
+    run.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
+    run.add_argument('--seed', type=_seed, metavar='N',
+                     help="sensor noise seed (default: the scenario's)")
+    run.add_argument('--quiet', '-q', action='store_true',
+                     help='no progress bar, only warnings and errors')
+    _add_foxglove_arguments(run)
+    launch = sub.add_parser(
+        'launch', help='run the graph, one process per node, in real time until Ctrl-C',
+        description='Start simulator, controller, thruster_allocator (and recorder with '
+                    '--output) each as its own process, as ros2 launch uvms_bringup '
+                    'uvms.launch.py would, on wall-clock timers by default. Ctrl-C or '
+                    'SIGTERM stops every node (exit 130); with --duration the run ends when '
+                    'the simulator reaches it (exit 0); a node that fails is named and the '
+                    'others are stopped (exit 1).')
+    launch.add_argument('scenario', metavar='SCENARIO.yaml', nargs='?',
+                        help='scenario file or name (default: the parameter files only)')
+    launch.add_argument('--duration', type=_positive_seconds, metavar='S',
+                        help='stop after this many simulated seconds (default: run until Ctrl-C)')
+    launch.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
+    launch.add_argument('--mode', choices=('realtime', 'lockstep'), default='realtime',
+                        help='execution mode (default: realtime)')
+    launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
+    _add_foxglove_arguments(launch)
+    for name, (_, help_text) in DELEGATED.items():
+        sub.add_parser(name, help=help_text, add_help=False)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``uvms``; returns the exit status."""
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    ros_environment_defaults()
+    # Installed first, so that a signal at any later point (building the graph, opening the
+    # recording) ends the run cleanly with status 130.
+    stop = StopEvent()
+    try:
+        return _main(args_list, stop)
+    finally:
+        stop.restore()
+
+
+def _main(args_list: list[str], stop: StopEvent) -> int:
+    """``main`` once the stop handlers are in place."""
+    if args_list and args_list[0] in DELEGATED:
+        module = importlib.import_module(DELEGATED[args_list[0]][0])
+        try:
+            return int(module.main(args_list[1:]) or 0)
+        except KeyboardInterrupt:
+            return EXIT_INTERRUPTED
+    parser = build_parser()
+    try:
+        args = parser.parse_args(args_list)
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    try:
+        if args.command == 'run':
+            return _run(args, stop)
+        return _launch(args, stop)
+    except KeyboardInterrupt:
+        print('uvms: interrupted', file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _error(command: str, message: str) -> None:
+    """One-line error on stderr."""
+    print(f'uvms {command}: error: {message}', file=sys.stderr)
+
+
+def _run(args: argparse.Namespace, stop: StopEvent) -> int:
+    """``uvms run``: lockstep run of a scenario in this process."""
+    return _run_in_process(args, 'lockstep', stop, progress=not args.quiet)
+
+
+def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
+    """``uvms launch``: one process per node (``uvms_bringup.launcher``), real time by default."""
+    from uvms_bringup.launch_helpers import resolve_scenario_path
+    from uvms_bringup.launcher import LaunchError, launch_graph
+    from uvms_bringup.scenario import ScenarioError, load_scenario
+
+    try:
+        scenario = None
+        if args.scenario is not None:
+            scenario = load_scenario(resolve_scenario_path(args.scenario))
+            scenario = scenario.with_changes(duration_s=args.duration)
+        return launch_graph(scenario, args.mode, duration_s=args.duration,
+                            output_path=args.output, quiet=args.quiet, stop=stop,
+                            foxglove=_foxglove_address(args))
+    except (ScenarioError, FileNotFoundError, ValueError) as exc:
+        _error('launch', str(exc))
+        return EXIT_USAGE
+    except LaunchError as exc:
+        _error('launch', str(exc))
+        return EXIT_FAILURE
+
+
+def _run_in_process(
+    args: argparse.Namespace, mode: str, stop: StopEvent, progress: bool
+) -> int:
+    """Build and run the graph in this process; report the outcome."""
+    from uvms_bringup.graph import GraphError, build_graph
+    from uvms_bringup.launch_helpers import resolve_scenario_path
+    from uvms_bringup.scenario import ScenarioError, load_scenario
+
+    command = args.command
+    scenario = None
+    try:
+        if args.scenario is not None:
+            scenario = load_scenario(resolve_scenario_path(args.scenario))
+            scenario = scenario.with_changes(duration_s=args.duration,
+                                             seed=getattr(args, 'seed', None))
+        duration = args.duration if scenario is None else scenario.duration_s
+        if args.quiet:
+            _quiet_logs()
+        graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration,
+                            foxglove=_foxglove_address(args))
+    except (ScenarioError, FileNotFoundError, ValueError) as exc:
+        _error(command, str(exc))
+        return EXIT_USAGE
+    except GraphError as exc:
+        _error(command, str(exc))
+        return EXIT_FAILURE
+    return _run_graph_and_report(args, graph, mode, stop, progress)
+
+
+def _run_graph_and_report(
+    args: argparse.Namespace, graph: Graph, mode: str, stop: StopEvent, progress: bool
+) -> int:
+    """Spin a built graph to its end and print the outcome."""
+    from uvms_bringup.graph import GraphError, run_graph
+    from uvms_bringup.progress import ProgressBar
+
+    command = args.command
+    bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
+    try:
+        result = run_graph(graph, progress=bar, stop=stop)
+    except GraphError as exc:
+        _error(command, str(exc))
+        if args.output:
+            print(f'uvms {command}: the recording {args.output} holds the run up to the error',
+                  file=sys.stderr)
+        return EXIT_FAILURE
+    summary = (f'simulated {result.sim_time_s:.2f} s in {result.wall_time_s:.2f} s wall '
+               f'({result.real_time_factor:.2f}x real time)')
+    if result.lockstep_timeouts:
+        summary += f', {result.lockstep_timeouts} lockstep timeouts'
+    if result.output_path is not None:
+        summary += f'; recorded {result.output_path}'
+    if not args.quiet:
+        print(f'uvms {command}: {summary}', file=sys.stderr)
+    return EXIT_INTERRUPTED if result.interrupted else EXIT_OK
+
+
+def _quiet_logs() -> None:
+    """Show only warnings and errors of the nodes."""
+    import rclpy.logging
+
+    rclpy.logging.set_logger_level('uvms', rclpy.logging.LoggingSeverity.WARN)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

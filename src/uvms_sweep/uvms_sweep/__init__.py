@@ -1,0 +1,1 @@
+"""Parameter sweeps of UVMS scenarios on Ray."""

@@ -1,0 +1,95 @@
+"""Check a sweep against the graph before it runs: base scenario, axis names and value types.
+
+Each axis must name a parameter its node declares (after robot.yaml and controller.yaml) and
+give values of the declared type; integers on a float parameter are taken as floats. Ranges
+are not checked here: a value outside a parameter's declared range fails its point at
+start-up, which the sweep records as failed with the node's message.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import replace
+
+from rclpy.parameter import Parameter
+from uvms_bringup.graph import declared_parameters
+from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario
+
+from uvms_sweep.sweep_file import Axis, Sweep, SweepError
+
+_TYPE_NAMES = {
+    Parameter.Type.BOOL: 'bool',
+    Parameter.Type.INTEGER: 'int',
+    Parameter.Type.DOUBLE: 'float',
+    Parameter.Type.STRING: 'str',
+    Parameter.Type.BOOL_ARRAY: 'list of bool',
+    Parameter.Type.INTEGER_ARRAY: 'list of int',
+    Parameter.Type.DOUBLE_ARRAY: 'list of float',
+    Parameter.Type.STRING_ARRAY: 'list of str',
+}
+
+
+def check_sweep(sweep: Sweep) -> tuple[Sweep, Scenario]:
+    """The sweep with its axis values in the declared types, and its base scenario.
+
+    Raises:
+        ScenarioError: The base scenario file is invalid (the message names its key).
+        SweepError: An axis names no parameter of its node, or a value has another type;
+            the message names the sweep file and the key ``axes.NODE.PARAMETER``.
+        GraphError: A node cannot be built from its parameter files.
+    """
+    scenario = load_scenario(sweep.scenario_path)
+    declared = declared_parameters()
+    for node, overrides in scenario.overrides.items():
+        for name, value in overrides.items():
+            if node in declared:
+                where = f'{scenario.path}: key {f"{node}.{name}"!r}'
+                _coerce(declared[node], node, name, value, where, strict=True)
+    axes = tuple(_checked_axis(sweep, axis, declared) for axis in sweep.axes)
+    return replace(sweep, axes=axes), scenario
+
+
+def _checked_axis(
+    sweep: Sweep, axis: Axis, declared: dict[str, dict[str, Parameter.Type]]
+) -> Axis:
+    """One axis with values converted to the declared type."""
+    where = f'{sweep.path}: key {"axes." + axis.name!r}'
+    values = tuple(
+        _coerce(declared[axis.node], axis.node, axis.parameter, value, where)
+        for value in axis.values
+    )
+    return replace(axis, values=values)
+
+
+def _coerce(
+    declared: dict[str, Parameter.Type],
+    node: str,
+    name: str,
+    value: ParameterValue,
+    where: str,
+    strict: bool = False,
+) -> ParameterValue:
+    """A value in the declared type of ``node``'s parameter ``name``, or SweepError.
+
+    Integers become floats for a float parameter unless ``strict`` (a scenario file, which
+    ``uvms run`` reads as written).
+    """
+    if name not in declared:
+        close = difflib.get_close_matches(name, list(declared), n=3)
+        hint = f'; did you mean {", ".join(close)}?' if close else ''
+        raise SweepError(f'{where}: the {node} node has no parameter {name!r}{hint}')
+    expected = declared[name]
+    if strict:
+        pass
+    elif expected == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(
+        value, bool
+    ):
+        return float(value)
+    if expected == Parameter.Type.DOUBLE_ARRAY and isinstance(value, list) and all(
+        isinstance(item, int | float) and not isinstance(item, bool) for item in value
+    ):
+        return [float(item) for item in value]
+    if Parameter(name, value=value).type_ != expected:
+        type_name = _TYPE_NAMES.get(expected, expected.name)
+        raise SweepError(f'{where}: expected {type_name}, got {type(value).__name__} {value!r}')
+    return value

@@ -1,0 +1,1 @@
+"""Viewing the UVMS."""

@@ -1,0 +1,195 @@
+"""The ``foxglove_server`` node: the graph's topics, live, over Foxglove's WebSocket protocol.
+
+Every topic the recorder records is subscribed raw and forwarded unchanged (CDR) to the
+Foxglove app through the foxglove-sdk server, with the ros2msg schema text the recordings
+carry (``uvms_recording.typestore.message_definition``). The server binds 127.0.0.1 unless
+the ``host`` parameter says otherwise (then with a warning). Nothing of the graph changes
+when no one watches: the other nodes do not know this one exists. A port already in use
+leaves the node idle with one error line, and the run goes on; a client leaving is one
+info line. Latched topics (/tf_static, /robot_description) are sent again to each client
+that subscribes to them, as a transient-local subscription would receive them.
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+import threading
+from typing import Any
+
+from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
+from uvms_common.node_main import run_node
+from uvms_recording.recorder_node import (
+    DEFAULT_TOPICS,
+    message_class,
+    parse_topic_spec,
+    publisher_qos,
+    subscription_qos,
+)
+from uvms_recording.recording import RecordingError
+from uvms_recording.typestore import InterfaceError, message_definition
+
+from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
+
+#: Hosts that keep the server on this machine.
+LOOPBACK_HOSTS = ('127.0.0.1', 'localhost', '::1')
+#: Package whose files the server hands to the Foxglove app (the URDF's meshes).
+ASSET_PACKAGE = 'uvms_description'
+
+
+class FoxgloveServerError(RuntimeError):
+    """The node cannot be configured (bad parameter, unknown topic type); the message names it."""
+
+
+def asset(uri: str) -> bytes | None:
+    """A ``package://uvms_description/...`` file for the Foxglove app, or None.
+
+    Only files inside uvms_description's share directory are served (the hull mesh the URDF
+    names); any other URI, or a path leaving that directory, gets None.
+    """
+    prefix = f'package://{ASSET_PACKAGE}/'
+    if not uri.startswith(prefix):
+        return None
+    import uvms_description
+
+    try:
+        share = uvms_description.share_directory().resolve()
+    except FileNotFoundError:
+        return None
+    path = (share / uri[len(prefix):]).resolve()
+    if not path.is_relative_to(share) or not path.is_file():
+        return None
+    return path.read_bytes()
+
+
+class _Listener:
+    """Foxglove server callbacks (SDK threads): resend latched messages, log clients."""
+
+    def __init__(self, node: FoxgloveServerNode) -> None:
+        self._node = node
+        self._lock = threading.Lock()
+        self._subscribed: dict[int, set[str]] = {}
+
+    def on_subscribe(self, client: Any, channel: Any) -> None:
+        with self._lock:
+            topics = self._subscribed.setdefault(client.id, set())
+            first = not topics
+            topics.add(channel.topic)
+        if first:
+            self._node.get_logger().info(f'Foxglove client {client.id} subscribed')
+        self._node.resend_latched(channel.topic)
+
+    def on_unsubscribe(self, client: Any, channel: Any) -> None:
+        with self._lock:
+            topics = self._subscribed.get(client.id, set())
+            topics.discard(channel.topic)
+            left = not topics and client.id in self._subscribed
+            if left:
+                del self._subscribed[client.id]
+        if left:
+            self._node.get_logger().info(
+                f'Foxglove client {client.id} left (disconnected or unsubscribed from every '
+                'topic); the run goes on')
+
+
+class FoxgloveServerNode(Node):
+    """Forwards the graph's topics, raw CDR, to Foxglove clients on ws://host:port."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('foxglove_server', **kwargs)
+        host = self.declare_parameter(
+            'host', FOXGLOVE_HOST, ParameterDescriptor(
+                description='Address the WebSocket server binds; 127.0.0.1 keeps it on this '
+                            'machine', read_only=True)).value
+        port = self.declare_parameter(
+            'port', FOXGLOVE_PORT, ParameterDescriptor(
+                description='TCP port of the WebSocket server; 0 picks a free one',
+                read_only=True,
+                integer_range=[IntegerRange(from_value=0, to_value=65535, step=1)])).value
+        topic_specs = self.declare_parameter(
+            'topics', list(DEFAULT_TOPICS), ParameterDescriptor(
+                description="Topics to serve, each 'topic:pkg/msg/Type'; relative names "
+                            'resolve in the node namespace', read_only=True)).value
+        try:
+            topics = {self.resolve_topic_name(topic): type_name
+                      for topic, type_name in map(parse_topic_spec, topic_specs)}
+            schemas = {type_name: message_definition(type_name)
+                       for type_name in set(topics.values())}
+            classes = {type_name: message_class(type_name) for type_name in schemas}
+        except (RecordingError, InterfaceError) as exc:
+            raise FoxgloveServerError(f"parameter 'topics': {exc}") from exc
+
+        import foxglove
+
+        self._context = foxglove.Context()
+        self._channels = {
+            topic: foxglove.Channel(
+                topic, schema=foxglove.Schema(name=type_name, encoding='ros2msg',
+                                              data=schemas[type_name].encode('utf-8')),
+                message_encoding='cdr', context=self._context)
+            for topic, type_name in topics.items()
+        }
+        self._latched: dict[str, bytes] = {}
+        self._latched_topics = {topic for topic in topics
+                                if publisher_qos(topic).durability == 'transient_local'}
+        self._server: Any = None
+        if host not in LOOPBACK_HOSTS:
+            self.get_logger().warning(
+                f"parameter 'host' = {host!r}: the live view is reachable from other machines; "
+                f'use {FOXGLOVE_HOST} to keep it on this one')
+        try:
+            self._server = foxglove.start_server(
+                name='uvms', host=host, port=port, context=self._context,
+                capabilities=[foxglove.Capability.Time], supported_encodings=['cdr'],
+                server_listener=_Listener(self), asset_handler=asset)
+        except RuntimeError as exc:
+            # foxglove-sdk raises RuntimeError('FoxgloveError: Failed to bind port: ...').
+            self.get_logger().error(
+                f'no Foxglove live view: cannot serve ws://{host}:{port}: {exc}; '
+                'the run goes on without it')
+            return
+        for topic, type_name in topics.items():
+            self.create_subscription(classes[type_name], topic,
+                                     functools.partial(self._on_message, topic),
+                                     subscription_qos(topic), raw=True)
+        self.get_logger().info(
+            f'Foxglove live view on ws://{host}:{self._server.port} '
+            f'({len(topics)} topics, raw CDR)')
+
+    @property
+    def port(self) -> int | None:
+        """The port the server listens on, None if it did not start."""
+        return None if self._server is None else int(self._server.port)
+
+    def _on_message(self, topic: str, data: bytes) -> None:
+        now_ns = self.get_clock().now().nanoseconds
+        if topic in self._latched_topics:
+            self._latched[topic] = data
+        self._channels[topic].log(data, log_time=now_ns)
+        if topic == '/clock':
+            self._server.broadcast_time(now_ns)
+
+    def resend_latched(self, topic: str) -> None:
+        """Send the last message of a latched topic again (to a client that just subscribed)."""
+        data = self._latched.get(topic)
+        if data is not None:
+            self._channels[topic].log(data, log_time=self.get_clock().now().nanoseconds)
+
+    def destroy_node(self) -> None:
+        """Stop the server, then destroy the node."""
+        if self._server is not None:
+            self._server.stop()
+            self._server = None
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the Foxglove server node until SIGINT/SIGTERM."""
+    sys.exit(run_node(FoxgloveServerNode, args, 'foxglove_server',
+                      (FoxgloveServerError, ParameterException)))
+
+
+if __name__ == '__main__':
+    main()
