@@ -71,9 +71,11 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
 from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
-from uvms_control.core.parameters import (  # noqa: E402
+from uvms_control.core.parameter_specs import (  # noqa: E402
     ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
+)
+from uvms_control.core.parameters import (  # noqa: E402
     ControllerParameters,
     thruster_parameters_from_flat_dict,
 )

@@ -32,12 +32,11 @@ from uvms_common.node_main import run_node
 
 from uvms_control import conversions
 from uvms_control.core.errors import ControlInputError, ControlParameterError
-from uvms_control.core.parameters import (
+from uvms_control.core.parameter_specs import (
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
-    ControllerParameters,
-    validate_node_parameters,
 )
+from uvms_control.core.parameters import ControllerParameters, validate_node_parameters
 from uvms_control.core.unified_controller import UnifiedForceController
 from uvms_control.ros_parameters import declare_parameters
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters

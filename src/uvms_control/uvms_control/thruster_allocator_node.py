@@ -26,8 +26,8 @@ from uvms_model.thrusters import ThrusterLayout
 from uvms_control import conversions
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.parameters import (
-    ALLOCATOR_PARAMETER_SPECS,
     thruster_parameters_from_flat_dict,
     validate_node_parameters,
 )

@@ -8,10 +8,12 @@ import re
 import numpy as np
 import pytest
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.parameters import (
+from uvms_control.core.parameter_specs import (
     ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
+)
+from uvms_control.core.parameters import (
     ControllerParameters,
     spd_matrix,
     thruster_parameters_from_flat_dict,

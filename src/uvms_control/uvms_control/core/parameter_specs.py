@@ -1,0 +1,379 @@
+"""ROS parameter specs of the controller and the allocator: names, defaults, units, ranges."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+ParameterValue = float | int | bool | str | list[float]
+
+
+class ParameterSpec(NamedTuple):
+    """One ROS parameter: name, default, description with unit, range, read-only flag."""
+
+    name: str
+    default: ParameterValue
+    description: str
+    min_value: float | None = None
+    max_value: float | None = None
+    read_only: bool = True
+
+
+TRIGGER_MODES = ('lockstep', 'timer')
+SWITCH_MODES = ('fuzzy', 'impedance', 'hybrid')
+
+CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
+    ParameterSpec(
+        'trigger_mode',
+        'lockstep',
+        "'lockstep': compute once joint states, odometry and wrench with the same stamp have "
+        "arrived and stamp the command alike; 'timer': compute at control_rate_hz on the "
+        'latest inputs (real time).',
+    ),
+    ParameterSpec('control_rate_hz', 500.0, 'Control rate in timer mode (Hz).', 1.0, 10000.0),
+    ParameterSpec(
+        'watchdog_timeout_s',
+        0.2,
+        'Inputs older than this (node-clock time) are stale: the controller then publishes '
+        'zero generalized force until fresh inputs arrive (s).',
+        1e-3,
+        60.0,
+    ),
+]
+
+CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
+    ParameterSpec(
+        'model.mass_scale',
+        1.0,
+        "Scale s of the controller's inertia estimate, M_hat = s M_tilde (eq. 34); the "
+        "paper's Case IV uses 0.9 (-).",
+        0.1,
+        10.0,
+    ),
+    ParameterSpec(
+        'impedance.inertia_kg',
+        [50.0, 50.0, 50.0],
+        'Target inertia P of eq. 21 (kg): 3 diagonal entries or 9 row-major entries of a '
+        'symmetric positive-definite matrix.',
+    ),
+    ParameterSpec(
+        'impedance.damping_n_s_m',
+        [1000.0, 1000.0, 1000.0],
+        'Target damping B_d of eq. 21 (N s/m): 3 diagonal or 9 row-major entries, SPD.',
+    ),
+    ParameterSpec(
+        'impedance.stiffness_n_m',
+        [3000.0, 3000.0, 3000.0],
+        'Target stiffness K of eq. 21 (N/m): 3 diagonal or 9 row-major entries, SPD.',
+    ),
+    ParameterSpec(
+        'hybrid.force_direction',
+        [1.0, 0.0, 0.0],
+        'Direction n along which force is controlled, the environment normal pointing into '
+        'the environment, in map_ned (-); selection matrix S = n n^T (eq. 35).',
+    ),
+    ParameterSpec(
+        'hybrid.position_kp',
+        [100.0, 100.0, 100.0],
+        'Position gain K_pp of eq. 37 (1/s^2): 3 diagonal or 9 row-major entries, SPD.',
+    ),
+    ParameterSpec(
+        'hybrid.position_kd',
+        [20.0, 20.0, 20.0],
+        'Velocity gain K_pv of eq. 37 (1/s): 3 diagonal or 9 row-major entries, SPD.',
+    ),
+    ParameterSpec(
+        'hybrid.force_kp',
+        0.05,
+        'Force gain K_fp of eq. 39 along n ((m/s^2)/N).',
+        0.0,
+        1e3,
+    ),
+    ParameterSpec(
+        'hybrid.force_ki',
+        0.2,
+        'Force integral gain K_fi of eq. 39 along n ((m/s^2)/(N s)).',
+        0.0,
+        1e3,
+    ),
+    ParameterSpec(
+        'hybrid.force_kd',
+        0.003,
+        'Force derivative gain K_fv of eq. 39 along n ((m/s^2)/(N/s)).',
+        0.0,
+        1e3,
+    ),
+    ParameterSpec(
+        'hybrid.force_feedforward_compliance_m_n',
+        0.0,
+        'Compliance c multiplying F_d_ddot in eq. 39, which the paper adds to an acceleration '
+        'without a unit; c = 1/K_e would need the environment stiffness that the method does '
+        'without, so 0 by default (m/N).',
+        0.0,
+        1.0,
+    ),
+    ParameterSpec(
+        'hybrid.force_derivative_cutoff_hz',
+        20.0,
+        'Cut-off of the filtered force derivative in eq. 39 (Hz).',
+        0.1,
+        1e4,
+    ),
+    ParameterSpec(
+        'hybrid.force_integral_limit_n_s',
+        50.0,
+        'Clamp on the force-error integral of eq. 39 (N s): anti-windup.',
+        0.0,
+        1e6,
+    ),
+    ParameterSpec(
+        'mode',
+        'fuzzy',
+        "How W of eq. 2 is set: 'fuzzy' (sec. 4.3), or fixed for comparisons: 'impedance' "
+        "(W = 1) or 'hybrid' (W = 0).",
+    ),
+    ParameterSpec(
+        'fuzzy.force_ratio_small',
+        [0.1, 0.5],
+        'FS on F_e/F_d (-), left shoulder: 1 up to the first value, 0 from the second.',
+    ),
+    ParameterSpec(
+        'fuzzy.force_ratio_medium',
+        [0.1, 0.5, 0.9],
+        'FM on F_e/F_d (-): triangle [left, peak, right] or trapezoid [a, b, c, d].',
+    ),
+    ParameterSpec(
+        'fuzzy.force_ratio_large',
+        [0.5, 0.9],
+        'FL on F_e/F_d (-), right shoulder: 0 up to the first value, 1 from the second.',
+    ),
+    ParameterSpec(
+        'fuzzy.normal_velocity_slow_m_s',
+        [0.05, 0.15],
+        'VS on v_e (m/s, positive toward the environment), left shoulder: 1 up to the first '
+        'value, 0 from the second.',
+    ),
+    ParameterSpec(
+        'fuzzy.normal_velocity_fast_m_s',
+        [0.05, 0.15],
+        'VF on v_e (m/s), right shoulder: 0 up to the first value, 1 from the second.',
+    ),
+    ParameterSpec(
+        'fuzzy.weight_small',
+        [-0.5, 0.0, 0.5],
+        'WS on W (-): triangle [left, peak, right] or trapezoid [a, b, c, d].',
+    ),
+    ParameterSpec(
+        'fuzzy.weight_medium',
+        [0.0, 0.5, 1.0],
+        'WM on W (-): triangle or trapezoid.',
+    ),
+    ParameterSpec(
+        'fuzzy.weight_large',
+        [0.5, 1.0, 1.5],
+        'WL on W (-): triangle or trapezoid.',
+    ),
+    ParameterSpec(
+        'fuzzy.no_rule_weight',
+        1.0,
+        'W where no rule fires (-); 1 = impedance control, safe for free motion and impact.',
+        0.0,
+        1.0,
+    ),
+    ParameterSpec(
+        'reference.radius_m', 0.1, 'Radius of the half circle (m); paper sec. 5.1.', 1e-4, 10.0
+    ),
+    ParameterSpec('reference.duration_s', 16.0, 'Time to run the half circle (s).', 1e-3, 1e5),
+    ParameterSpec(
+        'reference.start_delay_s',
+        2.0,
+        'Time at the start point before the half circle begins (s), counted from the first '
+        'controller step.',
+        0.0,
+        1e5,
+    ),
+    ParameterSpec(
+        'reference.sweep_direction',
+        [0.0, 0.0, 1.0],
+        'Direction of the half circle diameter in map_ned (-); default down (+z).',
+    ),
+    ParameterSpec(
+        'reference.capture_start',
+        True,
+        'Start the half circle at the end-effector position of the first state (true) or at '
+        'reference.start_position_m (false).',
+    ),
+    ParameterSpec(
+        'reference.start_position_m',
+        [0.0, 0.0, 0.0],
+        'Start of the half circle in map_ned when reference.capture_start is false (m).',
+    ),
+    ParameterSpec(
+        'force.setpoint_n', 150.0, 'Desired contact force along n (N); paper sec. 5.2.', 1e-3, 1e5
+    ),
+    ParameterSpec(
+        'force.ramp_time_s',
+        1.0,
+        'Duration of the quintic ramp of the force set-point after contact, and of its '
+        'release (s).',
+        1e-3,
+        1e4,
+    ),
+    ParameterSpec(
+        'force.contact_threshold_n',
+        5.0,
+        'Normal force that counts as contact and starts the force ramp (N); well above the '
+        'sensor noise (0.1 % of range).',
+        1e-3,
+        1e5,
+    ),
+    ParameterSpec(
+        'null_space.enabled',
+        True,
+        'Add the null-space term of eq. 24 that holds vehicle pose and arm posture (true), or '
+        'apply tau = J^T F_c alone as the paper does (false).',
+    ),
+    ParameterSpec(
+        'null_space.stiffness_1_s2',
+        [4.0] * 6 + [2.0] * 3,
+        'Posture stiffness K_n (1/s^2) per coordinate x, y, z, roll, pitch, yaw, q1..q3: '
+        'phi_ddot = K_n (q_0 - q) - D_n q_dot, projected into the null space of J.',
+        0.0,
+        1e4,
+        True,
+    ),
+    ParameterSpec(
+        'null_space.damping_1_s',
+        [4.0] * 6 + [3.0] * 3,
+        'Posture damping D_n (1/s) per coordinate, as null_space.stiffness_1_s2.',
+        0.0,
+        1e4,
+    ),
+]
+
+ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [
+    ParameterSpec(
+        'trigger_mode',
+        'lockstep',
+        "'lockstep': answer each command with the same stamp, integrating the thrusters over "
+        "the time between command stamps; 'timer': step at rate_hz on the latest command.",
+    ),
+    ParameterSpec('rate_hz', 500.0, 'Allocator rate in timer mode (Hz).', 1.0, 10000.0),
+    ParameterSpec(
+        'watchdog_timeout_s',
+        0.2,
+        'A command older than this (node-clock time) is stale: thrusters and motors are '
+        'commanded to zero (s).',
+        1e-3,
+        60.0,
+    ),
+    ParameterSpec(
+        'max_step_s',
+        0.1,
+        'Longest interval between command stamps that the thruster dynamics integrate over in '
+        'lockstep; a longer gap (a restart, a paused clock) restarts the integration (s).',
+        1e-4,
+        10.0,
+    ),
+    ParameterSpec(
+        'allocator.max_joint_torque_n_m',
+        [200.0, 200.0, 200.0],
+        'Torque limit of each arm motor (N m); the joint torque vector is scaled as a whole.',
+        1e-6,
+        1e6,
+    ),
+    ParameterSpec(
+        'thruster.propeller_diameter_m',
+        0.15,
+        'Propeller diameter D (m); duct area pi D^2 / 4. Sized so that the 200 N thrust '
+        'limit is reached near 1750 rpm.',
+        1e-3,
+        10.0,
+    ),
+    ParameterSpec(
+        'thruster.thrust_coefficient',
+        0.4566,
+        'Bollard K_T of T = K_T rho D^4 n^2 (-); 3-blade Wageningen B-series at J = 0.',
+        1e-3,
+        10.0,
+    ),
+    ParameterSpec(
+        'thruster.reverse_thrust_ratio',
+        0.6,
+        'Reverse over forward bollard thrust at equal propeller speed (-); the propeller turns '
+        'faster in reverse for the same thrust.',
+        0.01,
+        1.0,
+    ),
+    ParameterSpec(
+        'thruster.pitch_angle_rad',
+        math.atan(1.0 / (0.7 * math.pi)),
+        'Blade pitch angle p at 0.7 R (rad); default pitch ratio P/D = 1.',
+        1e-3,
+        1.5,
+    ),
+    ParameterSpec(
+        'thruster.lift_coefficient_max',
+        1.2,
+        'C_Lmax of C_L = C_Lmax sin 2 alpha (-) (Healey et al. 1995 form).',
+        1e-3,
+        10.0,
+    ),
+    ParameterSpec(
+        'thruster.drag_coefficient_max',
+        1.0,
+        'C_Dmax of C_D = C_Dmax (1 - cos 2 alpha) (-); 2 C_Dmax ~ 2 is a flat plate broadside.',
+        0.0,
+        10.0,
+    ),
+    ParameterSpec('thruster.duct_length_m', 0.1, 'Duct length L_d (m).', 1e-4, 10.0),
+    ParameterSpec(
+        'thruster.duct_added_mass_ratio',
+        1.0,
+        'gamma: effective fluid mass in the duct over rho A_p L_d (-).',
+        1e-3,
+        100.0,
+    ),
+    ParameterSpec(
+        'thruster.momentum_flux_coefficient',
+        1.0,
+        'Delta beta of the duct momentum balance (-).',
+        1e-3,
+        100.0,
+    ),
+    ParameterSpec(
+        'thruster.motor_inertia_kg_m2',
+        2.0e-3,
+        'J_m: motor, propeller and entrained water (kg m^2).',
+        1e-7,
+        10.0,
+    ),
+    ParameterSpec(
+        'thruster.motor_torque_constant_n_m_a',
+        0.2,
+        'Motor torque constant K_t (N m/A).',
+        1e-5,
+        100.0,
+    ),
+    ParameterSpec(
+        'thruster.motor_viscous_friction_n_m_s',
+        1.0e-3,
+        'Motor viscous friction K_f (N m s/rad).',
+        0.0,
+        100.0,
+    ),
+    ParameterSpec(
+        'thruster.speed_feedback_gain_a_s',
+        0.2,
+        'Speed feedback gain K_fb of the motor driver (A s/rad).',
+        0.0,
+        1e3,
+    ),
+    ParameterSpec(
+        'thruster.max_motor_current_a',
+        40.0,
+        'Motor current limit i_max (A); must hold the largest thrust limit.',
+        1e-3,
+        1e4,
+    ),
+]
