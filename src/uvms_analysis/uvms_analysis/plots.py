@@ -39,7 +39,8 @@ from uvms_analysis.analysis import (
 )
 
 if TYPE_CHECKING:
-    from uvms_control.core.fuzzy_switch import FuzzySwitch, Trapezoid
+    from uvms_control.core.fuzzy_sets import Trapezoid
+    from uvms_control.core.fuzzy_switch import FuzzySwitch
 
 #: Size (in) and resolution (dpi) of single-panel figures: 960 x 600 px.
 FIGSIZE = (8.0, 5.0)

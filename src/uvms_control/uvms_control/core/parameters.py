@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.fuzzy_switch import FuzzySwitchParameters, Trapezoid
+from uvms_control.core.fuzzy_sets import FuzzySwitchParameters, Trapezoid
 from uvms_control.core.parameter_specs import (
     ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
