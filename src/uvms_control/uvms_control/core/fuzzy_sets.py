@@ -162,5 +162,3 @@ class FuzzySwitchParameters:
                 raise ControlParameterError(
                     out.name, [out.a, out.b, out.c, out.d], 'a finite output set with d > a'
                 )
-
-
