@@ -47,7 +47,8 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
     THRUSTER_ALLOCATOR,
     resolve_scenario_path,
 )
-from uvms_bringup.launcher import Launcher, NodeProcess, plan_launch  # noqa: E402
+from uvms_bringup.launcher import plan_launch  # noqa: E402
+from uvms_bringup.processes import Launcher, NodeProcess  # noqa: E402
 from uvms_bringup.scenario import load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 

@@ -38,7 +38,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
 from uvms_bringup.launch_helpers import CONTROLLER, config_dir, file_parameters
-from uvms_bringup.launcher import Launcher, NodeProcessSpec
+from uvms_bringup.processes import Launcher, NodeProcessSpec
 from uvms_common.node_main import make_executor
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_sim.parameters import SIMULATOR_PARAMETERS

@@ -7,30 +7,17 @@ subprocesses (no rclpy in the launching process): each node's console script (or
 ``config/`` first and then a generated file per node holding the scenario's overrides and
 the mode (as launch_ros writes its temporary parameter files). The recorder's
 ``run.parameters`` holds what the other nodes were given, as ``launch/uvms.launch.py``
-fills it.
-
-Shutdown follows ``ros2 launch``: SIGINT to every node, SIGTERM after ``sigterm_timeout_s``,
-SIGKILL after ``sigkill_timeout_s`` more. The recorder is stopped last, so that it records
-the other nodes' last messages and then closes its file. The children run in their own
-process group, so a Ctrl-C in the terminal reaches only the launcher, which decides the
-order; on Linux they also receive SIGTERM if the launcher itself dies (``PR_SET_PDEATHSIG``),
-so no orphaned node keeps publishing.
+fills it. ``uvms_bringup.processes`` starts, watches and stops the processes.
 """
 
 from __future__ import annotations
 
-import ctypes
 import os
-import signal
-import subprocess
 import sys
 import tempfile
-import threading
-import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import IO, Any, Protocol
+from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
 
@@ -45,91 +32,17 @@ from uvms_bringup.launch_helpers import (
     node_parameters,
     parameters_file_text,
 )
+from uvms_bringup.processes import (
+    EXIT_FAILURE,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    Launcher,
+    LaunchError,
+    NodeProcessSpec,
+    StopRequest,
+    describe_status,
+)
 from uvms_bringup.scenario import Scenario
-
-EXIT_OK = 0
-EXIT_FAILURE = 1
-EXIT_INTERRUPTED = 130
-
-#: Seconds between SIGINT and SIGTERM, and between SIGTERM and SIGKILL (ros2 launch's).
-SIGTERM_TIMEOUT_S = 5.0
-SIGKILL_TIMEOUT_S = 5.0
-#: Wall-clock period of the launcher's look at its children and its stop event (s).
-POLL_PERIOD_S = 0.05
-#: Exit statuses of a node that stopped because it was asked to (signal handled, or 0).
-_STOPPED_STATUSES = (0, EXIT_INTERRUPTED, -signal.SIGINT, -signal.SIGTERM)
-
-_PR_SET_PDEATHSIG = 1
-_SIGTERM = int(signal.SIGTERM)
-
-
-class LaunchError(RuntimeError):
-    """A node process cannot be started; the message names the node and the command."""
-
-
-class StopRequest(Protocol):
-    """What the launcher polls to know that it should stop (``StopEvent``, threading.Event)."""
-
-    def is_set(self) -> bool:
-        """Whether a stop was asked for."""
-        ...
-
-
-@dataclass(frozen=True)
-class NodeProcessSpec:
-    """One node process of a launch: its label and its full command line.
-
-    Attributes:
-        spec: The node.
-        label: Name in the output prefix, ``executable-N`` as ros2 launch numbers them.
-        command: Executable and arguments, ``--ros-args ...`` included.
-        parameters_file: The generated parameter file of the overrides, if any.
-    """
-
-    spec: NodeSpec
-    label: str
-    command: tuple[str, ...]
-    parameters_file: Path | None = None
-
-
-@dataclass
-class NodeProcess:
-    """A started node process and what the launcher knows of its end.
-
-    Attributes:
-        plan: How it was started.
-        popen: The process.
-        status: Exit status once it ended (negative: killed by that signal), else None.
-        signals_sent: Signals the launcher sent it, in order.
-    """
-
-    plan: NodeProcessSpec
-    popen: subprocess.Popen[bytes]
-    status: int | None = None
-    signals_sent: list[signal.Signals] = field(default_factory=list)
-
-    @property
-    def name(self) -> str:
-        """The node's name."""
-        return self.plan.spec.name
-
-    def poll(self) -> int | None:
-        """The exit status if the process has ended (kept once known)."""
-        if self.status is None:
-            self.status = self.popen.poll()
-        return self.status
-
-
-def describe_status(status: int) -> str:
-    """An exit status as a user reads it: ``status 1``, ``killed by SIGKILL``."""
-    if status < 0:
-        try:
-            return f'killed by {signal.Signals(-status).name}'
-        except ValueError:
-            return f'killed by signal {-status}'
-    if status == EXIT_INTERRUPTED:
-        return 'status 130 (stopped by a signal)'
-    return f'status {status}'
 
 
 def node_executable(spec: NodeSpec, bin_dir: Path | None = None) -> list[str]:
@@ -227,201 +140,6 @@ def plan_launch(
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated))
     return plans
-
-
-def _die_with_parent() -> None:  # pragma: no cover - runs in the child between fork and exec
-    """Ask Linux for SIGTERM when the launcher dies, so that no node outlives it."""
-    if _PRCTL is not None:
-        _PRCTL(_PR_SET_PDEATHSIG, _SIGTERM)
-
-
-def _load_prctl() -> Callable[..., int] | None:
-    """The prctl function of libc, resolved before any fork (a child must not load it)."""
-    if not sys.platform.startswith('linux'):
-        return None
-    try:
-        return ctypes.CDLL(None, use_errno=True).prctl
-    except (OSError, AttributeError):
-        return None
-
-
-_PRCTL = _load_prctl()
-
-
-class _Prefixer(threading.Thread):
-    """Copies a child's output line by line to a stream, each line prefixed ``[label] ``."""
-
-    def __init__(self, source: IO[bytes], target: IO[str], label: str,
-                 lock: threading.Lock) -> None:
-        super().__init__(name=f'output of {label}', daemon=True)
-        self._source = source
-        self._target = target
-        self._prefix = f'[{label}] '
-        self._lock = lock
-
-    def run(self) -> None:
-        for raw in iter(self._source.readline, b''):
-            line = raw.decode('utf-8', errors='replace').rstrip('\r\n')
-            with self._lock:
-                try:
-                    self._target.write(f'{self._prefix}{line}\n')
-                    self._target.flush()
-                except (OSError, ValueError):
-                    pass  # the launcher's own output is gone (closed pipe): keep draining
-        self._source.close()
-
-
-class Launcher:
-    """Starts node processes, watches them, and stops them in order with escalation."""
-
-    def __init__(
-        self,
-        plans: Sequence[NodeProcessSpec],
-        *,
-        env: Mapping[str, str] | None = None,
-        stdout: IO[str] | None = None,
-        stderr: IO[str] | None = None,
-        capture: bool = True,
-        sigterm_timeout_s: float = SIGTERM_TIMEOUT_S,
-        sigkill_timeout_s: float = SIGKILL_TIMEOUT_S,
-    ) -> None:
-        """Prepare the launch; nothing starts before ``start``.
-
-        Args:
-            plans: The node processes, in start order.
-            env: Environment of the children (``os.environ`` with the project's ROS
-                defaults if None).
-            stdout: Where the children's prefixed stdout goes (``sys.stdout`` if None).
-            stderr: Where the children's prefixed stderr (their logs) and the launcher's
-                reports go (``sys.stderr`` if None).
-            capture: Prefix the children's output; False lets it through unchanged.
-            sigterm_timeout_s: Wait after SIGINT before SIGTERM (s).
-            sigkill_timeout_s: Wait after SIGTERM before SIGKILL (s).
-        """
-        self.plans = list(plans)
-        self.processes: list[NodeProcess] = []
-        self._stdout = stdout if stdout is not None else sys.stdout
-        self._stderr = stderr if stderr is not None else sys.stderr
-        self._capture = capture
-        self._sigterm_timeout_s = sigterm_timeout_s
-        self._sigkill_timeout_s = sigkill_timeout_s
-        self._lock = threading.Lock()
-        self._threads: list[threading.Thread] = []
-        if env is None:
-            ros_environment_defaults()
-            env = os.environ
-        self._env = dict(env)
-        self._env.setdefault('PYTHONUNBUFFERED', '1')
-        if capture and self._stderr.isatty():
-            self._env.setdefault('RCUTILS_COLORIZED_OUTPUT', '1')
-
-    def report(self, line: str) -> None:
-        """One line of the launcher's own on its stderr, between the children's lines."""
-        with self._lock:
-            self._stderr.write(line + '\n')
-            self._stderr.flush()
-
-    def start(self) -> None:
-        """Start every node process; the output copiers start after the last one.
-
-        The copier threads start only once every child is forked: the child runs
-        ``_die_with_parent`` between fork and exec, which must not meet other threads.
-
-        Raises:
-            LaunchError: An executable cannot be started; the ones started are stopped.
-        """
-        pipe = subprocess.PIPE if self._capture else None
-        for plan in self.plans:
-            try:
-                popen = subprocess.Popen(
-                    plan.command, env=self._env, stdin=subprocess.DEVNULL, stdout=pipe,
-                    stderr=pipe, process_group=0, preexec_fn=_die_with_parent,
-                )
-            except OSError as exc:
-                self.stop()
-                msg = f'node {plan.spec.name!r}: cannot start {plan.command[0]}: {exc}'
-                raise LaunchError(msg) from exc
-            self.processes.append(NodeProcess(plan, popen))
-        if self._capture:
-            for process in self.processes:
-                popen = process.popen
-                assert popen.stdout is not None and popen.stderr is not None
-                self._threads += [
-                    _Prefixer(popen.stdout, self._stdout, process.plan.label, self._lock),
-                    _Prefixer(popen.stderr, self._stderr, process.plan.label, self._lock),
-                ]
-            for thread in self._threads:
-                thread.start()
-
-    def running(self) -> list[NodeProcess]:
-        """The processes that have not ended."""
-        return [process for process in self.processes if process.poll() is None]
-
-    def wait_for_exit(
-        self, stop: StopRequest, end_node: str | None = SIMULATOR.name
-    ) -> tuple[str, NodeProcess | None]:
-        """Watch the children until a stop request or the first one that ends.
-
-        Args:
-            stop: Polled every ``POLL_PERIOD_S``.
-            end_node: The node whose exit with status 0 is the run's normal end.
-
-        Returns:
-            ``('stopped', None)`` after a stop request, ``('finished', node)`` when
-            ``end_node`` exited 0, ``('failed', node)`` when another one ended.
-        """
-        while True:
-            if stop.is_set():
-                return 'stopped', None
-            for process in self.processes:
-                status = process.poll()
-                if status is None:
-                    continue
-                if process.name == end_node and status == 0:
-                    return 'finished', process
-                return 'failed', process
-            time.sleep(POLL_PERIOD_S)
-
-    def stop(self) -> None:
-        """Stop every running node, the recorder last; escalate SIGINT, SIGTERM, SIGKILL."""
-        others = [p for p in self.processes if p.plan.spec is not RECORDER]
-        recorders = [p for p in self.processes if p.plan.spec is RECORDER]
-        for group in (others, recorders):
-            self._stop_group(group)
-        for thread in self._threads:
-            thread.join(timeout=1.0)
-
-    def _stop_group(self, group: Sequence[NodeProcess]) -> None:
-        """SIGINT to the group, then SIGTERM and SIGKILL to those still running."""
-        steps = ((signal.SIGINT, self._sigterm_timeout_s),
-                 (signal.SIGTERM, self._sigkill_timeout_s),
-                 (signal.SIGKILL, 5.0))
-        for sig, timeout_s in steps:
-            alive = [p for p in group if p.poll() is None]
-            if not alive:
-                return
-            if sig is not signal.SIGINT:
-                names = ', '.join(p.name for p in alive)
-                self.report(f'uvms launch: {names} still running after '
-                            f'{alive[0].signals_sent[-1].name}: sending {sig.name}')
-            for process in alive:
-                try:
-                    process.popen.send_signal(sig)
-                except ProcessLookupError:
-                    pass
-                process.signals_sent.append(sig)
-            deadline = time.monotonic() + timeout_s
-            for process in alive:
-                try:
-                    process.popen.wait(timeout=max(deadline - time.monotonic(), 0.0))
-                except subprocess.TimeoutExpired:
-                    continue
-                process.poll()
-
-    def unclean_stops(self) -> list[NodeProcess]:
-        """Processes that ended with an error while being stopped (not 0/130/by signal)."""
-        return [p for p in self.processes
-                if p.status is not None and p.status not in _STOPPED_STATUSES]
 
 
 def launch_graph(

@@ -191,7 +191,8 @@ def _run(args: argparse.Namespace, stop: StopEvent) -> int:
 def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
     """``uvms launch``: one process per node (``uvms_bringup.launcher``), real time by default."""
     from uvms_bringup.launch_helpers import resolve_scenario_path
-    from uvms_bringup.launcher import LaunchError, launch_graph
+    from uvms_bringup.launcher import launch_graph
+    from uvms_bringup.processes import LaunchError
     from uvms_bringup.scenario import ScenarioError, load_scenario
 
     try:
