@@ -1,22 +1,43 @@
-"""The run's progress bar: plain text, one line per tenth of the run off a terminal."""
+"""The run's progress bar (tqdm): one line per tenth of the run off a terminal, redraws on one."""
 
 import io
+import re
 
-from uvms_bringup.progress import ProgressBar
+from uvms_bringup.bars import RunBar
+
+
+def eta_s(line: str) -> int:
+    """The ETA of a bar line, ``[elapsed<MM:SS, ...]``, in seconds."""
+    match = re.search(r'<(\d+):(\d\d)[,\]]', line)
+    assert match is not None, line
+    return 60 * int(match[1]) + int(match[2])
 
 
 def test_progress_off_a_terminal_writes_one_line_per_tenth() -> None:
-    """Updated every 10 ms of a 1 s run, a log gets eleven lines, 0 % to 100 %."""
+    """Updated every 10 ms of a 1 s run, a log gets eleven whole lines, 0 % to 100 %."""
     stream = io.StringIO()
-    bar = ProgressBar(1.0, stream=stream)
+    bar = RunBar(1.0, file=stream)
     for k in range(101):
-        bar.update(k * 0.01)
-    bar.close(1.0)
+        bar.update_to(k * 0.01)
+    bar.close()
     lines = stream.getvalue().splitlines()
     assert len(lines) == 11
-    assert '  0.0%' in lines[0] and '100.0%' in lines[-1]
-    assert '1.00/1.00 s simulated' in lines[-1]
+    assert '  0%' in lines[0] and '0.00/1.00 s simulated' in lines[0]
+    assert '100%' in lines[-1] and '1.00/1.00 s simulated' in lines[-1]
+    assert all('x real time' in line for line in lines)
     assert '\r' not in stream.getvalue()
+
+
+def test_progress_shows_real_time_factor_and_eta() -> None:
+    """500 of 2000 simulated seconds in 1000 s of wall time: 0.5x real time, 3000 s to go."""
+    stream = io.StringIO()
+    bar = RunBar(2000.0, file=stream)
+    bar.start_t -= 1000.0  # the run started 1000 s of wall time ago
+    bar.update_to(500.0)
+    line = stream.getvalue().splitlines()[-1]
+    assert '500.00/2000.00 s simulated' in line
+    assert '0.50x real time' in line
+    assert 2990 <= eta_s(line) <= 3030
 
 
 class _Terminal(io.StringIO):
@@ -29,10 +50,11 @@ class _Terminal(io.StringIO):
 def test_progress_on_a_terminal_redraws_in_place() -> None:
     """On a terminal the bar is redrawn with carriage returns and ends with one newline."""
     stream = _Terminal()
-    bar = ProgressBar(2.0, stream=stream, redraw_hz=1e9)
-    bar.update(1.0)
-    bar.close(2.0)
+    bar = RunBar(2.0, file=stream, mininterval=0.0)
+    bar.update_to(1.0)
+    bar.update_to(2.0)
+    bar.close()
     text = stream.getvalue()
-    assert text.count('\r') == 2
+    assert text.count('\r') >= 3
     assert text.endswith('\n') and text.count('\n') == 1
-    assert '#' * 30 in text
+    assert '2.00/2.00 s simulated' in text.split('\r')[-1]

@@ -28,6 +28,7 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from uvms_common.node_main import StopEvent, make_executor
 
+from uvms_bringup.bars import RunBar
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     RECORDER,
@@ -38,7 +39,6 @@ from uvms_bringup.launch_helpers import (
     node_parameters,
     parameters_file_text,
 )
-from uvms_bringup.progress import ProgressBar
 from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
 
 #: Longest wall-clock wait for any callback before the lockstep loop checks on the graph (s).
@@ -176,7 +176,7 @@ def build_graph(
 def run_graph(
     graph: Graph,
     *,
-    progress: ProgressBar | None = None,
+    progress: RunBar | None = None,
     on_spin: Callable[[Graph], None] | None = None,
     threads: int = 1,
     stop: StopEvent | None = None,
@@ -219,7 +219,7 @@ def run_graph(
                 raise KeyboardInterrupt
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT_S)
             if progress is not None:
-                progress.update(sim.sim_time_ns * 1e-9)
+                progress.update_to(sim.sim_time_ns * 1e-9)
             if on_spin is not None:
                 on_spin(graph)
         wall_s = time.monotonic() - start
@@ -235,7 +235,8 @@ def run_graph(
         raise GraphError(msg) from exc
     finally:
         if progress is not None:
-            progress.close(sim.sim_time_ns * 1e-9)
+            progress.update_to(sim.sim_time_ns * 1e-9)
+            progress.close()
         timeouts = sim.timeouts
         sim_time_s = sim.sim_time_ns * 1e-9
         executor.shutdown()
@@ -253,7 +254,7 @@ def run_scenario(
 ) -> RunResult:
     """Build and run the graph of a scenario (the ``uvms run`` and ``uvms launch`` path)."""
     graph = build_graph(scenario, mode, output_path=output_path, duration_s=duration_s)
-    bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
+    bar = RunBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
     return run_graph(graph, progress=bar)
 
 

@@ -244,11 +244,11 @@ def _run_graph_and_report(
     args: argparse.Namespace, graph: Graph, mode: str, stop: StopEvent, progress: bool
 ) -> int:
     """Spin a built graph to its end and print the outcome."""
+    from uvms_bringup.bars import RunBar
     from uvms_bringup.graph import GraphError, run_graph
-    from uvms_bringup.progress import ProgressBar
 
     command = args.command
-    bar = ProgressBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
+    bar = RunBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None
     try:
         result = run_graph(graph, progress=bar, stop=stop)
     except GraphError as exc:

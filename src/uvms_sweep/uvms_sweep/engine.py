@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from uvms_bringup.progress import PointProgress
+from uvms_bringup.bars import PointBar
 from uvms_bringup.scenario import Scenario
 from uvms_common.node_main import StopEvent
 
@@ -234,7 +234,7 @@ def _run_points(
     try:
         capacity = workers or max(int(ray.cluster_resources().get('CPU', 1)), 1)
         capacity = min(capacity, len(DOMAIN_IDS))
-        bar = PointProgress(len(points), summary.skipped) if progress else None
+        bar = PointBar(len(points), summary.skipped) if progress else None
         try:
             _dispatch(ray, sweep, scenario, out_dir, todo, points, rows, summary, capacity,
                       bar, stop, on_outcome)
@@ -249,7 +249,7 @@ def _run_points(
 def _dispatch(
     ray: Any, sweep: Sweep, scenario: Scenario, out_dir: Path, todo: list[SweepPoint],
     points: Sequence[SweepPoint], rows: dict[str, dict[str, str]], summary: SweepSummary,
-    capacity: int, bar: PointProgress | None, stop: StopEvent | None,
+    capacity: int, bar: PointBar | None, stop: StopEvent | None,
     on_outcome: Callable[[Mapping[str, Any]], None] | None,
 ) -> None:
     """Keep ``capacity`` point tasks in flight until all ran or a stop arrives."""
@@ -276,7 +276,7 @@ def _dispatch(
                 outcome = _outcome(ray, ref, point)
                 _record(sweep, out_dir, point, outcome, points, rows, summary)
                 if bar is not None:
-                    bar.update(outcome['status'] != 'done')
+                    bar.point_done(outcome['status'] != 'done')
                 if on_outcome is not None:
                     on_outcome(outcome)
     except KeyboardInterrupt:

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from uvms_bringup.progress import PointProgress
 from uvms_sweep.sweep_file import SweepError, expand_axis, load_sweep, point_id
 from uvms_sweep.table import stability
 
@@ -117,19 +116,6 @@ def test_bouncing_or_surging_force_is_unstable(
 ) -> None:
     """Unstable: several contact intervals, or a peak above twice the set-point."""
     assert stability(metrics) == expected
-
-
-def test_progress_line_counts_points_and_estimates_the_rest() -> None:
-    """The bar says points done of the total, the failures and an ETA (a log: one line each)."""
-    import io
-
-    stream = io.StringIO()
-    bar = PointProgress(10, already_done=5, stream=stream)
-    bar.update(failed=True)
-    bar.close()
-    lines = stream.getvalue().splitlines()
-    assert lines[0].startswith('[') and '5/10 points, 0 failed' in lines[0]
-    assert '6/10 points, 1 failed' in lines[-1] and 'ETA' in lines[-1]
 
 
 def test_one_axis_sweep_draws_a_line_per_metric_with_failed_points(tmp_path: Path) -> None:
