@@ -81,7 +81,7 @@ from uvms_control.core.parameters import (  # noqa: E402
 )
 from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
-from uvms_recording.recording import open_recording  # noqa: E402
+from uvms_recording.mcap_reader import open_recording  # noqa: E402
 from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings  # noqa: E402
 from uvms_sim.plant import Plant, initial_coordinates  # noqa: E402
 

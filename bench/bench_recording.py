@@ -20,7 +20,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / 'src' / 'uvms_bringup'))
 
-from uvms_recording.recording import McapRecorder, open_recording  # noqa: E402
+from uvms_recording.mcap_reader import open_recording  # noqa: E402
+from uvms_recording.mcap_writer import McapRecorder  # noqa: E402
 from uvms_recording.typestore import uvms_typestore  # noqa: E402
 
 MIX = (

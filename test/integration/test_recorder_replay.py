@@ -24,11 +24,12 @@ from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
 from uvms_bringup.graph import build_graph, run_graph
 from uvms_bringup.scenario import load_scenario
+from uvms_recording.mcap_reader import open_recording
+from uvms_recording.mcap_writer import McapRecorder
 from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
-from uvms_recording.recording import McapRecorder, open_recording
 from uvms_recording.replay import ReplayNode, ReplayOptions
 
-from uvms_recording import replay
+from uvms_recording import replay, rerun
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
@@ -217,7 +218,7 @@ def test_rerun_controller_reproduces_its_recorded_outputs_exactly(
     assert status == 0, out
     assert 'PASS' in out
     recording = open_recording(lockstep_recording)
-    report = replay.rerun_controller(recording, tolerance=0.0)
+    report = rerun.rerun_controller(recording, tolerance=0.0)
     outputs = ('/uvms/command/generalized_force', '/uvms/controller/state')
     assert report.compared == sum(recording.topics[t].message_count for t in outputs)
     assert {d.max_abs for d in report.deviations.values()} == {0.0}

@@ -20,7 +20,10 @@ PURE_MODULES = sorted(
             if not path.name.endswith('_node.py') and path.name != 'conversions.py'
         ),
         *(SRC / 'uvms_analysis' / 'uvms_analysis').rglob('*.py'),
-        SRC / 'uvms_recording' / 'uvms_recording' / 'recording.py',
+        *(
+            SRC / 'uvms_recording' / 'uvms_recording' / name
+            for name in ('errors.py', 'mcap_writer.py', 'mcap_reader.py')
+        ),
         SRC / 'uvms_viz' / 'uvms_viz' / 'marker_geometry.py',
     ]
 )

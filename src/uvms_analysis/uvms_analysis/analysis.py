@@ -20,12 +20,9 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
-from uvms_recording.recording import (
-    RUN_METADATA_NAME,
-    RecordedMessage,
-    RecordingError,
-    open_recording,
-)
+from uvms_recording.errors import RecordingError
+from uvms_recording.mcap_reader import RecordedMessage, open_recording
+from uvms_recording.mcap_writer import RUN_METADATA_NAME
 from uvms_recording.typestore import uvms_typestore
 
 if TYPE_CHECKING:

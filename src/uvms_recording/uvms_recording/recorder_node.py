@@ -20,11 +20,11 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from uvms_common.node_main import run_node
 
-from uvms_recording.recording import (
+from uvms_recording.errors import RecordingError
+from uvms_recording.mcap_writer import (
     DEFAULT_CHUNK_SIZE,
     McapRecorder,
     QosDescription,
-    RecordingError,
     run_metadata,
 )
 from uvms_recording.typestore import InterfaceError, normalize_type_name

@@ -21,6 +21,7 @@ from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from uvms_common.node_main import run_node
+from uvms_recording.errors import RecordingError
 from uvms_recording.recorder_node import (
     DEFAULT_TOPICS,
     message_class,
@@ -28,7 +29,6 @@ from uvms_recording.recorder_node import (
     publisher_qos,
     subscription_qos,
 )
-from uvms_recording.recording import RecordingError
 from uvms_recording.typestore import InterfaceError, message_definition
 
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT

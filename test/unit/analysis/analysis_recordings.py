@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from uvms_recording.recording import McapRecorder, run_metadata
+from uvms_recording.mcap_writer import McapRecorder, run_metadata
 from uvms_recording.typestore import uvms_typestore
 
 #: Sample period of every synthetic topic (s).

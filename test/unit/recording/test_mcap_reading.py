@@ -12,13 +12,9 @@ from mcap.writer import Writer
 from recording_samples import GRAPH_TOPICS, graph_messages, make_cdr
 from rosbags.rosbag2 import StoragePlugin
 from rosbags.rosbag2 import Writer as Rosbag2Writer
-from uvms_recording.recording import (
-    McapRecorder,
-    RecordingError,
-    RecordingTruncatedWarning,
-    open_recording,
-    read_recording,
-)
+from uvms_recording.errors import RecordingError, RecordingTruncatedWarning
+from uvms_recording.mcap_reader import open_recording, read_recording
+from uvms_recording.mcap_writer import McapRecorder
 from uvms_recording.typestore import uvms_typestore
 
 N_STEPS = 200

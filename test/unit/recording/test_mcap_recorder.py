@@ -14,12 +14,12 @@ from mcap.stream_reader import StreamReader
 from recording_samples import GRAPH_TOPICS, graph_messages, make_message
 from rosbags.highlevel import AnyReader
 from rosbags.interfaces import QosDurability, QosReliability
-from uvms_recording.recording import (
+from uvms_recording.errors import RecordingError
+from uvms_recording.mcap_reader import open_recording
+from uvms_recording.mcap_writer import (
     RUN_METADATA_NAME,
     McapRecorder,
     QosDescription,
-    RecordingError,
-    open_recording,
     run_metadata,
 )
 from uvms_recording.typestore import type_hash, uvms_typestore

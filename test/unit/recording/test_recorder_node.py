@@ -22,8 +22,10 @@ from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
+from uvms_recording.errors import RecordingError
+from uvms_recording.mcap_reader import open_recording
+from uvms_recording.mcap_writer import RUN_METADATA_NAME
 from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
-from uvms_recording.recording import RUN_METADATA_NAME, RecordingError, open_recording
 
 from uvms_msgs.msg import ControllerState
 

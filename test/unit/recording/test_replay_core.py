@@ -7,15 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from recording_samples import GRAPH_TOPICS, graph_messages, make_message
-from uvms_recording.recording import McapRecorder, RecordedMessage, ReplayError, open_recording
-from uvms_recording.replay import (
-    Deviation,
-    ReplayOptions,
-    RerunReport,
-    output_differences,
-    play_messages,
-    select_topics,
-)
+from uvms_recording.errors import ReplayError
+from uvms_recording.mcap_reader import RecordedMessage, open_recording
+from uvms_recording.mcap_writer import McapRecorder
+from uvms_recording.replay import ReplayOptions, play_messages, select_topics
+from uvms_recording.rerun import Deviation, RerunReport, output_differences
 from uvms_recording.typestore import uvms_typestore
 
 

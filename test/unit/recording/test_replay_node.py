@@ -13,8 +13,9 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from recording_samples import GRAPH_TOPICS, graph_messages
+from uvms_recording.mcap_reader import open_recording
+from uvms_recording.mcap_writer import McapRecorder, QosDescription
 from uvms_recording.recorder_node import message_class
-from uvms_recording.recording import McapRecorder, QosDescription, open_recording
 from uvms_recording.replay import ReplayNode, ReplayOptions, main, select_topics
 
 N_STEPS = 20
