@@ -2,7 +2,7 @@
 
 A scenario run is the whole node graph in lockstep (``uvms run SCENARIO --output F.mcap``),
 recorded to MCAP in a session temporary directory and read back with
-``uvms_analysis.analysis``. The runs are CPU-bound Python, so they go to separate processes:
+``uvms_analysis.series``. The runs are CPU-bound Python, so they go to separate processes:
 when the first scenario fixture is requested, every scenario that the selected tests need is
 started, at most ``WORKERS`` at a time in the order the tests use them, and each fixture
 then waits only for its own run.
@@ -17,7 +17,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from uvms_analysis.analysis import Run, RunMetrics, compute_metrics, load_run
+from uvms_analysis.metrics import RunMetrics, compute_metrics
+from uvms_analysis.series import Run, load_run
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 #: Concurrent scenario processes: the CI machine has two cores.
@@ -39,8 +40,8 @@ class ScenarioResult:
     Attributes:
         name: Scenario name (file stem in config/scenarios).
         path: The MCAP recording.
-        run: Its series (``uvms_analysis.analysis.load_run``).
-        metrics: Its metrics (``uvms_analysis.analysis.compute_metrics``).
+        run: Its series (``uvms_analysis.series.load_run``).
+        metrics: Its metrics (``uvms_analysis.metrics.compute_metrics``).
     """
 
     name: str

@@ -2,7 +2,7 @@
 
 The whole graph runs the paper's half circle into a wall at x = 1.7771 m of K_e = 1e4 and
 1e5 N/m and tracks 150 N along the wall; the metrics are those of ``uvms report``
-(``uvms_analysis.analysis``), the force is the simulator's ground truth.
+(``uvms_analysis.metrics``), the force is the simulator's ground truth.
 """
 
 from __future__ import annotations

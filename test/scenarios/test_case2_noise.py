@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 from scenario_runs import ScenarioResult
-from uvms_analysis.analysis import hold
+from uvms_analysis.metrics import hold
 
 F_D_N = 150.0
 #: Noise standard deviation of the Case II sensor: 0.1 % of its 400 N range (N).

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 from scenario_runs import ScenarioResult
-from uvms_analysis.analysis import SETTLING_BAND, hold, last_time_in_band
+from uvms_analysis.metrics import SETTLING_BAND, hold, last_time_in_band
 
 F_D_N = 150.0
 WALL_SPEED_M_S = 0.05
@@ -17,7 +17,7 @@ WALL_SPEED_M_S = 0.05
 def tracking_window(result: ScenarioResult) -> tuple[float, float]:
     """The window of the force-error metric: settling instant to the end of the constrained phase.
 
-    This is the window of ``force_rms_error`` (uvms_analysis.analysis): from the first contact
+    This is the window of ``force_rms_error`` (uvms_analysis.metrics): from the first contact
     plus the settling time to the last sample in the F_d band before the release.
     """
     metrics, contact = result.metrics, result.run.contact

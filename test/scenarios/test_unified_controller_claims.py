@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scenario_runs import ScenarioResult
-from uvms_analysis.analysis import contact_intervals, hold
+from uvms_analysis.metrics import contact_intervals, hold
 
 UNIFIED_CASES = ('case1_ke1e4', 'case1_ke1e5', 'case2_noise', 'case3_moving_wall',
                  'case4_model_error')

@@ -10,15 +10,14 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from uvms_analysis.analysis import (
+from uvms_analysis.metrics import (
     IMPACT_WINDOW_S,
     SETTLING_BAND,
     TRACKING_START_S,
-    AnalysisError,
     RunMetrics,
     compute_metrics,
-    load_run,
 )
+from uvms_analysis.series import AnalysisError, load_run
 
 FORMATS = ('text', 'markdown', 'csv')
 NOT_APPLICABLE = 'n/a'

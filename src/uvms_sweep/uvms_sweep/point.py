@@ -162,8 +162,9 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
     Raises:
         ScenarioError, GraphError, AnalysisError: the run could not be made or read.
     """
-    from uvms_analysis.analysis import compute_metrics, load_run
+    from uvms_analysis.metrics import compute_metrics
     from uvms_analysis.report import COLUMNS
+    from uvms_analysis.series import load_run
     from uvms_bringup.graph import build_graph, run_graph
     from uvms_bringup.scenario import load_scenario
 
@@ -189,7 +190,7 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the point process: ``python -m uvms_sweep.point REQUEST.json``."""
-    from uvms_analysis.analysis import AnalysisError
+    from uvms_analysis.series import AnalysisError
     from uvms_bringup.graph import GraphError
     from uvms_bringup.scenario import ScenarioError
 

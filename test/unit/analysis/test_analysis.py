@@ -1,4 +1,4 @@
-"""uvms_analysis.analysis: metrics on signals with known answers, and recording loading."""
+"""uvms_analysis.series and .metrics: metrics of known signals, and recording loading."""
 
 from __future__ import annotations
 
@@ -25,22 +25,24 @@ from analysis_recordings import (
     YAW_MAX,
 )
 from scipy.spatial.transform import Rotation
-from uvms_analysis.analysis import (
-    AnalysisError,
-    ContactSeries,
-    ControllerSeries,
-    Run,
+from uvms_analysis.metrics import (
     compute_metrics,
     contact_duration,
     contact_intervals,
     hold,
-    load_run,
     overshoot_percent,
     peak,
-    quaternion_to_rpy,
     rms,
     rotation_angle_from,
     settling_time,
+)
+from uvms_analysis.series import (
+    AnalysisError,
+    ContactSeries,
+    ControllerSeries,
+    Run,
+    load_run,
+    quaternion_to_rpy,
 )
 
 

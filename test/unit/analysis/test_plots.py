@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from uvms_analysis.analysis import load_run
 from uvms_analysis.plots import RECORDING_FIGURES, figure_force_response, main
+from uvms_analysis.series import load_run
 
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 
