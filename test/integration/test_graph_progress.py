@@ -1,8 +1,12 @@
 """The run's progress bar (tqdm): one line per tenth of the run off a terminal, redraws on one."""
 
 import io
+import os
+import pty
 import re
+import sys
 
+import pytest
 from uvms_bringup.bars import RunBar
 
 
@@ -58,3 +62,19 @@ def test_progress_on_a_terminal_redraws_in_place() -> None:
     assert text.count('\r') >= 3
     assert text.endswith('\n') and text.count('\n') == 1
     assert '2.00/2.00 s simulated' in text.split('\r')[-1]
+
+
+def test_progress_on_a_terminal_without_a_size_still_draws(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A pseudo-terminal that reports 0 x 0 (``script``, some CI runners) still gets the bar."""
+    master, slave = pty.openpty()  # a new pseudo-terminal has no size until one is set
+    with os.fdopen(slave, 'w') as stream:
+        assert os.get_terminal_size(slave).columns == 0
+        monkeypatch.setattr(sys, 'stderr', stream)  # tqdm asks the size of stderr's terminal
+        bar = RunBar(2.0)
+        bar.update_to(2.0)
+        bar.close()
+    text = os.read(master, 65536).decode()
+    os.close(master)
+    assert '2.00/2.00 s simulated' in text

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from typing import Any, TextIO
 
@@ -37,6 +38,11 @@ class LineBar(tqdm):
         self.logged_tenth = -1
         if not self.on_terminal:
             kwargs.update(mininterval=0.0, leave=False)
+        elif not _has_size(stream):
+            # A pseudo-terminal without a size (``script``, some CI runners) says 0 x 0, which
+            # tqdm takes as no room for the bar: it would draw nothing.
+            kwargs.setdefault('ncols', 80)
+            kwargs.setdefault('nrows', 24)
         kwargs.setdefault('smoothing', 0.0)
         super().__init__(*args, file=stream, miniters=0, **kwargs)
 
@@ -118,3 +124,11 @@ class PointBar(LineBar):
         """The fields of tqdm plus ``total_points`` and ``failed``."""
         fields: dict[str, Any] = super().format_dict
         return {**fields, 'total_points': self.total, 'failed': self.failed}
+
+
+def _has_size(stream: TextIO) -> bool:
+    """Whether the terminal behind ``stream`` reports a width (True if it cannot be asked)."""
+    try:
+        return os.get_terminal_size(stream.fileno()).columns > 0
+    except (AttributeError, OSError, ValueError):
+        return True
