@@ -27,6 +27,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from uvms_common.node_main import StopEvent, make_executor
+from uvms_tasks.mission_node import MissionNode
 
 from uvms_bringup.bars import RunBar
 from uvms_bringup.launch_helpers import (
@@ -167,6 +168,12 @@ def build_graph(
                 overrides[spec.name].update(_recorder_run_parameters(graph))
             graph.nodes[spec.name] = _make_node(spec, overrides[spec.name], config, namespace,
                                                 context)
+        if scenario is not None and scenario.mission:
+            # The scenario's goals go through the controller's ContactTask action, as a
+            # user's would; their start times are on /clock, so lockstep stays deterministic.
+            graph.nodes['mission'] = MissionNode(
+                scenario.mission, namespace=namespace, context=context,
+                parameter_overrides=[Parameter('use_sim_time', value=True)])
     except BaseException:
         graph.destroy()
         raise

@@ -14,6 +14,11 @@ random seed, and overrides ROS parameters of the nodes of the graph::
     controller: {...}                 # mapping, optional: controller parameters
     thruster_allocator: {...}         # mapping, optional: thruster allocator parameters
     recorder: {...}                   # mapping, optional: recorder parameters
+    mission:                          # list, optional: ContactTask goals, sent in order
+      - half_circle: {radius_m: 0.1, duration_s: 16.0}   # (uvms_tasks.task_file)
+        normal: [1.0, 0.0, 0.0]
+        force_n: 150.0
+        start_time_s: 2.0
 
 Parameter values are booleans, integers, floats, strings or non-empty lists of one of
 them, as in a ROS 2 parameter file. Whether each overridden name is a parameter the node
@@ -30,6 +35,8 @@ from pathlib import Path
 from typing import Any, TypeAlias
 
 import yaml
+from uvms_tasks.errors import TaskFileError
+from uvms_tasks.task_file import TaskSpec, parse_mission
 
 #: A ROS 2 parameter value as a scenario may give it.
 ParameterValue: TypeAlias = (
@@ -40,7 +47,7 @@ ParameterValue: TypeAlias = (
 NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder')
 
 _REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
-_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0'}
+_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'mission': 'list of tasks'}
 _KNOWN_KEYS = (*_REQUIRED, *_OPTIONAL, *NODE_SECTIONS)
 _NAME_SEGMENT = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _MAX_SEED = 2**31 - 1
@@ -80,6 +87,8 @@ class Scenario:
         seed: Seed of the simulator's random numbers (sensor noise).
         paper: Where the paper shows this experiment, if it does.
         overrides: Per node name, flat dotted parameter names and their values.
+        mission: ContactTask goals the graph sends, in order (none: the graph holds and
+            waits for goals).
     """
 
     path: Path
@@ -89,6 +98,7 @@ class Scenario:
     seed: int = 0
     paper: str | None = None
     overrides: Mapping[str, Mapping[str, ParameterValue]] = field(default_factory=dict)
+    mission: tuple[TaskSpec, ...] = ()
 
     def node_overrides(self, node: str) -> dict[str, ParameterValue]:
         """Parameter overrides of one node, the seed included for the simulator."""
@@ -202,6 +212,10 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         flat: dict[str, ParameterValue] = {}
         _flatten(section, node, '', flat, path)
         overrides[node] = flat
+    try:
+        mission = tuple(parse_mission(data['mission'], str(path))) if 'mission' in data else ()
+    except TaskFileError as exc:
+        raise ScenarioError(str(exc)) from exc
     return Scenario(
         path=path,
         name=name,
@@ -210,6 +224,7 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         seed=seed,
         paper=paper,
         overrides=overrides,
+        mission=mission,
     )
 
 

@@ -1,186 +1,242 @@
-"""The ``controller`` node: the unified force controller (paper sec. 4) as a ROS 2 node.
+"""The ``controller`` node: the unified force controller (paper sec. 4), commanded by tasks.
 
-Subscribes ``joint_states``, ``odometry`` and ``wrench``; publishes
-``command/generalized_force`` and ``controller/state`` (relative names: run it in ``/uvms``).
-``trigger_mode: lockstep`` computes once the three inputs with one stamp have arrived and
-stamps the command alike (a repeated stamp re-sends the same command); inputs are gathered
-per stamp, so inputs with other stamps (another publisher, a flood of bad messages) cannot
-stall the exchange. ``timer`` computes at ``control_rate_hz`` of the steady (wall) clock on
-the latest inputs and stamps with the node clock (``/clock`` time under ``use_sim_time``). A
-rejected input (NaN/Inf, wrong size or frame) is logged; at the stamp of a running lockstep
-exchange the last safe command is held; stale inputs (older than
-``watchdog_timeout_s``: by stamp in lockstep, by node-clock arrival time in timer mode) give a
+Subscribes ``joint_states``, ``odometry``, ``wrench`` and ``controller/target_position``
+(PointStamped, map_ned: a streamed hold target while no task runs); publishes
+``command/generalized_force`` and ``controller/state``; serves the ContactTask action
+``controller/contact_task`` (relative names: run it in ``/uvms``). ``trigger_mode:
+lockstep`` computes once the three inputs with one stamp have arrived and stamps the
+command alike; ``timer`` computes at ``control_rate_hz`` of the steady clock on the latest
+inputs. Rejected inputs are logged; stale inputs (older than ``watchdog_timeout_s``) give a
 zero command, logged once.
+
+A managed node (``autostart``: it activates itself unless false): configure builds the model
+and the controller; activate holds the end effector where it is at the first step;
+deactivate ends a running task INACTIVE and commands zero generalized force, in answer to
+every lockstep stamp (so the exchange never stalls) or at the control rate. Gains, the
+contact threshold, null-space gains and ``safety.*`` change at run time (``set_parameters``,
+checked like the parameter files); the rest is read-only. ``/diagnostics`` reports rates,
+input ages, rejections, the lifecycle state, the task and any safety limit reached.
 """
 
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from pathlib import Path
+from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import PointStamped, WrenchStamped
 from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
+from uvms_common.diagnostics import robot_name as urdf_robot_name
+from uvms_common.lifecycle import autostart, declare_autostart, state_label
 from uvms_common.node_main import run_node
 
-from uvms_control import conversions
+from uvms_control import conversions, task_conversions
+from uvms_control.core.contact_task import SafetyLimits, TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
 from uvms_control.core.parameter_specs import (
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
+    SAFETY_PARAMETER_SPECS,
 )
 from uvms_control.core.parameters import ControllerParameters, validate_node_parameters
+from uvms_control.core.task_supervisor import TaskSupervisor
 from uvms_control.core.unified_controller import UnifiedForceController
+from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
+from uvms_control.task_server import ContactTaskServer
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 
 TOPICS = ('joint_states', 'odometry', 'wrench')
+SUCCESS = TransitionCallbackReturn.SUCCESS
+FAILURE = TransitionCallbackReturn.FAILURE
 
 
-class _Input(NamedTuple):
-    stamp_ns: int
-    arrival_ns: int
-    value: Any  # None when the message was rejected
+def safety_limits(values: dict[str, Any]) -> SafetyLimits:
+    """``safety.*`` parameter values as limits."""
+    return SafetyLimits(**{name.removeprefix('safety.'): float(value)
+                           for name, value in values.items()})
 
 
-@dataclass
-class _PendingEntry:
-    """The inputs of one stamp that have arrived (None: arrived but rejected)."""
-
-    values: dict[str, Any] = field(default_factory=dict)
-    valid: int = 0
-    complete: bool = False
-
-
-class PendingStamps:
-    """Lockstep inputs gathered per stamp, so that inputs of other stamps cannot disturb one.
-
-    A stamp is complete when every topic has arrived for it and at least one of them was
-    valid: a rejected input at the stamp of the running exchange is then answered with the
-    last safe command, while rejected inputs of stamps nothing valid asked for never complete
-    and never evict an entry that holds valid inputs. At most ``capacity`` stamps are kept.
-    """
-
-    def __init__(self, topics: tuple[str, ...], capacity: int = 16) -> None:
-        self._topics = topics
-        self._capacity = capacity
-        self._entries: dict[int, _PendingEntry] = {}
-
-    def arrive(self, stamp_ns: int, topic: str, value: Any) -> _PendingEntry:
-        """Record one input (None if it was rejected); return the entry of its stamp."""
-        entry = self._entries.get(stamp_ns)
-        if entry is None:
-            if len(self._entries) >= self._capacity:
-                self._evict()
-            entry = self._entries[stamp_ns] = _PendingEntry()
-        if value is not None and entry.values.get(topic) is None:
-            entry.valid += 1
-        if value is not None or topic not in entry.values:
-            entry.values[topic] = value
-        entry.complete = entry.valid > 0 and len(entry.values) == len(self._topics)
-        return entry
-
-    def finish(self, stamp_ns: int) -> None:
-        """Forget a computed stamp and every older one (the exchange has moved past them)."""
-        for stamp in [s for s in self._entries if s <= stamp_ns]:
-            del self._entries[stamp]
-
-    def _evict(self) -> None:
-        """Drop the oldest entry without a valid input, else the oldest entry."""
-        invalid = [s for s, e in self._entries.items() if e.valid == 0]
-        del self._entries[invalid[0] if invalid else next(iter(self._entries))]
-
-
-class ControllerNode(Node):
-    """Unified force controller: sensor topics in, generalized force and state out."""
+class ControllerNode(LifecycleNode):
+    """Unified force controller: sensor topics and tasks in, generalized force and state out."""
 
     def __init__(self, **kwargs: Any) -> None:
+        """Declare the parameters and, under ``autostart``, configure and activate.
+
+        Raises:
+            ControlParameterError: a parameter that configure refused, under ``autostart``.
+        """
         super().__init__('controller', **kwargs)
-        robot = declare_parameters(self, PARAMETER_SPECS)
-        node = validate_node_parameters(
-            CONTROLLER_NODE_PARAMETER_SPECS,
-            declare_parameters(self, CONTROLLER_NODE_PARAMETER_SPECS),
-        )
-        gains = ControllerParameters.from_flat_dict(
-            declare_parameters(self, CONTROLLER_PARAMETER_SPECS)
-        )
-        try:
-            model = UvmsModel(UvmsParameters.from_flat_dict(robot))
-        except ModelError as error:
-            raise ControlParameterError(
-                'robot parameters', str(error), 'config/robot.yaml'
-            ) from error
-        self.core = UnifiedForceController(gains, model)
-        self._joint_names = model.joint_names
-        self._lockstep = node['trigger_mode'] == 'lockstep'
-        self._watchdog_ns = round(float(node['watchdog_timeout_s']) * 1e9)
-        self._inputs: dict[str, _Input | None] = dict.fromkeys(TOPICS)
+        self._robot = declare_parameters(self, PARAMETER_SPECS)
+        self._node_values = declare_parameters(self, CONTROLLER_NODE_PARAMETER_SPECS)
+        self._gains = declare_parameters(self, CONTROLLER_PARAMETER_SPECS)
+        self._safety = declare_parameters(self, SAFETY_PARAMETER_SPECS)
+        starting = declare_autostart(self)
+        self.core: UnifiedForceController | None = None
+        self.supervisor: TaskSupervisor | None = None
+        self._active = False
+        self._entities: list[Any] = []
+        self._error: Exception | None = None
+        self._joint_names: list[str] = []
+        self._inputs: dict[str, Input | None] = dict.fromkeys(TOPICS)
         self._pending = PendingStamps(TOPICS)
-        self._last_tau_b = np.zeros(model.n_dof)
-        self._last_stamp_ns = -1
-        self._first_stamp_ns: int | None = None
-        self._zeroed_stamp_ns = -1
-        self._stale = False
-        # Refilled for each publication (rclpy serializes at publish).
+        self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0}
+        self._rate = RateMeter()
+        self._breach: str | None = None
         self._command_msg: GeneralizedForce | None = None
         self._state_msg: ControllerState | None = None
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.tasks = ContactTaskServer(self, lambda: self.supervisor if self._active else None,
+                                       lambda: self.get_clock().now().nanoseconds * 1e-9)
+        self.create_subscription(PointStamped, 'controller/target_position', self._on_target,
+                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
+        self._diagnostics.add('control', self._report_control)
+        self._diagnostics.add('task', self._report_task)
+        if starting and not autostart(self):
+            error = self._error or ControlParameterError('autostart', True, 'a node that can '
+                                                         'configure and activate')
+            self.destroy_node()
+            raise error
 
+    # ------------------------------------------------------------------------ lifecycle
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Validate the parameters, build model, controller, task supervisor and topics."""
+        try:
+            node = validate_node_parameters(CONTROLLER_NODE_PARAMETER_SPECS, self._node_values)
+            gains = ControllerParameters.from_flat_dict(self._gains)
+            try:
+                model = UvmsModel(UvmsParameters.from_flat_dict(self._robot))
+            except ModelError as error:
+                raise ControlParameterError('robot parameters', str(error),
+                                            'config/robot.yaml') from error
+            self.core = UnifiedForceController(gains, model)
+            self.supervisor = TaskSupervisor(self.core, safety_limits(self._safety))
+            self._configure_topics(node, model.joint_names)
+        except Exception as error:  # rclpy would turn it into ERROR silently
+            self._release()
+            return self._failed('configure', error)
+        self.get_logger().info(
+            f'unified force controller, {node["trigger_mode"]} trigger, null space '
+            f'{"on" if gains.null_space_enabled else "off"}, W mode {gains.switch_mode}; '
+            'contact tasks on controller/contact_task')
+        return SUCCESS
+
+    def _configure_topics(self, node: dict[str, Any], joint_names: list[str]) -> None:
+        self._joint_names = joint_names
+        self._lockstep = node['trigger_mode'] == 'lockstep'
+        self._watchdog_ns = round(float(node['watchdog_timeout_s']) * 1e9)
+        self._last_tau_b = np.zeros(len(joint_names) + 6)
+        self._last_stamp_ns, self._zeroed_stamp_ns = -1, -1
+        self._first_stamp_ns: int | None = None
+        self._stale = False
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._command_pub = self.create_publisher(
-            GeneralizedForce, 'command/generalized_force', qos
-        )
+        self._command_pub = self.create_publisher(GeneralizedForce, 'command/generalized_force',
+                                                  qos)
         self._state_pub = self.create_publisher(ControllerState, 'controller/state', qos)
-        readers: dict[str, tuple[type, Callable[[Any], Any]]] = {
-            'joint_states': (
-                JointState,
-                lambda m: conversions.joint_state_arrays(m, self._joint_names),
-            ),
+        self._entities = [(self.destroy_publisher, self._command_pub),
+                          (self.destroy_publisher, self._state_pub)]
+        readers = {
+            'joint_states': (JointState,
+                             lambda m: conversions.joint_state_arrays(m, self._joint_names)),
             'odometry': (Odometry, conversions.odometry_arrays),
             'wrench': (WrenchStamped, conversions.wrench_force),
         }
         for topic, (msg_type, read) in readers.items():
-            self.create_subscription(
-                msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos
-            )
+            self._entities.append((self.destroy_subscription, self.create_subscription(
+                msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos)))
         if not self._lockstep:
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.
-            self.create_timer(1.0 / float(node['control_rate_hz']), self._on_timer,
-                              clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self.get_logger().info(
-            f'unified force controller, {node["trigger_mode"]} trigger, '
-            f'null space {"on" if gains.null_space_enabled else "off"}, W mode {gains.switch_mode}'
-        )
+            self._entities.append((self.destroy_timer, self.create_timer(
+                1.0 / float(node['control_rate_hz']), self._on_timer,
+                clock=Clock(clock_type=ClockType.STEADY_TIME))))
 
-    def _on_input(self, topic: str, read: Callable[[Any], Any], msg: Any) -> None:
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Hold the end effector where it is at the next step, from a fresh controller."""
+        assert self.core is not None
+        self.core.reset()
+        self._active = True
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """End a running task INACTIVE and command zero generalized force."""
+        self._active = False
+        if self.supervisor is not None:
+            self.tasks.finish(self.supervisor.abort_all(TaskCode.INACTIVE,
+                                                        'the controller was deactivated'))
+        self._zero(self.get_clock().now().nanoseconds, None)
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Drop the controller, its publishers, subscriptions and timer."""
+        self._release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """From any state: zero command if it was active, end tasks, release everything."""
+        if self._active:
+            self._zero(self.get_clock().now().nanoseconds, None)
+        self.tasks.finish_all(TaskCode.INACTIVE, 'the controller shut down')
+        self._release()
+        return super().on_shutdown(state)
+
+    def destroy_node(self) -> None:
+        """Shut down as rclcpp's lifecycle node does, then destroy."""
+        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
+            self.trigger_shutdown()
+        self._diagnostics.destroy()
+        self.tasks.destroy()
+        super().destroy_node()
+
+    def _release(self) -> None:
+        self._active = False
+        for destroy, entity in reversed(self._entities):
+            destroy(entity)
+        self._entities = []
+        self.core = self.supervisor = None
+
+    def _failed(self, transition: str, error: Exception) -> TransitionCallbackReturn:
+        self._error = error
+        reason = (str(error) if isinstance(error, ControlParameterError)
+                  else f'{type(error).__name__}: {error}')
+        self.get_logger().error(f'{transition} failed: {reason}')
+        return FAILURE
+
+    # ------------------------------------------------------------------------ inputs
+
+    def _on_input(self, topic: str, read: Any, msg: Any) -> None:
         """Convert and keep one input; in lockstep, compute once a stamp is complete."""
         stamp = conversions.stamp_ns(msg.header.stamp)
         try:
             value = read(msg)
         except ControlInputError as error:
+            self._counts['rejected'] += 1
             self.get_logger().error(f'rejected {topic}: {error}', throttle_duration_sec=1.0)
             value = None
         if not self._lockstep:
             if value is not None:  # timer mode computes on the last valid input
-                self._inputs[topic] = _Input(stamp, self.get_clock().now().nanoseconds, value)
+                self._inputs[topic] = Input(stamp, self.get_clock().now().nanoseconds, value)
             return
         entry = self._pending.arrive(stamp, topic, value)
         if value is not None:
-            self._inputs[topic] = _Input(stamp, 0, value)
+            self._inputs[topic] = Input(stamp, 0, value)
             if self._first_stamp_ns is None:
                 self._first_stamp_ns = stamp
         if entry.complete:
             self._pending.finish(stamp)
-            inputs = [_Input(stamp, 0, entry.values[name]) for name in TOPICS]
-            self._compute(stamp, inputs)
+            self._compute(stamp, [Input(stamp, 0, entry.values[name]) for name in TOPICS])
             return
         if value is None or self._first_stamp_ns is None:
             return  # only valid inputs move the lockstep exchange on
@@ -202,7 +258,27 @@ class ControllerNode(Node):
             return
         self._compute(now, inputs)
 
-    def _compute(self, t_ns: int, inputs: list[_Input | None]) -> None:
+    def _on_target(self, msg: PointStamped) -> None:
+        """A streamed hold target: taken while no task runs, else refused with a log line."""
+        try:
+            target = task_conversions.target_position(msg)
+        except TaskGoalError as error:
+            self.get_logger().error(f'rejected target_position: {error}',
+                                    throttle_duration_sec=1.0)
+            return
+        if self.supervisor is None or not self._active:
+            self.get_logger().warn('target_position ignored: the controller is not active',
+                                   throttle_duration_sec=5.0)
+        elif not self.supervisor.set_target(target):
+            self.get_logger().warn('target_position ignored while a contact task runs',
+                                   throttle_duration_sec=5.0)
+
+    # ------------------------------------------------------------------------ control
+
+    def _compute(self, t_ns: int, inputs: list[Input | None]) -> None:
+        if not self._active or self.supervisor is None:
+            self._publish_command(t_ns, np.zeros_like(self._last_tau_b))  # inactive: zero
+            return
         if any(i is None or i.value is None for i in inputs):
             self._publish_command(t_ns, self._last_tau_b)  # hold the last safe command
             return
@@ -213,40 +289,107 @@ class ControllerNode(Node):
             self._publish_command(t_ns, self._last_tau_b)  # a re-published state: same answer
             return
         (positions, velocities), (eta, nu), force = (i.value for i in inputs if i is not None)
-        q = np.concatenate((eta, positions))
-        w = np.concatenate((nu, velocities))
+        t = t_ns * 1e-9
         try:
-            result = self.core.step_from_sensors(t_ns * 1e-9, q, w, force)
+            result, events = self.supervisor.step(
+                t, np.concatenate((eta, positions)), np.concatenate((nu, velocities)), force)
         except ControlInputError as error:
-            self.get_logger().error(
-                f'control step failed, holding: {error}', throttle_duration_sec=1.0
-            )
+            self.get_logger().error(f'control step failed, holding: {error}',
+                                    throttle_duration_sec=1.0)
             self._publish_command(t_ns, self._last_tau_b)
             return
+        self._counts['steps'] += 1
         self._last_tau_b = result.tau_b
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
         self._state_msg = conversions.controller_state_message(t_ns, result, self._state_msg)
         self._state_pub.publish(self._state_msg)
+        self.tasks.finish(events)
+        self.tasks.publish_feedback(self.supervisor, t)
+        if self.supervisor.breach != self._breach:
+            self._breach = self.supervisor.breach
+            if self._breach is not None:
+                self.get_logger().error(f'safety limit: {self._breach}')
 
-    def _zero(self, t_ns: int, reason: str) -> None:
-        if not self._stale:
+    def _zero(self, t_ns: int, reason: str | None) -> None:
+        if reason is not None and not self._stale:
             self._stale = True
             self.get_logger().warn(f'{reason}: publishing zero generalized force')
-        self._last_tau_b = np.zeros_like(self._last_tau_b)
-        self._publish_command(t_ns, self._last_tau_b)
+        self._counts['zeroed'] += 1
+        if self._entities:
+            self._last_tau_b = np.zeros_like(self._last_tau_b)
+            self._publish_command(t_ns, self._last_tau_b)
 
     def _publish_command(self, t_ns: int, tau_b: np.ndarray) -> None:
         self._command_msg = conversions.generalized_force_message(
-            t_ns, tau_b, self._joint_names, self._command_msg
-        )
+            t_ns, tau_b, self._joint_names, self._command_msg)
         self._command_pub.publish(self._command_msg)
+
+    # ------------------------------------------------------------------------ parameters
+
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Take new gains or limits at run time, checked like the files; all or nothing."""
+        gains, safety = dict(self._gains), dict(self._safety)
+        for parameter in parameters:
+            value = parameter.value
+            value = list(value) if not isinstance(value, (str, bool, int, float)) else value
+            if parameter.name in gains:
+                gains[parameter.name] = value
+            elif parameter.name in safety:
+                safety[parameter.name] = value
+        try:
+            params = ControllerParameters.from_flat_dict(gains)
+            limits = safety_limits(safety)
+        except (ControlParameterError, TypeError, ValueError) as error:
+            return SetParametersResult(successful=False, reason=str(error))
+        self._gains, self._safety = gains, safety
+        if self.core is not None:
+            self.core.set_gains(params)
+        if self.supervisor is not None:
+            self.supervisor.limits = limits
+        return SetParametersResult(successful=True)
+
+    # ------------------------------------------------------------------------ diagnostics
+
+    def _hardware_id(self) -> str:
+        try:
+            urdf = UvmsParameters.from_flat_dict(self._robot).description.urdf_path
+            return urdf_robot_name(Path(urdf).read_text())
+        except (ModelError, OSError):
+            return urdf_robot_name(None)
+
+    def _report_control(self) -> Report:
+        state = state_label(self)
+        now = self.get_clock().now().nanoseconds
+        rate = self._rate.rate_hz(self._counts['steps'], now)
+        ages = {f'{topic}_age_s': (now - value.arrival_ns) * 1e-9 if value and value.arrival_ns
+                else None for topic, value in self._inputs.items()}
+        level = OK if state == 'active' and not self._stale else WARN
+        message = 'stale inputs: zero command' if self._stale else state
+        return Report(level, message, {'lifecycle_state': state, 'rate_hz': rate,
+                                       'rejected_inputs': self._counts['rejected'],
+                                       'zero_commands': self._counts['zeroed'], **ages})
+
+    def _report_task(self) -> Report:
+        supervisor = self.supervisor
+        progress = supervisor.progress() if supervisor is not None else None
+        last = supervisor.last_result if supervisor is not None else None
+        values = {'task': 'none' if progress is None else progress.state.name.lower(),
+                  'progress': None if progress is None else progress.progress,
+                  'phase': None if last is None else last.phase.name.lower(),
+                  'weight': None if last is None else last.W,
+                  'goals_received': self.tasks.goals_received,
+                  'last_result': self.tasks.last_outcome}
+        if self._breach is not None:
+            return Report(ERROR, f'safety limit: {self._breach}', values)
+        return Report(OK, 'holding' if progress is None else 'running a contact task', values)
 
 
 def main(args: list[str] | None = None) -> None:
     """Run the controller node until SIGINT/SIGTERM."""
     sys.exit(run_node(ControllerNode, args, 'controller',
                       (ControlParameterError, ParameterException)))
+
 
 if __name__ == '__main__':
     main()

@@ -32,7 +32,8 @@ class Spec(Protocol):
 
 
 def _descriptor(spec: Spec) -> ParameterDescriptor:
-    descriptor = ParameterDescriptor(description=spec.description, read_only=True)
+    descriptor = ParameterDescriptor(description=spec.description,
+                                     read_only=getattr(spec, 'read_only', True))
     lo, hi = spec.min_value, spec.max_value
     default = spec.default
     scalar = not isinstance(default, (bool, str, list, tuple))

@@ -8,18 +8,27 @@ command, stamped with the node clock. A rejected command (NaN/Inf, wrong size, f
 joints) is logged and the last safe command is held;
 in timer mode a command older than ``watchdog_timeout_s`` (node clock) is replaced by zero,
 so the thrusters spin down and the motors go limp.
+
+A managed node (``autostart``: it activates itself unless false). Configure validates the
+parameters and builds the core; inactive, it commands zero thrust and zero joint torque: at
+deactivation at once, then in answer to every lockstep command (stamped like it, so the
+lockstep exchange never stalls) or at ``rate_hz`` in timer mode. Unconfigured, it publishes
+nothing. ``/diagnostics`` reports the state, rates, input age, rejections and saturation.
 """
 
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
+from uvms_common.lifecycle import autostart, declare_autostart, state_label
 from uvms_common.node_main import run_node
 from uvms_model.thrusters import ThrusterLayout
 
@@ -35,26 +44,102 @@ from uvms_control.ros_parameters import declare_parameters
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 
+SUCCESS = TransitionCallbackReturn.SUCCESS
+FAILURE = TransitionCallbackReturn.FAILURE
 
-class ThrusterAllocatorNode(Node):
+
+class ThrusterAllocatorNode(LifecycleNode):
     """Generalized force command in, thrusts and motor torques out."""
 
     def __init__(self, **kwargs: Any) -> None:
+        """Declare the parameters and, under ``autostart``, configure and activate.
+
+        Raises:
+            ControlParameterError: A parameter of the wrong type or, under ``autostart``, one
+                that configure refused (named, with its value and valid range).
+        """
         super().__init__('thruster_allocator', **kwargs)
-        robot = declare_parameters(self, PARAMETER_SPECS)
-        values = validate_node_parameters(
-            ALLOCATOR_PARAMETER_SPECS, declare_parameters(self, ALLOCATOR_PARAMETER_SPECS)
-        )
+        self._robot = declare_parameters(self, PARAMETER_SPECS)
+        self._values = declare_parameters(self, ALLOCATOR_PARAMETER_SPECS)
+        starting = declare_autostart(self)
+        self.core: ThrusterAllocator | None = None
+        self._entities: list[tuple[Callable[[Any], Any], Any]] = []  # (destroy, entity)
+        self._active = False
+        self._transition_error: Exception | None = None
+        self._log_transition_error = not starting  # under autostart the constructor raises it
+        # Counters for /diagnostics (since start; the report turns them into rates).
+        self._published = self._saturated = self._rejected = 0
+        self._meters = {name: RateMeter() for name in ('published', 'saturated', 'rejected')}
+        self._diagnostics = DiagnosticsPublisher(self)
+        self._diagnostics.add('allocation', self._report)
+        if starting and not autostart(self):
+            error = self._transition_error
+            self.destroy_node()
+            if error is None:
+                error = ControlParameterError('autostart', True, 'a node that can activate')
+            raise error
+        self._log_transition_error = True
+
+    # ------------------------------------------------------------------------ lifecycle
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Validate the parameters, build the core, create publishers, subscription, timer."""
         try:
-            uvms = UvmsParameters.from_flat_dict(robot)
+            self._configure()
+        except Exception as error:  # rclpy would turn it into ERROR silently
+            self._release()
+            return self._failed('configure', error)
+        return SUCCESS
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Start allocating from rest: thrusters at zero speed, no command held yet."""
+        assert self.core is not None
+        self.core.reset()
+        self._safe_tau_b = np.zeros_like(self._safe_tau_b)
+        self._last_stamp_ns = self._arrival_ns = None
+        self._stale = False
+        self._active = True
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Command zero thrust and zero joint torque at once; zeros until reactivated."""
+        self._active = False
+        self._publish_zero(self.get_clock().now().nanoseconds)
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Drop the core, the publishers, the subscription and the timer."""
+        self._release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """From any state: zero command if it was active, then release everything."""
+        return self._safe_stop(state, super().on_shutdown)
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """A transition raised: zero command, release everything, back to unconfigured."""
+        return self._safe_stop(state, super().on_error)
+
+    def destroy_node(self) -> None:
+        """Shut down (zero command if active) as rclcpp's lifecycle node does, then destroy."""
+        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
+            self.trigger_shutdown()
+        self._diagnostics.destroy()
+        super().destroy_node()
+
+    def _configure(self) -> None:
+        values = validate_node_parameters(ALLOCATOR_PARAMETER_SPECS, self._values)
+        try:
+            uvms = UvmsParameters.from_flat_dict(self._robot)
             layout = ThrusterLayout.from_parameters(uvms.thrusters)
-            joint_names = load_description(
+            description = load_description(
                 uvms.description.urdf_path, uvms.description.hydrodynamics_path
-            ).joint_names
+            )
         except ModelError as error:
             raise ControlParameterError(
                 'robot parameters', str(error), 'valid values (config/robot.yaml)'
             ) from error
+        joint_names = description.joint_names
         thruster = thruster_parameters_from_flat_dict(
             {k: v for k, v in values.items() if k.startswith('thruster.')},
             uvms.hydrodynamics.water_density_kg_m3,
@@ -70,12 +155,16 @@ class ThrusterAllocatorNode(Node):
             layout.thrust_matrix(), layout.max_thrust_n, torque_limits, thruster
         )
         self.core = ThrusterAllocator(limits)
+        self._diagnostics.hardware_id = robot_name(description.urdf_text)
         self._joint_names = joint_names
-        self._lockstep = values['trigger_mode'] == 'lockstep'
+        self._trigger_mode = str(values['trigger_mode'])
+        self._lockstep = self._trigger_mode == 'lockstep'
         self._watchdog_ns = round(float(values['watchdog_timeout_s']) * 1e9)
         self._max_step_ns = round(float(values['max_step_s']) * 1e9)
         self._period_s = 1.0 / float(values['rate_hz'])
         self._safe_tau_b = np.zeros(6 + len(self._joint_names))
+        self._zero_thrust = np.zeros(layout.count)
+        self._zero_torque = np.zeros(len(self._joint_names))
         self._last_stamp_ns: int | None = None
         self._arrival_ns: int | None = None
         self._stale = False
@@ -83,16 +172,19 @@ class ThrusterAllocatorNode(Node):
         self._actuator_msg: ActuatorCommand | None = None
         self._state_msg: ThrusterState | None = None
 
+        # Plain publishers, not lifecycle ones: inactive, the node still commands zero.
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._actuator_pub = self.create_publisher(ActuatorCommand, 'command/actuators', qos)
         self._state_pub = self.create_publisher(ThrusterState, 'thrusters/state', qos)
-        self.create_subscription(
-            GeneralizedForce, 'command/generalized_force', self._on_command, qos
-        )
+        self._entities = [
+            (self.destroy_publisher, self._actuator_pub),
+            (self.destroy_publisher, self._state_pub),
+            (self.destroy_subscription, self.create_subscription(
+                GeneralizedForce, 'command/generalized_force', self._on_command, qos))]
         if not self._lockstep:
             # On the steady clock, as the controller's: /clock bursts must not drop periods.
-            self.create_timer(self._period_s, self._on_timer,
-                              clock=Clock(clock_type=ClockType.STEADY_TIME))
+            self._entities.append((self.destroy_timer, self.create_timer(
+                self._period_s, self._on_timer, clock=Clock(clock_type=ClockType.STEADY_TIME))))
         c = self.core.thrusters.calibration
         self.get_logger().info(
             f'{layout.count} thrusters, {values["trigger_mode"]} trigger; calibrated blade area '
@@ -100,12 +192,45 @@ class ThrusterAllocatorNode(Node):
             f'integration step <= {c.max_step * 1e3:.3g} ms'
         )
 
+    def _release(self) -> None:
+        """Destroy what configure created (the timer, subscription, publishers) and the core."""
+        self._active = False
+        for destroy, entity in reversed(self._entities):
+            destroy(entity)
+        self._entities = []
+        self.core = None
+
+    def _failed(self, transition: str, error: Exception) -> TransitionCallbackReturn:
+        """Keep the error for the constructor, or log it: a transition never fails silently."""
+        self._transition_error = error
+        if self._log_transition_errors:
+            reason = str(error) if isinstance(error, ControlParameterError) else (
+                f'{type(error).__name__}: {error}')
+            self.get_logger().error(f'{transition} failed: {reason}')
+        return FAILURE
+
+    def _safe_stop(self, state: LifecycleState, then: Any) -> TransitionCallbackReturn:
+        try:
+            if self._active:
+                self._publish_zero(self.get_clock().now().nanoseconds)
+            self._release()
+        except Exception as error:  # rclpy would turn it into ERROR silently
+            return self._failed('shutdown', error)
+        return then(state)  # type: ignore[no-any-return]
+
+    # ------------------------------------------------------------------------ callbacks
+
     def _on_command(self, msg: GeneralizedForce) -> None:
         """Keep a valid command; in lockstep answer it at once with its own stamp."""
         stamp = conversions.stamp_ns(msg.header.stamp)
+        if not self._active:
+            if self._lockstep:
+                self._publish_zero(stamp)
+            return
         try:
             _, tau_b = conversions.generalized_force_arrays(msg, self._joint_names)
         except ControlInputError as error:
+            self._rejected += 1
             self.get_logger().error(
                 f'rejected generalized force, holding the last safe command: {error}',
                 throttle_duration_sec=1.0,
@@ -132,14 +257,18 @@ class ThrusterAllocatorNode(Node):
             self.get_logger().warn(
                 f'{dt_ns * 1e-9:.3f} s between commands exceeds max_step_s: thrusters restarted'
             )
+            assert self.core is not None
             self.core.reset()
             dt_ns = 0
         self._last_stamp_ns = stamp
         self._step(stamp, self._safe_tau_b, dt_ns * 1e-9)
 
     def _on_timer(self) -> None:
-        """Timer mode: step on the latest command, or on zero once it is stale."""
+        """Timer mode: step on the latest command, or on zero once it is stale or inactive."""
         now = self.get_clock().now().nanoseconds
+        if not self._active:
+            self._publish_zero(now)
+            return
         tau_b = self._safe_tau_b
         if self._arrival_ns is None or now - self._arrival_ns > self._watchdog_ns:
             if not self._stale and self._arrival_ns is not None:
@@ -154,13 +283,47 @@ class ThrusterAllocatorNode(Node):
         self._step(now, tau_b, self._period_s)
 
     def _step(self, t_ns: int, tau_b: np.ndarray, dt: float) -> None:
+        assert self.core is not None
         output = self.core.step(tau_b, dt)
+        self._published += 1
+        self._saturated += output.allocation.saturation_scale < 1.0
         self._actuator_msg = conversions.actuator_command_message(
             t_ns, output.thrust, self._joint_names, output.joint_torques, self._actuator_msg
         )
         self._actuator_pub.publish(self._actuator_msg)
         self._state_msg = conversions.thruster_state_message(t_ns, output, self._state_msg)
         self._state_pub.publish(self._state_msg)
+
+    def _publish_zero(self, t_ns: int) -> None:
+        """Zero thrust and zero joint torque stamped t_ns (inactive, or leaving active)."""
+        self._actuator_msg = conversions.actuator_command_message(
+            t_ns, self._zero_thrust, self._joint_names, self._zero_torque, self._actuator_msg
+        )
+        self._actuator_pub.publish(self._actuator_msg)
+
+    def _report(self) -> Report:
+        """/diagnostics: lifecycle state, output rate, input age, rejections, saturation."""
+        now_ns = self.get_clock().now().nanoseconds
+        rates = {name: meter.rate_hz(getattr(self, f'_{name}'), now_ns)
+                 for name, meter in self._meters.items()}
+        state = state_label(self)
+        values: dict[str, Any] = {'lifecycle_state': state}
+        if self.core is None:
+            return Report(WARN, f'{state}: publishes nothing', values)
+        step_hz, saturated_hz = rates['published'], rates['saturated']
+        age_s = None if self._arrival_ns is None else (now_ns - self._arrival_ns) * 1e-9
+        values.update({
+            'trigger_mode': self._trigger_mode, 'output_rate_hz': step_hz, 'input_age_s': age_s,
+            'rejected_commands': self._rejected, 'rejected_per_s': rates['rejected'],
+            'saturation_share': saturated_hz / step_hz if step_hz and saturated_hz is not None
+            else None})
+        if not self._active:
+            return Report(WARN, f'{state}: commanding zero thrust and joint torque', values)
+        if self._stale:
+            return Report(WARN, 'command stale: zero thrust and joint torque', values)
+        if rates['rejected']:
+            return Report(WARN, 'rejecting generalized force commands', values)
+        return Report(OK, 'running', values)
 
 
 def main(args: list[str] | None = None) -> None:

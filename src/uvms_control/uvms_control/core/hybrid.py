@@ -82,6 +82,16 @@ class HybridLaw:
         self._derivative = DirtyDerivative(derivative_cutoff_hz)
         self.integral = 0.0
 
+    def carry_state_from(self, other: HybridLaw) -> None:
+        """Continue another law's integral and force-derivative filter (new gains, no bump).
+
+        The integral is clamped to this law's limit; the filter carries over at the same
+        cut-off only.
+        """
+        self.integral = min(max(other.integral, -self.integral_limit), self.integral_limit)
+        if other._derivative.tau == self._derivative.tau:
+            self._derivative = other._derivative
+
     def reset(self) -> None:
         """Clear the integral and the derivative filter."""
         self.integral = 0.0

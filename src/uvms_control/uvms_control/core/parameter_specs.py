@@ -181,51 +181,13 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
         1.0,
     ),
     ParameterSpec(
-        'reference.radius_m', 0.1, 'Radius of the half circle (m); paper sec. 5.1.', 1e-4, 10.0
-    ),
-    ParameterSpec('reference.duration_s', 16.0, 'Time to run the half circle (s).', 1e-3, 1e5),
-    ParameterSpec(
-        'reference.start_delay_s',
-        2.0,
-        'Time at the start point before the half circle begins (s), counted from the first '
-        'controller step.',
-        0.0,
-        1e5,
-    ),
-    ParameterSpec(
-        'reference.sweep_direction',
-        [0.0, 0.0, 1.0],
-        'Direction of the half circle diameter in map_ned (-); default down (+z).',
-    ),
-    ParameterSpec(
-        'reference.capture_start',
-        True,
-        'Start the half circle at the end-effector position of the first state (true) or at '
-        'reference.start_position_m (false).',
-    ),
-    ParameterSpec(
-        'reference.start_position_m',
-        [0.0, 0.0, 0.0],
-        'Start of the half circle in map_ned when reference.capture_start is false (m).',
-    ),
-    ParameterSpec(
-        'force.setpoint_n', 150.0, 'Desired contact force along n (N); paper sec. 5.2.', 1e-3, 1e5
-    ),
-    ParameterSpec(
-        'force.ramp_time_s',
-        1.0,
-        'Duration of the quintic ramp of the force set-point after contact, and of its '
-        'release (s).',
-        1e-3,
-        1e4,
-    ),
-    ParameterSpec(
         'force.contact_threshold_n',
         5.0,
         'Normal force that counts as contact and starts the force ramp (N); well above the '
         'sensor noise (0.1 % of range).',
         1e-3,
         1e5,
+        False,
     ),
     ParameterSpec(
         'null_space.enabled',
@@ -248,6 +210,56 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
         'Posture damping D_n (1/s) per coordinate, as null_space.stiffness_1_s2.',
         0.0,
         1e4,
+    ),
+]
+
+#: Controller parameters that ``set_parameters`` may change while the node runs: the gains of
+#: the laws and the switch, the contact threshold and the null-space gains. The model, the
+#: switch mode, the default normal, rates and topology stay read-only.
+RUNTIME_PREFIXES = ('impedance.', 'hybrid.position_', 'hybrid.force_k',
+                    'hybrid.force_feedforward', 'hybrid.force_derivative',
+                    'hybrid.force_integral', 'fuzzy.', 'force.', 'null_space.stiffness',
+                    'null_space.damping', 'safety.')
+
+CONTROLLER_PARAMETER_SPECS = [
+    spec._replace(read_only=not spec.name.startswith(RUNTIME_PREFIXES))
+    for spec in CONTROLLER_PARAMETER_SPECS
+]
+
+#: Safety limits of the contact tasks (``contact_task.SafetyLimits``), changeable at run time.
+SAFETY_PARAMETER_SPECS: list[ParameterSpec] = [
+    ParameterSpec(
+        'safety.max_contact_force_n', 400.0,
+        'Largest measured contact force along the task normal (N): beyond it the task ends '
+        'FORCE_LIMIT and the arm backs off; a goal asking more is refused.', 1.0, 1e5, False,
+    ),
+    ParameterSpec(
+        'safety.sensor_range_n', 400.0,
+        'Full scale of the wrist force/torque sensor per axis (N): a reading at 99.9 % of it '
+        'counts as saturated (FORCE_LIMIT).', 1.0, 1e6, False,
+    ),
+    ParameterSpec(
+        'safety.max_position_error_m', 0.2,
+        'Largest end-effector tracking error |X_d - X| (m): beyond it the task ends '
+        'TRACKING_LIMIT.', 1e-3, 100.0, False,
+    ),
+    ParameterSpec(
+        'safety.max_path_distance_m', 1.5,
+        "Largest distance of a goal's waypoint from the end effector at acceptance (m).",
+        1e-3, 1000.0, False,
+    ),
+    ParameterSpec(
+        'safety.retreat_m', 0.05,
+        'Back-off along -normal after a cancel or a limit (m).', 0.0, 10.0, False,
+    ),
+    ParameterSpec(
+        'safety.retreat_time_s', 1.0,
+        'Time of the back-off and of the force ramp-down with it (s).', 1e-3, 100.0, False,
+    ),
+    ParameterSpec(
+        'safety.max_target_speed_m_s', 0.1,
+        'Speed limit of the streamed hold target (target_position topic) (m/s).', 1e-4, 10.0,
+        False,
     ),
 ]
 

@@ -163,13 +163,6 @@ class ControllerParameters:
     force_integral_limit: float
     switch_mode: str
     fuzzy: FuzzySwitchParameters
-    reference_radius: float
-    reference_duration: float
-    reference_start_delay: float
-    reference_sweep_direction: FloatArray
-    reference_start_position: FloatArray | None
-    force_setpoint: float
-    force_ramp_time: float
     contact_threshold: float
     null_space_enabled: bool
     null_space_stiffness: FloatArray
@@ -227,16 +220,9 @@ class ControllerParameters:
         mode = v['mode']
         if mode not in SWITCH_MODES:
             raise ControlParameterError('mode', mode, f'one of {list(SWITCH_MODES)}')
-        capture = v['reference.capture_start']
-        assert isinstance(capture, bool)
         enabled = v['null_space.enabled']
         assert isinstance(enabled, bool)
-        setpoint = number('force.setpoint_n')
         threshold = number('force.contact_threshold_n')
-        if threshold >= setpoint:
-            raise ControlParameterError(
-                'force.contact_threshold_n', threshold, f'(0, force.setpoint_n = {setpoint}) N'
-            )
         return cls(
             mass_scale=number('model.mass_scale'),
             impedance_inertia=spd_matrix('impedance.inertia_kg', floats('impedance.inertia_kg')),
@@ -257,17 +243,6 @@ class ControllerParameters:
             force_integral_limit=number('hybrid.force_integral_limit_n_s'),
             switch_mode=str(mode),
             fuzzy=fuzzy,
-            reference_radius=number('reference.radius_m'),
-            reference_duration=number('reference.duration_s'),
-            reference_start_delay=number('reference.start_delay_s'),
-            reference_sweep_direction=_unit3(
-                'reference.sweep_direction', floats('reference.sweep_direction')
-            ),
-            reference_start_position=None
-            if capture
-            else _vector3('reference.start_position_m', floats('reference.start_position_m')),
-            force_setpoint=setpoint,
-            force_ramp_time=number('force.ramp_time_s'),
             contact_threshold=threshold,
             null_space_enabled=enabled,
             null_space_stiffness=nine('null_space.stiffness_1_s2'),

@@ -220,6 +220,7 @@ class ForceSetpoint:
         self._f1 = 0.0
         self._x_contact: float | None = None
         self._started = False
+        self._duration = self.ramp_time
 
     @property
     def in_contact_since(self) -> float | None:
@@ -227,13 +228,25 @@ class ForceSetpoint:
         return self._t0 if self.phase == ForcePhase.RAMP_UP else None
 
     def _ramp(self, t: float) -> tuple[float, float, float]:
-        s, ds, dds = quintic_time_scaling((t - self._t0) / self.ramp_time)
+        s, ds, dds = quintic_time_scaling((t - self._t0) / self._duration)
         span = self._f1 - self._f0
         return (
             self._f0 + span * s,
-            span * ds / self.ramp_time,
-            span * dds / (self.ramp_time * self.ramp_time),
+            span * ds / self._duration,
+            span * dds / (self._duration * self._duration),
         )
+
+    def release(self, t: float, ramp_s: float | None = None) -> None:
+        """Ramp F_d from its value at t (s) down to zero over ``ramp_s`` (s; default ramp_time).
+
+        Ends a task's force (path done, cancel, safety limit); nothing happens while idle.
+        """
+        if self.phase != ForcePhase.RAMP_UP:
+            return
+        f_now = self._ramp(t)[0]
+        self.phase = ForcePhase.RELEASE
+        self._t0, self._f0, self._f1 = t, f_now, 0.0
+        self._duration = self.ramp_time if ramp_s is None else ramp_s
 
     def update(
         self,
@@ -259,10 +272,12 @@ class ForceSetpoint:
             if self.start_immediately and not self._started:
                 self.phase = ForcePhase.RAMP_UP
                 self._t0, self._f0, self._f1 = t, 0.0, self.magnitude
+                self._duration = self.ramp_time
                 self._x_contact = x_normal if in_contact else None
             elif self._armed and in_contact:
                 self.phase = ForcePhase.RAMP_UP
                 self._t0, self._f0, self._f1 = t, min(f_normal, self.magnitude), self.magnitude
+                self._duration = self.ramp_time
                 self._x_contact = x_normal
             self._started = True
         if self.phase == ForcePhase.RAMP_UP and self._x_contact is None and in_contact:
@@ -273,15 +288,13 @@ class ForceSetpoint:
             and x_d_dot_normal < 0.0
             and x_d_normal < self._x_contact
         ):
-            f_now = self._ramp(t)[0]
-            self.phase = ForcePhase.RELEASE
-            self._t0, self._f0, self._f1 = t, f_now, 0.0
+            self.release(t)
         if self.phase == ForcePhase.IDLE:
             sample = ForceSetpointSample(0.0, 0.0, 0.0, ForcePhase.IDLE)
         else:
             f_d, f_d_dot, f_d_ddot = self._ramp(t)
             sample = ForceSetpointSample(f_d, f_d_dot, f_d_ddot, self.phase)
-            if self.phase == ForcePhase.RELEASE and t - self._t0 >= self.ramp_time:
+            if self.phase == ForcePhase.RELEASE and t - self._t0 >= self._duration:
                 self.phase = ForcePhase.IDLE
                 self._armed = False
         return sample

@@ -5,7 +5,8 @@ effector exerts on the environment, in map_ned):
 
 1. task-space model M̃, ζ̃ (eq. 22-28) from the controller's own UvmsModel; M̂ = s M̃
    (s = 1 nominally, 0.9 in the paper's Case IV), ζ̂ = ζ̃;
-2. references: the half circle X_d (sec. 5.1) and the force set-point F_d n (sec. 5.2);
+2. references: X_d of the running task's path or the hold point (``TaskReference``), and
+   the task's force set-point F_d n (sec. 5.2), n the task's normal;
 3. impedance law F_IP (eq. 29-31) and hybrid law F_H (eq. 35, 37, 39);
 4. fuzzy weight W(F_e/F_d, v_e) (sec. 4.3) and the blend F_c = W F_IP + (1 - W) F_H (eq. 2);
 5. generalized forces τ = Jᵀ F_c (eq. 26) plus, optionally, the null-space term below, mapped
@@ -42,15 +43,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-from uvms_model.jit import kernel
-from uvms_model.loop_products import matvec
 
+from uvms_control.core.contact_task import ContactTaskGoal
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.fuzzy_switch import FuzzySwitch
 from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
+from uvms_control.core.null_space import null_space_torque
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.reference import ForcePhase, ForceSetpoint, HalfCircleReference
+from uvms_control.core.reference import ForcePhase
+from uvms_control.core.task_reference import TaskReference
 from uvms_control.core.task_space import (
     TaskSpaceModel,
     inverse_3x3,
@@ -149,37 +151,11 @@ class UnifiedForceController:
         self.impedance = ImpedanceLaw(
             params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
         )
-        self.hybrid = HybridLaw(
-            params.force_direction,
-            params.position_kp,
-            params.position_kd,
-            params.force_kp,
-            params.force_ki,
-            params.force_kd,
-            params.force_feedforward_compliance,
-            params.force_derivative_cutoff_hz,
-            params.force_integral_limit,
-        )
         self.fuzzy = FuzzySwitch(params.fuzzy)
-        self.reference = HalfCircleReference(
-            params.reference_radius,
-            params.reference_duration,
-            params.reference_start_delay,
-            params.force_direction,
-            params.reference_sweep_direction,
-        )
-        self.force_setpoint = ForceSetpoint(
-            params.force_setpoint,
-            params.force_ramp_time,
-            params.contact_threshold,
-            start_immediately=params.switch_mode == 'hybrid',
-        )
-        self.n = self.hybrid.n
-        self._n_list: list[float] = self.n.tolist()
+        self.task = TaskReference(params.contact_threshold,
+                                  ramp_from_start=params.switch_mode == 'hybrid')
         self._n_dof = model.n_dof
-        self._law_map = self._build_law_map()
-        self._S: list[list[float]] = self.hybrid.S.tolist()
-        self._I_minus_S: list[list[float]] = self.hybrid.I_minus_S.tolist()
+        self._set_normal(params.force_direction)
         self._null_gains = np.array((
             np.broadcast_to(params.null_space_stiffness, (self._n_dof,)),
             np.broadcast_to(params.null_space_damping, (self._n_dof,)),
@@ -190,6 +166,56 @@ class UnifiedForceController:
         with contextlib.suppress(ControlInputError):  # then the first real step says why
             self.step(0.0, rest, rest, np.zeros(3))
         self.reset()
+
+    def _set_normal(self, normal: npt.ArrayLike) -> None:
+        """Make n the force direction of the hybrid law (S = n nᵀ) and rebuild its maps."""
+        p = self.params
+        self.hybrid = HybridLaw(
+            np.asarray(normal, dtype=np.float64),
+            p.position_kp,
+            p.position_kd,
+            p.force_kp,
+            p.force_ki,
+            p.force_kd,
+            p.force_feedforward_compliance,
+            p.force_derivative_cutoff_hz,
+            p.force_integral_limit,
+        )
+        self.n = self.hybrid.n
+        self._n_list: list[float] = self.n.tolist()
+        self._law_map = self._build_law_map()
+        self._S: list[list[float]] = self.hybrid.S.tolist()
+        self._I_minus_S: list[list[float]] = self.hybrid.I_minus_S.tolist()
+
+    def set_gains(self, params: ControllerParameters) -> None:
+        """Take new gains while running (runtime parameters), keeping the force law's state.
+
+        The impedance, hybrid and fuzzy laws and the null-space gains are rebuilt from
+        ``params``; the force integral, the derivative filter (when its cut-off is unchanged),
+        the task, the posture and the time origin carry over.
+        """
+        old = self.hybrid
+        self.params = params
+        self.impedance = ImpedanceLaw(
+            params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
+        )
+        self.fuzzy = FuzzySwitch(params.fuzzy)
+        self._set_normal(old.n)
+        self.hybrid.carry_state_from(old)
+        self.task.set_contact_threshold(params.contact_threshold)
+        self._null_gains = np.array((
+            np.broadcast_to(params.null_space_stiffness, (self._n_dof,)),
+            np.broadcast_to(params.null_space_damping, (self._n_dof,)),
+        ))  # fmt: skip
+
+    def start_task(self, t: float, goal: ContactTaskGoal) -> None:
+        """Follow a contact task from t (s): its path from the running X_d, F_d along its normal.
+
+        The goal must have passed ``contact_task.validate_goal``. The force law starts afresh
+        (integral and derivative filter) along the new normal.
+        """
+        self._set_normal(goal.normal)
+        self.task.start(t, goal)
 
     def _build_law_map(self) -> FloatArray:
         """G (9, 19): the law accelerations from z = [X_d, Ẋ_d, Ẍ_d, F_e, X, Ẋ, a_f] at once.
@@ -208,17 +234,15 @@ class UnifiedForceController:
         return result
 
     def reset(self) -> None:
-        """Forget the start time, start position, posture and the integral and filter states."""
+        """Forget the start time, posture, task and the integral and filter states.
+
+        The next step holds the end effector where it is (the hold point of activation).
+        """
         self._t0: float | None = None
         self._t_prev = 0.0
-        self._X0: FloatArray | None = (
-            None
-            if self.params.reference_start_position is None
-            else self.params.reference_start_position.copy()
-        )
         self._q0 = np.zeros(self._n_dof)
         self.hybrid.reset()
-        self.force_setpoint.reset()
+        self.task.hold()
 
     @property
     def start_time(self) -> float | None:
@@ -283,15 +307,12 @@ class UnifiedForceController:
             self._t0 = t
             self._t_prev = t
             self._q0 = q.copy()
-            if self._X0 is None:
-                self._X0 = ts.X.copy()
-        assert self._X0 is not None
+        self.task.capture(ts.X.tolist())
         dt = max(t - self._t_prev, 0.0)
         self._t_prev = max(t, self._t_prev)
-        t_rel = t - self._t0
         p = self.params
 
-        reference = self.reference.evaluate_floats(t_rel, self._X0.tolist())
+        reference = self.task.state(t)
         d0, d1, d2, w0, w1, w2 = reference[:6]
         X, X_dot = ts.X.tolist(), ts.X_dot.tolist()
         F_e_list = F_e.tolist()
@@ -301,8 +322,8 @@ class UnifiedForceController:
         x0, x1, x2 = X
         f_normal = n0 * f0 + n1 * f1 + n2 * f2
         v_e = n0 * v0 + n1 * v1 + n2 * v2
-        setpoint = self.force_setpoint.update(
-            t_rel,
+        setpoint = self.task.force_sample(
+            t,
             f_normal,
             n0 * x0 + n1 * x1 + n2 * x2,
             n0 * d0 + n1 * d1 + n2 * d2,
@@ -310,8 +331,11 @@ class UnifiedForceController:
         )
         if setpoint.phase == ForcePhase.IDLE and self.hybrid.integral != 0.0:
             self.hybrid.integral = 0.0
-        force_ratio = f_normal / p.force_setpoint
-        if p.switch_mode == 'fuzzy':
+        force = self.task.force
+        force_ratio = f_normal / force.magnitude if force is not None else 0.0
+        if force is None:
+            W = 1.0  # no force set-point: the impedance law holds or follows the path
+        elif p.switch_mode == 'fuzzy':
             W = self.fuzzy.weight(force_ratio, v_e)
         else:
             W = 1.0 if p.switch_mode == 'impedance' else 0.0
@@ -323,7 +347,7 @@ class UnifiedForceController:
             dt,
             integrate=setpoint.phase != ForcePhase.IDLE
             and W <= CONSTRAINED_WEIGHT
-            and f_normal >= self.force_setpoint.contact_threshold,
+            and f_normal >= self.task.contact_threshold_n,
         )
 
         M_hat = ts.M_tilde if p.mass_scale == 1.0 else p.mass_scale * ts.M_tilde
@@ -367,7 +391,7 @@ class UnifiedForceController:
                 f'the control law gave a non-finite command at q = {q.tolist()} '
                 '(kinematic singularity?)'
             )
-        if f_normal < self.force_setpoint.contact_threshold:
+        if f_normal < self.task.contact_threshold_n:
             phase = Phase.FREE_MOTION
         elif W <= CONSTRAINED_WEIGHT:
             phase = Phase.CONSTRAINED
@@ -419,26 +443,3 @@ class UnifiedForceController:
             np.array((*F_c, *a_c)), tau,
         )  # fmt: skip
         return tau
-
-
-@kernel
-def null_space_torque(
-    J: FloatArray, Jt_pinv: FloatArray, J_dot_q_dot: FloatArray, M: FloatArray,
-    zeta: FloatArray, Jt_pinv_zeta: FloatArray, M_hat: FloatArray, mass_scale: float,
-    q: FloatArray, q0: FloatArray, q_dot: FloatArray, gains: FloatArray,
-    commands: FloatArray, tau: FloatArray,
-) -> None:
-    """τ = Jᵀ (F_c - M̂ y - J̃⁺ ζ) + ζ + M̂_q (φ̈ + J⁺ (y - J φ̈)) into ``tau`` (eq. 20, 24, 26).
-
-    y = a_c - J̇ q̇, φ̈ = K_n (q_0 - q) - D_n q̇ with the attitude error taken the short way
-    round, M̂_q = s M; ``gains`` rows are K_n and D_n, ``commands`` is [F_c, a_c].
-    """
-    error = q0 - q
-    for k in (3, 4, 5):  # Euler angles wrap: hold the attitude the short way round
-        if abs(error[k]) > math.pi:
-            error[k] = (error[k] + math.pi) % (2.0 * math.pi) - math.pi
-    phi_ddot = gains[0] * error - gains[1] * q_dot
-    y = commands[3:] - J_dot_q_dot
-    w3 = commands[:3] - matvec(M_hat, y) - Jt_pinv_zeta
-    s9 = phi_ddot + matvec(Jt_pinv.T, y - matvec(J, phi_ddot))
-    tau[:] = matvec(J.T, w3) + mass_scale * matvec(M, s9) + zeta

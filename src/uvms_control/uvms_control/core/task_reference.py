@@ -1,0 +1,124 @@
+"""What the controller follows: a hold point or a task's path, and the task's force set-point.
+
+Between tasks the reference holds a point (on activation: the end effector's position at the
+first step) at rest, with no force set-point, so the impedance law holds it (paper eq. 29).
+A task replaces it by a path that starts from the running reference without a jump in X_d,
+Ẋ_d or Ẍ_d, and by a set-point of F_d along the task's normal that ramps up at first contact
+(``ForceSetpoint``, paper sec. 5.2). At the end of a task, or on a cancel or a limit, the
+set-point ramps down; a retreat also moves X_d back off the surface along -n.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from uvms_control.core.contact_task import ContactTaskGoal
+from uvms_control.core.reference import ForcePhase, ForceSetpoint, ForceSetpointSample
+from uvms_control.core.task_path import TaskPath
+
+FloatArray = npt.NDArray[np.float64]
+
+_NO_FORCE = ForceSetpointSample(0.0, 0.0, 0.0, ForcePhase.IDLE)
+
+
+class TaskReference:
+    """X_d(t) and F_d(t) of the running task, or the hold point between tasks.
+
+    Args:
+        contact_threshold_n: normal force that counts as contact (N).
+        ramp_from_start: start the force ramp when the task starts instead of at first
+            contact (the pure hybrid law, W = 0, needs it: along n it controls only force).
+    """
+
+    def __init__(self, contact_threshold_n: float, ramp_from_start: bool = False) -> None:
+        self.contact_threshold_n = contact_threshold_n
+        self.ramp_from_start = ramp_from_start
+        self.path: TaskPath | None = None
+        self.force: ForceSetpoint | None = None
+        self._hold: list[float] | None = None
+
+    @property
+    def has_force(self) -> bool:
+        """A force set-point is defined (a task with force_n > 0 runs or releases)."""
+        return self.force is not None
+
+    @property
+    def force_active(self) -> bool:
+        """F_d is ramping up or held (not idle, not releasing)."""
+        return self.force is not None and self.force.phase == ForcePhase.RAMP_UP
+
+    @property
+    def force_idle(self) -> bool:
+        """No force is asked for, or the ramp-down has ended."""
+        return self.force is None or self.force.phase == ForcePhase.IDLE
+
+    def set_contact_threshold(self, contact_threshold_n: float) -> None:
+        """Change the force that counts as contact (N), for the running set-point too."""
+        self.contact_threshold_n = contact_threshold_n
+        if self.force is not None:
+            self.force.contact_threshold = contact_threshold_n
+
+    def capture(self, X: Sequence[float]) -> None:
+        """Hold X (m) if nothing is held yet (the first step after activation)."""
+        if self.path is None and self._hold is None:
+            self._hold = list(X)
+
+    def hold(self, position: Sequence[float] | None = None) -> None:
+        """Hold a point at rest with no force; None: capture X at the next step."""
+        self.path = None
+        self.force = None
+        self._hold = None if position is None else list(position)
+
+    def move_hold_toward(self, target: Sequence[float], max_distance_m: float) -> None:
+        """Move the hold point toward a target by at most max_distance_m (m), at rest."""
+        if self.path is not None or self._hold is None:
+            return
+        step = np.asarray(target, dtype=np.float64) - self._hold
+        distance = float(np.linalg.norm(step))
+        if distance > max_distance_m:
+            step *= max_distance_m / distance
+        self._hold = (np.asarray(self._hold) + step).tolist()
+
+    def state(self, t: float) -> list[float]:
+        """[X_d, Ẋ_d, Ẍ_d] at t (s) as nine floats; the hold point at rest between tasks."""
+        if self.path is not None:
+            return self.path.evaluate_floats(t)
+        if self._hold is None:
+            raise RuntimeError('the reference holds no point yet (no step since activation)')
+        return [*self._hold, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+
+    def start(self, t: float, goal: ContactTaskGoal) -> None:
+        """Follow a goal's path from t (s), from the running reference, with its force."""
+        self.path = TaskPath.from_state(
+            t, self.state(t), t + goal.times, goal.path, goal.velocities, goal.accelerations
+        )
+        self._hold = None
+        self.force = (
+            ForceSetpoint(goal.force_n, goal.force_ramp_s, self.contact_threshold_n,
+                          start_immediately=self.ramp_from_start)
+            if goal.force_n > 0.0 else None
+        )
+
+    def release(self, t: float, ramp_s: float | None = None) -> None:
+        """Ramp F_d down to zero from t (s), over ``ramp_s`` or the task's ramp time."""
+        if self.force is not None:
+            self.force.release(t, ramp_s)
+
+    def retreat(self, t: float, X: Sequence[float], normal: FloatArray, distance_m: float,
+                duration_s: float) -> None:
+        """Back off to X - distance n from the running reference over duration (s), no force."""
+        target = np.asarray(X, dtype=np.float64) - distance_m * normal
+        self.path = TaskPath.from_state(t, self.state(t), np.array([t + duration_s]),
+                                        target[np.newaxis, :])
+        self._hold = None
+        self.release(t, duration_s)
+
+    def force_sample(self, t: float, f_normal: float, x_normal: float, x_d_normal: float,
+                     x_d_dot_normal: float) -> ForceSetpointSample:
+        """F_d and its derivatives at t (``ForceSetpoint.update``); zero without a task force."""
+        if self.force is None:
+            return _NO_FORCE
+        return self.force.update(t, f_normal, x_normal, x_d_normal, x_d_dot_normal)

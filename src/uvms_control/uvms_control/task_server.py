@@ -1,0 +1,144 @@
+"""The ContactTask action server of the controller: goals in, feedback and results out.
+
+A thin adapter between rclpy's ActionServer and the task core (``TaskSupervisor``): it
+accepts every well-formed request, hands the goal to the supervisor (which refuses an
+invalid one with INVALID_GOAL and the field named, or lets it preempt the running task),
+and answers when the control loop says the task ended. The control loop drives everything:
+rclpy's coroutine execute callback would poll the executor while a task runs, so the goal
+stays ACCEPTED while it runs and ``execute`` is called only to deliver its result.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action.server import ServerGoalHandle
+from rclpy.callback_groups import CallbackGroup
+from rclpy.node import Node
+
+from uvms_control.core.contact_task import TaskCode, TaskGoalError, TaskResult
+from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
+from uvms_control.task_conversions import (
+    contact_task_feedback,
+    contact_task_goal,
+    contact_task_result,
+)
+from uvms_msgs.action import ContactTask
+
+#: Feedback period on the controller's clock (s): 20 Hz, above the 10 Hz the contract asks.
+FEEDBACK_PERIOD_S = 0.05
+
+
+def _goal_key(handle: ServerGoalHandle) -> bytes:
+    return bytes(handle.goal_id.uuid)
+
+
+class ContactTaskServer:
+    """Serves ``~/contact_task`` for a controller node.
+
+    Args:
+        node: the controller node.
+        supervisor: returns the running ``TaskSupervisor``, or None while the node is not
+            active (goals then end INACTIVE at once).
+        now_s: the controller's clock (s).
+        callback_group: where the action's callbacks run.
+    """
+
+    def __init__(self, node: Node, supervisor: Callable[[], TaskSupervisor | None],
+                 now_s: Callable[[], float], callback_group: CallbackGroup | None = None
+                 ) -> None:
+        self._node = node
+        self._supervisor = supervisor
+        self._now_s = now_s
+        self._handles: dict[bytes, ServerGoalHandle] = {}
+        self._results: dict[bytes, ContactTask.Result] = {}
+        self._last_feedback_s = -float('inf')
+        self.goals_received = 0
+        self.last_outcome = 'none'
+        self._server = ActionServer(
+            node, ContactTask, 'controller/contact_task',
+            execute_callback=self._deliver,
+            goal_callback=lambda _request: GoalResponse.ACCEPT,
+            handle_accepted_callback=self._accepted,
+            cancel_callback=self._cancel,
+            callback_group=callback_group,
+        )
+
+    def destroy(self) -> None:
+        """End every open goal (INACTIVE) and remove the action server."""
+        self.finish_all(TaskCode.INACTIVE, 'the controller shut down')
+        self._server.destroy()
+
+    def _accepted(self, handle: ServerGoalHandle) -> None:
+        key = _goal_key(handle)
+        self._handles[key] = handle
+        self.goals_received += 1
+        supervisor = self._supervisor()
+        if supervisor is None:
+            self._finish(key, TaskResult(TaskCode.INACTIVE, 'the controller is not active',
+                                         0.0, 0.0, float('nan'), float('nan')))
+            return
+        try:
+            goal = contact_task_goal(handle.request)
+        except TaskGoalError as error:
+            self._finish(key, TaskResult(TaskCode.INVALID_GOAL, str(error), 0.0, 0.0,
+                                         float('nan'), float('nan')))
+            return
+        self.finish(supervisor.submit(key, goal, self._now_s()))
+        if key in self._handles:
+            self._node.get_logger().info(
+                f'contact task accepted: {len(goal.times)} waypoints over '
+                f'{goal.times[-1]:.2f} s, F_d {goal.force_n:g} N')
+
+    def _cancel(self, handle: ServerGoalHandle) -> CancelResponse:
+        supervisor = self._supervisor()
+        if supervisor is not None and supervisor.cancel(_goal_key(handle)):
+            return CancelResponse.ACCEPT
+        return CancelResponse.REJECT
+
+    def publish_feedback(self, supervisor: TaskSupervisor, now_s: float) -> None:
+        """Feedback of the running task, at most once per ``FEEDBACK_PERIOD_S``."""
+        if now_s - self._last_feedback_s < FEEDBACK_PERIOD_S:
+            return
+        progress, step = supervisor.progress(), supervisor.last_result
+        if progress is None or step is None:
+            return
+        handle = self._handles.get(progress.goal_id)  # type: ignore[call-overload]
+        if handle is not None:
+            self._last_feedback_s = now_s
+            handle.publish_feedback(contact_task_feedback(progress, step))
+
+    def finish(self, events: Iterable[TaskEvent]) -> None:
+        """Deliver the results of tasks that ended."""
+        for event in events:
+            self._finish(event.goal_id, event.result)  # type: ignore[arg-type]
+
+    def finish_all(self, code: TaskCode, message: str) -> None:
+        """End every open goal with ``code`` (deactivation, shutdown)."""
+        for key in list(self._handles):
+            self._finish(key, TaskResult(code, message, 0.0, 0.0, float('nan'), float('nan')))
+
+    def _finish(self, key: bytes, result: TaskResult) -> None:
+        handle = self._handles.get(key)
+        if handle is None:
+            return
+        self._results[key] = contact_task_result(result)
+        self.last_outcome = f'{result.code.name}: {result.message}'
+        log = (self._node.get_logger().info if result.code == TaskCode.SUCCEEDED
+               else self._node.get_logger().warn)
+        log(f'contact task ended {result.code.name}: {result.message}')
+        handle.execute()  # _deliver, from the executor, sets the final state
+
+    def _deliver(self, handle: ServerGoalHandle) -> Any:
+        key = _goal_key(handle)
+        self._handles.pop(key, None)
+        result = self._results.pop(key)
+        if result.error_code == TaskCode.SUCCEEDED:
+            handle.succeed()
+        elif handle.is_cancel_requested and result.error_code == TaskCode.CANCELED:
+            handle.canceled()
+        else:
+            handle.abort()
+        return result
