@@ -32,6 +32,7 @@ DELEGATED = {
     'report': ('uvms_analysis.report', 'print the metrics of recordings'),
     'sweep': ('uvms_sweep.cli', 'run a parameter sweep of a scenario on Ray and map '
                                         'its metrics'),
+    'task': ('uvms_tasks.cli', 'send a task or mission file to the controller of a running graph'),
     'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '
                                       'messages'),
 }

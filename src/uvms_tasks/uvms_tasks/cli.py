@@ -1,0 +1,224 @@
+"""``uvms task FILE.yaml``: send a task or mission file to a running graph and follow it.
+
+Joins the graph of the ROS domain in the environment, sends each task through the
+controller's ContactTask action (the next when the previous one SUCCEEDED), shows a progress
+line on stderr (state, phase, W, force, progress) and prints each result on stdout. Ctrl-C
+cancels the running goal (the controller ramps the force down and backs off) and exits 130.
+
+Exit status: 0 every task SUCCEEDED, 1 one did not (or no controller answered), 2 a bad file
+or bad usage, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, TextIO
+
+from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.stop_event import StopEvent, active_stop_event
+
+from uvms_tasks.errors import TaskClientError, TaskFileError
+from uvms_tasks.goals import TaskOutcome, describe_feedback, describe_task
+from uvms_tasks.task_file import TaskSpec, load_task_file
+
+if TYPE_CHECKING:
+    from uvms_tasks.client import ContactTaskClient
+
+EXIT_OK = 0
+EXIT_FAILURE = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+#: Wall seconds to wait for the result of a canceled goal (the controller retreats first).
+CANCEL_WAIT_S = 10.0
+#: Shortest interval between two progress line updates (s).
+PROGRESS_INTERVAL_S = 0.1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Argument parser of ``uvms task``."""
+    parser = argparse.ArgumentParser(
+        prog='uvms task',
+        description='Send a task or mission file (uvms_tasks.task_file) to the controller of '
+                    'a running graph through its ContactTask action, show the feedback and '
+                    'print each result. Ctrl-C cancels the running goal.')
+    parser.add_argument('file', metavar='FILE.yaml', help='task or mission file')
+    parser.add_argument('--namespace', default='/uvms', metavar='NS',
+                        help="the graph's namespace (default /uvms: "
+                             '/uvms/controller/contact_task)')
+    parser.add_argument('--timeout', type=float, default=10.0, metavar='S',
+                        help='seconds to wait for the action server, the controller state and '
+                             'the answer to each goal (default 10)')
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``uvms task``; returns the exit status."""
+    try:
+        args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    if not args.timeout > 0.0:
+        _error(f'--timeout: expected seconds > 0, got {args.timeout}')
+        return EXIT_USAGE
+    try:
+        tasks = load_task_file(args.file)
+    except TaskFileError as exc:
+        _error(str(exc))
+        return EXIT_USAGE
+    ros_environment_defaults()
+    installed = active_stop_event()
+    stop = installed if installed is not None else StopEvent()
+    try:
+        return _send_tasks(tasks, args.namespace, args.timeout, stop)
+    finally:
+        if stop is not installed:
+            stop.restore()
+
+
+def _error(message: str) -> None:
+    """One-line error on stderr."""
+    print(f'uvms task: error: {message}', file=sys.stderr)
+
+
+def _send_tasks(tasks: list[TaskSpec], namespace: str, timeout_s: float,
+                stop: StopEvent) -> int:
+    """Join the graph, send the tasks in order, report; the exit status."""
+    import rclpy
+    from rclpy.node import Node
+    from rclpy.signals import SignalHandlerOptions
+
+    from uvms_tasks.client import ContactTaskClient
+
+    rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
+    node = Node(f'uvms_task_{os.getpid()}', namespace=namespace)
+    client = ContactTaskClient(node)
+    run = _TaskRun(client, stop, timeout_s)
+    try:
+        return run.run(tasks)
+    except TaskClientError as exc:
+        run.progress.end()
+        _error(str(exc))
+        return EXIT_FAILURE
+    finally:
+        client.destroy()
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+class _TaskRun:
+    """The tasks of one ``uvms task`` call, sent and followed on the client's executor."""
+
+    def __init__(self, client: ContactTaskClient, stop: StopEvent, timeout_s: float) -> None:
+        self.client = client
+        self.stop = stop
+        self.timeout_s = timeout_s
+        self.progress = _ProgressLine(sys.stderr)
+
+    def spin(self, done: Callable[[], bool], timeout_s: float | None) -> bool:
+        """Spin until done() (True), a stop signal or the timeout (False)."""
+        self.client.spin_until(lambda: done() or self.stop.is_set(), timeout_s)
+        return done()
+
+    def run(self, tasks: list[TaskSpec]) -> int:
+        """Send every task, stopping after the first that does not succeed."""
+        client = self.client
+        if not self.spin(client.server_is_ready, self.timeout_s):
+            if self.stop.is_set():
+                return EXIT_INTERRUPTED
+            msg = f'no action server {client.action_name} within {self.timeout_s:g} s'
+            raise TaskClientError(msg)
+        # The server must discover this new client too before it can answer (client.py).
+        from uvms_tasks.client import DISCOVERY_SETTLE_S
+
+        self.spin(lambda: False, DISCOVERY_SETTLE_S)
+        if self.stop.is_set():
+            return EXIT_INTERRUPTED
+        if any(task.needs_start for task in tasks) and not self.spin(
+                lambda: client.latest_state is not None, self.timeout_s):
+            if self.stop.is_set():
+                return EXIT_INTERRUPTED
+            msg = f'no controller/state message within {self.timeout_s:g} s (X0 of half circle)'
+            raise TaskClientError(msg)
+        for i, task in enumerate(tasks):
+            outcome = self.run_task(task)
+            if outcome is None:
+                return EXIT_INTERRUPTED
+            print(outcome.describe(), flush=True)
+            if not outcome.succeeded:
+                skipped = len(tasks) - i - 1
+                if skipped:
+                    print(f'not sent: {skipped} remaining task(s)', file=sys.stderr)
+                return EXIT_FAILURE
+        return EXIT_OK
+
+    def run_task(self, task: TaskSpec) -> TaskOutcome | None:
+        """Send one task and wait for its end; None when interrupted (the goal canceled)."""
+        from uvms_tasks.goals import goal_from_task
+
+        client = self.client
+        state = client.latest_state
+        start = None if state is None else (state.desired_position.x,
+                                             state.desired_position.y,
+                                             state.desired_position.z)
+        print(f'sending {describe_task(task)}', file=sys.stderr, flush=True)
+        sent = client.send_goal_async(goal_from_task(task, start), self.progress.update)
+        if not self.spin(sent.done, self.timeout_s):
+            # Interrupted before the answer: wait for it, so that an accepted goal is canceled.
+            if not self.stop.is_set() or not client.spin_until(sent.done, self.timeout_s):
+                msg = f'{client.action_name}: no answer to {task.name} in {self.timeout_s:g} s'
+                raise TaskClientError(msg)
+        handle = sent.result()
+        if not handle.accepted:
+            return TaskOutcome(task.name, int(handle.status), rejected=True)
+        result = client.result_async(handle)
+        if not self.spin(result.done, None):
+            self.cancel(task, handle, result)
+            return None
+        self.progress.end()
+        response = result.result()
+        return TaskOutcome(task.name, int(response.status), response.result)
+
+    def cancel(self, task: TaskSpec, handle: Any, result: Any) -> None:
+        """Cancel an interrupted goal and print its result if it comes in time."""
+        self.progress.end()
+        print(f'uvms task: interrupted: canceling {task.name}', file=sys.stderr, flush=True)
+        self.client.cancel_async(handle)
+        if self.client.spin_until(result.done, CANCEL_WAIT_S):
+            response = result.result()
+            print(TaskOutcome(task.name, int(response.status), response.result).describe(),
+                  flush=True)
+
+
+class _ProgressLine:
+    """The feedback as one line rewritten in place (a terminal only; nothing otherwise)."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+        self.enabled = stream.isatty()
+        self._shown = False
+        self._last = 0.0
+
+    def update(self, feedback: Any) -> None:
+        """Show the latest feedback, at most every PROGRESS_INTERVAL_S."""
+        now = time.monotonic()
+        if not self.enabled or now - self._last < PROGRESS_INTERVAL_S:
+            return
+        self._last = now
+        self.stream.write(f'\r\x1b[K{describe_feedback(feedback)}')
+        self.stream.flush()
+        self._shown = True
+
+    def end(self) -> None:
+        """Leave the line (before a result or an error is printed)."""
+        if self._shown:
+            self.stream.write('\n')
+            self.stream.flush()
+            self._shown = False
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,211 @@
+"""The mission node: sends a mission's ContactTask goals to the controller, one after another.
+
+It waits for the controller's action server and its first ``controller/state`` (whose
+``desired_position``, the hold target X_d, is X0 of a half circle), sends the first goal,
+and sends each next one when the previous result arrives, from the X_d then current. Each
+result is logged in one line. ``finished``/``results`` let an in-process graph runner stop
+when the mission is done. Names are relative: run it in /uvms.
+
+In process::
+
+    node = MissionNode(tasks=load_task_file('mission.yaml'), namespace='uvms',
+                       context=context)   # or parameter mission_file, read here
+    executor.add_node(node)               # spin until node.finished; node.results
+
+As its own process: ``ros2 run uvms_tasks mission --ros-args -r __ns:=/uvms
+-p mission_file:=mission.yaml`` (exit 0 when every goal SUCCEEDED, 1 otherwise).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Sequence
+from typing import Any
+
+from action_msgs.msg import GoalStatus
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rclpy.action.client import ClientGoalHandle
+from rclpy.exceptions import ParameterException
+from rclpy.node import Node
+from rclpy.task import Future
+from uvms_common.node_main import run_node
+
+from uvms_msgs.action import ContactTask
+from uvms_msgs.msg import ControllerState
+from uvms_tasks.client import DISCOVERY_SETTLE_S, ContactTaskClient
+from uvms_tasks.errors import TaskError, TaskFileError
+from uvms_tasks.goals import TaskOutcome, describe_task, goal_from_task
+from uvms_tasks.task_file import TaskSpec, load_task_file
+
+
+class MissionNode(Node):
+    """Sends a mission through the controller's ContactTask action (node name ``mission``).
+
+    Args:
+        tasks: The mission, in order; None reads the file of parameter ``mission_file``.
+        server_settle_s: Default of parameter ``server_settle_s``: wall time between seeing
+            the action server and sending the first goal, for the server to discover this
+            node in turn (``uvms_tasks.client.DISCOVERY_SETTLE_S``, what ``main`` uses for a
+            process of its own). 0 (the default) in process: nodes of one context match at
+            once, and a lockstep run then sends its goals at the same simulated time every run.
+        **kwargs: Passed to ``rclpy.node.Node`` (namespace, context, cli_args,
+            parameter_overrides, ...).
+
+    Raises:
+        TaskFileError: No tasks given, or the mission file is unreadable or invalid.
+    """
+
+    def __init__(self, tasks: Sequence[TaskSpec] | None = None,
+                 server_settle_s: float = 0.0, **kwargs: Any) -> None:
+        super().__init__('mission', **kwargs)
+        mission_file = self.declare_parameter(
+            'mission_file', '', ParameterDescriptor(
+                description='Task or mission YAML file (uvms_tasks.task_file); ignored when '
+                            'the tasks are given in process', read_only=True)).value
+        self.continue_on_failure: bool = self.declare_parameter(
+            'continue_on_failure', False, ParameterDescriptor(
+                description='Send the next goal also after one that did not succeed',
+                read_only=True)).value
+        self.server_settle_s: float = self.declare_parameter(
+            'server_settle_s', float(server_settle_s), ParameterDescriptor(
+                description='Wall time between discovering the action server and sending the '
+                            'first goal (s); 0 when the server is in the same process',
+                read_only=True, floating_point_range=[
+                    FloatingPointRange(from_value=0.0, to_value=10.0, step=0.0)])).value
+        if tasks is None:
+            if not mission_file:
+                msg = 'mission: no tasks: set parameter mission_file to a task or mission file'
+                raise TaskFileError(msg)
+            tasks = load_task_file(mission_file)
+        if not tasks:
+            msg = 'mission: the mission holds no tasks'
+            raise TaskFileError(msg)
+        self.tasks: list[TaskSpec] = list(tasks)
+        #: Outcome of each goal sent so far, in order.
+        self.results: list[TaskOutcome] = []
+        #: The goals as sent (half circles expanded from the X_d of that moment).
+        self.sent_goals: list[ContactTask.Goal] = []
+        self.last_feedback: ContactTask.Feedback | None = None
+        self.finished = False
+        self._target: tuple[float, float, float] | None = None
+        self._busy = False
+        self._server_seen_s: float | None = None
+        self._handle: ClientGoalHandle | None = None
+        self.client = ContactTaskClient(self)
+        # The state topic drives the mission: every control step is a chance to start.
+        self.create_subscription(ControllerState, 'controller/state', self._on_state, 1)
+        self.get_logger().info(
+            f'mission of {len(self.tasks)} task(s) for {self.client.action_name}; waiting for '
+            'the action server and controller/state')
+
+    @property
+    def succeeded(self) -> bool:
+        """Whether every task of the mission ended SUCCEEDED."""
+        return (self.finished and len(self.results) == len(self.tasks)
+                and all(outcome.succeeded for outcome in self.results))
+
+    def _on_state(self, msg: ControllerState) -> None:
+        p = msg.desired_position
+        self._target = (p.x, p.y, p.z)
+        if not self._busy and not self.finished and self._server_settled():
+            self._send_next()
+
+    def _server_settled(self) -> bool:
+        """The action server is discovered, and has had server_settle_s to discover us."""
+        if not self.client.server_is_ready():
+            return False
+        # Discovery runs on wall time, whatever clock the node uses.
+        now = time.monotonic()
+        if self._server_seen_s is None:
+            self._server_seen_s = now
+        return now - self._server_seen_s >= self.server_settle_s
+
+    def _send_next(self) -> None:
+        """Send the next task's goal, its half circle (if any) from the current X_d."""
+        task = self.tasks[len(self.results)]
+        try:
+            goal = goal_from_task(task, self._target)
+        except TaskError as exc:
+            self._finish_task(TaskOutcome(task.name, GoalStatus.STATUS_ABORTED, rejected=True))
+            self.get_logger().error(str(exc))
+            return
+        self._busy = True
+        self.sent_goals.append(goal)
+        self.get_logger().info(f'sending {describe_task(task)}')
+        future = self.client.send_goal_async(goal, self._on_feedback)
+        future.add_done_callback(self._on_goal_response)
+
+    def _on_feedback(self, feedback: ContactTask.Feedback) -> None:
+        self.last_feedback = feedback
+
+    def _on_goal_response(self, future: Future) -> None:
+        handle: ClientGoalHandle = future.result()
+        if not handle.accepted:
+            self._finish_task(TaskOutcome(self._current_name(), int(handle.status),
+                                          rejected=True))
+            return
+        self._handle = handle
+        self.client.result_async(handle).add_done_callback(self._on_result)
+
+    def _on_result(self, future: Future) -> None:
+        response: Any = future.result()
+        self._handle = None
+        self._finish_task(TaskOutcome(self._current_name(), int(response.status),
+                                      response.result))
+
+    def _current_name(self) -> str:
+        return self.tasks[len(self.results)].name
+
+    def _finish_task(self, outcome: TaskOutcome) -> None:
+        """Log and keep a goal's outcome; send the next goal or end the mission."""
+        self.results.append(outcome)
+        # rclpy refuses one call site logging at two severities: one line per severity.
+        if outcome.succeeded:
+            self.get_logger().info(outcome.describe())
+        else:
+            self.get_logger().error(outcome.describe())
+        done = len(self.results) == len(self.tasks)
+        if not done and (outcome.succeeded or self.continue_on_failure):
+            if self._target is not None and self.client.server_is_ready():
+                self._send_next()
+            else:
+                self._busy = False
+            return
+        self._busy = False
+        self.finished = True
+        passed = sum(result.succeeded for result in self.results)
+        summary = (f'mission {"done" if self.succeeded else "failed"}: {passed} of '
+                   f'{len(self.tasks)} task(s) succeeded')
+        if self.succeeded:
+            self.get_logger().info(summary)
+        else:
+            self.get_logger().error(summary)
+
+    def destroy_node(self) -> None:
+        """Ask the controller to cancel a goal still running, then destroy the node."""
+        if self._handle is not None:
+            self.get_logger().warning(f'stopping: canceling {self._current_name()}')
+            self.client.cancel_async(self._handle)
+            self._handle = None
+        self.client.destroy()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the mission node until its mission ends or SIGINT/SIGTERM."""
+    nodes: list[MissionNode] = []
+
+    def make_node() -> MissionNode:
+        nodes.append(MissionNode(server_settle_s=DISCOVERY_SETTLE_S))
+        return nodes[-1]
+
+    status = run_node(make_node, args, 'mission', (TaskError, ParameterException),
+                      finished=lambda node: getattr(node, 'finished', False))
+    if status == 0 and nodes and nodes[0].finished and not nodes[0].succeeded:
+        status = 1
+    sys.exit(status)
+
+
+if __name__ == '__main__':
+    main()
