@@ -4,6 +4,7 @@ import io
 import os
 import pty
 import re
+import select
 import sys
 
 import pytest
@@ -75,6 +76,12 @@ def test_progress_on_a_terminal_without_a_size_still_draws(
         bar = RunBar(2.0)
         bar.update_to(2.0)
         bar.close()
-    text = os.read(master, 65536).decode()
+    chunks = []
+    try:
+        while select.select([master], [], [], 0.5)[0]:
+            chunks.append(os.read(master, 65536))
+    except OSError:  # EIO: drained, and the terminal side is closed
+        pass
     os.close(master)
+    text = b''.join(chunks).decode()
     assert '2.00/2.00 s simulated' in text
