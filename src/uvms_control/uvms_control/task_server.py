@@ -121,20 +121,20 @@ class ContactTaskServer:
             self._finish(key, TaskResult(code, message, 0.0, 0.0, float('nan'), float('nan')))
 
     def _finish(self, key: bytes, result: TaskResult) -> None:
-        handle = self._handles.get(key)
+        handle = self._handles.pop(key, None)
         if handle is None:
-            return
+            return  # ended already (its result is on its way)
         self._results[key] = contact_task_result(result)
         self.last_outcome = f'{result.code.name}: {result.message}'
-        log = (self._node.get_logger().info if result.code == TaskCode.SUCCEEDED
-               else self._node.get_logger().warn)
-        log(f'contact task ended {result.code.name}: {result.message}')
+        text = f'contact task ended {result.code.name}: {result.message}'
+        if result.code == TaskCode.SUCCEEDED:  # rclpy wants one severity per call site
+            self._node.get_logger().info(text)
+        else:
+            self._node.get_logger().warn(text)
         handle.execute()  # _deliver, from the executor, sets the final state
 
     def _deliver(self, handle: ServerGoalHandle) -> Any:
-        key = _goal_key(handle)
-        self._handles.pop(key, None)
-        result = self._results.pop(key)
+        result = self._results.pop(_goal_key(handle))
         if result.error_code == TaskCode.SUCCEEDED:
             handle.succeed()
         elif handle.is_cancel_requested and result.error_code == TaskCode.CANCELED:
