@@ -271,8 +271,9 @@ def test_force_limit_ends_the_task_and_the_arm_backs_off() -> None:
 
 
 def test_inactive_allocator_commands_zero_and_inactive_controller_does_not_stall() -> None:
-    """Deactivate the allocator: zero actuators within two periods; reactivate: they resume.
-    Deactivate the controller: lockstep still reaches the end (zero commands).
+    """Allocator off: zero actuators within two periods, on again: they resume; controller off.
+
+    With the controller inactive the lockstep run still reaches its end, on zero commands.
     """
     def deactivate(probe: Probe) -> None:
         probe.notes['off_at'] = probe.now_s()
