@@ -17,6 +17,7 @@ Keep the traffic on this machine with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
@@ -26,6 +27,7 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
+    MISSION,
     MODES,
     RECORDER,
     file_parameters,
@@ -33,6 +35,7 @@ from uvms_bringup.launch_helpers import (
     node_parameters,
     parameters_file_text,
     resolve_scenario_path,
+    write_mission_file,
 )
 from uvms_bringup.scenario import load_scenario
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
@@ -58,9 +61,14 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
         scenario = load_scenario(resolve_scenario_path(scenario_arg, Path(config)))
     actions = []
     run_values = {}
-    for spec in graph_nodes(record=bool(output_path), foxglove=foxglove):
+    mission = scenario is not None and bool(scenario.mission)
+    for spec in graph_nodes(record=bool(output_path), foxglove=foxglove, mission=mission):
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
                                     foxglove_address)
+        if spec is MISSION:
+            assert scenario is not None
+            overrides['mission_file'] = str(write_mission_file(
+                scenario, Path(tempfile.mkdtemp(prefix='uvms_mission_'))))
         if spec.uses_sim_time:
             overrides['use_sim_time'] = use_sim_time
         if spec is RECORDER:

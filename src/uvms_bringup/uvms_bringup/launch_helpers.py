@@ -16,7 +16,7 @@ from typing import Any
 import yaml
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
-from uvms_bringup.scenario import ParameterValue, Scenario
+from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioLoader
 
 #: Namespace of the robot's nodes and topics (``/clock``, ``/tf`` stay global).
 DEFAULT_NAMESPACE = 'uvms'
@@ -41,6 +41,8 @@ class NodeSpec:
         class_name: Node class in that module.
         parameter_files: Files of ``config/`` loaded with ``--params-file``, in order.
         uses_sim_time: Whether the node runs on ``/clock`` (all but the clock source).
+        finishes: Whether the node ends by itself, exit status 0, without ending the run
+            (the mission node, once its goals are done).
     """
 
     name: str
@@ -50,6 +52,7 @@ class NodeSpec:
     class_name: str
     parameter_files: tuple[str, ...]
     uses_sim_time: bool = True
+    finishes: bool = False
 
 
 SIMULATOR = NodeSpec(
@@ -77,14 +80,29 @@ RECORDER = NodeSpec(
     'recorder', 'uvms_recording', 'recorder', 'uvms_recording.recorder_node', 'RecorderNode', (),
 )
 
+#: Sends a scenario's mission through the ContactTask action (``uvms_tasks``), then exits.
+MISSION = NodeSpec(
+    'mission', 'uvms_tasks', 'mission', 'uvms_tasks.mission_node', 'MissionNode', (),
+    finishes=True,
+)
+
 #: The nodes that always run, in start order; the Foxglove server joins for a live view and
 #: the recorder, last, when there is an output.
 CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, VISUALIZER)
 
-def graph_nodes(record: bool, foxglove: bool = False) -> tuple[NodeSpec, ...]:
-    """The nodes of a run: with the Foxglove server for a live view, the recorder last."""
-    return (*CORE_NODES, *((FOXGLOVE_SERVER,) if foxglove else ()),
-            *((RECORDER,) if record else ()))
+def graph_nodes(record: bool, foxglove: bool = False,
+                mission: bool = False) -> tuple[NodeSpec, ...]:
+    """The nodes of a run; the mission sender, a live view and the recorder (last) if asked."""
+    return (*CORE_NODES, *((MISSION,) if mission else ()),
+            *((FOXGLOVE_SERVER,) if foxglove else ()), *((RECORDER,) if record else ()))
+
+
+def write_mission_file(scenario: Scenario, directory: Path) -> Path:
+    """The scenario's ``mission:`` as a mission file in directory, for the mission process."""
+    document = yaml.load(scenario.path.read_text(encoding='utf-8'), Loader=ScenarioLoader)
+    path = directory / 'mission.yaml'
+    path.write_text(yaml.safe_dump({'mission': document['mission']}), encoding='utf-8')
+    return path
 
 
 def node_parameters(

@@ -23,6 +23,7 @@ from uvms_common.ros_environment import ros_environment_defaults
 
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
+    MISSION,
     RECORDER,
     SIMULATOR,
     NodeSpec,
@@ -31,6 +32,7 @@ from uvms_bringup.launch_helpers import (
     graph_nodes,
     node_parameters,
     parameters_file_text,
+    write_mission_file,
 )
 from uvms_bringup.processes import (
     EXIT_FAILURE,
@@ -114,7 +116,14 @@ def plan_launch(
     fq_prefix = f'/{namespace.strip("/")}'
     run_values: dict[str, dict[str, Any]] = {}
     plans: list[NodeProcessSpec] = []
-    for spec in graph_nodes(record=output is not None, foxglove=foxglove is not None):
+    mission = scenario is not None and bool(scenario.mission)
+    for spec in graph_nodes(record=output is not None, foxglove=foxglove is not None,
+                            mission=mission):
+        if spec is MISSION:
+            assert scenario is not None
+            plans.append(_mission_process(scenario, namespace, parameters_dir, log_level,
+                                          bin_dir, len(plans) + 1))
+            continue
         overrides: dict[str, Any] = {
             **node_parameters(spec, scenario, mode, duration_s, output, foxglove),
             **(extra_overrides or {}).get(spec.name, {}),
@@ -140,6 +149,19 @@ def plan_launch(
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated))
     return plans
+
+
+def _mission_process(scenario: Scenario, namespace: str, parameters_dir: Path,
+                     log_level: str | None, bin_dir: Path | None, index: int
+                     ) -> NodeProcessSpec:
+    """The mission sender of a scenario: its ``mission:`` copied into a mission file."""
+    mission_file = write_mission_file(scenario, parameters_dir)
+    generated = parameters_dir / 'mission_parameters.yaml'
+    generated.write_text(parameters_file_text({f'/{namespace.strip("/")}/mission': {
+        'use_sim_time': True, 'mission_file': str(mission_file)}}), encoding='utf-8')
+    command = [*node_executable(MISSION, bin_dir),
+               *ros_arguments(MISSION, namespace, [generated], log_level)]
+    return NodeProcessSpec(MISSION, f'{MISSION.executable}-{index}', tuple(command), generated)
 
 
 def launch_graph(

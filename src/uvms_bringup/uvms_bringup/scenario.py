@@ -57,11 +57,11 @@ class ScenarioError(ValueError):
     """A scenario file cannot be read or does not follow the schema."""
 
 
-class _Loader(yaml.SafeLoader):
+class ScenarioLoader(yaml.SafeLoader):
     """YAML loader that reads ``1e4`` as a float, as ROS 2 parameter files do (YAML 1.2)."""
 
 
-_Loader.add_implicit_resolver(  # type: ignore[no-untyped-call]
+ScenarioLoader.add_implicit_resolver(  # type: ignore[no-untyped-call]
     'tag:yaml.org,2002:float',
     re.compile(
         r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
@@ -154,7 +154,7 @@ def read_yaml_file(path: Path, what: str, error: type[Exception]) -> Any:
         msg = f'{path}: cannot read the {what}: {exc.strerror or exc}'
         raise error(msg) from exc
     try:
-        return yaml.load(text, Loader=_Loader)  # a SafeLoader subclass
+        return yaml.load(text, Loader=ScenarioLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         msg = f'{path}: not valid YAML: {exc}'
         raise error(msg) from exc
