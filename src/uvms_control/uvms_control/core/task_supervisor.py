@@ -98,6 +98,7 @@ class TaskSupervisor:
         self._t_last: float | None = None
         self.breach: str | None = None
         self._target: list[float] | None = None
+        self._queued: list[tuple[Hashable, ContactTaskGoal]] = []
 
     @property
     def goal_id(self) -> Hashable | None:
@@ -114,14 +115,15 @@ class TaskSupervisor:
 
         An invalid goal ends at once (INVALID_GOAL, the field named) and leaves the running
         task alone; a valid one preempts it (PREEMPTED) and starts at its start time, or at
-        the next step if that has passed.
+        the next step if that has passed. A goal that arrives before the first step (no
+        state yet) is checked at that step.
         """
-        X = self._last.X if self._last is not None else None
+        if self._last is None:
+            self._queued.append((goal_id, goal))
+            return []
         try:
-            if X is None:
-                raise TaskGoalError('goal', 'received', 'the controller has not stepped yet '
-                                    '(no state since activation)')
-            validate_goal(goal, X, self.limits, self.controller.task.contact_threshold_n)
+            validate_goal(goal, self._last.X, self.limits,
+                          self.controller.task.contact_threshold_n)
         except TaskGoalError as error:
             return [TaskEvent(goal_id, _empty_result(TaskCode.INVALID_GOAL, str(error)))]
         events = self._end_running(TaskCode.PREEMPTED, 'preempted by a new goal')
@@ -166,6 +168,9 @@ class TaskSupervisor:
         dt = 0.0 if self._t_last is None else max(t - self._t_last, 0.0)
         self._t_last = t
         events = self._after_step(t, dt, result, np.asarray(f_sensor, dtype=np.float64))
+        queued, self._queued = self._queued, []
+        for goal_id, goal in queued:
+            events += self.submit(goal_id, goal, t)
         return result, events
 
     def progress(self) -> TaskProgress | None:
