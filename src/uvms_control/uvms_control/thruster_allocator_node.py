@@ -28,7 +28,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
-from uvms_common.lifecycle import autostart, declare_autostart, state_label
+from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_model.thrusters import ThrusterLayout
 
@@ -61,24 +61,23 @@ class ThrusterAllocatorNode(LifecycleNode):
         super().__init__('thruster_allocator', **kwargs)
         self._robot = declare_parameters(self, PARAMETER_SPECS)
         self._values = declare_parameters(self, ALLOCATOR_PARAMETER_SPECS)
+        guard_change_state(self)
         starting = declare_autostart(self)
         self.core: ThrusterAllocator | None = None
         self._entities: list[tuple[Callable[[Any], Any], Any]] = []  # (destroy, entity)
         self._active = False
         self._transition_error: Exception | None = None
-        self._log_transition_error = not starting  # under autostart the constructor raises it
+        self._log_transition_errors = not starting  # under autostart the constructor raises it
         # Counters for /diagnostics (since start; the report turns them into rates).
         self._published = self._saturated = self._rejected = 0
         self._meters = {name: RateMeter() for name in ('published', 'saturated', 'rejected')}
         self._diagnostics = DiagnosticsPublisher(self)
         self._diagnostics.add('allocation', self._report)
         if starting and not autostart(self):
-            error = self._transition_error
+            error = self._transition_error or RuntimeError('autostart failed (see the log)')
             self.destroy_node()
-            if error is None:
-                error = ControlParameterError('autostart', True, 'a node that can activate')
             raise error
-        self._log_transition_error = True
+        self._log_transition_errors = True
 
     # ------------------------------------------------------------------------ lifecycle
 
@@ -93,7 +92,8 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Start allocating from rest: thrusters at zero speed, no command held yet."""
-        assert self.core is not None
+        if self.core is None:
+            return self._failed('activate', RuntimeError('no allocator core: not configured'))
         self.core.reset()
         self._safe_tau_b = np.zeros_like(self._safe_tau_b)
         self._last_stamp_ns = self._arrival_ns = None
@@ -122,7 +122,7 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def destroy_node(self) -> None:
         """Shut down (zero command if active) as rclcpp's lifecycle node does, then destroy."""
-        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
+        if state_label(self) in ('unconfigured', 'inactive', 'active') and self.context.ok():
             self.trigger_shutdown()
         self._diagnostics.destroy()
         super().destroy_node()
