@@ -10,6 +10,7 @@ from typing import Any
 
 import pytest
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
@@ -312,3 +313,35 @@ def test_realtime_mode_steps_on_the_wall_clock(harness: Harness) -> None:
     assert sim.sim_time_ns == 50_000_000
     stamps = [stamp_ns(m) for m in harness.responder.states]
     assert stamps == [2_000_000 * k for k in range(26)]
+
+
+def simulation_status(arrays: list[DiagnosticArray]) -> tuple[DiagnosticStatus, dict[str, str]]:
+    """The simulator's status in the last array, and its values by key."""
+    [status] = [s for s in arrays[-1].status if s.name == 'simulator: simulation']
+    return status, {kv.key: kv.value for kv in status.values}
+
+
+def test_diagnostics_report_step_rate_and_real_time_factor(harness: Harness) -> None:
+    """Lockstep answered at once: OK, steps per wall second = 1000 x the real-time factor."""
+    arrays = collect(harness, DiagnosticArray, '/diagnostics', 10)
+    harness.start()
+    harness.spin_until(lambda: len(arrays) >= 2, timeout_s=5.0)
+    status, values = simulation_status(arrays)
+    assert (status.level, status.message, status.hardware_id) == (
+        DiagnosticStatus.OK, 'running', 'uvms')
+    assert values['mode'] == 'lockstep' and values['lockstep_timeouts'] == '0'
+    step_hz, factor = float(values['step_rate_hz']), float(values['real_time_factor'])
+    assert step_hz > 10.0
+    assert step_hz == pytest.approx(1000.0 * factor, rel=2e-3)  # 1 kHz physics
+
+
+def test_lockstep_timeouts_are_reported_as_a_warning(harness: Harness) -> None:
+    """Unanswered states: WARN naming the timeouts, with their count."""
+    arrays = collect(harness, DiagnosticArray, '/diagnostics', 10)
+    harness.responder.answer = lambda t_ns: t_ns < 4_000_000
+    sim = harness.start(lockstep_timeout_s=0.05)
+    harness.spin_until(lambda: len(arrays) >= 2, timeout_s=5.0)
+    status, values = simulation_status(arrays)
+    assert status.level == DiagnosticStatus.WARN
+    assert status.message == 'lockstep timeouts: stepping on the last command'
+    assert 0 < int(values['lockstep_timeouts']) <= sim.timeouts

@@ -3,7 +3,8 @@
 Lockstep (default): publish the state of step k stamped t_k, wait for the actuator command
 stamped t_k, then integrate to the next publication; deterministic. Real time: a wall timer
 integrates one step per period on the latest command. The node is the clock source, so it
-keeps its own simulated time and never runs on ``use_sim_time``.
+keeps its own simulated time and never runs on ``use_sim_time``. ``/diagnostics`` reports the
+achieved step rate, the real-time factor (both against the wall clock) and lockstep timeouts.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.node_main import run_node
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters
@@ -32,6 +34,8 @@ from uvms_sim.plant import Plant, initial_coordinates
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
+#: Real-time factor below which a real-time simulation reports that it falls behind.
+_BEHIND_REAL_TIME_FACTOR = 0.9
 
 
 class SimulatorNode(Node):
@@ -94,6 +98,10 @@ class SimulatorNode(Node):
             self.create_timer(period, self._on_lockstep_timer)
         else:
             self.create_timer(cfg.physics_dt_s, self._on_realtime_tick)
+        self._diagnostics = DiagnosticsPublisher(
+            self, robot_name(self._plant.model.description.urdf_text))
+        self._diagnostics.add('simulation', self._report)
+        self._meters = (RateMeter(), RateMeter(), RateMeter())  # steps, sim seconds, timeouts
         self.get_logger().info(
             f'{cfg.mode} simulation at {1e9 / cfg.physics_dt_ns:g} Hz, state published every '
             f'{cfg.steps_per_publish} steps, wall {"on" if cfg.wall_enabled else "off"}')
@@ -239,6 +247,27 @@ class SimulatorNode(Node):
         except SimulationError as exc:
             self.get_logger().fatal(f'simulation stopped: {exc}')
             raise
+
+    def _report(self) -> Report:
+        """/diagnostics: step rate and real-time factor on the wall clock, lockstep timeouts."""
+        now_ns = self.get_clock().now().nanoseconds  # the system clock: no use_sim_time here
+        t_ns = self._plant.t_ns
+        steps, seconds, timeouts = self._meters
+        step_hz = steps.rate_hz(t_ns // self._plant.dt_ns, now_ns)
+        factor = seconds.rate_hz(t_ns * 1e-9, now_ns)
+        new_timeouts = timeouts.rate_hz(self.timeouts, now_ns)
+        mode = self._settings.mode
+        values = {'mode': mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
+                  'real_time_factor': factor, 'lockstep_timeouts': self.timeouts}
+        if self._finished:
+            return Report(OK, f'finished at t = {t_ns * 1e-9:.3f} s', values)
+        if mode == 'lockstep' and self._command is None:
+            return Report(WARN, 'waiting for the first actuator command', values)
+        if mode == 'lockstep' and new_timeouts:
+            return Report(WARN, 'lockstep timeouts: stepping on the last command', values)
+        if mode != 'lockstep' and factor is not None and factor < _BEHIND_REAL_TIME_FACTOR:
+            return Report(WARN, f'behind real time (factor {factor:.2f})', values)
+        return Report(OK, 'running', values)
 
     def _publish_state(self) -> None:
         """Publish /clock, the sensor topics and, when due, /tf, all stamped t_k."""
