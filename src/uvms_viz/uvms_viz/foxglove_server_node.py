@@ -8,6 +8,7 @@ when no one watches: the other nodes do not know this one exists. A port already
 leaves the node idle with one error line, and the run goes on; a client leaving is one
 info line. Latched topics (/tf_static, /robot_description) are sent again to each client
 that subscribes to them, as a transient-local subscription would receive them.
+``/diagnostics`` reports the server's address, its clients and the forwarded message rate.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import Any
 from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
 from uvms_recording.errors import RecordingError
 from uvms_recording.recorder_node import (
@@ -71,6 +73,12 @@ class _Listener:
         self._node = node
         self._lock = threading.Lock()
         self._subscribed: dict[int, set[str]] = {}
+
+    @property
+    def clients(self) -> int:
+        """Clients subscribed to at least one topic."""
+        with self._lock:
+            return len(self._subscribed)
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
         with self._lock:
@@ -135,6 +143,12 @@ class FoxgloveServerNode(Node):
         self._latched_topics = {topic for topic in topics
                                 if publisher_qos(topic).durability == 'transient_local'}
         self._server: Any = None
+        self._listener = _Listener(self)
+        self._address = f'ws://{host}:{port}'
+        self._forwarded = 0
+        self._forward_meter = RateMeter()
+        self._diagnostics = DiagnosticsPublisher(self)
+        self._diagnostics.add('live view', self._report)
         if host not in LOOPBACK_HOSTS:
             self.get_logger().warning(
                 f"parameter 'host' = {host!r}: the live view is reachable from other machines; "
@@ -143,13 +157,14 @@ class FoxgloveServerNode(Node):
             self._server = foxglove.start_server(
                 name='uvms', host=host, port=port, context=self._context,
                 capabilities=[foxglove.Capability.Time], supported_encodings=['cdr'],
-                server_listener=_Listener(self), asset_handler=asset)
+                server_listener=self._listener, asset_handler=asset)
         except RuntimeError as exc:
             # foxglove-sdk raises RuntimeError('FoxgloveError: Failed to bind port: ...').
             self.get_logger().error(
                 f'no Foxglove live view: cannot serve ws://{host}:{port}: {exc}; '
                 'the run goes on without it')
             return
+        self._address = f'ws://{host}:{self._server.port}'
         for topic, type_name in topics.items():
             self.create_subscription(classes[type_name], topic,
                                      functools.partial(self._on_message, topic),
@@ -168,6 +183,7 @@ class FoxgloveServerNode(Node):
         if topic in self._latched_topics:
             self._latched[topic] = data
         self._channels[topic].log(data, log_time=now_ns)
+        self._forwarded += 1
         if topic == '/clock':
             self._server.broadcast_time(now_ns)
 
@@ -176,6 +192,16 @@ class FoxgloveServerNode(Node):
         data = self._latched.get(topic)
         if data is not None:
             self._channels[topic].log(data, log_time=self.get_clock().now().nanoseconds)
+
+    def _report(self) -> Report:
+        """/diagnostics: 'running' with address, clients and forwarded rate; WARN unserved."""
+        values = {'address': self._address, 'topics': len(self._channels),
+                  'clients': self._listener.clients, 'forwarded_rate_hz':
+                  self._forward_meter.rate_hz(self._forwarded,
+                                              self.get_clock().now().nanoseconds)}
+        if self._server is None:
+            return Report(WARN, f'no live view: cannot serve {self._address}', values)
+        return Report(OK, 'running', values)
 
     def destroy_node(self) -> None:
         """Stop the server, then destroy the node."""

@@ -6,7 +6,8 @@ force, taken at the state's stamp) and publishes a visualization_msgs/MarkerArra
 state. Both arrive at the control rate (500 Hz) but are used at the marker rate (20 Hz), so
 they are subscribed raw and only the ones used are deserialized. The markers depend on
 message contents only, so lockstep runs stay deterministic; the hot path of the graph
-(simulator, controller, allocator) does not wait for this node.
+(simulator, controller, allocator) does not wait for this node. ``/diagnostics`` reports
+the rates of controller states received and marker arrays published (per node-clock second).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
+from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
 from visualization_msgs.msg import MarkerArray
 
@@ -75,6 +77,10 @@ class VisualizerNode(Node):
         self.create_subscription(ContactState, 'contact', self._on_contact, reliable, raw=True)
         self.create_subscription(ControllerState, 'controller/state', self._on_state, reliable,
                                  raw=True)
+        self._states = self._published = 0
+        self._meters = (RateMeter(), RateMeter())
+        self._diagnostics = DiagnosticsPublisher(self)
+        self._diagnostics.add('markers', self._report)
         self.get_logger().info(f'markers on {self.resolve_topic_name("markers")} at '
                                f'{rate_hz:g} Hz of simulated time, frame map_ned')
 
@@ -92,6 +98,7 @@ class VisualizerNode(Node):
         except ValueError as exc:
             self.get_logger().error(f'ignored controller state: {exc}', throttle_duration_sec=5.0)
             return
+        self._states += 1
         if t_ns < self._next_due_ns:
             return
         self._next_due_ns = (t_ns // self._period_ns + 1) * self._period_ns
@@ -107,6 +114,17 @@ class VisualizerNode(Node):
         scene = marker_scene(p_ee, conversions.xyz(state.desired_position), force,
                              wall_position_m, self._trail, self._settings)
         self._publisher.publish(conversions.marker_array(scene, t_ns))
+        self._published += 1
+
+    def _report(self) -> Report:
+        """/diagnostics: 'running' with the state and marker rates, WARN without states."""
+        now_ns = self.get_clock().now().nanoseconds
+        values = {'controller_state_rate_hz': self._meters[0].rate_hz(self._states, now_ns),
+                  'marker_rate_hz': self._meters[1].rate_hz(self._published, now_ns),
+                  'marker_arrays_published': self._published}
+        if self._states == 0:
+            return Report(WARN, 'waiting for controller/state', values)
+        return Report(OK, 'running', values)
 
 
 def main(args: list[str] | None = None) -> None:
