@@ -18,6 +18,7 @@ from rcl_interfaces.msg import (
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
 
 from uvms_recording.errors import RecordingError
@@ -243,6 +244,10 @@ class RecorderNode(Node):
         except BaseException:
             self._recorder.close()
             raise
+        self._dropped = 0
+        self._meters = (RateMeter(), RateMeter())  # messages written, dropped
+        self._diagnostics = DiagnosticsPublisher(self)
+        self._diagnostics.add('recording', self._report)
         self.get_logger().info(
             f'recording {len(self._subscriptions_by_topic)} topics to {path} '
             f'({compression}, log time = node clock)'
@@ -257,11 +262,24 @@ class RecorderNode(Node):
         log_time_ns = self.get_clock().now().nanoseconds
         with self._lock:
             if self._recorder.closed:
+                self._dropped += 1
                 return
             try:
                 self._recorder.write(topic, data, log_time_ns)
             except RecordingError as error:
+                self._dropped += 1
                 self.get_logger().error(str(error), throttle_duration_sec=5.0)
+
+    def _report(self) -> Report:
+        """/diagnostics: file, messages written and their rate, dropped (WARN while dropping)."""
+        now_ns = self.get_clock().now().nanoseconds
+        written = self._recorder.message_count
+        values = {'file': str(self._recorder.path), 'messages_written': written,
+                  'write_rate_hz': self._meters[0].rate_hz(written, now_ns),
+                  'dropped': self._dropped}
+        if self._meters[1].rate_hz(self._dropped, now_ns):
+            return Report(WARN, 'dropping messages', values)
+        return Report(OK, 'closed' if self._recorder.closed else 'recording', values)
 
     def close(self) -> None:
         """Write the file's summary and close it (idempotent); later messages are dropped.
