@@ -71,9 +71,9 @@ def test_node_actions_take_package_and_executable_from_the_graph_spec() -> None:
     [('simulator', 'uvms_sim', 'simulator'),
      ('controller', 'uvms_control', 'controller'),
      ('thruster_allocator', 'uvms_control', 'thruster_allocator'),
-     ('recorder', 'uvms_bringup', 'recorder'),
-     ('visualizer', 'uvms_bringup', 'visualizer'),
-     ('foxglove_server', 'uvms_bringup', 'foxglove_server')],
+     ('recorder', 'uvms_recording', 'recorder'),
+     ('visualizer', 'uvms_viz', 'visualizer'),
+     ('foxglove_server', 'uvms_viz', 'foxglove_server')],
 )
 def test_graph_spec_names_the_console_scripts(name: str, package: str, executable: str) -> None:
     """Each node runs the console script its package's setup.py installs."""
@@ -111,7 +111,7 @@ def test_parameter_file_sections_for_one_node_are_merged() -> None:
     robot = file_parameters(config / 'robot.yaml', 'controller', 'uvms')
     gains = file_parameters(config / 'controller.yaml', 'controller', 'uvms')
     assert robot['contact.stiffness_n_m'] == 10000.0
-    assert gains['force.setpoint_n'] == 150.0
+    assert gains['force.contact_threshold_n'] == 5.0
     assert 'rate_hz' not in gains  # the allocator's section
 
 
