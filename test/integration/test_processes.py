@@ -334,7 +334,7 @@ def launched(tmp_path_factory: pytest.TempPathFactory) -> LaunchRun:
 
 
 def test_launch_starts_each_node_as_its_own_process_with_ros_args(launched: LaunchRun) -> None:
-    """Five child processes, each a node started with its name, namespace and files."""
+    """Six child processes, each a node started with its name, namespace and files."""
     names = {}
     for pid, cmdline in launched.children.items():
         assert pid != launched.launcher_pid
@@ -344,8 +344,8 @@ def test_launch_starts_each_node_as_its_own_process_with_ros_args(launched: Laun
         assert '__ns:=/uvms' in cmdline
         files = [cmdline[i + 1] for i, arg in enumerate(cmdline) if arg == '--params-file']
         assert files, cmdline
-    assert sorted(names) == ['controller', 'recorder', 'simulator', 'thruster_allocator',
-                             'visualizer']
+    assert sorted(names) == ['controller', 'mission', 'recorder', 'simulator',
+                             'thruster_allocator', 'visualizer']
     robot_yaml = str(CONFIG / 'robot.yaml')
     for node in ('simulator', 'controller', 'thruster_allocator'):
         assert robot_yaml in names[node]
@@ -428,7 +428,7 @@ def test_launch_with_duration_ends_when_the_simulator_does() -> None:
     assert process.returncode == 0, err
     assert 'the simulator reached 0.5 s' in err
     pids = _launch_pids(err)
-    assert len(pids) == 4  # simulator, controller, thruster_allocator, visualizer
+    assert len(pids) == 5  # simulator, controller, thruster_allocator, visualizer, mission
     assert not any(alive(pid) for pid in pids)
 
 
@@ -444,7 +444,7 @@ def test_sigterm_stops_every_node_with_status_130(
     wait_until(lambda: all(observer.count(topic) > 0 for topic in topics), 30.0,
                'messages of all three nodes', process)
     pids = list(children_of(process.pid))
-    assert len(pids) == 4  # the three nodes and the visualizer
+    assert len(pids) == 5  # the three nodes, the visualizer and the scenario's mission
     returncode, _, err = stop(process, signal.SIGTERM)
     assert returncode == 130, err
     assert not any(alive(pid) for pid in pids)
