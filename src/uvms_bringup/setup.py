@@ -22,6 +22,10 @@ setup(
             os.path.join('share', package_name, 'config', 'scenarios'),
             glob('../../config/scenarios/*.yaml'),
         ),
+        (
+            os.path.join('share', package_name, 'config', 'tasks'),
+            glob('../../config/tasks/*.yaml'),
+        ),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
