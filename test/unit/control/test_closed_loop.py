@@ -28,16 +28,9 @@ def simulate(k_e: float, duration: float, **overrides: object) -> tuple[np.ndarr
     """
     plant = UvmsModel()
     x_start = plant.ee_position(Q0)
-    params = ControllerParameters.from_flat_dict(
-        {
-            'mode': 'impedance',
-            'reference.capture_start': False,
-            'reference.start_position_m': (x_start + np.array([STEP, 0.0, 0.0])).tolist(),
-            'reference.start_delay_s': 100.0,
-            **overrides,
-        }
-    )
+    params = ControllerParameters.from_flat_dict({'mode': 'impedance', **overrides})
     controller = UnifiedForceController(params, UvmsModel())
+    controller.task.hold(x_start + np.array([STEP, 0.0, 0.0]))
     wall = x_start[0] + WALL_GAP
     q, w = Q0.copy(), np.zeros(9)
     times, positions = [], []
