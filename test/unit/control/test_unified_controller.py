@@ -6,14 +6,17 @@ import math
 
 import numpy as np
 import pytest
+from uvms_control.core.contact_task import ContactTaskGoal
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.parameters import ControllerParameters
+from uvms_control.core.reference import ForcePhase, HalfCircleReference
 from uvms_control.core.unified_controller import Phase, UnifiedForceController
 
 from uvms_model import UvmsModel
 
 MODEL = UvmsModel()
 Q_START = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.477, -1.511])
+X_START = MODEL.ee_position(Q_START)
 
 # (q, w, F_e): states around the working posture, with vehicle attitude, motion and contact.
 STATES = [
@@ -80,13 +83,52 @@ def generalized_acceleration(
     return result
 
 
+def half_circle_goal(start_delay_s: float = 2.0) -> ContactTaskGoal:
+    """The paper's task from X_START: the half circle (r = 0.1 m, 16 s, down) and 150 N along +x.
+
+    81 waypoints with the exact velocities and accelerations of ``HalfCircleReference``,
+    starting ``start_delay_s`` after the task; F_d ramps over 1 s.
+    """
+    reference = HalfCircleReference(radius=0.1, duration=16.0, start_delay=0.0)
+    times = np.linspace(0.0, 16.0, 81)
+    samples = np.array([reference.evaluate_floats(float(t), X_START.tolist()) for t in times])
+    return ContactTaskGoal(
+        path=samples[:, 0:3],
+        times=start_delay_s + times,
+        velocities=samples[:, 3:6],
+        accelerations=samples[:, 6:9],
+        normal=np.array([1.0, 0.0, 0.0]),
+        force_n=150.0,
+        force_ramp_s=1.0,
+    )
+
+
+def start(ctrl: UnifiedForceController, goal: ContactTaskGoal | None):  # type: ignore[no-untyped-def]
+    """First step at Q_START at rest (posture and time origin), running ``goal`` from t = 0."""
+    if goal is not None:
+        ctrl.task.hold(X_START)
+        ctrl.start_task(0.0, goal)
+    return ctrl.step(0.0, Q_START, np.zeros(9), np.zeros(3))
+
+
 def step_at(
-    ctrl: UnifiedForceController, q: np.ndarray, w: np.ndarray, F_e: np.ndarray, t: float = 3.7
+    ctrl: UnifiedForceController,
+    q: np.ndarray,
+    w: np.ndarray,
+    F_e: np.ndarray,
+    t: float = 3.7,
+    goal: ContactTaskGoal | None = None,
 ):  # type: ignore[no-untyped-def]
-    """Start the controller at Q_START (posture and reference origin), then step at (q, w)."""
-    ctrl.step(0.0, Q_START, np.zeros(9), np.zeros(3))
+    """Start the controller at Q_START on a task (default: the paper's), then step at (q, w)."""
+    start(ctrl, half_circle_goal() if goal is None else goal)
     q_dot = MODEL.velocity_transform(q) @ w
     return ctrl.step(t, q, q_dot, F_e)
+
+
+def reference_acceleration(ctrl: UnifiedForceController, t: float) -> np.ndarray:
+    """Ẍ_d of the controller's running task path at t (m/s²)."""
+    assert ctrl.task.path is not None
+    return np.array(ctrl.task.path.evaluate_floats(t)[6:9])
 
 
 @pytest.mark.parametrize(('q', 'w', 'F_e'), STATES)
@@ -94,10 +136,10 @@ def test_impedance_closed_loop_obeys_target_impedance(
     q: np.ndarray, w: np.ndarray, F_e: np.ndarray
 ) -> None:
     """With M̂ = M̃, ζ̂ = ζ̃ the plant under F_IP satisfies P Ë + B_d Ė + K E = F_e (eq. 21, 34)."""
-    ctrl = controller(**{'mode': 'impedance', 'reference.start_delay_s': 1.0})
-    result = step_at(ctrl, q, w, F_e)
+    ctrl = controller(mode='impedance')
+    result = step_at(ctrl, q, w, F_e, goal=half_circle_goal(start_delay_s=1.0))
     x_ddot = ee_acceleration(q, w, result.tau_b, F_e)
-    _, _, x_ddot_d = ctrl.reference.evaluate(3.7, MODEL.ee_position(Q_START))
+    x_ddot_d = reference_acceleration(ctrl, 3.7)
     law = ctrl.impedance
     E = result.X_d - result.X
     E_dot = result.X_dot_d - result.X_dot
@@ -110,6 +152,7 @@ def test_hybrid_closed_loop_obeys_eq_36(q: np.ndarray, w: np.ndarray, F_e: np.nd
     """With ζ̂ = ζ̃ the plant under F_H satisfies M̃ Ẍ = (I - S) F_p + S F_f (eq. 36)."""
     ctrl = controller(**{'mode': 'hybrid'})
     result = step_at(ctrl, q, w, F_e)
+    assert result.W == 0.0  # the task's 150 N set-point selects the hybrid law alone
     x_ddot = ee_acceleration(q, w, result.tau_b, F_e)
     selected = result.F_H - result.zeta_hat - F_e  # (I - S) F_p + S F_f of eq. 35
     np.testing.assert_allclose(result.M_hat @ x_ddot, selected, atol=tolerance(selected, F_e))
@@ -136,7 +179,7 @@ def test_paper_law_without_null_space_misses_the_target_impedance() -> None:
     ctrl = controller(**{'mode': 'impedance', 'null_space.enabled': False})
     result = step_at(ctrl, q, w, F_e)
     x_ddot = ee_acceleration(q, w, result.tau_b, F_e)
-    _, _, x_ddot_d = ctrl.reference.evaluate(3.7, MODEL.ee_position(Q_START))
+    x_ddot_d = reference_acceleration(ctrl, 3.7)
     law = ctrl.impedance
     E = result.X_d - result.X
     lhs = law.P @ (x_ddot_d - x_ddot) + law.B_d @ (result.X_dot_d - result.X_dot) + law.K @ E
@@ -185,7 +228,7 @@ def test_sensor_force_is_rotated_into_map_ned() -> None:
     a = controller()
     b = controller()
     for ctrl in (a, b):
-        ctrl.step(0.0, Q_START, np.zeros(9), np.zeros(3))
+        start(ctrl, half_circle_goal())
     from_sensor = a.step_from_sensors(1.0, q, w, rot.T @ F_e)
     from_ned = b.step(1.0, q, MODEL.velocity_transform(q) @ w, F_e)
     np.testing.assert_allclose(from_sensor.F_e, F_e, atol=1e-12)
@@ -209,13 +252,14 @@ def test_first_step_starts_the_reference_at_rest_in_free_motion() -> None:
     assert result.phase == Phase.FREE_MOTION
 
 
-def test_given_start_position_overrides_the_captured_one() -> None:
-    """reference.capture_start = false starts the half circle at reference.start_position_m."""
-    ctrl = controller(
-        **{'reference.capture_start': False, 'reference.start_position_m': [1.6, 0.1, 0.3]}
-    )
+def test_hold_point_is_used_instead_of_the_captured_one() -> None:
+    """task.hold(p) before the first step holds p at rest (W = 1), not the captured X."""
+    ctrl = controller()
+    ctrl.task.hold([1.6, 0.1, 0.3])
     result = ctrl.step(0.0, Q_START, np.zeros(9), np.zeros(3))
     np.testing.assert_allclose(result.X_d, [1.6, 0.1, 0.3])
+    np.testing.assert_allclose(result.X_dot_d, 0.0)
+    assert result.W == 1.0
 
 
 def test_large_contact_force_at_rest_selects_the_hybrid_law() -> None:
@@ -251,9 +295,11 @@ def test_singular_attitude_is_an_input_error() -> None:
 def test_force_integral_does_not_wind_up_out_of_contact() -> None:
     """In free motion the force integral stays zero even with a pure hybrid set-point active."""
     ctrl = controller(mode='hybrid')
-    for k in range(200):
+    start(ctrl, half_circle_goal())
+    for k in range(1, 200):
         ctrl.step(0.01 * k, Q_START, np.zeros(9), np.zeros(3))
-    assert ctrl.force_setpoint.phase.name == 'RAMP_UP'
+    assert ctrl.task.force is not None
+    assert ctrl.task.force.phase == ForcePhase.RAMP_UP
     assert ctrl.hybrid.integral == 0.0
 
 
