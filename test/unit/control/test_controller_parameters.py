@@ -7,11 +7,18 @@ import re
 
 import numpy as np
 import pytest
+from uvms_control.core.contact_task import (
+    ContactTaskGoal,
+    SafetyLimits,
+    TaskGoalError,
+    validate_goal,
+)
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.parameter_specs import (
     ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
+    SAFETY_PARAMETER_SPECS,
 )
 from uvms_control.core.parameters import (
     ControllerParameters,
@@ -74,8 +81,8 @@ def test_spd_matrix_from_diagonal_is_diagonal() -> None:
     ('name', 'value'),
     [
         ('model.mass_scale', 0.0),
-        ('force.setpoint_n', math.nan),
-        ('reference.radius_m', -0.1),
+        ('force.contact_threshold_n', math.nan),
+        ('hybrid.force_integral_limit_n_s', -0.1),
         ('mode', 'adaptive'),
         ('null_space.stiffness_1_s2', [1.0] * 8),
         ('fuzzy.force_ratio_medium', [0.5, 0.1, 0.9]),
@@ -94,10 +101,22 @@ def test_unknown_parameter_is_rejected() -> None:
         ControllerParameters.from_flat_dict({'impedance.stifness': [1.0, 1.0, 1.0]})
 
 
-def test_contact_threshold_must_be_below_the_setpoint() -> None:
-    """A contact threshold at or above the set-point could never start a force ramp."""
-    with pytest.raises(ControlParameterError, match=r'force\.contact_threshold_n'):
-        ControllerParameters.from_flat_dict({'force.contact_threshold_n': 200.0})
+@pytest.mark.parametrize('force_n', [200.0, 150.0])
+def test_goal_force_at_or_below_the_contact_threshold_is_refused(force_n: float) -> None:
+    """A task force at or below the contact threshold could never start a force ramp."""
+    params = ControllerParameters.from_flat_dict({'force.contact_threshold_n': 200.0})
+    goal = ContactTaskGoal(
+        path=np.array([[1.7, 0.0, 0.0], [1.8, 0.0, 0.0]]),
+        times=np.array([0.0, 2.0]),
+        velocities=None,
+        accelerations=None,
+        normal=np.array([1.0, 0.0, 0.0]),
+        force_n=force_n,
+        force_ramp_s=1.0,
+    )
+    with pytest.raises(TaskGoalError, match=r'^force_n = .*contact threshold') as info:
+        validate_goal(goal, np.array([1.7, 0.0, 0.0]), SafetyLimits(), params.contact_threshold)
+    assert info.value.field == 'force_n'
 
 
 def test_unknown_trigger_mode_is_rejected() -> None:
@@ -114,7 +133,12 @@ def test_thruster_parameters_use_the_given_water_density() -> None:
 
 @pytest.mark.parametrize(
     'specs',
-    [CONTROLLER_PARAMETER_SPECS, CONTROLLER_NODE_PARAMETER_SPECS, ALLOCATOR_PARAMETER_SPECS],
+    [
+        CONTROLLER_PARAMETER_SPECS,
+        CONTROLLER_NODE_PARAMETER_SPECS,
+        SAFETY_PARAMETER_SPECS,
+        ALLOCATOR_PARAMETER_SPECS,
+    ],
 )
 def test_every_parameter_is_documented_with_a_unit_or_choice(specs: list) -> None:  # type: ignore[type-arg]
     """Each spec states a unit in parentheses (or its choices), and its default is in range."""
