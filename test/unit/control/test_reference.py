@@ -176,3 +176,38 @@ def test_immediate_setpoint_ramps_from_zero_without_contact() -> None:
     later = setpoint.update(4.0, 0.0, 1.70, 1.69, -0.01)
     assert (first.f_d, first.phase) == (0.0, ForcePhase.RAMP_UP)
     assert later.f_d == 150.0  # no contact point yet, so no release either
+
+
+def test_release_ramps_from_the_current_force_to_zero_over_the_given_time() -> None:
+    """release(t, 2 s) mid-ramp starts at the F_d of that instant, halves at 1 s, ends idle."""
+    setpoint = ForceSetpoint(150.0, 1.0, 5.0, start_immediately=True)
+    setpoint.update(0.0, 0.0, 1.70, 1.70, 0.0)
+    f_at_release = setpoint.update(0.5, 0.0, 1.70, 1.70, 0.0).f_d
+    setpoint.release(0.5, 2.0)
+    start = setpoint.update(0.5, 0.0, 1.70, 1.70, 0.0)
+    half = setpoint.update(1.5, 0.0, 1.70, 1.70, 0.0)
+    done = setpoint.update(2.5, 0.0, 1.70, 1.70, 0.0)
+    assert f_at_release == pytest.approx(75.0)
+    assert (start.phase, start.f_d, start.f_d_dot) == (ForcePhase.RELEASE, f_at_release, 0.0)
+    assert half.f_d == pytest.approx(f_at_release / 2.0)
+    assert half.f_d_dot == pytest.approx(-1.875 * f_at_release / 2.0)
+    assert done.f_d == 0.0
+    assert setpoint.phase == ForcePhase.IDLE
+
+
+def test_release_without_a_time_takes_the_ramp_time() -> None:
+    """release(t) ramps down over ramp_time: half the set-point half a ramp later."""
+    setpoint = ForceSetpoint(150.0, 2.0, 5.0, start_immediately=True)
+    setpoint.update(0.0, 0.0, 1.70, 1.70, 0.0)
+    setpoint.update(3.0, 0.0, 1.70, 1.70, 0.0)
+    setpoint.release(3.0)
+    assert setpoint.update(4.0, 0.0, 1.70, 1.70, 0.0).f_d == pytest.approx(75.0)
+    assert setpoint.update(5.0, 0.0, 1.70, 1.70, 0.0).f_d == 0.0
+
+
+def test_release_while_idle_does_nothing() -> None:
+    """Without a ramp running there is nothing to release: F_d stays zero and idle."""
+    setpoint = ForceSetpoint(150.0, 1.0, 5.0)
+    setpoint.release(1.0, 0.5)
+    sample = setpoint.update(1.2, 0.0, 1.70, 1.70, 0.0)
+    assert (sample.f_d, sample.phase) == (0.0, ForcePhase.IDLE)
