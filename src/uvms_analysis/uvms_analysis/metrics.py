@@ -187,6 +187,8 @@ class RunMetrics:
 
     Attributes:
         name: Run name.
+        file: The recording it was computed from, as given (None without a file): runs of
+            one scenario share a name, so the file tells them apart.
         force_source: Which force the force metrics use: 'contact' (simulator ground truth)
             or 'controller' (measured F_e); None without a force signal.
         desired_force: Force set-point F_d (N): median of F_d,x while in contact.
@@ -208,6 +210,7 @@ class RunMetrics:
     """
 
     name: str
+    file: str | None = None
     force_source: str | None = None
     desired_force: float | None = None
     first_contact_time: float | None = None
@@ -290,6 +293,8 @@ def normal_force(run: Run, source: ForceSource = 'auto') -> NormalForce | None:
 def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
     """All metrics of a run (see RunMetrics); force metrics are None for a run without contact."""
     values: dict[str, Any] = {'name': run.name}
+    if run.path is not None:
+        values['file'] = str(run.path)
     f_d = desired_normal_force(run)
     values['desired_force'] = f_d
     force = normal_force(run, force_source)

@@ -59,6 +59,7 @@ def _attr(name: str) -> Callable[[RunMetrics], float | int | str | None]:
 
 COLUMNS = (
     Column('run', '', 'run', _attr('name')),
+    Column('file', '', 'file', _attr('file')),
     Column('F_d', 'N', 'desired_force_N', _attr('desired_force')),
     Column('first\ncontact', 's', 'first_contact_s', _attr('first_contact_time'), 3),
     Column('contacts', '', 'contact_count', _attr('contact_count'), 0),
@@ -93,8 +94,12 @@ COLUMNS = (
     ),
     Column('force\nfrom', '', 'force_source', _attr('force_source')),
 )
+#: Columns that name a run rather than measure it (left-aligned; no sweep metric).
+LABEL_KEYS = ('run', 'file', 'force_source')
+_LEFT_ALIGNED = ('run', 'file')
 
 LEGEND = (
+    'run: scenario of the recording (else its file name); file: the recording as given.',
     'F: contact force along the wall normal (map_ned x); force from: contact = simulator ground',
     "   truth (/uvms/contact), controller = the controller's measured F_e.",
     'F_d: median force set-point while in contact. overshoot: (peak F - F_d) / F_d, 0 if below.',
@@ -139,7 +144,9 @@ def format_report(runs: Sequence[RunMetrics], fmt: str = 'text') -> str:
         ]
         lines = [
             '| ' + ' | '.join(headings) + ' |',
-            '| ' + ' | '.join('---' if i == 0 else '---:' for i in range(len(COLUMNS))) + ' |',
+            '| '
+            + ' | '.join('---' if column.key in _LEFT_ALIGNED else '---:' for column in COLUMNS)
+            + ' |',
             *('| ' + ' | '.join(cell.replace('|', '\\|') for cell in row) + ' |' for row in rows),
         ]
         return '\n'.join([*lines, '', *LEGEND]) + '\n'
@@ -160,9 +167,11 @@ def format_report(runs: Sequence[RunMetrics], fmt: str = 'text') -> str:
     ]
 
     def line(cells: Sequence[str]) -> str:
-        first = cells[0].ljust(widths[0])
-        rest = (cell.rjust(width) for cell, width in zip(cells[1:], widths[1:], strict=True))
-        return '  '.join([first, *rest]).rstrip()
+        aligned = (
+            cell.ljust(width) if column.key in _LEFT_ALIGNED else cell.rjust(width)
+            for cell, width, column in zip(cells, widths, COLUMNS, strict=True)
+        )
+        return '  '.join(aligned).rstrip()
 
     table = [
         *(line([heading[k] for heading in heading_cells]) for k in range(heading_lines + 1)),
@@ -181,7 +190,8 @@ def build_parser() -> argparse.ArgumentParser:
     """Argument parser of `uvms report`."""
     parser = argparse.ArgumentParser(
         prog='uvms report',
-        description='Print the performance metrics of UVMS recordings (MCAP), one row per run.',
+        description='Print the performance metrics of UVMS recordings (MCAP), one row per '
+        'recording: run (the scenario name) and file (the recording) identify it.',
     )
     parser.add_argument('recordings', nargs='+', metavar='F.mcap', help='recordings to analyse')
     parser.add_argument(

@@ -163,7 +163,7 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
         ScenarioError, GraphError, AnalysisError: the run could not be made or read.
     """
     from uvms_analysis.metrics import compute_metrics
-    from uvms_analysis.report import COLUMNS
+    from uvms_analysis.report import COLUMNS, LABEL_KEYS
     from uvms_analysis.series import load_run
     from uvms_bringup.graph import build_graph, run_graph
     from uvms_bringup.scenario import load_scenario
@@ -181,7 +181,7 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
     metrics = compute_metrics(load_run(request['output']))
     values = {}
     for column in COLUMNS:
-        if column.key in ('run', 'force_source'):
+        if column.key in LABEL_KEYS:
             continue
         value = column.value(metrics)
         values[column.key] = None if value is None else float(value)  # type: ignore[arg-type]

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from uvms_analysis.report import COLUMNS
+from uvms_analysis.report import COLUMNS, LABEL_KEYS
 from uvms_bringup.scenario import (
     _NAME_SEGMENT,
     NODE_SECTIONS,
@@ -48,7 +48,7 @@ from uvms_bringup.scenario import yaml_kind as _kind
 #: Node sections an axis may vary (the recorder's parameters change no result).
 AXIS_NODES = tuple(node for node in NODE_SECTIONS if node != 'recorder')
 #: Metrics a sweep can tabulate and map: the numeric columns of ``uvms report --format csv``.
-METRIC_KEYS = tuple(column.key for column in COLUMNS if column.key not in ('run', 'force_source'))
+METRIC_KEYS = tuple(column.key for column in COLUMNS if column.key not in LABEL_KEYS)
 #: Wall-clock limit of one point when the file sets none (s).
 DEFAULT_TIMEOUT_S = 600.0
 #: Largest number of points one sweep may have (a typo in n should not queue a million runs).

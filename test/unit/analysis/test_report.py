@@ -71,7 +71,7 @@ def test_text_report_shows_units_and_a_row_per_run(
     lines = out.splitlines()
     assert any('[N]' in line and '[mm]' in line and '[deg]' in line for line in lines)
     row = next(line for line in lines if line.startswith('case1_synthetic'))
-    assert row.split()[1:4] == ['150.0', '2.000', '1']
+    assert row.split()[1:5] == [str(contact_recording), '150.0', '2.000', '1']
 
 
 def test_markdown_report_is_a_table_with_aligned_columns(
@@ -82,7 +82,25 @@ def test_markdown_report_is_a_table_with_aligned_columns(
     table = [line for line in out.splitlines() if line.startswith('|')]
     assert len(table) == 3
     assert len({line.count(' | ') for line in table}) == 1
-    assert table[2].startswith('| case1_synthetic | 150.0 |')
+    assert table[2].startswith(f'| case1_synthetic | {contact_recording} | 150.0 |')
+
+
+@pytest.mark.parametrize('fmt', ['text', 'markdown', 'csv'])
+def test_two_recordings_of_one_scenario_give_two_distinct_rows(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path, tmp_path: Path, fmt: str
+) -> None:
+    """Runs that share a scenario name are told apart by their file in every format."""
+    copy = tmp_path / 'live.mcap'
+    copy.write_bytes(contact_recording.read_bytes())
+    status, out, _ = run_report(capsys, str(contact_recording), str(copy), '--format', fmt)
+    assert status == 0
+    rows = [line for line in out.splitlines() if 'case1_synthetic' in line]
+    assert len(rows) == 2
+    assert len(set(rows)) == 2
+    assert str(contact_recording) in rows[0] and str(copy) in rows[1]
+    if fmt == 'csv':
+        files = [row['file'] for row in csv.DictReader(io.StringIO(out))]
+        assert files == [str(contact_recording), str(copy)]
 
 
 def test_missing_file_fails_with_a_message_and_no_traceback(
