@@ -97,11 +97,18 @@ def graph_nodes(record: bool, foxglove: bool = False,
             *((FOXGLOVE_SERVER,) if foxglove else ()), *((RECORDER,) if record else ()))
 
 
+def mission_file_text(scenario: Scenario) -> str:
+    """The scenario's ``mission:`` as the text of a mission file ('' without a mission)."""
+    if not scenario.mission:
+        return ''
+    document = yaml.load(scenario.path.read_text(encoding='utf-8'), Loader=ScenarioLoader)
+    return yaml.safe_dump({'mission': document['mission']}, sort_keys=False)
+
+
 def write_mission_file(scenario: Scenario, directory: Path) -> Path:
     """The scenario's ``mission:`` as a mission file in directory, for the mission process."""
-    document = yaml.load(scenario.path.read_text(encoding='utf-8'), Loader=ScenarioLoader)
     path = directory / 'mission.yaml'
-    path.write_text(yaml.safe_dump({'mission': document['mission']}), encoding='utf-8')
+    path.write_text(mission_file_text(scenario), encoding='utf-8')
     return path
 
 
@@ -150,6 +157,8 @@ def node_parameters(
         values['run.scenario'] = scenario.name if scenario is not None else ''
         values['run.seed'] = scenario.seed if scenario is not None else 0
         values['run.mode'] = mode
+        # The goals the run sends, so that replay can re-run the controller on them too.
+        values['run.mission'] = mission_file_text(scenario) if scenario is not None else ''
     return values
 
 

@@ -196,6 +196,12 @@ class RecorderNode(Node):
                                 "'uvms' metadata so that replay can rebuild the controller",
                                 read_only=True),
         ).value
+        mission = self.declare_parameter(
+            'run.mission', '',
+            ParameterDescriptor(description="Mission file text of the run's ContactTask goals, "
+                                "stored in the 'uvms' metadata so that replay can send them to "
+                                'the re-run controller', read_only=True),
+        ).value
         mode = self.declare_parameter(
             'run.mode', '',
             ParameterDescriptor(description="Execution mode stored in the 'uvms' metadata "
@@ -217,6 +223,8 @@ class RecorderNode(Node):
             metadata = run_metadata(scenario, seed, parameters_yaml)
             if mode:
                 metadata['mode'] = mode
+            if mission:
+                metadata['mission'] = mission
         path = Path(output_path)
         path.parent.mkdir(parents=True, exist_ok=True)
         self._recorder = McapRecorder(

@@ -18,9 +18,11 @@ from typing import Any
 
 import numpy as np
 import rclpy
+import yaml
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from uvms_recording.errors import ReplayError
@@ -193,6 +195,28 @@ def _params_file_from_metadata(recording: McapRecording, directory: Path) -> Pat
     return path
 
 
+def _mission_node(recording: McapRecording, namespace: str, context: Context) -> Node | None:
+    """The recorded run's ContactTask goals, sent to the re-run controller as in the run.
+
+    The goals' start times are on the recorded /clock, so the re-run controller takes them at
+    the same steps. Goals a user sent from outside the run are not in the recording.
+    """
+    text = (recording.run_metadata or {}).get('mission', '')
+    if not text.strip():
+        return None
+    from uvms_tasks.errors import TaskFileError
+    from uvms_tasks.mission_node import MissionNode
+    from uvms_tasks.task_file import parse_task_document
+
+    try:
+        tasks = parse_task_document(yaml.safe_load(text), f'{recording.path} (mission)')
+    except (TaskFileError, yaml.YAMLError) as error:
+        msg = f'the recorded mission cannot be read: {error}'
+        raise ReplayError(msg) from error
+    return MissionNode(tasks, namespace=namespace, context=context,
+                       parameter_overrides=[Parameter('use_sim_time', value=True)])
+
+
 def _spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool],
                 timeout_s: float) -> bool:
     deadline = time.monotonic() + timeout_s
@@ -276,6 +300,11 @@ def rerun_controller(
             nodes.append(controller)
             feeder = _RerunFeeder(recording, inputs, outputs, context=context)
             nodes.append(feeder)
+            mission = _mission_node(recording, namespace, context)
+            if mission is not None:
+                nodes.append(mission)
+                report.parameter_sources.append(
+                    f"recorded mission ('uvms' metadata) of {recording.path.name}")
             for node in nodes:
                 executor.add_node(node)
             _feed_and_compare(recording, feeder, executor, inputs, outputs, report, timeout_s,
