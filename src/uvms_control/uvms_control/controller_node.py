@@ -93,6 +93,7 @@ class ControllerNode(LifecycleNode):
         self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0}
         self._rate = RateMeter()
         self._breach: str | None = None
+        self._stale = False
         self._command_msg: GeneralizedForce | None = None
         self._state_msg: ControllerState | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
