@@ -62,7 +62,9 @@ USED_MESSAGE_TYPES = (
 )
 
 #: Python distributions whose versions the report shows; all are needed to run the stack.
-DISTRIBUTIONS = ('numpy', 'scipy', 'rosbags', 'mcap', 'PyYAML', 'matplotlib')
+DISTRIBUTIONS = ('numpy', 'scipy', 'rosbags', 'mcap', 'PyYAML', 'matplotlib', 'foxglove-sdk')
+#: Optional distributions, shown when installed: Ray runs ``uvms sweep`` (the sweep extra).
+OPTIONAL_DISTRIBUTIONS = ('ray',)
 
 
 @dataclass
@@ -160,6 +162,11 @@ def _distribution_versions() -> tuple[list[tuple[str, str]], bool]:
         except importlib.metadata.PackageNotFoundError:
             versions.append((name, 'MISSING'))
             all_found = False
+    for name in OPTIONAL_DISTRIBUTIONS:
+        try:
+            versions.append((name, importlib.metadata.version(name)))
+        except importlib.metadata.PackageNotFoundError:
+            pass
     return versions, all_found
 
 

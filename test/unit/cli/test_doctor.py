@@ -28,6 +28,37 @@ def test_doctor_reports_genuine_rclpy_rmw_and_profile(capsys: pytest.CaptureFixt
     assert out.rstrip().endswith('all good')
 
 
+def test_doctor_reports_foxglove_sdk_and_ray_when_installed(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """foxglove-sdk (the live view) always, Ray (uvms sweep) only where it is installed."""
+    doctor.main([])
+    out = capsys.readouterr().out
+    assert f'  foxglove-sdk {importlib.metadata.version("foxglove-sdk")}\n' in out
+    try:
+        ray_version = importlib.metadata.version('ray')
+    except importlib.metadata.PackageNotFoundError:
+        assert '  ray ' not in out
+    else:
+        assert f'  ray         {ray_version}\n' in out
+
+
+def test_doctor_leaves_out_ray_when_it_is_not_installed(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without Ray the report has no ray line and is still all good (Ray is optional)."""
+    real_version = importlib.metadata.version
+
+    def version(name: str) -> str:
+        if name == 'ray':
+            raise importlib.metadata.PackageNotFoundError(name)
+        return real_version(name)
+
+    monkeypatch.setattr(importlib.metadata, 'version', version)
+    out = io.StringIO()
+    ok = doctor.report(out, types=('sensor_msgs/msg/JointState',))
+    assert ok
+    assert '  ray ' not in out.getvalue()
+
+
 def test_doctor_fails_when_a_message_type_does_not_load() -> None:
     """An unknown type is reported as FAIL and the report is not all good."""
     out = io.StringIO()
