@@ -278,23 +278,43 @@ def figure_vehicle_motion(run: Run) -> Figure | None:
     return fig
 
 
+#: Line style and marker per thruster: symmetric thrusters carry the same thrust, so their
+#: lines overlap exactly; a dash pattern and markers placed at staggered samples keep each
+#: one visible and matched to the legend where colour alone would hide it.
+THRUSTER_STYLES = (('-', 'o'), ('--', 's'), ('-.', '^'), ((0, (1, 1)), 'v'),
+                   ((0, (5, 1, 1, 1, 1, 1)), 'D'), ((0, (3, 2)), 'P'), ((0, (8, 2)), 'X'),
+                   ((0, (1, 2, 4, 2)), '*'))
+#: Markers per thruster line (spread over the run, staggered between thrusters).
+_THRUSTER_MARKERS = 12
+
+
 def figure_thrusters(run: Run) -> Figure | None:
-    """Actual and allocated thrust and propeller speed of every thruster over time."""
+    """Actual and allocated thrust and propeller speed of every thruster over time.
+
+    Each thruster has its own colour, dash pattern and marker (``THRUSTER_STYLES``); the
+    allocated thrust is the thin, faint line of the same colour.
+    """
     if run.thrusters is None or run.thrusters.t.size == 0:
         return None
     thr = run.thrusters
     fig = _figure(FIGSIZE_TALL)
     ax_f, ax_w = fig.subplots(2, 1, sharex=True)
-    colors = [f'C{i % 10}' for i in range(thr.actual_thrust.shape[1])]
-    for i, color in enumerate(colors):
-        ax_f.plot(thr.t, thr.actual_thrust[:, i], color=color, linewidth=1.0, label=f'T{i + 1}')
-        ax_f.plot(thr.t, thr.desired_thrust[:, i], ':', color=color, linewidth=0.9)
-        ax_w.plot(thr.t, thr.propeller_speed[:, i], color=color, linewidth=1.0)
-    ax_f.plot([], [], ':', color='0.3', label='allocated')
+    count = thr.actual_thrust.shape[1]
+    spacing = max(1, thr.t.size // _THRUSTER_MARKERS)
+    for i in range(count):
+        linestyle, marker = THRUSTER_STYLES[i % len(THRUSTER_STYLES)]
+        style = {'color': f'C{i % 10}', 'linestyle': linestyle}
+        marks = {'marker': marker, 'markersize': 4.0, 'fillstyle': 'none',
+                 'markevery': (i * spacing // max(count, 1), spacing)}
+        ax_f.plot(thr.t, thr.actual_thrust[:, i], linewidth=1.1, label=f'T{i + 1}',
+                  **style, **marks)
+        ax_f.plot(thr.t, thr.desired_thrust[:, i], linewidth=0.7, alpha=0.45, **style)
+        ax_w.plot(thr.t, thr.propeller_speed[:, i], linewidth=1.1, **style, **marks)
+    ax_f.plot([], [], color='0.3', linewidth=0.7, alpha=0.45, label='allocated')
     ax_f.set_ylabel('thrust (N)')
     ax_w.set_ylabel('propeller speed Ω (rad/s)')
     ax_w.set_xlabel('time t (s)')
-    ax_f.set_title(f'Thrusters, actual (solid) and allocated (dotted): {run.name}')
+    ax_f.set_title(f'Thrusters, actual (with markers) and allocated (faint): {run.name}')
     fig.legend(*ax_f.get_legend_handles_labels(), loc='outside right upper', fontsize='small')
     for ax in (ax_f, ax_w):
         ax.grid(True, alpha=0.4)

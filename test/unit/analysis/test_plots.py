@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from uvms_analysis.plots import RECORDING_FIGURES, figure_force_response, main
+from uvms_analysis.plots import RECORDING_FIGURES, figure_force_response, figure_thrusters, main
 from uvms_analysis.series import load_run
 
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
@@ -59,6 +59,20 @@ def test_ground_truth_force_is_drawn_thin_over_the_wider_measured_force(
     assert truth.get_zorder() > measured.get_zorder()
     assert truth.get_linewidth() < measured.get_linewidth() / 2
     assert truth.get_linestyle() == '--'
+
+
+def test_thruster_lines_differ_in_style_where_symmetric_thrusters_overlap(
+    contact_recording: Path,
+) -> None:
+    """Every thruster has its own marker and dash pattern, markers at staggered samples."""
+    fig = figure_thrusters(load_run(contact_recording))
+    assert fig is not None
+    lines = [line for line in fig.axes[0].get_lines() if line.get_label().startswith('T')]
+    assert len(lines) >= 8
+    assert len({line.get_marker() for line in lines}) == len(lines)
+    assert len({str(line._dash_pattern) for line in lines}) == len(lines)  # type: ignore[attr-defined]
+    starts = [line.get_markevery()[0] for line in lines]  # type: ignore[index]
+    assert len(set(starts)) == len(lines)
 
 
 def test_figures_without_their_topics_are_skipped_with_a_note(
