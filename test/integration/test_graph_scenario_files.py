@@ -108,9 +108,17 @@ def test_override_of_undeclared_parameter_names_it_with_a_suggestion(tmp_path: P
     assert 'contact.stiffness_n_m' in message
 
 
-def test_override_of_wrong_parameter_type_names_expected_type(tmp_path: Path) -> None:
-    """An int where the simulator declares a float is refused, as ros2 launch would."""
+def test_override_of_int_on_a_float_parameter_is_taken_as_float(tmp_path: Path) -> None:
+    """An int where the simulator declares a float becomes a float, as in sweep files."""
     scenario = load_scenario(write(tmp_path, VALID.replace('1e4', '10000')))
+    checked = check_scenario_overrides(scenario, [SIMULATOR])
+    value = checked.overrides['simulator']['contact.stiffness_n_m']
+    assert isinstance(value, float) and value == 10000.0
+
+
+def test_override_of_wrong_parameter_type_names_expected_type(tmp_path: Path) -> None:
+    """A string where the simulator declares a float is refused, naming the expected type."""
+    scenario = load_scenario(write(tmp_path, VALID.replace('1e4', 'stiff')))
     with pytest.raises(ScenarioError, match=r"contact\.stiffness_n_m': expected float"):
         check_scenario_overrides(scenario, [SIMULATOR])
 

@@ -25,6 +25,7 @@ from launch import LaunchContext, LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
+from uvms_bringup.graph import check_scenario_overrides
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     MISSION,
@@ -59,6 +60,9 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     scenario = None
     if scenario_arg:
         scenario = load_scenario(resolve_scenario_path(scenario_arg, Path(config)))
+        # Typed as uvms run and uvms launch type them (an int on a float parameter is a float).
+        scenario = check_scenario_overrides(scenario, config=Path(config),
+                                            namespace=namespace or DEFAULT_NAMESPACE)
     actions = []
     run_values = {}
     mission = scenario is not None and bool(scenario.mission)

@@ -15,7 +15,7 @@ import difflib
 import importlib
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -146,6 +146,8 @@ def build_graph(
     if duration_s is None:
         duration_s = scenario.duration_s if scenario is not None else 0.0
     specs = graph_nodes(record=output_path is not None, foxglove=foxglove is not None)
+    if scenario is not None:
+        scenario = check_scenario_overrides(scenario, specs, config, namespace)
     overrides = {
         spec.name: {
             **node_parameters(spec, scenario, mode, duration_s,
@@ -154,8 +156,6 @@ def build_graph(
         }
         for spec in specs
     }
-    if scenario is not None:
-        check_scenario_overrides(scenario, specs, config, namespace)
     context = Context()
     # No rclpy signal handlers: they would shut the context down under running callbacks;
     # the caller's StopEvent (uvms run) or KeyboardInterrupt ends run_graph instead.
@@ -336,17 +336,21 @@ def check_scenario_overrides(
     specs: Sequence[NodeSpec] | None = None,
     config: Path | None = None,
     namespace: str = DEFAULT_NAMESPACE,
-) -> None:
+) -> Scenario:
     """Check every scenario override against what its node declares, before the real run.
 
     The nodes are built once with their parameter files only, in a throwaway context, to
     read the declared names and types; the recorder is left out (it would open its file).
+    Integers on a float parameter are taken as floats, as sweep files take them.
 
     Args:
         scenario: The scenario.
         specs: Nodes of the run (all, recorder included, if None).
         config: Directory of the parameter files (``config_dir()`` if None).
         namespace: Namespace of the nodes.
+
+    Returns:
+        The scenario with its overrides in the declared types.
 
     Raises:
         ScenarioError: An override names no parameter of its node or has another type;
@@ -357,7 +361,8 @@ def check_scenario_overrides(
     config = config if config is not None else config_dir()
     to_check = [spec for spec in specs if spec.name in scenario.overrides and spec is not RECORDER]
     if not to_check:
-        return
+        return scenario
+    checked = {node: dict(values) for node, values in scenario.overrides.items()}
     context = Context()
     rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     try:
@@ -371,19 +376,21 @@ def check_scenario_overrides(
                 node = _make_node(spec, {}, config, namespace, context)
                 try:
                     for name, value in scenario.overrides[spec.name].items():
-                        _check_override(scenario, spec.name, node, name, value)
+                        checked[spec.name][name] = _check_override(
+                            scenario, spec.name, node, name, value)
                 finally:
                     node.destroy_node()
             finally:
                 rclpy.logging.set_logger_level(logger, level)
     finally:
         rclpy.try_shutdown(context=context)
+    return replace(scenario, overrides=checked)
 
 
 def _check_override(
     scenario: Scenario, node_name: str, node: Node, name: str, value: ParameterValue
-) -> None:
-    """One override: declared by the node, and of the declared type."""
+) -> ParameterValue:
+    """One override, declared by the node, in the declared type (integers become floats)."""
     key = f'{node_name}.{name}'
     if not node.has_parameter(name):
         declared = list(node.get_parameters_by_prefix('').keys())
@@ -392,12 +399,31 @@ def _check_override(
         msg = f'{scenario.path}: key {key!r}: the {node_name} node has no parameter {name!r}{hint}'
         raise ScenarioError(msg)
     declared_type = node.get_parameter(name).type_
+    value = as_declared_type(declared_type, value)
     given_type = Parameter(name, value=value).type_
     if declared_type != given_type:
         expected = _TYPE_NAMES.get(declared_type, declared_type.name)
         msg = (f'{scenario.path}: key {key!r}: expected {expected}, got '
                f'{type(value).__name__} {value!r}')
         raise ScenarioError(msg)
+    return value
+
+
+def as_declared_type(declared: Parameter.Type, value: ParameterValue) -> ParameterValue:
+    """An integer (or list of numbers) as floats where ``declared`` is a float type.
+
+    YAML writes ``3`` for three, and ROS would refuse it for a double parameter; scenario and
+    sweep files both take it as ``3.0``. Other values are returned as they are.
+    """
+    if declared == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(
+        value, bool
+    ):
+        return float(value)
+    if declared == Parameter.Type.DOUBLE_ARRAY and isinstance(value, list) and all(
+        isinstance(item, int | float) and not isinstance(item, bool) for item in value
+    ):
+        return [float(item) for item in value]
+    return value
 
 
 def declared_parameters(

@@ -12,7 +12,7 @@ import difflib
 from dataclasses import replace
 
 from rclpy.parameter import Parameter
-from uvms_bringup.graph import declared_parameters
+from uvms_bringup.graph import as_declared_type, declared_parameters
 from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario
 
 from uvms_sweep.sweep_file import Axis, Sweep, SweepError
@@ -44,7 +44,7 @@ def check_sweep(sweep: Sweep) -> tuple[Sweep, Scenario]:
         for name, value in overrides.items():
             if node in declared:
                 where = f'{scenario.path}: key {f"{node}.{name}"!r}'
-                _coerce(declared[node], node, name, value, where, strict=True)
+                _coerce(declared[node], node, name, value, where)
     axes = tuple(_checked_axis(sweep, axis, declared) for axis in sweep.axes)
     return replace(sweep, axes=axes), scenario
 
@@ -67,28 +67,18 @@ def _coerce(
     name: str,
     value: ParameterValue,
     where: str,
-    strict: bool = False,
 ) -> ParameterValue:
     """A value in the declared type of ``node``'s parameter ``name``, or SweepError.
 
-    Integers become floats for a float parameter unless ``strict`` (a scenario file, which
-    ``uvms run`` reads as written).
+    Integers become floats for a float parameter, in sweep and scenario files alike
+    (``graph.as_declared_type``).
     """
     if name not in declared:
         close = difflib.get_close_matches(name, list(declared), n=3)
         hint = f'; did you mean {", ".join(close)}?' if close else ''
         raise SweepError(f'{where}: the {node} node has no parameter {name!r}{hint}')
     expected = declared[name]
-    if strict:
-        pass
-    elif expected == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(
-        value, bool
-    ):
-        return float(value)
-    if expected == Parameter.Type.DOUBLE_ARRAY and isinstance(value, list) and all(
-        isinstance(item, int | float) and not isinstance(item, bool) for item in value
-    ):
-        return [float(item) for item in value]
+    value = as_declared_type(expected, value)
     if Parameter(name, value=value).type_ != expected:
         type_name = _TYPE_NAMES.get(expected, expected.name)
         raise SweepError(f'{where}: expected {type_name}, got {type(value).__name__} {value!r}')
