@@ -153,12 +153,15 @@ def test_bad_node_parameter_stops_the_build_naming_node_and_parameter() -> None:
 
 
 def test_cli_run_records_the_scenario(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """`uvms run NAME --duration --output --quiet` exits 0 and writes the recording."""
+    """`uvms run NAME --duration --output --quiet` exits 0, writes the recording, says where."""
     output = tmp_path / 'out' / 'run.mcap'
     status = cli.main(['run', 'free_motion', '--duration', '0.1', '--output', str(output),
                        '--quiet'])
-    assert status == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert status == 0, err
     assert len(payloads(output)['/uvms/joint_states']) == 51
+    summary = [line for line in err.splitlines() if line.startswith('uvms run: simulated')]
+    assert len(summary) == 1 and summary[0].endswith(f'; recorded {output}'), err
 
 
 def test_realtime_graph_runs_on_wall_clock_timers(tmp_path: Path) -> None:

@@ -310,7 +310,8 @@ def launched(tmp_path_factory: pytest.TempPathFactory) -> LaunchRun:
     """``uvms launch case1_ke1e4 --output F`` observed for a few seconds, then SIGINT."""
     output = tmp_path_factory.mktemp('launch') / 'run.mcap'
     observer = Observer(PUBLIC_TOPICS)
-    process = start([str(BIN / 'uvms'), 'launch', 'case1_ke1e4', '--output', str(output)])
+    process = start([str(BIN / 'uvms'), 'launch', 'case1_ke1e4', '--output', str(output),
+                     '--duration', '0'])
     try:
         wait_until(lambda: all(observer.count(t) > 0 for t in PUBLIC_TOPICS), 30.0,
                    'a message on every public topic', process)
@@ -440,7 +441,7 @@ def test_sigterm_stops_every_node_with_status_130(
     topics = {'/clock': Clock, '/uvms/controller/state': ControllerState,
               '/uvms/command/actuators': ActuatorCommand}
     observer = observer_factory(topics)
-    process = start([str(BIN / 'uvms'), 'launch', 'free_motion'])
+    process = start([str(BIN / 'uvms'), 'launch', 'free_motion', '--duration', '0'])
     wait_until(lambda: all(observer.count(topic) > 0 for topic in topics), 30.0,
                'messages of all three nodes', process)
     pids = list(children_of(process.pid))
@@ -490,7 +491,7 @@ def test_a_node_killed_while_running_is_named_and_the_others_are_stopped(
 ) -> None:
     """SIGKILL to the running controller: the launcher names it, stops the rest, exits 1."""
     observer = observer_factory({'/uvms/controller/state': ControllerState})
-    process = start([str(BIN / 'uvms'), 'launch', 'free_motion'])
+    process = start([str(BIN / 'uvms'), 'launch', 'free_motion', '--duration', '0'])
     wait_until(lambda: observer.count('/uvms/controller/state') > 0, 30.0,
                'the controller runs', process)
     children = children_of(process.pid)

@@ -186,7 +186,8 @@ def launch_graph(
             runs until stopped.
         output_path: MCAP file to record every topic to; None launches no recorder.
         namespace: Namespace of the nodes.
-        quiet: The nodes log only warnings and errors; the launcher reports only errors.
+        quiet: The nodes log only warnings and errors; the launcher reports only errors and
+            its closing line.
         stop: Set by SIGINT/SIGTERM (``uvms``'s ``StopEvent``); a ``StopEvent`` of its own
             is installed if None.
         config: Directory of the parameter files (``config_dir()`` if None).
@@ -204,7 +205,7 @@ def launch_graph(
     """
     ros_environment_defaults()
     if scenario is not None:
-        _check_overrides(scenario, namespace, config)
+        scenario = _check_overrides(scenario, namespace, config)
     own_stop = None
     if stop is None:
         from uvms_common.stop_event import StopEvent
@@ -222,12 +223,12 @@ def launch_graph(
             own_stop.restore()
 
 
-def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) -> None:
-    """The scenario's overrides against what the nodes declare, as ``uvms run`` checks them."""
+def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) -> Scenario:
+    """The scenario's overrides checked and typed as ``uvms run`` does (ints on floats)."""
     from uvms_bringup.graph import GraphError, check_scenario_overrides
 
     try:
-        check_scenario_overrides(scenario, config=config, namespace=namespace)
+        return check_scenario_overrides(scenario, config=config, namespace=namespace)
     except GraphError as exc:
         raise LaunchError(str(exc)) from exc
 
@@ -257,11 +258,10 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
                         'nodes')
         return EXIT_FAILURE
     unclean = bool(launcher.unclean_stops())
+    # The closing line is printed with --quiet too: it is the one summary of the launch.
     if outcome == 'stopped':
-        if not quiet:
-            launcher.report('uvms launch: interrupted; every node stopped')
+        launcher.report('uvms launch: interrupted; every node stopped')
         return EXIT_INTERRUPTED
-    if not quiet:
-        launcher.report(f'uvms launch: the simulator reached {duration_s or 0.0:g} s; '
-                        'every node stopped')
+    launcher.report(f'uvms launch: the simulator reached {duration_s or 0.0:g} s; '
+                    'every node stopped')
     return EXIT_FAILURE if unclean else EXIT_OK

@@ -49,6 +49,13 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
+def _seconds_or_zero(text: str) -> float:
+    """Argparse type: a finite number of seconds >= 0 (0: no limit)."""
+    if text.strip() in ('0', '0.0'):
+        return 0.0
+    return _positive_seconds(text)
+
+
 def _seed(text: str) -> int:
     """Argparse type: an integer seed in [0, 2^31 - 1]."""
     try:
@@ -117,20 +124,22 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument('--seed', type=_seed, metavar='N',
                      help="sensor noise seed (default: the scenario's)")
     run.add_argument('--quiet', '-q', action='store_true',
-                     help='no progress bar, only warnings and errors')
+                     help='no progress bar, only warnings, errors and the summary line')
     _add_foxglove_arguments(run)
     launch = sub.add_parser(
         'launch', help='run the graph, one process per node, in real time until Ctrl-C',
         description='Start simulator, controller, thruster_allocator (and recorder with '
                     '--output) each as its own process, as ros2 launch uvms_bringup '
                     'uvms.launch.py would, on wall-clock timers by default. Ctrl-C or '
-                    'SIGTERM stops every node (exit 130); with --duration the run ends when '
-                    'the simulator reaches it (exit 0); a node that fails is named and the '
-                    'others are stopped (exit 1).')
+                    "SIGTERM stops every node (exit 130); the run ends when the simulator "
+                    "reaches the scenario's duration_s or --duration (exit 0; --duration 0 "
+                    'runs on until stopped); a node that fails is named and the others are '
+                    'stopped (exit 1).')
     launch.add_argument('scenario', metavar='SCENARIO.yaml', nargs='?',
                         help='scenario file or name (default: the parameter files only)')
-    launch.add_argument('--duration', type=_positive_seconds, metavar='S',
-                        help='stop after this many simulated seconds (default: run until Ctrl-C)')
+    launch.add_argument('--duration', type=_seconds_or_zero, metavar='S',
+                        help="stop after this many simulated seconds (default: the scenario's "
+                             'duration_s; without a scenario, or with 0: run until Ctrl-C)')
     launch.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
     launch.add_argument('--mode', choices=('realtime', 'lockstep'), default='realtime',
                         help='execution mode (default: realtime)')
@@ -198,10 +207,13 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
 
     try:
         scenario = None
+        duration = args.duration or None  # 0: run on until stopped
         if args.scenario is not None:
             scenario = load_scenario(resolve_scenario_path(args.scenario))
-            scenario = scenario.with_changes(duration_s=args.duration)
-        return launch_graph(scenario, args.mode, duration_s=args.duration,
+            scenario = scenario.with_changes(duration_s=duration)
+            if args.duration is None:
+                duration = scenario.duration_s
+        return launch_graph(scenario, args.mode, duration_s=duration,
                             output_path=args.output, quiet=args.quiet, stop=stop,
                             foxglove=_foxglove_address(args))
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
@@ -264,8 +276,7 @@ def _run_graph_and_report(
         summary += f', {result.lockstep_timeouts} lockstep timeouts'
     if result.output_path is not None:
         summary += f'; recorded {result.output_path}'
-    if not args.quiet:
-        print(f'uvms {command}: {summary}', file=sys.stderr)
+    print(f'uvms {command}: {summary}', file=sys.stderr)  # --quiet too: where the run went
     return EXIT_INTERRUPTED if result.interrupted else EXIT_OK
 
 
