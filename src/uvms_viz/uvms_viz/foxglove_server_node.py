@@ -131,12 +131,12 @@ class FoxgloveServerNode(Node):
 
         import foxglove
 
-        self._context = foxglove.Context()
+        self._foxglove_context = foxglove.Context()
         self._channels = {
             topic: foxglove.Channel(
                 topic, schema=foxglove.Schema(name=type_name, encoding='ros2msg',
                                               data=schemas[type_name].encode('utf-8')),
-                message_encoding='cdr', context=self._context)
+                message_encoding='cdr', context=self._foxglove_context)
             for topic, type_name in topics.items()
         }
         self._latched: dict[str, bytes] = {}
@@ -155,7 +155,7 @@ class FoxgloveServerNode(Node):
                 f'use {FOXGLOVE_HOST} to keep it on this one')
         try:
             self._server = foxglove.start_server(
-                name='uvms', host=host, port=port, context=self._context,
+                name='uvms', host=host, port=port, context=self._foxglove_context,
                 capabilities=[foxglove.Capability.Time], supported_encodings=['cdr'],
                 server_listener=self._listener, asset_handler=asset)
         except RuntimeError as exc:
