@@ -433,6 +433,20 @@ def test_launch_with_duration_ends_when_the_simulator_does() -> None:
     assert not any(alive(pid) for pid in pids)
 
 
+def test_real_time_start_up_logs_no_staleness_or_lateness_warnings() -> None:
+    """The first 2 s of a real-time launch: start-up waits are INFO, never WARN.
+
+    The mechanism (start-up grace, INFO while waiting) is tested with a fake clock in
+    test/unit/common/test_realtime.py; this checks that the nodes use it.
+    """
+    process = start([str(BIN / 'uvms'), 'launch', 'free_motion', '--duration', '2'])
+    err = finish(process, 60.0)
+    assert process.returncode == 0, err
+    alarms = [line for line in err.splitlines() if 'WARN' in line and any(
+        word in line for word in ('watchdog', 'stale', 'behind real time', 'missed'))]
+    assert not alarms, err
+
+
 def test_sigterm_stops_every_node_with_status_130(
     observer_factory: Callable[[Mapping[str, type]], Observer],
 ) -> None:

@@ -38,6 +38,7 @@ from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateM
 from uvms_common.diagnostics import robot_name as urdf_robot_name
 from uvms_common.lifecycle import autostart, declare_autostart, state_label
 from uvms_common.node_main import run_node
+from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
 from uvms_control import conversions, task_conversions
 from uvms_control.core.contact_task import SafetyLimits, TaskCode, TaskGoalError
@@ -94,6 +95,8 @@ class ControllerNode(LifecycleNode):
         self._rate = RateMeter()
         self._breach: str | None = None
         self._stale = False
+        self._staleness = StalenessMonitor()
+        self._misses: MissCounter | None = None
         self._command_msg: GeneralizedForce | None = None
         self._state_msg: ControllerState | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -142,6 +145,18 @@ class ControllerNode(LifecycleNode):
         self._last_stamp_ns, self._zeroed_stamp_ns = -1, -1
         self._first_stamp_ns: int | None = None
         self._stale = False
+        # Timer mode: start-up staleness is INFO (nodes start one after the other); missed
+        # periods are counted on the steady clock the timer runs on.
+        self._staleness = StalenessMonitor()
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._misses = MissCounter(round(1e9 / float(node['control_rate_hz'])))
+        self._staleness_log = EventLogger(self.get_logger(), {
+            'waiting': 'waiting for fresh joint_states, odometry and wrench (start-up): '
+                       'publishing zero generalized force',
+            'fresh': 'fresh inputs: control running',
+            'stale': 'inputs older than watchdog_timeout_s: publishing zero generalized force',
+            'never_fresh': 'no fresh inputs since start-up: publishing zero generalized force',
+            'resumed': 'fresh inputs: control resumed'})
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._command_pub = self.create_publisher(GeneralizedForce, 'command/generalized_force',
                                                   qos)
@@ -250,14 +265,27 @@ class ControllerNode(LifecycleNode):
     def _on_timer(self) -> None:
         """Timer mode: compute on the latest inputs, or zero the command when they are stale."""
         now = self.get_clock().now().nanoseconds
+        steps = self._counts['steps']
         inputs = [self._inputs[name] for name in TOPICS]
         if any(i is None for i in inputs):
             self.get_logger().info('waiting for joint_states, odometry and wrench', once=True)
-            return
-        if any(now - i.arrival_ns > self._watchdog_ns for i in inputs if i is not None):
-            self._zero(now, 'inputs older than watchdog_timeout_s')
-            return
-        self._compute(now, inputs)
+        elif self._checked_fresh(now, inputs):
+            self._compute(now, inputs)
+        assert self._misses is not None
+        ran = self._counts['steps'] > steps or not self._active
+        share = self._misses.tick(self._steady.now().nanoseconds, ran)
+        if share is not None:
+            self.get_logger().warning(
+                f'missed {share:.1%} of the control periods in the last {MISS_WINDOW_S:g} s '
+                '(no new state published: late timer or no new simulated time)')
+
+    def _checked_fresh(self, now: int, inputs: list[Input | None]) -> bool:
+        """Timer mode: whether the inputs are fresh; zero command and log when not."""
+        stale = any(now - i.arrival_ns > self._watchdog_ns for i in inputs if i is not None)
+        self._staleness_log.log(self._staleness.observe(now, stale))
+        if stale:
+            self._zero(now, None)
+        return not stale
 
     def _on_target(self, msg: PointStamped) -> None:
         """A streamed hold target: taken while no task runs, else refused with a log line."""
@@ -365,11 +393,18 @@ class ControllerNode(LifecycleNode):
         rate = self._rate.rate_hz(self._counts['steps'], now)
         ages = {f'{topic}_age_s': (now - value.arrival_ns) * 1e-9 if value and value.arrival_ns
                 else None for topic, value in self._inputs.items()}
-        level = OK if state == 'active' and not self._stale else WARN
-        message = 'stale inputs: zero command' if self._stale else state
+        stale = self._stale or self._staleness.alarmed
+        misses = self._misses
+        level = OK if state == 'active' and not stale else WARN
+        message = 'stale inputs: zero command' if stale else state
+        if not stale and self._staleness.stale:
+            message = f'{state}: waiting for fresh inputs (start-up)'
         return Report(level, message, {'lifecycle_state': state, 'rate_hz': rate,
                                        'rejected_inputs': self._counts['rejected'],
-                                       'zero_commands': self._counts['zeroed'], **ages})
+                                       'zero_commands': self._counts['zeroed'],
+                                       'missed_periods': misses.missed if misses else None,
+                                       'missed_share': misses.share if misses else None,
+                                       **ages})
 
     def _report_task(self) -> Report:
         supervisor = self.supervisor

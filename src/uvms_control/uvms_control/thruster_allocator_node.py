@@ -30,6 +30,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
+from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 from uvms_model.thrusters import ThrusterLayout
 
 from uvms_control import conversions
@@ -98,6 +99,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._safe_tau_b = np.zeros_like(self._safe_tau_b)
         self._last_stamp_ns = self._arrival_ns = None
         self._stale = False
+        self._staleness = StalenessMonitor()  # a start-up grace from each activation
         self._active = True
         return super().on_activate(state)
 
@@ -168,6 +170,19 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._last_stamp_ns: int | None = None
         self._arrival_ns: int | None = None
         self._stale = False
+        # Timer mode: a command missing or stale during start-up is INFO; missed periods
+        # are counted on the steady clock the timer runs on.
+        self._staleness = StalenessMonitor()
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._misses = MissCounter(round(self._period_s * 1e9))
+        self._staleness_log = EventLogger(self.get_logger(), {
+            'waiting': 'waiting for fresh generalized force commands (start-up): thrusters '
+                       'and motors set to zero',
+            'fresh': 'fresh generalized force commands: allocating',
+            'stale': 'generalized force command is stale: thrusters and motors set to zero',
+            'never_fresh': 'no generalized force command since start-up: thrusters and '
+                           'motors set to zero',
+            'resumed': 'fresh generalized force commands: resumed'})
         # Refilled for each publication (rclpy serializes at publish).
         self._actuator_msg: ActuatorCommand | None = None
         self._state_msg: ThrusterState | None = None
@@ -270,17 +285,17 @@ class ThrusterAllocatorNode(LifecycleNode):
             self._publish_zero(now)
             return
         tau_b = self._safe_tau_b
-        if self._arrival_ns is None or now - self._arrival_ns > self._watchdog_ns:
-            if not self._stale and self._arrival_ns is not None:
-                self.get_logger().warn(
-                    'generalized force command is stale: thrusters and motors set to zero'
-                )
-            self._stale = self._arrival_ns is not None
+        stale = self._arrival_ns is None or now - self._arrival_ns > self._watchdog_ns
+        self._staleness_log.log(self._staleness.observe(now, stale))
+        self._stale = self._staleness.alarmed
+        if stale:
             tau_b = np.zeros_like(tau_b)
-        elif self._stale:
-            self._stale = False
-            self.get_logger().info('fresh generalized force commands: resumed')
         self._step(now, tau_b, self._period_s)
+        share = self._misses.tick(self._steady.now().nanoseconds)
+        if share is not None:
+            self.get_logger().warning(
+                f'missed {share:.1%} of the allocation periods in the last {MISS_WINDOW_S:g} s '
+                '(late timer: the machine is busy)')
 
     def _step(self, t_ns: int, tau_b: np.ndarray, dt: float) -> None:
         assert self.core is not None
@@ -314,6 +329,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         age_s = None if self._arrival_ns is None else (now_ns - self._arrival_ns) * 1e-9
         values.update({
             'trigger_mode': self._trigger_mode, 'output_rate_hz': step_hz, 'input_age_s': age_s,
+            'missed_periods': self._misses.missed, 'missed_share': self._misses.share,
             'rejected_commands': self._rejected, 'rejected_per_s': rates['rejected'],
             'saturation_share': saturated_hz / step_hz if step_hz and saturated_hz is not None
             else None})

@@ -24,6 +24,7 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.node_main import run_node
+from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
@@ -92,6 +93,9 @@ class SimulatorNode(Node):
         self._finished = False
         self.timeouts = 0
         self._realtime_start: Any = None
+        # Real time: ticks that end behind the wall clock, counted after the start-up grace
+        # (the first ticks wait for the other nodes and the kernels, which is no fault).
+        self._behind = MissCounter(round(cfg.physics_dt_s * 1e9))
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
@@ -204,10 +208,15 @@ class SimulatorNode(Node):
                     return
             self._step()
         behind_s = (due_ns - self._plant.t_ns) * 1e-9
-        if behind_s > 0.0:
+        share = self._behind.tick(now.nanoseconds, ran=behind_s <= 0.0, on_time=True)
+        if share is not None:
             self.get_logger().warning(
-                f'the simulation runs {behind_s * 1e3:.1f} ms behind real time',
-                throttle_duration_sec=5.0)
+                f'the simulation ended {share:.1%} of its ticks in the last {MISS_WINDOW_S:g} s '
+                f'behind real time (now {max(behind_s, 0.0) * 1e3:.1f} ms)')
+        elif behind_s > 0.0 and due_ns < STARTUP_GRACE_S * 1e9:
+            self.get_logger().info(
+                f'the simulation runs {behind_s * 1e3:.1f} ms behind real time (start-up)',
+                once=True)
 
     def _answered(self) -> None:
         """Lockstep: the published state is answered; integrate to the next one, or finish."""
@@ -258,7 +267,9 @@ class SimulatorNode(Node):
         new_timeouts = timeouts.rate_hz(self.timeouts, now_ns)
         mode = self._settings.mode
         values = {'mode': mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
-                  'real_time_factor': factor, 'lockstep_timeouts': self.timeouts}
+                  'real_time_factor': factor, 'lockstep_timeouts': self.timeouts,
+                  'steps_behind_real_time': self._behind.missed,
+                  'behind_real_time_share': self._behind.share}
         if self._finished:
             return Report(OK, f'finished at t = {t_ns * 1e-9:.3f} s', values)
         if mode == 'lockstep' and self._command is None:
