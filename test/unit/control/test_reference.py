@@ -155,10 +155,10 @@ def test_force_setpoint_rearms_only_after_the_force_drops() -> None:
 @pytest.mark.parametrize(
     ('args', 'name'),
     [
-        ((0.0, 1.0, 5.0), 'force.setpoint_n'),
-        ((150.0, -1.0, 5.0), 'force.ramp_time_s'),
+        ((0.0, 1.0, 5.0), 'force_n'),
+        ((150.0, -1.0, 5.0), 'force_ramp_s'),
         ((150.0, 1.0, 200.0), 'force.contact_threshold_n'),
-        ((150.0, math.nan, 5.0), 'force.ramp_time_s'),
+        ((150.0, math.nan, 5.0), 'force_ramp_s'),
     ],
 )
 def test_invalid_force_setpoint_parameters_name_the_parameter(

@@ -173,7 +173,8 @@ class ForceSetpoint:
     would put into the PID at first contact; the fuzzy switch keeps the impedance law in
     charge until the contact force has grown.
 
-    With ``start_immediately`` the ramp starts from zero at the first update instead, without
+    With ``start_immediately`` the ramp starts from ``start_force`` (zero unless a task with a
+    force takes over from another) at the first update instead, without
     waiting for contact: the pure hybrid law (W = 0) needs it, since along n it controls only
     force and would never approach the wall with a zero set-point.
 
@@ -196,11 +197,12 @@ class ForceSetpoint:
         ramp_time: float,
         contact_threshold: float,
         start_immediately: bool = False,
+        start_force: float = 0.0,
     ) -> None:
         if not (math.isfinite(magnitude) and magnitude > 0.0):
-            raise ControlParameterError('force.setpoint_n', magnitude, '(0, inf) N')
+            raise ControlParameterError('force_n', magnitude, '(0, inf) N')
         if not (math.isfinite(ramp_time) and ramp_time > 0.0):
-            raise ControlParameterError('force.ramp_time_s', ramp_time, '(0, inf) s')
+            raise ControlParameterError('force_ramp_s', ramp_time, '(0, inf) s')
         if not (math.isfinite(contact_threshold) and 0.0 < contact_threshold < magnitude):
             raise ControlParameterError(
                 'force.contact_threshold_n', contact_threshold, f'(0, {magnitude}) N'
@@ -209,6 +211,7 @@ class ForceSetpoint:
         self.ramp_time = ramp_time
         self.contact_threshold = contact_threshold
         self.start_immediately = start_immediately
+        self.start_force = start_force
         self.reset()
 
     def reset(self) -> None:
@@ -235,6 +238,10 @@ class ForceSetpoint:
             span * ds / self._duration,
             span * dds / (self._duration * self._duration),
         )
+
+    def desired(self, t: float) -> float:
+        """F_d at t (N) without advancing the set-point; 0 while idle."""
+        return 0.0 if self.phase == ForcePhase.IDLE else self._ramp(t)[0]
 
     def release(self, t: float, ramp_s: float | None = None) -> None:
         """Ramp F_d from its value at t (s) down to zero over ``ramp_s`` (s; default ramp_time).
@@ -271,7 +278,7 @@ class ForceSetpoint:
                 self._armed = True
             if self.start_immediately and not self._started:
                 self.phase = ForcePhase.RAMP_UP
-                self._t0, self._f0, self._f1 = t, 0.0, self.magnitude
+                self._t0, self._f0, self._f1 = t, self.start_force, self.magnitude
                 self._duration = self.ramp_time
                 self._x_contact = x_normal if in_contact else None
             elif self._armed and in_contact:

@@ -96,9 +96,11 @@ class TaskReference:
             t, self.state(t), t + goal.times, goal.path, goal.velocities, goal.accelerations
         )
         self._hold = None
+        # A task that takes over from a pressing one ramps from the running F_d, not from 0.
+        running = self.force.desired(t) if self.force is not None else 0.0
         self.force = (
             ForceSetpoint(goal.force_n, goal.force_ramp_s, self.contact_threshold_n,
-                          start_immediately=self.ramp_from_start)
+                          start_immediately=self.ramp_from_start, start_force=running)
             if goal.force_n > 0.0 else None
         )
 
