@@ -211,3 +211,11 @@ def test_release_while_idle_does_nothing() -> None:
     setpoint.release(1.0, 0.5)
     sample = setpoint.update(1.2, 0.0, 1.70, 1.70, 0.0)
     assert (sample.f_d, sample.phase) == (0.0, ForcePhase.IDLE)
+
+
+def test_a_task_taking_over_ramps_from_the_running_force() -> None:
+    """start_force: a preempting task's set-point starts where the running one stood."""
+    setpoint = ForceSetpoint(150.0, 1.0, 5.0, start_immediately=True, start_force=100.0)
+    first = setpoint.update(0.0, 100.0, 1.0, 1.0, 0.0)
+    assert first.f_d == 100.0 and first.f_d_dot == 0.0
+    assert setpoint.update(1.0, 150.0, 1.0, 1.0, 0.0).f_d == pytest.approx(150.0)
