@@ -335,10 +335,10 @@ class ControllerNode(LifecycleNode):
         self._state_pub.publish(self._state_msg)
         self.tasks.finish(events)
         self.tasks.publish_feedback(self.supervisor, t)
-        if self.supervisor.breach != self._breach:
-            self._breach = self.supervisor.breach
-            if self._breach is not None:
-                self.get_logger().error(f'safety limit: {self._breach}')
+        breach = self.supervisor.breach
+        if breach is not None and self._breach is None:  # once per breach, not per step
+            self.get_logger().error(f'safety limit: {breach}')
+        self._breach = breach
 
     def _zero(self, t_ns: int, reason: str | None) -> None:
         if reason is not None and not self._stale:
