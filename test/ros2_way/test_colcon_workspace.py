@@ -321,7 +321,8 @@ def test_bringup_installs_the_repository_config_files(workspace: Workspace) -> N
     share = workspace.install / 'uvms_bringup' / 'share' / 'uvms_bringup' / 'config'
     source = REPO / 'config'
     expected = sorted(str(p.relative_to(source)) for pattern in ('*.yaml', '*.xml',
-                                                                 'scenarios/*.yaml')
+                                                                 'scenarios/*.yaml',
+                                                                 'tasks/*.yaml')
                       for p in source.glob(pattern))
     installed = sorted(str(p.relative_to(share)) for p in share.rglob('*') if p.is_file())
     assert installed == expected

@@ -36,7 +36,12 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.diagnostics import robot_name as urdf_robot_name
-from uvms_common.lifecycle import autostart, declare_autostart, state_label
+from uvms_common.lifecycle import (
+    autostart,
+    declare_autostart,
+    guard_change_state,
+    state_label,
+)
 from uvms_common.node_main import run_node
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
@@ -83,6 +88,7 @@ class ControllerNode(LifecycleNode):
         self._gains = declare_parameters(self, CONTROLLER_PARAMETER_SPECS)
         self._safety = declare_parameters(self, SAFETY_PARAMETER_SPECS)
         starting = declare_autostart(self)
+        guard_change_state(self)
         self.core: UnifiedForceController | None = None
         self.supervisor: TaskSupervisor | None = None
         self._active = False
