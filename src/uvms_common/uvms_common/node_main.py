@@ -7,7 +7,13 @@ Jazzy). So rclpy is initialised without its handlers; SIGINT and SIGTERM only se
 the executor spins in short turns and checks it, and the node is destroyed before the
 context is shut down. The same holds before the executor exists: a signal during start-up
 stops the process without a traceback, before the node is built when it came during the
-imports (``uvms_common.node_entry``, the console scripts' entry).
+imports (``uvms_common.node_entry``, the console scripts' entry), at once when it came while
+the node was being built (model, kernels).
+
+The teardown is bounded: the node's output is closed first (the recorder's MCAP file), then
+the middleware teardown gets ``TEARDOWN_GRACE_S``; a teardown still running then (rclpy's
+``destroy_node`` has been seen to hang) writes every thread's stack to stderr and ends the
+process with the status it would have had, well before the launcher's SIGTERM and SIGKILL.
 """
 
 from __future__ import annotations
@@ -15,7 +21,10 @@ from __future__ import annotations
 import faulthandler
 import os
 import sys
+import threading
+import time
 from collections.abc import Callable, Sequence
+from typing import TypeVar
 
 import rclpy
 from rclpy.context import Context
@@ -23,19 +32,27 @@ from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedE
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from uvms_common.node_entry import flush_output
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent, active_stop_event
 
-__all__ = ['EXECUTORS', 'SPIN_TURN_S', 'StopEvent', 'make_executor', 'run_node',
-           'spin_until_stopped']
+__all__ = ['EXECUTORS', 'SPIN_TURN_S', 'TEARDOWN_BACKSTOP_S', 'TEARDOWN_GRACE_S', 'StopEvent',
+           'TeardownDeadline', 'make_executor', 'run_node', 'spin_until_stopped']
+
+#: The node class a process runs.
+N = TypeVar('N', bound=Node)
 
 #: Executors a node process can spin on; ``UVMS_EXECUTOR`` picks one (default ``events``).
 EXECUTORS = ('events', 'single')
 #: Longest wait of one executor turn before the stop event is checked again (s).
 SPIN_TURN_S = 0.1
-#: Teardown time after which every thread's stack is written to stderr (s); below the
-#: launcher's 5 s between SIGINT and SIGTERM.
-TEARDOWN_REPORT_S = 4.0
+#: Time the middleware teardown (executor, node, context) gets once the node's output is
+#: closed (s); a normal one takes tens of milliseconds. After it the process ends itself: a
+#: stop stays within 2 s of the signal, far below the launcher's 5 s before SIGTERM.
+TEARDOWN_GRACE_S = 1.0
+#: Further time after which faulthandler's own thread dumps the stacks and exits (status 1):
+#: for a teardown stuck while holding the GIL, where no Python thread runs any more (s).
+TEARDOWN_BACKSTOP_S = 1.0
 
 
 def make_executor(kind: str | None = None, context: Context | None = None) -> Executor:
@@ -78,12 +95,54 @@ def spin_until_stopped(
         executor.spin_once(timeout_sec=SPIN_TURN_S)
 
 
+class TeardownDeadline:
+    """Ends the process if the teardown outlives its grace period; ``cancel`` when it is done.
+
+    A thread of its own waits the grace period, then writes one line and every thread's
+    stack to stderr, flushes Python's and C's stdio and calls ``os._exit(status)``. Only arm
+    it once nothing is left to lose (files closed): the process ends without cleanup.
+    faulthandler's watchdog (a C thread, no GIL needed) backs it up ``TEARDOWN_BACKSTOP_S``
+    later, exiting with status 1, for a teardown that blocks while holding the GIL.
+    """
+
+    def __init__(self, logger_name: str, status: int, grace_s: float = TEARDOWN_GRACE_S,
+                 backstop_s: float = TEARDOWN_BACKSTOP_S) -> None:
+        self._logger_name = logger_name
+        self._status = status
+        self._grace_s = grace_s
+        self._done = threading.Event()
+        self._stream = sys.__stderr__ or sys.stderr
+        faulthandler.dump_traceback_later(grace_s + backstop_s, exit=True, file=self._stream)
+        self._thread = threading.Thread(target=self._watch, name='teardown deadline',
+                                        daemon=True)
+        self._thread.start()
+
+    def cancel(self) -> None:
+        """The teardown finished: nothing is ended."""
+        self._done.set()
+        faulthandler.cancel_dump_traceback_later()
+
+    def _watch(self) -> None:
+        if self._done.wait(self._grace_s):
+            return
+        # Written directly, not through rclpy's logger: the stuck teardown may hold the
+        # logging mutex that rclpy takes around node creation and destruction.
+        self._stream.write(
+            f'[WARN] [{time.time():.9f}] [{self._logger_name}]: teardown still running '
+            f'{self._grace_s:g} s after the output was closed (stuck in the middleware): '
+            f'ending the process with status {self._status}; stacks follow\n')
+        faulthandler.dump_traceback(file=self._stream, all_threads=True)
+        flush_output()
+        os._exit(self._status)
+
+
 def run_node(
-    make_node: Callable[[], Node],
+    make_node: Callable[[], N],
     args: Sequence[str] | None,
     logger_name: str,
     startup_errors: tuple[type[Exception], ...] = (),
-    finished: Callable[[Node], bool] | None = None,
+    finished: Callable[[N], bool] | None = None,
+    close_output: Callable[[N], None] | None = None,
 ) -> int:
     """Build a node and spin it until SIGINT/SIGTERM; return the process exit status.
 
@@ -94,6 +153,9 @@ def run_node(
         startup_errors: Exceptions of a node that cannot start (invalid parameter, ...):
             logged as fatal in one line, exit status 1, no traceback.
         finished: The node's own end (e.g. the simulator reached its duration); exit 0.
+        close_output: Closes what the node must not lose (the recorder's file), run first
+            in the teardown; after it, a teardown stuck in the middleware ends the process
+            (``TeardownDeadline``).
 
     Returns:
         0 after ``finished``, a signal or an external shutdown, each ending in a clean
@@ -101,7 +163,8 @@ def run_node(
         error raised by a callback (logged with its type).
 
     A ``StopEvent`` already installed (``uvms_common.node_entry``, before the node's
-    imports) is taken over, so a signal received during the imports counts too.
+    imports) is taken over, so a signal received during the imports counts too; one received
+    while the node is being built interrupts that (KeyboardInterrupt, exit 0).
     """
     ros_environment_defaults()
     earlier = active_stop_event()
@@ -109,13 +172,12 @@ def run_node(
     rclpy.init(args=None if args is None else list(args),
                signal_handler_options=SignalHandlerOptions.NO)
     logger = rclpy.logging.get_logger(logger_name)
-    node: Node | None = None
+    node: N | None = None
     executor: Executor | None = None
     status = 0
     try:
-        if stop.is_set():
-            return 0
-        node = make_node()
+        with stop.interrupting():
+            node = make_node()
         executor = make_executor()
         executor.add_node(node)
         built = node
@@ -130,16 +192,21 @@ def run_node(
         logger.fatal(f'{type(exc).__name__}: {exc}')
         status = 1
     finally:
-        # A teardown stuck in the middleware (seen once in CI under load: a node that took
-        # neither SIGINT nor SIGTERM and was killed) then leaves every thread's stack on
-        # stderr for the bug report; the launcher's SIGTERM and SIGKILL still follow.
-        faulthandler.dump_traceback_later(TEARDOWN_REPORT_S, file=sys.__stderr__ or sys.stderr)
+        if node is not None and close_output is not None:
+            try:
+                close_output(node)
+            except Exception as exc:
+                logger.fatal(f'closing the output: {type(exc).__name__}: {exc}')
+                status = 1
+        # Seen in CI and here under load: destroy_node stuck after the work was done, the
+        # process SIGKILLed by the launcher. Nothing is left to lose now.
+        deadline = TeardownDeadline(logger_name, status)
         if executor is not None:
             executor.shutdown()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-        faulthandler.cancel_dump_traceback_later()
+        deadline.cancel()
         if stop is not earlier:
             stop.restore()
     return status

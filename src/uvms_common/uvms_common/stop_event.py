@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import signal
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from types import FrameType
 
 _active: list[StopEvent] = []
@@ -20,6 +22,7 @@ class StopEvent:
     def __init__(self) -> None:
         self._event = threading.Event()
         self._previous: dict[int, object] = {}
+        self._interrupting = False
         self.signal_number = 0
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
@@ -29,6 +32,23 @@ class StopEvent:
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
         self.signal_number = signum
         self._event.set()
+        if self._interrupting:
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def interrupting(self) -> Iterator[None]:
+        """Within the block a stop signal also raises KeyboardInterrupt where the code is.
+
+        For start-up work that checks no event (building a model, loading kernels: seconds),
+        so that a stop then ends the process at once instead of after that work.
+        """
+        self._interrupting = True
+        try:
+            if self._event.is_set():
+                raise KeyboardInterrupt
+            yield
+        finally:
+            self._interrupting = False
 
     def is_set(self) -> bool:
         """Whether a stop signal arrived."""

@@ -309,8 +309,13 @@ class RecorderNode(Node):
 
 
 def main(args: Sequence[str] | None = None) -> None:
-    """Run the recorder until SIGINT or SIGTERM, then close the MCAP file cleanly."""
-    sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException)))
+    """Run the recorder until SIGINT or SIGTERM, then close the MCAP file cleanly.
+
+    The file is closed before the middleware teardown, whose hang then costs nothing: the
+    process ends itself after a grace period (``uvms_common.node_main.run_node``).
+    """
+    sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException),
+                      close_output=RecorderNode.close))
 
 if __name__ == '__main__':
     main()

@@ -49,3 +49,18 @@ def test_restore_puts_the_earlier_handler_back_and_forgets_the_event() -> None:
     stop.restore()
     assert signal.getsignal(signal.SIGINT) is before
     assert active_stop_event() is not stop
+
+
+def test_a_signal_inside_interrupting_raises_and_outside_only_sets_the_event() -> None:
+    """Start-up work (model, kernels) ends at once on a stop; the spin loop polls instead."""
+    stop = StopEvent()
+    try:
+        with pytest.raises(KeyboardInterrupt), stop.interrupting():
+            os.kill(os.getpid(), signal.SIGINT)  # the handler runs as kill returns
+        assert stop.is_set()
+        os.kill(os.getpid(), signal.SIGTERM)  # outside: no exception
+        assert stop.signal_number == signal.SIGTERM
+        with pytest.raises(KeyboardInterrupt), stop.interrupting():
+            pass  # a stop that came before the block ends it on entry
+    finally:
+        stop.restore()
