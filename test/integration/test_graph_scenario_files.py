@@ -3,7 +3,7 @@
 from pathlib import Path
 
 import pytest
-from uvms_bringup.graph import check_scenario_overrides
+from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.launch_helpers import SIMULATOR
 from uvms_bringup.scenario import ScenarioError, load_scenario
 

@@ -25,7 +25,7 @@ from launch import LaunchContext, LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
-from uvms_bringup.graph import check_scenario_overrides
+from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     MISSION,

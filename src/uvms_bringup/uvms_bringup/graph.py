@@ -11,11 +11,9 @@ simulated time; real-time runs spin on wall-clock timers until the duration or C
 
 from __future__ import annotations
 
-import difflib
-import importlib
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -30,26 +28,23 @@ from uvms_common.node_main import StopEvent, make_executor
 from uvms_tasks.mission_node import MissionNode
 
 from uvms_bringup.bars import RunBar
+from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     RECORDER,
     SIMULATOR,
-    NodeSpec,
     config_dir,
     graph_nodes,
     node_parameters,
     parameters_file_text,
 )
-from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
+from uvms_bringup.node_factory import GraphError, make_node
+from uvms_bringup.scenario import ParameterValue, Scenario
 
 #: Longest wall-clock wait for any callback before the lockstep loop checks on the graph (s).
 _SPIN_TIMEOUT_S = 0.5
 #: Wall-clock time given to the last messages to reach the recorder after the run (s).
 _DRAIN_S = 0.1
-
-
-class GraphError(RuntimeError):
-    """The graph cannot be built or stopped with an error; the message names the node."""
 
 
 @dataclass
@@ -166,7 +161,7 @@ def build_graph(
         for spec in specs:
             if spec is RECORDER:
                 overrides[spec.name].update(_recorder_run_parameters(graph))
-            graph.nodes[spec.name] = _make_node(spec, overrides[spec.name], config, namespace,
+            graph.nodes[spec.name] = make_node(spec, overrides[spec.name], config, namespace,
                                                 context)
         if scenario is not None and scenario.mission:
             # The scenario's goals go through the controller's ContactTask action, as a
@@ -265,41 +260,6 @@ def run_scenario(
     return run_graph(graph, progress=bar)
 
 
-def _make_node(
-    spec: NodeSpec,
-    overrides: Mapping[str, ParameterValue],
-    config: Path,
-    namespace: str,
-    context: Context,
-) -> Node:
-    """Import a node class and build it with its parameter files and overrides."""
-    try:
-        module = importlib.import_module(spec.module)
-        node_class = getattr(module, spec.class_name)
-    except (ImportError, AttributeError) as exc:
-        msg = f'node {spec.name!r}: cannot import {spec.module}.{spec.class_name}: {exc}'
-        raise GraphError(msg) from exc
-    cli_args = ['--ros-args']
-    for file in spec.parameter_files:
-        path = config / file
-        if not path.is_file():
-            msg = f'node {spec.name!r}: parameter file {path} does not exist'
-            raise GraphError(msg)
-        cli_args += ['--params-file', str(path)]
-    try:
-        node: Node = node_class(
-            namespace=namespace,
-            context=context,
-            cli_args=cli_args if len(cli_args) > 1 else None,
-            parameter_overrides=[Parameter(name, value=value)
-                                 for name, value in overrides.items()],
-        )
-    except Exception as exc:
-        msg = f'node {spec.name!r} could not start: {type(exc).__name__}: {exc}'
-        raise GraphError(msg) from exc
-    return node
-
-
 def _recorder_run_parameters(graph: Graph) -> dict[str, ParameterValue]:
     """The recorder's ``run.parameters``: every node's parameters as a parameter file."""
     values = {
@@ -317,151 +277,3 @@ def _plain(value: Any) -> Any:
     if isinstance(value, bool | int | float | str) or value is None:
         return value
     return [_plain(item) for item in value]
-
-
-_TYPE_NAMES = {
-    Parameter.Type.BOOL: 'bool',
-    Parameter.Type.INTEGER: 'int',
-    Parameter.Type.DOUBLE: 'float (write a decimal point, e.g. 1.0e+4)',
-    Parameter.Type.STRING: 'str',
-    Parameter.Type.BOOL_ARRAY: 'list of bool',
-    Parameter.Type.INTEGER_ARRAY: 'list of int',
-    Parameter.Type.DOUBLE_ARRAY: 'list of float',
-    Parameter.Type.STRING_ARRAY: 'list of str',
-}
-
-
-def check_scenario_overrides(
-    scenario: Scenario,
-    specs: Sequence[NodeSpec] | None = None,
-    config: Path | None = None,
-    namespace: str = DEFAULT_NAMESPACE,
-) -> Scenario:
-    """Check every scenario override against what its node declares, before the real run.
-
-    The nodes are built once with their parameter files only, in a throwaway context, to
-    read the declared names and types; the recorder is left out (it would open its file).
-    Integers on a float parameter are taken as floats, as sweep files take them.
-
-    Args:
-        scenario: The scenario.
-        specs: Nodes of the run (all, recorder included, if None).
-        config: Directory of the parameter files (``config_dir()`` if None).
-        namespace: Namespace of the nodes.
-
-    Returns:
-        The scenario with its overrides in the declared types.
-
-    Raises:
-        ScenarioError: An override names no parameter of its node or has another type;
-            the message names the file, the key and the expected type.
-        GraphError: A node cannot be built from its parameter files.
-    """
-    specs = specs if specs is not None else graph_nodes(record=True)
-    config = config if config is not None else config_dir()
-    to_check = [spec for spec in specs if spec.name in scenario.overrides and spec is not RECORDER]
-    if not to_check:
-        return scenario
-    checked = {node: dict(values) for node, values in scenario.overrides.items()}
-    context = Context()
-    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
-    try:
-        for spec in to_check:
-            # The throwaway node's start-up lines would read as the run's own (e.g. "lockstep
-            # trigger" before a real-time launch): only its warnings and errors are shown.
-            logger = f'{namespace.strip("/").replace("/", ".")}.{spec.name}'.lstrip('.')
-            level = rclpy.logging.get_logger_level(logger)
-            rclpy.logging.set_logger_level(logger, rclpy.logging.LoggingSeverity.WARN)
-            try:
-                node = _make_node(spec, {}, config, namespace, context)
-                try:
-                    for name, value in scenario.overrides[spec.name].items():
-                        checked[spec.name][name] = _check_override(
-                            scenario, spec.name, node, name, value)
-                finally:
-                    node.destroy_node()
-            finally:
-                rclpy.logging.set_logger_level(logger, level)
-    finally:
-        rclpy.try_shutdown(context=context)
-    return replace(scenario, overrides=checked)
-
-
-def _check_override(
-    scenario: Scenario, node_name: str, node: Node, name: str, value: ParameterValue
-) -> ParameterValue:
-    """One override, declared by the node, in the declared type (integers become floats)."""
-    key = f'{node_name}.{name}'
-    if not node.has_parameter(name):
-        declared = list(node.get_parameters_by_prefix('').keys())
-        close = difflib.get_close_matches(name, declared, n=3)
-        hint = f'; did you mean {", ".join(close)}?' if close else ''
-        msg = f'{scenario.path}: key {key!r}: the {node_name} node has no parameter {name!r}{hint}'
-        raise ScenarioError(msg)
-    declared_type = node.get_parameter(name).type_
-    value = as_declared_type(declared_type, value)
-    given_type = Parameter(name, value=value).type_
-    if declared_type != given_type:
-        expected = _TYPE_NAMES.get(declared_type, declared_type.name)
-        msg = (f'{scenario.path}: key {key!r}: expected {expected}, got '
-               f'{type(value).__name__} {value!r}')
-        raise ScenarioError(msg)
-    return value
-
-
-def as_declared_type(declared: Parameter.Type, value: ParameterValue) -> ParameterValue:
-    """An integer (or list of numbers) as floats where ``declared`` is a float type.
-
-    YAML writes ``3`` for three, and ROS would refuse it for a double parameter; scenario and
-    sweep files both take it as ``3.0``. Other values are returned as they are.
-    """
-    if declared == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(
-        value, bool
-    ):
-        return float(value)
-    if declared == Parameter.Type.DOUBLE_ARRAY and isinstance(value, list) and all(
-        isinstance(item, int | float) and not isinstance(item, bool) for item in value
-    ):
-        return [float(item) for item in value]
-    return value
-
-
-def declared_parameters(
-    specs: Sequence[NodeSpec] | None = None,
-    config: Path | None = None,
-    namespace: str = DEFAULT_NAMESPACE,
-) -> dict[str, dict[str, Parameter.Type]]:
-    """Every parameter each node declares after its parameter files, with its type.
-
-    The nodes are built once in a throwaway context (as ``check_scenario_overrides`` does);
-    sweeps use this to check their axes before any run.
-
-    Args:
-        specs: Nodes to read (simulator, controller and thruster allocator if None).
-        config: Directory of the parameter files (``config_dir()`` if None).
-        namespace: Namespace of the nodes.
-
-    Returns:
-        Node name to parameter name to declared type.
-
-    Raises:
-        GraphError: A node cannot be built from its parameter files.
-    """
-    specs = specs if specs is not None else graph_nodes(record=False)
-    config = config if config is not None else config_dir()
-    context = Context()
-    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
-    declared: dict[str, dict[str, Parameter.Type]] = {}
-    try:
-        for spec in specs:
-            node = _make_node(spec, {}, config, namespace, context)
-            try:
-                declared[spec.name] = {
-                    name: parameter.type_
-                    for name, parameter in node.get_parameters_by_prefix('').items()
-                }
-            finally:
-                node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
-    return declared

@@ -225,7 +225,8 @@ def launch_graph(
 
 def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) -> Scenario:
     """The scenario's overrides checked and typed as ``uvms run`` does (ints on floats)."""
-    from uvms_bringup.graph import GraphError, check_scenario_overrides
+    from uvms_bringup.declared import check_scenario_overrides
+    from uvms_bringup.node_factory import GraphError
 
     try:
         return check_scenario_overrides(scenario, config=config, namespace=namespace)

@@ -1,0 +1,177 @@
+"""What the nodes declare: scenario overrides and sweep axes checked against it before a run.
+
+The nodes are built once in a throwaway context with their parameter files only, to read
+each declared parameter's name and type; a scenario key no node declares, or a value of
+another type, then stops the run before it starts, with the file, the key and the type.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+
+import rclpy
+import rclpy.logging
+from rclpy.context import Context
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
+
+from uvms_bringup.launch_helpers import (
+    DEFAULT_NAMESPACE,
+    RECORDER,
+    NodeSpec,
+    config_dir,
+    graph_nodes,
+)
+from uvms_bringup.node_factory import make_node
+from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
+
+_TYPE_NAMES = {
+    Parameter.Type.BOOL: 'bool',
+    Parameter.Type.INTEGER: 'int',
+    Parameter.Type.DOUBLE: 'float (write a decimal point, e.g. 1.0e+4)',
+    Parameter.Type.STRING: 'str',
+    Parameter.Type.BOOL_ARRAY: 'list of bool',
+    Parameter.Type.INTEGER_ARRAY: 'list of int',
+    Parameter.Type.DOUBLE_ARRAY: 'list of float',
+    Parameter.Type.STRING_ARRAY: 'list of str',
+}
+
+
+def check_scenario_overrides(
+    scenario: Scenario,
+    specs: Sequence[NodeSpec] | None = None,
+    config: Path | None = None,
+    namespace: str = DEFAULT_NAMESPACE,
+) -> Scenario:
+    """Check every scenario override against what its node declares, before the real run.
+
+    The nodes are built once with their parameter files only, in a throwaway context, to
+    read the declared names and types; the recorder is left out (it would open its file).
+    Integers on a float parameter are taken as floats, as sweep files take them.
+
+    Args:
+        scenario: The scenario.
+        specs: Nodes of the run (all, recorder included, if None).
+        config: Directory of the parameter files (``config_dir()`` if None).
+        namespace: Namespace of the nodes.
+
+    Returns:
+        The scenario with its overrides in the declared types.
+
+    Raises:
+        ScenarioError: An override names no parameter of its node or has another type;
+            the message names the file, the key and the expected type.
+        GraphError: A node cannot be built from its parameter files.
+    """
+    specs = specs if specs is not None else graph_nodes(record=True)
+    config = config if config is not None else config_dir()
+    to_check = [spec for spec in specs if spec.name in scenario.overrides and spec is not RECORDER]
+    if not to_check:
+        return scenario
+    checked = {node: dict(values) for node, values in scenario.overrides.items()}
+    context = Context()
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        for spec in to_check:
+            # The throwaway node's start-up lines would read as the run's own (e.g. "lockstep
+            # trigger" before a real-time launch): only its warnings and errors are shown.
+            logger = f'{namespace.strip("/").replace("/", ".")}.{spec.name}'.lstrip('.')
+            level = rclpy.logging.get_logger_level(logger)
+            rclpy.logging.set_logger_level(logger, rclpy.logging.LoggingSeverity.WARN)
+            try:
+                node = make_node(spec, {}, config, namespace, context)
+                try:
+                    for name, value in scenario.overrides[spec.name].items():
+                        checked[spec.name][name] = _check_override(
+                            scenario, spec.name, node, name, value)
+                finally:
+                    node.destroy_node()
+            finally:
+                rclpy.logging.set_logger_level(logger, level)
+    finally:
+        rclpy.try_shutdown(context=context)
+    return replace(scenario, overrides=checked)
+
+
+def _check_override(
+    scenario: Scenario, node_name: str, node: Node, name: str, value: ParameterValue
+) -> ParameterValue:
+    """One override, declared by the node, in the declared type (integers become floats)."""
+    key = f'{node_name}.{name}'
+    if not node.has_parameter(name):
+        declared = list(node.get_parameters_by_prefix('').keys())
+        close = difflib.get_close_matches(name, declared, n=3)
+        hint = f'; did you mean {", ".join(close)}?' if close else ''
+        msg = f'{scenario.path}: key {key!r}: the {node_name} node has no parameter {name!r}{hint}'
+        raise ScenarioError(msg)
+    declared_type = node.get_parameter(name).type_
+    value = as_declared_type(declared_type, value)
+    given_type = Parameter(name, value=value).type_
+    if declared_type != given_type:
+        expected = _TYPE_NAMES.get(declared_type, declared_type.name)
+        msg = (f'{scenario.path}: key {key!r}: expected {expected}, got '
+               f'{type(value).__name__} {value!r}')
+        raise ScenarioError(msg)
+    return value
+
+
+def as_declared_type(declared: Parameter.Type, value: ParameterValue) -> ParameterValue:
+    """An integer (or list of numbers) as floats where ``declared`` is a float type.
+
+    YAML writes ``3`` for three, and ROS would refuse it for a double parameter; scenario and
+    sweep files both take it as ``3.0``. Other values are returned as they are.
+    """
+    if declared == Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(
+        value, bool
+    ):
+        return float(value)
+    if declared == Parameter.Type.DOUBLE_ARRAY and isinstance(value, list) and all(
+        isinstance(item, int | float) and not isinstance(item, bool) for item in value
+    ):
+        return [float(item) for item in value]
+    return value
+
+
+def declared_parameters(
+    specs: Sequence[NodeSpec] | None = None,
+    config: Path | None = None,
+    namespace: str = DEFAULT_NAMESPACE,
+) -> dict[str, dict[str, Parameter.Type]]:
+    """Every parameter each node declares after its parameter files, with its type.
+
+    The nodes are built once in a throwaway context (as ``check_scenario_overrides`` does);
+    sweeps use this to check their axes before any run.
+
+    Args:
+        specs: Nodes to read (simulator, controller and thruster allocator if None).
+        config: Directory of the parameter files (``config_dir()`` if None).
+        namespace: Namespace of the nodes.
+
+    Returns:
+        Node name to parameter name to declared type.
+
+    Raises:
+        GraphError: A node cannot be built from its parameter files.
+    """
+    specs = specs if specs is not None else graph_nodes(record=False)
+    config = config if config is not None else config_dir()
+    context = Context()
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    declared: dict[str, dict[str, Parameter.Type]] = {}
+    try:
+        for spec in specs:
+            node = make_node(spec, {}, config, namespace, context)
+            try:
+                declared[spec.name] = {
+                    name: parameter.type_
+                    for name, parameter in node.get_parameters_by_prefix('').items()
+                }
+            finally:
+                node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+    return declared
