@@ -126,6 +126,8 @@ class ControllerNode(LifecycleNode):
         try:
             node = validate_node_parameters(CONTROLLER_NODE_PARAMETER_SPECS, self._node_values)
             gains = ControllerParameters.from_flat_dict(self._gains)
+            # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
+            self.get_logger().info('loading the model and compiled kernels')
             try:
                 model = UvmsModel(UvmsParameters.from_flat_dict(self._robot))
             except ModelError as error:

@@ -131,6 +131,8 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def _configure(self) -> None:
         values = validate_node_parameters(ALLOCATOR_PARAMETER_SPECS, self._values)
+        # Seconds of silence otherwise (the URDF, the kernels from Numba's cache).
+        self.get_logger().info('loading the thruster model and compiled kernels')
         try:
             uvms = UvmsParameters.from_flat_dict(self._robot)
             layout = ThrusterLayout.from_parameters(uvms.thrusters)

@@ -57,6 +57,8 @@ class SimulatorNode(Node):
         except ModelError as exc:
             raise SimParameterError(f'invalid robot parameter: {exc}') from exc
         self._settings = cfg = SimulatorSettings.from_values(values)
+        # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
+        self.get_logger().info('loading the model and compiled kernels')
         plant = Plant(params, [0.0] * 9, cfg.physics_dt_ns)
         q0 = initial_coordinates(plant.model, cfg.vehicle_pose, cfg.joint_positions,
                                  cfg.ee_position if cfg.arm_from_ee_position else None)
