@@ -230,7 +230,7 @@ def _run_in_process(
     """Build and run the graph in this process; report the outcome."""
     from uvms_bringup.graph import GraphError, build_graph
     from uvms_bringup.launch_helpers import resolve_scenario_path
-    from uvms_bringup.scenario import ScenarioError, load_scenario
+    from uvms_bringup.scenario import ScenarioError, load_scenario, short_duration_warning
 
     command = args.command
     scenario = None
@@ -239,6 +239,8 @@ def _run_in_process(
             scenario = load_scenario(resolve_scenario_path(args.scenario))
             scenario = scenario.with_changes(duration_s=args.duration,
                                              seed=getattr(args, 'seed', None))
+            if warning := short_duration_warning(scenario, scenario.duration_s):
+                print(f'uvms {command}: warning: {warning}', file=sys.stderr)
         duration = args.duration if scenario is None else scenario.duration_s
         if args.quiet:
             _quiet_logs()

@@ -80,7 +80,7 @@ def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     from uvms_sweep.engine import SweepEngineError, run_sweep
     from uvms_sweep.sweep_file import SweepError, load_sweep
     from uvms_sweep.table import TableError
-    from uvms_sweep.validate import check_sweep
+    from uvms_sweep.validate import check_sweep, duration_warning
 
     # The nodes built to check the axes would log their start-up lines: only warnings.
     rclpy.logging.set_logger_level('uvms', rclpy.logging.LoggingSeverity.WARN)
@@ -92,6 +92,8 @@ def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     except GraphError as exc:
         _error(str(exc))
         return EXIT_FAILURE
+    if warning := duration_warning(sweep, scenario):
+        print(f'uvms sweep: warning: {warning}', file=sys.stderr)
     if stop.is_set():
         return EXIT_INTERRUPTED
     try:

@@ -4,26 +4,91 @@ Drawn on ``matplotlib.figure.Figure`` with the Agg canvas, without pyplot (as ``
 
 A cell (or a point of the line) is the mean of the metric over the seeds that ran. Cells
 where a seed failed are grey with a cross hatch (``xx``) and the label ``failed``; cells
-where a seed ran unstable (``sweep_table.stability``) carry a diagonal hatch (``//``), and
-the colour scale spans the other cells (an unstable cell beyond it shows saturated); in
-line plots failed points are red crosses at the bottom and unstable ones open red circles.
+where a seed ran unstable (``table.stability``) carry a red diagonal hatch (``//``), cells
+where a seed ended before settling (``table.ended_early``) an orange dotted hatch (``..``),
+and the colour scale spans the other cells (a marked cell beyond it shows saturated); in
+line plots failed points are red crosses at the bottom, unstable ones open red circles and
+those that ended early open orange squares. The legend lists the marks a figure uses.
 Sweeps over three or more axes get the table only.
+
+Legible at any grid size: a heatmap is at least ``_MIN_FIGSIZE_IN``, axis labels are the
+full parameter names wrapped at their dots and underscores, and the colour bar (line plots:
+the y axis) carries the metric's label and unit from ``uvms_analysis.report.COLUMNS``.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
+from uvms_analysis.report import COLUMNS
 
-from uvms_sweep.sweep_file import Sweep, SweepPoint, axis_labels
-from uvms_sweep.table import metric_value
+from uvms_sweep.sweep_file import Axis, Sweep, SweepPoint, axis_labels
+from uvms_sweep.table import ENDED_BEFORE_SETTLING, metric_value
 
 FIGURE_DIR = 'figures'
 _DPI = 110
+#: Smallest heatmap (width, height) in inches: room for wrapped labels and the legend.
+_MIN_FIGSIZE_IN = (6.4, 4.8)
+#: Characters per inch of a 10 pt axis label, to wrap a label to the length of its axis.
+_LABEL_CHARS_PER_IN = 11.0
+#: Marks of the cells: (legend label, face colour, hatch, edge colour).
+_FAILED = ('failed', '0.6', 'xx', '0.3')
+_UNSTABLE = ('unstable', 'none', '//', 'red')
+_ENDED = (ENDED_BEFORE_SETTLING, 'none', '..', 'darkorange')
+
+
+def metric_label(metric: str) -> str:
+    """A metric's heading and unit as ``uvms report`` shows them, e.g. ``overshoot (%)``.
+
+    Example:
+        >>> metric_label('settling_time_s')
+        'settling time (s)'
+    """
+    column = next((column for column in COLUMNS if column.key == metric), None)
+    if column is None:
+        return metric
+    label = column.label.replace('-\n', '').replace('\n', ' ')
+    return f'{label} ({column.unit})' if column.unit else label
+
+
+def wrap_name(name: str, width: int) -> str:
+    """A dotted parameter name on lines of at most ``width`` characters where it can be.
+
+    Lines break after a dot or an underscore, so that no part of the name is lost.
+
+    Example:
+        >>> print(wrap_name('controller.hybrid.force_derivative_cutoff_hz', 20))
+        controller.hybrid.
+        force_derivative_
+        cutoff_hz
+    """
+    lines = ['']
+    for piece in re.findall(r'[^._]+[._]?|[._]', name):
+        if lines[-1] and len(lines[-1]) + len(piece) > width:
+            lines.append('')
+        lines[-1] += piece
+    return '\n'.join(lines)
+
+
+def _axis_label(axis: Axis, length_in: float) -> str:
+    """An axis's full name wrapped to ``length_in`` inches, with its spacing if logarithmic."""
+    name = axis.name + (' (log spaced)' if axis.spacing == 'logspace' else '')
+    return wrap_name(name, max(12, int(length_in * _LABEL_CHARS_PER_IN)))
+
+
+def _legend(fig: Figure, marks: Sequence[tuple[str, str, str, str]]) -> None:
+    """Legend of the cell marks used, below the axes."""
+    if not marks:
+        return
+    handles = [Patch(facecolor=face, fill=face != 'none', hatch=hatch, edgecolor=edge,
+                     label=label) for label, face, hatch, edge in marks]
+    fig.legend(handles=handles, loc='lower center', ncol=len(handles), fontsize=8,
+               frameon=False)
 
 
 def draw_figures(
@@ -42,34 +107,43 @@ def draw_figures(
         return []
     out = directory / FIGURE_DIR
     out.mkdir(parents=True, exist_ok=True)
-    shape = tuple(len(axis.values) for axis in sweep.axes)
     files = []
     for metric in sweep.metrics:
-        total = np.zeros(shape)
-        count = np.zeros(shape)
-        failed = np.zeros(shape, dtype=bool)
-        unstable = np.zeros(shape, dtype=bool)
-        for point in points:
-            row = rows.get(point.point_id)
-            if row is None:
-                continue
-            if row['status'] != 'done':
-                failed[point.index] = True
-                continue
-            unstable[point.index] |= row.get('stable') == 'no'
-            value = metric_value(row, metric)
-            if value is not None:
-                total[point.index] += value
-                count[point.index] += 1
-        with np.errstate(invalid='ignore', divide='ignore'):
-            mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
         path = out / f'{metric}.png'
-        if len(sweep.axes) == 1:
-            _line(sweep, metric, mean, failed, unstable, path)
-        else:
-            _heatmap(sweep, metric, mean, failed, unstable, path)
+        metric_figure(sweep, points, rows, metric).savefig(path, dpi=_DPI)
         files.append(path)
     return files
+
+
+def metric_figure(
+    sweep: Sweep, points: Sequence[SweepPoint], rows: Mapping[str, Mapping[str, str]],
+    metric: str,
+) -> Figure:
+    """The figure of one metric over a sweep of one or two axes (see ``draw_figures``)."""
+    shape = tuple(len(axis.values) for axis in sweep.axes)
+    total = np.zeros(shape)
+    count = np.zeros(shape)
+    failed = np.zeros(shape, dtype=bool)
+    unstable = np.zeros(shape, dtype=bool)
+    ended = np.zeros(shape, dtype=bool)
+    for point in points:
+        row = rows.get(point.point_id)
+        if row is None:
+            continue
+        if row['status'] != 'done':
+            failed[point.index] = True
+            continue
+        unstable[point.index] |= row.get('stable') == 'no'
+        ended[point.index] |= row.get('reason') == ENDED_BEFORE_SETTLING
+        value = metric_value(row, metric)
+        if value is not None:
+            total[point.index] += value
+            count[point.index] += 1
+    with np.errstate(invalid='ignore', divide='ignore'):
+        mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    if len(sweep.axes) == 1:
+        return _line(sweep, metric, mean, failed, unstable, ended)
+    return _heatmap(sweep, metric, mean, failed, unstable, ended)
 
 
 def _title(sweep: Sweep, metric: str) -> str:
@@ -79,22 +153,24 @@ def _title(sweep: Sweep, metric: str) -> str:
 
 def _heatmap(
     sweep: Sweep, metric: str, mean: np.ndarray, failed: np.ndarray, unstable: np.ndarray,
-    path: Path,
-) -> None:
+    ended: np.ndarray,
+) -> Figure:
     """Heatmap: first axis along x, second along y, value labels in small grids."""
     x_axis, y_axis = sweep.axes
     nx, ny = mean.shape
-    fig = Figure(figsize=(1.2 + 0.9 * nx + 1.5, 1.2 + 0.6 * ny + 0.8))
+    width_in = max(1.2 + 0.9 * nx + 1.5, _MIN_FIGSIZE_IN[0])
+    height_in = max(1.2 + 0.6 * ny + 0.8, _MIN_FIGSIZE_IN[1])
+    fig = Figure(figsize=(width_in, height_in))
     ax = fig.subplots()
     grid = np.ma.masked_invalid(mean.T)
     # Colours span the stable cells, so that a diverged run does not flatten the map; the
-    # unstable cells beyond that range show saturated (their labels give the values).
-    steady = mean[np.isfinite(mean) & ~unstable]
+    # marked cells beyond that range show saturated (their labels give the values).
+    steady = mean[np.isfinite(mean) & ~unstable & ~ended]
     limits = (float(steady.min()), float(steady.max())) if steady.size else (None, None)
     image = ax.imshow(grid, origin='lower', aspect='auto', cmap='viridis', vmin=limits[0],
                       vmax=limits[1])
     ax.set_facecolor('0.85')
-    fig.colorbar(image, ax=ax, label=metric)
+    fig.colorbar(image, ax=ax, label=metric_label(metric))
     for i in range(nx):
         for j in range(ny):
             if failed[i, j]:
@@ -102,9 +178,10 @@ def _heatmap(
                                        hatch='xx', edgecolor='0.3', linewidth=0.0))
                 ax.text(i, j, 'failed', ha='center', va='center', fontsize=7, color='k')
                 continue
-            if unstable[i, j]:
-                ax.add_patch(Rectangle((i - 0.5, j - 0.5), 1, 1, fill=False, hatch='//',
-                                       edgecolor='red', linewidth=0.0))
+            for marked, (_, _, hatch, edge) in ((unstable, _UNSTABLE), (ended, _ENDED)):
+                if marked[i, j]:
+                    ax.add_patch(Rectangle((i - 0.5, j - 0.5), 1, 1, fill=False, hatch=hatch,
+                                           edgecolor=edge, linewidth=0.0))
             if np.isfinite(mean[i, j]) and nx * ny <= 100:
                 value = mean[i, j]
                 shade = float(np.clip(image.norm(value), 0.0, 1.0))
@@ -115,27 +192,27 @@ def _heatmap(
                 ax.text(i, j, 'n/a', ha='center', va='center', fontsize=7, color='0.4')
     ax.set_xticks(range(nx), axis_labels(x_axis), rotation=45 if nx > 6 else 0)
     ax.set_yticks(range(ny), axis_labels(y_axis))
-    ax.set_xlabel(x_axis.name + (' (log spaced)' if x_axis.spacing == 'logspace' else ''))
-    ax.set_ylabel(y_axis.name + (' (log spaced)' if y_axis.spacing == 'logspace' else ''))
+    # Axes span about the figure less the colour bar and margins (tight_layout fits them).
+    ax.set_xlabel(_axis_label(x_axis, width_in - 2.5))
+    ax.set_ylabel(_axis_label(y_axis, height_in - 1.8))
     ax.set_title(_title(sweep, metric), fontsize=10)
-    handles = [Patch(facecolor='0.6', hatch='xx', edgecolor='0.3', label='failed'),
-               Patch(fill=False, hatch='//', edgecolor='red', label='unstable')]
     fig.tight_layout(rect=(0.0, 0.07, 1.0, 1.0))
-    fig.legend(handles=handles, loc='lower center', ncol=2, fontsize=8, frameon=False)
-    fig.savefig(path, dpi=_DPI)
+    _legend(fig, [mark for used, mark in ((failed, _FAILED), (unstable, _UNSTABLE),
+                                          (ended, _ENDED)) if used.any()])
+    return fig
 
 
 def _line(
     sweep: Sweep, metric: str, mean: np.ndarray, failed: np.ndarray, unstable: np.ndarray,
-    path: Path,
-) -> None:
+    ended: np.ndarray,
+) -> Figure:
     """Line plot over one axis: numeric values on their own scale, others by position."""
     (axis,) = sweep.axes
     numeric = all(isinstance(v, int | float) and not isinstance(v, bool) for v in axis.values)
     x = np.array(axis.values, dtype=float) if numeric else np.arange(len(axis.values), dtype=float)
     fig = Figure(figsize=(6.4, 4.0))
     ax = fig.subplots()
-    ax.plot(x, mean, 'o-', color='tab:blue', label=metric)
+    ax.plot(x, mean, 'o-', color='tab:blue', label=metric_label(metric))
     finite = mean[np.isfinite(mean)]
     bottom = float(finite.min()) if finite.size else 0.0
     if failed.any():
@@ -144,14 +221,17 @@ def _line(
     if unstable.any():
         ax.plot(x[unstable], mean[unstable], 'o', markerfacecolor='none', color='red',
                 markersize=12, label='unstable')
+    if ended.any():
+        ax.plot(x[ended], mean[ended], 's', markerfacecolor='none', color='darkorange',
+                markersize=12, label=ENDED_BEFORE_SETTLING)
     if axis.spacing == 'logspace':
         ax.set_xscale('log')
     if not numeric:
         ax.set_xticks(x, axis_labels(axis))
-    ax.set_xlabel(axis.name)
-    ax.set_ylabel(metric)
+    ax.set_xlabel(_axis_label(axis, 5.0))
+    ax.set_ylabel(metric_label(metric))
     ax.set_title(_title(sweep, metric), fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=_DPI)
+    return fig

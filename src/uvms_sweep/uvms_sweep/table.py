@@ -1,10 +1,12 @@
 """The table of a sweep (DIR/points.csv): one row per point, rewritten whole after each point.
 
 Columns: ``point_id``, one per axis (its dotted name), ``seed``, ``status`` (``done`` or
-``failed``), ``reason`` (why it failed: ``timeout`` or the run's error line), ``stable``
-(``yes``, ``no`` or empty, see ``stability``), ``wall_time_s`` (the point's process, start-up
-included), ``sim_time_s``, ``finished_utc``, then every metric of ``uvms report --format csv``
-(empty where n/a). Values are written with full precision (``repr``); list values as JSON.
+``failed``), ``reason`` (why it failed: ``timeout`` or the run's error line; for a done
+point why its force metrics mean little: ``ended before settling``, see ``ended_early``),
+``stable`` (``yes``, ``no`` or empty, see ``stability``; empty where the run ended early),
+``wall_time_s`` (the point's process, start-up included), ``sim_time_s``, ``finished_utc``,
+then every metric of ``uvms report --format csv`` (empty where n/a). Values are written with
+full precision (``repr``); list values as JSON.
 
 The file is replaced atomically (write to a temporary file, then rename), so an interrupted
 sweep leaves the table of the points finished before it, never half a row.
@@ -29,6 +31,11 @@ FIXED_COLUMNS = ('status', 'reason', 'stable', 'wall_time_s', 'sim_time_s', 'fin
 UNSTABLE_CONTACTS = 2
 #: Peak force over F_d above which the contact force counts as surging (unstable).
 SURGE_RATIO = 2.0
+#: Reason of a done point whose run ended in its only contact before the force settled.
+ENDED_BEFORE_SETTLING = 'ended before settling'
+#: Gap between the end of the last contact and the run's end within which the run ends in
+#: contact (s): the recorder's last samples may trail the simulated end by a few periods.
+END_IN_CONTACT_SLACK_S = 0.1
 
 
 class TableError(RuntimeError):
@@ -61,6 +68,30 @@ def stability(metrics: Mapping[str, float | None]) -> str:
     return 'yes'
 
 
+def ended_early(metrics: Mapping[str, float | None], sim_time_s: float | None) -> str:
+    """``ENDED_BEFORE_SETTLING`` if the run ended too early for its force metrics, else ''.
+
+    Too early: the run ends in its only contact interval and the force has no settling time,
+    as a run does that stops during the force ramp after the first contact (F_d still
+    rising) or before the force settled at F_d. Its desired force (the median F_d in
+    contact), overshoot and settling time describe that transient, not the controller, so
+    the point is marked with this reason instead of a ``stability`` verdict. A run that
+    leaves the wall before its end without settling (a wall too soft for F_d) is judged.
+
+    Example:
+        >>> ended_early({'contact_count': 1.0, 'first_contact_s': 8.05,
+        ...              'contact_duration_s': 0.95, 'settling_time_s': None}, 9.0)
+        'ended before settling'
+    """
+    first = metrics.get('first_contact_s')
+    duration = metrics.get('contact_duration_s')
+    if (metrics.get('contact_count') != 1.0 or metrics.get('settling_time_s') is not None
+            or first is None or duration is None or sim_time_s is None):
+        return ''
+    ends_in_contact = first + duration >= sim_time_s - END_IN_CONTACT_SLACK_S
+    return ENDED_BEFORE_SETTLING if ends_in_contact else ''
+
+
 def read_table(directory: Path, sweep: Sweep) -> dict[str, dict[str, str]]:
     """Rows of an existing table by point id (empty if there is none).
 
@@ -77,7 +108,9 @@ def read_table(directory: Path, sweep: Sweep) -> dict[str, dict[str, str]]:
             rows = [row for row in reader if row.get('point_id')]
         for row in rows:  # derived, so that a table of an older definition is brought up to date
             if row.get('status') == 'done':
-                row['stable'] = stability({key: metric_value(row, key) for key in METRIC_KEYS})
+                metrics = {key: metric_value(row, key) for key in METRIC_KEYS}
+                row['reason'] = ended_early(metrics, metric_value(row, 'sim_time_s'))
+                row['stable'] = '' if row['reason'] else stability(metrics)
     except (OSError, csv.Error) as exc:
         raise TableError(f'{path}: cannot read the sweep table: {exc}') from exc
     if header != columns(sweep):
@@ -94,9 +127,12 @@ def outcome_row(
 ) -> dict[str, str]:
     """The table row of a finished point."""
     metrics = outcome.get('metrics') or {}
+    reason, stable = _one_line(outcome.get('reason', '')), ''
+    if outcome['status'] == 'done':
+        reason = ended_early(metrics, outcome.get('sim_time_s'))
+        stable = '' if reason else stability(metrics)
     row = {'point_id': outcome['point_id'], 'seed': str(seed), 'status': outcome['status'],
-           'reason': _one_line(outcome.get('reason', '')),
-           'stable': stability(metrics) if outcome['status'] == 'done' else '',
+           'reason': reason, 'stable': stable,
            'wall_time_s': _cell(outcome.get('wall_time_s')),
            'sim_time_s': _cell(outcome.get('sim_time_s')), 'finished_utc': finished_utc}
     for axis in sweep.axes:

@@ -4,6 +4,9 @@ Each axis must name a parameter its node declares (after robot.yaml and controll
 give values of the declared type; integers on a float parameter are taken as floats. Ranges
 are not checked here: a value outside a parameter's declared range fails its point at
 start-up, which the sweep records as failed with the node's message.
+
+``duration_warning`` warns (without stopping the sweep) when the duration ends before the
+base scenario's force is reached, estimated before the run (``scenario.contact_estimate``).
 """
 
 from __future__ import annotations
@@ -12,8 +15,13 @@ import difflib
 from dataclasses import replace
 
 from rclpy.parameter import Parameter
-from uvms_bringup.graph import as_declared_type, declared_parameters
-from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario
+from uvms_bringup.declared import as_declared_type, declared_parameters
+from uvms_bringup.scenario import (
+    ParameterValue,
+    Scenario,
+    load_scenario,
+    short_duration_warning,
+)
 
 from uvms_sweep.sweep_file import Axis, Sweep, SweepError
 
@@ -49,6 +57,21 @@ def check_sweep(sweep: Sweep) -> tuple[Sweep, Scenario]:
     return replace(sweep, axes=axes), scenario
 
 
+def duration_warning(sweep: Sweep, scenario: Scenario) -> str | None:
+    """A warning if each point's run ends before F_d is reached, else None.
+
+    The first contact is estimated on the base scenario (``scenario.contact_estimate``: X_d
+    reaching the wall); axes that move the wall or the start are not taken into account.
+    Such points are marked ``ended before settling`` in the table (``table.ended_early``).
+    """
+    duration_s = scenario.duration_s if sweep.duration_s is None else sweep.duration_s
+    why = short_duration_warning(scenario, duration_s)
+    if why is None:
+        return None
+    return (f'{sweep.path}: duration_s: {why}; points that end in contact before the force '
+            'settles are marked "ended before settling"')
+
+
 def _checked_axis(
     sweep: Sweep, axis: Axis, declared: dict[str, dict[str, Parameter.Type]]
 ) -> Axis:
@@ -71,7 +94,7 @@ def _coerce(
     """A value in the declared type of ``node``'s parameter ``name``, or SweepError.
 
     Integers become floats for a float parameter, in sweep and scenario files alike
-    (``graph.as_declared_type``).
+    (``declared.as_declared_type``).
     """
     if name not in declared:
         close = difflib.get_close_matches(name, list(declared), n=3)
