@@ -190,9 +190,9 @@ def test_launch_with_foxglove_serves_the_process_graph(tmp_path: Path) -> None:
     env = dict(os.environ, ROS_DOMAIN_ID=str(random.SystemRandom().randint(101, 200)),
                PYTHONUNBUFFERED='1')
     process = subprocess.Popen(
-        [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'free_motion', '--foxglove',
-         str(port)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
-        cwd=REPO)
+        [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'free_motion', '--duration', '0',
+         '--foxglove', str(port)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env=env, cwd=REPO)
     try:
         client = connect_when_up(f'ws://127.0.0.1:{port}')
         client.read_advertisements(set(ADVERTISED))
