@@ -10,10 +10,13 @@ from __future__ import annotations
 import itertools
 import os
 import random
+import re
 import signal
 import socket
 import subprocess
 import sys
+import threading
+import time
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -157,7 +160,7 @@ def test_a_client_leaving_changes_nothing_in_the_run(live: LiveRun) -> None:
     assert max(recorded(live.recording, WRENCH)) > first_last
     assert live.status == 130, live.output
     assert 'Traceback' not in live.output
-    assert 'left (disconnected or unsubscribed from every topic)' in live.output
+    assert 'left; the run goes on' in live.output
 
 
 def test_port_in_use_leaves_the_run_unchanged_with_one_log_line(tmp_path: Path) -> None:
@@ -216,3 +219,96 @@ def test_launch_with_foxglove_serves_the_process_graph(tmp_path: Path) -> None:
     assert process.returncode == 130, output
     assert '[foxglove_server-5]' in output
     assert 'Traceback' not in output
+
+
+@dataclass
+class ServerLog:
+    """The log of a foxglove_server node that two clients joined and left, by client address."""
+
+    dropped: str
+    quiet: str
+    status: int
+    output: str
+
+    def lines_of(self, address: str) -> list[str]:
+        """The output lines that name a client address."""
+        return [line for line in self.output.splitlines() if address in line]
+
+
+def wait_for(lines: list[str], text: str, timeout_s: float = 60.0) -> None:
+    """Wait until a line holding ``text`` has been read."""
+    deadline = time.monotonic() + timeout_s
+    while not any(text in line for line in list(lines)):
+        assert time.monotonic() < deadline, f'no line with {text!r} in:\n' + ''.join(lines)
+        time.sleep(0.05)
+
+
+@pytest.fixture(scope='module')
+def server_log() -> Iterator[ServerLog]:
+    """A foxglove_server node alone, two clients in turn, then SIGINT.
+
+    The first subscribes and drops without a closing handshake (as a killed tab does); the
+    second connects and closes without subscribing.
+    """
+    port = free_port()
+    env = dict(os.environ, ROS_DOMAIN_ID=str(random.SystemRandom().randint(101, 200)),
+               PYTHONUNBUFFERED='1')
+    process = subprocess.Popen(
+        [sys.executable, '-m', 'uvms_viz.foxglove_server_node', '--ros-args',
+         '-r', '__ns:=/uvms', '-p', f'port:={port}'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO)
+    lines: list[str] = []
+    assert process.stdout is not None
+    reader = threading.Thread(target=lambda: lines.extend(process.stdout or ()), daemon=True)
+    reader.start()
+    try:
+        url = f'ws://127.0.0.1:{port}'
+        client = connect_when_up(url)
+        client.read_advertisements({WRENCH})
+        client.subscribe(WRENCH)
+        host, client_port = client.connection.socket.getsockname()[:2]
+        dropped = f'{host}:{client_port}'
+        wait_for(lines, f'{dropped} joined')
+        # A killed tab: the kernel ends the TCP connection, no WebSocket close frame is sent.
+        client.connection.socket.shutdown(socket.SHUT_RDWR)
+        client.connection.socket.close()
+        wait_for(lines, f'{dropped} left')
+        quiet_client = connect_when_up(url)
+        quiet_client.read_advertisements({WRENCH})
+        host, client_port = quiet_client.connection.socket.getsockname()[:2]
+        quiet = f'{host}:{client_port}'
+        quiet_client.close()
+        wait_for(lines, f'{quiet} left')
+        process.send_signal(signal.SIGINT)
+        process.wait(timeout=60.0)
+        reader.join(timeout=10.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    yield ServerLog(dropped, quiet, process.returncode, ''.join(lines))
+
+
+#: A node log line as rclpy formats it: [LEVEL] [time] [logger]: message.
+NODE_LINE = re.compile(r'^\[(INFO|WARN|ERROR|DEBUG)\] \[[0-9.]+\] \[uvms\.foxglove_server\]: ')
+
+
+def test_a_dropped_connection_is_one_formatted_line(server_log: ServerLog) -> None:
+    """A client gone without a closing handshake: joined, then one 'left: connection dropped'."""
+    joined, left = server_log.lines_of(server_log.dropped)
+    assert NODE_LINE.match(joined) and joined.endswith(f'Foxglove client {server_log.dropped} '
+                                                       'joined')
+    assert NODE_LINE.match(left), left
+    assert f'Foxglove client {server_log.dropped} left: connection dropped (' in left
+    assert left.endswith('; the run goes on')
+    unformatted = [line for line in server_log.output.splitlines()
+                   if line.strip() and not NODE_LINE.match(line)]
+    assert not unformatted, server_log.output
+    assert server_log.status == 0, server_log.output
+
+
+def test_a_client_that_never_subscribed_joins_and_leaves(server_log: ServerLog) -> None:
+    """A client that only connected and closed: one join line and one leave line."""
+    lines = [NODE_LINE.sub('', line) for line in server_log.lines_of(server_log.quiet)]
+    assert lines == [f'Foxglove client {server_log.quiet} joined',
+                     f'Foxglove client {server_log.quiet} left; the run goes on']

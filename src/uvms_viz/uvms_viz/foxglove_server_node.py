@@ -5,15 +5,18 @@ Foxglove app through the foxglove-sdk server, with the ros2msg schema text the r
 carry (``uvms_recording.typestore.message_definition``). The server binds 127.0.0.1 unless
 the ``host`` parameter says otherwise (then with a warning). Nothing of the graph changes
 when no one watches: the other nodes do not know this one exists. A port already in use
-leaves the node idle with one error line, and the run goes on; a client leaving is one
-info line. Latched topics (/tf_static, /robot_description) are sent again to each client
-that subscribes to them, as a transient-local subscription would receive them.
-``/diagnostics`` reports the server's address, its clients and the forwarded message rate.
+leaves the node idle with one error line, and the run goes on. Every client joining and
+leaving is one info line, a dropped connection (a killed tab) included, with its error
+(``foxglove_log``: the SDK's own log, formatted). Latched topics (/tf_static,
+/robot_description) are sent again to each client that subscribes to them, as a
+transient-local subscription would receive them. ``/diagnostics`` reports the server's
+address, its clients (subscribed, and connected) and the forwarded message rate.
 """
 
 from __future__ import annotations
 
 import functools
+import logging
 import sys
 import threading
 from typing import Any
@@ -34,6 +37,7 @@ from uvms_recording.recorder_node import (
 from uvms_recording.typestore import InterfaceError, message_definition
 
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
+from uvms_viz.foxglove_log import SDK_LOGGER, SdkLogHandler, capture_sdk_log
 
 #: Hosts that keep the server on this machine.
 LOOPBACK_HOSTS = ('127.0.0.1', 'localhost', '::1')
@@ -96,10 +100,9 @@ class _Listener:
             left = not topics and client.id in self._subscribed
             if left:
                 del self._subscribed[client.id]
-        if left:
-            self._node.get_logger().info(
-                f'Foxglove client {client.id} left (disconnected or unsubscribed from every '
-                'topic); the run goes on')
+        if left:  # the SDK's log gives the leave line of a client that disconnects
+            self._node.get_logger().debug(
+                f'Foxglove client {client.id} unsubscribed from every topic')
 
 
 class FoxgloveServerNode(Node):
@@ -131,6 +134,9 @@ class FoxgloveServerNode(Node):
 
         import foxglove
 
+        capture_sdk_log()  # before the process's first server: the SDK takes it only then
+        self._sdk_log = SdkLogHandler(self._log_line)
+        logging.getLogger(SDK_LOGGER).addHandler(self._sdk_log)
         self._foxglove_context = foxglove.Context()
         self._channels = {
             topic: foxglove.Channel(
@@ -178,6 +184,18 @@ class FoxgloveServerNode(Node):
         """The port the server listens on, None if it did not start."""
         return None if self._server is None else int(self._server.port)
 
+    def _log_line(self, level: int, message: str) -> None:
+        """A line of the SDK's log (``foxglove_log``) through this node's logger."""
+        logger = self.get_logger()
+        if level >= logging.ERROR:
+            logger.error(message)
+        elif level >= logging.WARNING:
+            logger.warning(message)
+        elif level >= logging.INFO:
+            logger.info(message)
+        else:
+            logger.debug(message)
+
     def _on_message(self, topic: str, data: bytes) -> None:
         now_ns = self.get_clock().now().nanoseconds
         if topic in self._latched_topics:
@@ -196,7 +214,8 @@ class FoxgloveServerNode(Node):
     def _report(self) -> Report:
         """/diagnostics: 'running' with address, clients and forwarded rate; WARN unserved."""
         values = {'address': self._address, 'topics': len(self._channels),
-                  'clients': self._listener.clients, 'forwarded_rate_hz':
+                  'clients': self._listener.clients,
+                  'connected_clients': self._sdk_log.connected, 'forwarded_rate_hz':
                   self._forward_meter.rate_hz(self._forwarded,
                                               self.get_clock().now().nanoseconds)}
         if self._server is None:
@@ -208,6 +227,7 @@ class FoxgloveServerNode(Node):
         if self._server is not None:
             self._server.stop()
             self._server = None
+        logging.getLogger(SDK_LOGGER).removeHandler(self._sdk_log)
         super().destroy_node()
 
 
