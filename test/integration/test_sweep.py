@@ -3,7 +3,9 @@
 Every point is a genuine lockstep graph run (rclpy, Fast DDS on loopback) in its own process
 and DDS domain, short (0.3 s simulated) so that the module stays cheap. One local Ray serves
 the module (started once, as ``uvms sweep`` starts it); the Ctrl-C test runs the command in
-a process of its own, which starts its own.
+a process of its own, which starts its own. The ``--address`` tests run the command against
+heads started with ``ray start --head`` on 127.0.0.1, each with a HOME and Ray temp dir of its
+own.
 """
 
 from __future__ import annotations
@@ -11,13 +13,16 @@ from __future__ import annotations
 import csv
 import io
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 import uuid
 from collections.abc import Iterator
-from contextlib import redirect_stdout
+from contextlib import contextmanager, redirect_stdout
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -294,39 +299,159 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
-def test_address_joins_an_existing_ray_cluster(tmp_path: Path) -> None:
-    """`--address` runs the points on a cluster started apart (`ray start --head`), left up.
+#: Two points, both done: the sweep run on a cluster started apart.
+PAIR = GRID.replace('record: true', 'record: false').replace(f'{MASS}: [1.0, 20.0]',
+                                                               f'{MASS}: [1.0]')
+#: Wall-clock limit of a head node's start-up (s).
+HEAD_START_S = 60.0
 
-    The head runs in the foreground (``--block``) so that this test stops exactly the
-    processes it started. Token authentication is off on both sides (RAY_AUTH_MODE), as a
-    user of an authenticated cluster would instead give the driver the cluster's token.
+
+@dataclass
+class RayHead:
+    """A `ray start --head` of a test: its process, port, HOME and Ray temp dir."""
+
+    process: subprocess.Popen[bytes]
+    port: int
+    home: Path
+    temp_dir: Path
+
+
+def command_environment(home: Path, **extra: str) -> dict[str, str]:
+    """This environment without Ray's variables, with HOME, the project's sources and MARK.
+
+    The local Ray of this module leaves RAY_AUTH_MODE=token (and RAY_CLIENT_MODE) here: the
+    cluster tests' commands get only the Ray settings each test gives, as a user's would.
+    """
+    name, value = MARK.split('=')
+    env = {key: text for key, text in os.environ.items() if not key.startswith('RAY_')}
+    return {**env, 'HOME': str(home), 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p),
+            name: value, 'RAY_USAGE_STATS_ENABLED': '0', **extra}
+
+
+def processes_of(temp_dir: Path) -> list[int]:
+    """Pids of the processes whose command line names ``temp_dir`` (a head's Ray processes)."""
+    pids = []
+    for entry in Path('/proc').iterdir():
+        try:
+            if entry.name.isdigit() and str(temp_dir).encode() in (entry / 'cmdline').read_bytes():
+                pids.append(int(entry.name))
+        except OSError:
+            continue
+    return pids
+
+
+@contextmanager
+def ray_head(home: Path, **extra: str) -> Iterator[RayHead]:
+    """`ray start --head` on 127.0.0.1 and a free port, 2 CPUs, stopped on exit.
+
+    With HOME ``home`` (Ray's token file is $HOME/.ray/auth_token) and a Ray temp dir of its
+    own (sessions, sockets, the address file), so that it meets no other Ray. It runs in the
+    foreground (``--block``): SIGTERM to it stops exactly the processes it started, where
+    `ray stop` would stop every Ray process on the machine, other tests' too.
     """
     port = free_port()
-    name, value = MARK.split('=')
-    env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p), name: value,
-           'RAY_AUTH_MODE': 'disabled', 'RAY_USAGE_STATS_ENABLED': '0'}
+    temp_dir = Path(tempfile.mkdtemp(prefix='uvms-ray-', dir='/tmp'))  # socket paths <= 107
     ray_cli = Path(sys.executable).parent / 'ray'
-    head = subprocess.Popen(
-        [str(ray_cli), 'start', '--head', '--block', '--node-ip-address=127.0.0.1',
-         f'--port={port}', '--num-cpus=2', '--include-dashboard=false',
-         '--disable-usage-stats'], env=env, stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL)
+    log = temp_dir / 'head.log'
+    with log.open('wb') as file:
+        process = subprocess.Popen(
+            [str(ray_cli), 'start', '--head', '--block', '--node-ip-address=127.0.0.1',
+             f'--port={port}', '--num-cpus=2', '--include-dashboard=false',
+             f'--temp-dir={temp_dir}'], env=command_environment(home, **extra), stdout=file,
+            stderr=subprocess.STDOUT)
     try:
-        text = GRID.replace('record: true', 'record: false')
-        path = write(tmp_path, text)
-        process = subprocess.run(
-            [sys.executable, '-m', 'uvms_cli.cli', 'sweep', str(path), '--out',
-             str(tmp_path / 'out'), '--address', f'127.0.0.1:{port}', '--quiet'],
-            capture_output=True, text=True, env=env, timeout=PROCESS_TIMEOUT_S)
-        assert process.returncode == 0, process.stderr
-        rows = read_rows(tmp_path / 'out')
-        assert sorted(row['status'] for row in rows) == ['done', 'done', 'failed', 'failed']
-        assert head.poll() is None  # the cluster is the user's: still running
+        deadline = time.monotonic() + HEAD_START_S
+        while not (temp_dir / 'ray_current_cluster').is_file():  # written once it runs
+            assert process.poll() is None, log.read_text()
+            assert time.monotonic() < deadline, log.read_text()
+            time.sleep(0.2)
+        yield RayHead(process, port, home, temp_dir)
     finally:
-        head.send_signal(signal.SIGTERM)
-        head.wait(timeout=PROCESS_TIMEOUT_S)
-        # `ray start` leaves its address for later ray.init() calls; this one is gone.
-        current = Path('/tmp/ray/ray_current_cluster')
-        if current.is_file() and current.read_text().strip() == f'127.0.0.1:{port}':
-            current.unlink()
+        process.send_signal(signal.SIGTERM)
+        process.wait(timeout=PROCESS_TIMEOUT_S)
+        deadline = time.monotonic() + 10.0
+        while processes_of(temp_dir) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        left = processes_of(temp_dir)
+        for pid in left:
+            os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(temp_dir, ignore_errors=True)
+        assert left == [], f'Ray processes of {temp_dir} left after the head stopped'
+
+
+@pytest.fixture(scope='module')
+def token_head(tmp_path_factory: pytest.TempPathFactory) -> Iterator[RayHead]:
+    """A head with Ray 2.60's default authentication where a token exists: token auth on.
+
+    Its HOME holds ~/.ray/auth_token, written by `ray get-auth-token --generate` (as a first
+    local `ray.init()`, `uvms sweep` without --address for one, would write it); `ray start`
+    then turns token authentication on by itself. No RAY_AUTH_* variable is set.
+    """
+    home = tmp_path_factory.mktemp('head_home')
+    subprocess.run([str(Path(sys.executable).parent / 'ray'), 'get-auth-token', '--generate'],
+                   env=command_environment(home), capture_output=True, check=True,
+                   timeout=PROCESS_TIMEOUT_S)
+    with ray_head(home) as head:
+        log = (head.temp_dir / 'head.log').read_text()
+        assert 'Token authentication is enabled for this Ray cluster' in log, log
+        yield head
+
+
+def sweep_on(
+    head: RayHead, out: Path, home: Path, **extra: str
+) -> subprocess.CompletedProcess[str]:
+    """`uvms sweep PAIR --address 127.0.0.1:PORT` run as a user would, with HOME ``home``."""
+    path = write(out.parent, PAIR)
+    return subprocess.run(
+        [sys.executable, '-m', 'uvms_cli.cli', 'sweep', str(path), '--out', str(out),
+         '--address', f'127.0.0.1:{head.port}', '--quiet'], capture_output=True, text=True,
+        env=command_environment(home, **extra), timeout=PROCESS_TIMEOUT_S)
+
+
+def test_address_joins_a_cluster_with_default_token_authentication(
+    token_head: RayHead, tmp_path: Path
+) -> None:
+    """`--address` to a `ray start --head` with token auth: both points done there, head left up.
+
+    The driver has only what a user on the head's machine has: ~/.ray/auth_token.
+    """
+    process = sweep_on(token_head, tmp_path / 'out', token_head.home)
+    assert process.returncode == 0, process.stderr
+    rows = read_rows(tmp_path / 'out')
+    assert [row['status'] for row in rows] == ['done', 'done'], [row['reason'] for row in rows]
+    assert token_head.process.poll() is None  # the cluster is the user's: still running
+    assert point_processes() == []
+
+
+def test_address_join_without_the_token_fails_naming_the_token_settings(
+    token_head: RayHead, tmp_path: Path
+) -> None:
+    """A driver with no token (another HOME, no RAY_AUTH_*): exit 1, one line saying what to set.
+
+    The head refuses every attempt alike, so one attempt instead of Ray's 20 (1 s apart).
+    """
+    home = tmp_path / 'home'
+    home.mkdir()
+    process = sweep_on(token_head, tmp_path / 'out', home, RAY_gcs_server_port_wait_time_s='1')
+    assert process.returncode == 1, process.stderr
+    errors = [line for line in process.stderr.splitlines() if 'uvms sweep: error' in line]
+    assert errors == [process.stderr.strip().splitlines()[-1]], process.stderr
+    (error,) = errors
+    assert error.startswith(f'uvms sweep: error: cannot join the Ray cluster at '
+                            f'127.0.0.1:{token_head.port}: it uses token authentication and '
+                            'this driver has no token: '), error
+    assert all(setting in error for setting in
+               ('~/.ray/auth_token', 'RAY_AUTH_TOKEN=', 'RAY_AUTH_TOKEN_PATH=')), error
+    assert not (tmp_path / 'out' / TABLE_NAME).exists()
+
+
+def test_address_joins_a_cluster_without_authentication_though_a_token_is_here(
+    token_head: RayHead, tmp_path: Path
+) -> None:
+    """A head with RAY_AUTH_MODE=disabled ignores the token the driver finds and sends."""
+    with ray_head(token_head.home, RAY_AUTH_MODE='disabled') as head:
+        process = sweep_on(head, tmp_path / 'out', token_head.home)
+    assert process.returncode == 0, process.stderr
+    rows = read_rows(tmp_path / 'out')
+    assert [row['status'] for row in rows] == ['done', 'done'], [row['reason'] for row in rows]
     assert point_processes() == []

@@ -18,6 +18,12 @@ so GCS, raylet, object manager and workers listen on 127.0.0.1 only; no dashboar
 HTTP proxy on a closed loopback port (127.0.0.1:9, loopback exempt) for Ray's own processes,
 because its usage-stats module asks the cloud metadata address 169.254.169.254 and
 metadata.google.internal which cloud it runs on even with usage statistics off.
+
+Joining a cluster (``--address``), Ray 2.60: ``ray start --head`` turns token authentication
+on whenever a token exists on its machine (~/.ray/auth_token, which a local ``ray.init()``
+writes), but a driver sends its token only with RAY_AUTH_MODE=token, which
+``ray.init(address=...)`` never sets by itself; so ``join_ray`` sets it where it is unset and
+Ray would find a token (``ray_token_source``), and names the missing setting when a join fails.
 """
 
 from __future__ import annotations
@@ -56,6 +62,9 @@ LOCAL_RAY_ENVIRONMENT = {
     'no_proxy': '127.0.0.1,localhost,::1',
     'NO_PROXY': '127.0.0.1,localhost,::1',
 }
+#: How a driver gives a cluster its token, in one phrase for the join errors (docs/sweeps.md).
+_TOKEN_HOW = ("put the cluster's token (`ray get-auth-token` on its head node) in "
+              '~/.ray/auth_token, or set RAY_AUTH_TOKEN=<token> or RAY_AUTH_TOKEN_PATH=<file>')
 #: Object store of a local Ray (bytes): recordings pass through it, a few MB each.
 LOCAL_OBJECT_STORE_BYTES = 256 * 2**20
 #: Wall time given to stopped tasks to end their point processes before a forced kill (s).
@@ -118,14 +127,78 @@ def start_local_ray(workers: int) -> Any:
 
 
 def join_ray(address: str) -> Any:
-    """Join an existing Ray cluster at ``address`` (``ray.init(address=...)``)."""
+    """Join an existing Ray cluster at ``address``, with the token Ray finds, if any.
+
+    RAY_AUTH_MODE=token is set where RAY_AUTH_MODE is unset and ``ray_token_source`` finds a
+    token (see the module docstring); a cluster without authentication ignores the token.
+
+    Raises:
+        SweepEngineError: The join failed; one line, naming the setting to give where the
+            cluster's token authentication refused the driver.
+    """
     os.environ.setdefault('RAY_USAGE_STATS_ENABLED', '0')
+    token = ray_token_source(os.environ)
+    refresh = False
+    if token and 'RAY_AUTH_MODE' not in os.environ:
+        os.environ['RAY_AUTH_MODE'] = 'token'
+        refresh = 'ray' in sys.modules
+    mode = os.environ.get('RAY_AUTH_MODE', '').lower() or None
+    if mode == 'token' and token is None:
+        raise SweepEngineError(f'cannot join the Ray cluster at {address}: RAY_AUTH_MODE=token '
+                               f'but no token here: {_TOKEN_HOW}')
     ray = _import_ray()
+    if refresh:
+        # Ray reads RAY_AUTH_MODE into its config at import; Ray itself refreshes it so.
+        from ray._raylet import Config
+        Config.initialize('')
     try:
         ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
-    except (ConnectionError, RuntimeError, ValueError) as exc:
-        raise SweepEngineError(f'cannot join the Ray cluster at {address}: {exc}') from exc
+    except (ConnectionError, RuntimeError, ValueError, ray.exceptions.RayError) as exc:
+        raise SweepEngineError(_join_error(address, exc, token, mode)) from exc
     return ray
+
+
+def ray_token_source(environ: Mapping[str, str]) -> str | None:
+    """Where Ray 2.60 takes the token a driver sends, in its order; None: nowhere.
+
+    RAY_AUTH_TOKEN; else the first line of the file RAY_AUTH_TOKEN_PATH names; else
+    $HOME/.ray/auth_token (``ray get-auth-token --generate`` and a local ``ray.init()`` write
+    it, ``ray start`` reads it).
+
+    Raises:
+        SweepEngineError: RAY_AUTH_TOKEN_PATH names a missing or empty file (Ray would abort).
+    """
+    if environ.get('RAY_AUTH_TOKEN', '').strip():
+        return 'RAY_AUTH_TOKEN'
+    if path := environ.get('RAY_AUTH_TOKEN_PATH', ''):
+        if not _first_line(Path(path)):
+            msg = f'RAY_AUTH_TOKEN_PATH={path}: no token there (missing or empty file)'
+            raise SweepEngineError(msg)
+        return f'RAY_AUTH_TOKEN_PATH={path}'
+    default = Path(environ.get('HOME', '.')) / '.ray' / 'auth_token'
+    return str(default) if _first_line(default) else None
+
+
+def _first_line(path: Path) -> str:
+    """The file's first line without surrounding whitespace; '' if unreadable."""
+    try:
+        with path.open(encoding='utf-8') as file:
+            return file.readline().strip()
+    except (OSError, UnicodeDecodeError):
+        return ''
+
+
+def _join_error(address: str, exc: BaseException, token: str | None, mode: str | None) -> str:
+    """One line: why joining ``address`` failed, and the setting to give if it was the token."""
+    # Ray 2.60: ConnectionError from a RuntimeError quoting the GCS's refusal.
+    if 'InvalidAuthToken' not in f'{exc} {exc.__cause__}':
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        return f'cannot join the Ray cluster at {address}: {first}'
+    why = ('and this driver has no token' if token is None and mode is None else
+           f'but RAY_AUTH_MODE={mode} here (unset it)' if mode != 'token' else
+           f'and refused the token of {token}')
+    return (f'cannot join the Ray cluster at {address}: it uses token authentication {why}: '
+            f'{_TOKEN_HOW}')
 
 
 def _import_ray() -> Any:
@@ -224,13 +297,12 @@ def _run_points(
     on_outcome: Callable[[Mapping[str, Any]], None] | None,
 ) -> None:
     """Start Ray if needed, run ``todo`` on it, and shut a Ray started here down."""
-    owned = False
-    if address is None and 'ray' not in sys.modules:
-        os.environ.update(LOCAL_RAY_ENVIRONMENT)  # read by ray's constants at import
-    ray = _import_ray()
-    if not ray.is_initialized():
+    # Ray reads its environment at import: start_local_ray and join_ray set it first.
+    owned = 'ray' not in sys.modules or not _import_ray().is_initialized()
+    if owned:
         ray = join_ray(address) if address else start_local_ray(workers or os.cpu_count() or 1)
-        owned = True
+    else:
+        ray = _import_ray()
     try:
         capacity = workers or max(int(ray.cluster_resources().get('CPU', 1)), 1)
         capacity = min(capacity, len(DOMAIN_IDS))
