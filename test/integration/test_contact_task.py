@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Point, Vector3
+from geometry_msgs.msg import Point, PointStamped, Vector3
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from uvms_bringup.graph import Graph, build_graph, run_graph
@@ -26,7 +26,7 @@ from uvms_bringup.scenario import load_scenario
 from uvms_tasks.client import ContactTaskClient
 
 from uvms_msgs.action import ContactTask
-from uvms_msgs.msg import ActuatorCommand, ContactState, GeneralizedForce
+from uvms_msgs.msg import ActuatorCommand, ContactState, ControllerState, GeneralizedForce
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 #: Point A of the scenario (m, map_ned) and the wall's x (m).
@@ -66,6 +66,7 @@ class Probe:
     commands: list[tuple[float, np.ndarray]] = field(default_factory=list)
     actuators: list[tuple[float, float]] = field(default_factory=list)
     diagnostics: set[str] = field(default_factory=set)
+    desired: list[tuple[float, np.ndarray]] = field(default_factory=list)
     notes: dict[str, Any] = field(default_factory=dict)
 
     def now_s(self) -> float:
@@ -125,8 +126,14 @@ def run(duration_s: float, script: list[tuple[float, Action]], stiffness: float 
             (probe.now_s(), float(np.abs(m.thrust).sum() + np.abs(m.joint_torques).sum()))),
         100)
     node.create_subscription(
+        ControllerState, 'controller/state',
+        lambda m: probe.desired.append((probe.now_s(), np.array(
+            [m.desired_position.x, m.desired_position.y, m.desired_position.z]))), 100)
+    node.create_subscription(
         DiagnosticArray, '/diagnostics',
         lambda m: probe.diagnostics.update(status.name for status in m.status), 10)
+    probe.notes['target_pub'] = node.create_publisher(PointStamped, 'controller/target_position',
+                                                      10)
     graph.nodes['probe'] = node
     pending = sorted(script, key=lambda item: item[0])
 
@@ -292,3 +299,24 @@ def test_inactive_allocator_commands_zero_and_inactive_controller_does_not_stall
     assert probe.notes['end_s'] >= 2.0 - 1e-9  # the run reached its end: nothing stalled
     after_controller_off = [c for t, c in probe.commands if t > 1.2 + 2 * CONTROL_PERIOD_S]
     assert after_controller_off and all(np.all(c == 0.0) for c in after_controller_off)
+
+
+def target(frame: str, x: float) -> Action:
+    """Publish a hold target at (x, 0, -0.10) in ``frame``."""
+    def act(probe: Probe) -> None:
+        msg = PointStamped()
+        msg.header.frame_id = frame
+        msg.point.x, msg.point.y, msg.point.z = x, 0.0, -0.10
+        probe.notes['target_pub'].publish(msg)
+    return act
+
+
+def test_streamed_target_moves_the_hold_point_at_its_speed_limit() -> None:
+    """A map_ned target moves X_d at most 0.1 m/s toward it; another frame is refused."""
+    probe = run(1.2, [(0.1, target('map_ned', X0[0] + 0.05)), (0.7, target('base_link', 1.0))])
+    x_d = {round(t, 3): x for t, x in probe.desired}
+    assert x_d[0.1][0] == pytest.approx(X0[0], abs=1e-3)
+    moved = x_d[0.4][0] - x_d[0.2][0]
+    assert 0.01 < moved <= 0.02 + 1e-6  # 0.2 s at the 0.1 m/s limit
+    assert x_d[0.7][0] == pytest.approx(X0[0] + 0.05, abs=1e-6)  # reached, then held
+    assert x_d[1.1][0] == pytest.approx(X0[0] + 0.05, abs=1e-6)  # base_link target refused
