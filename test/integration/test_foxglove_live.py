@@ -217,7 +217,7 @@ def test_launch_with_foxglove_serves_the_process_graph(tmp_path: Path) -> None:
     assert {'map', 'map_ned'} <= {t.header.frame_id for t in static.transforms} | {
         t.child_frame_id for t in static.transforms}
     assert process.returncode == 130, output
-    assert '[foxglove_server-5]' in output
+    assert re.search(r'\[foxglove_server-\d+\]', output), output  # its own process's lines
     assert 'Traceback' not in output
 
 
