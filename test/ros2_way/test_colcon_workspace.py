@@ -31,6 +31,7 @@ from typing import Any
 
 import pytest
 import rclpy
+from geometry_msgs.msg import WrenchStamped
 from mcap.reader import make_reader
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
@@ -77,6 +78,8 @@ GRAPH_TIMEOUT_S = 90.0
 SETTLE_S = 2.0
 #: Longest wait for a node to exit after SIGINT (s).
 STOP_TIMEOUT_S = 20.0
+#: Longest time from an installed node's first start to its first message (s), issue 22.
+FIRST_START_S = 5.0
 #: The topics each node publishes, with their message types.
 PUBLISHED = {
     'simulator': {'/clock': Clock, f'{NAMESPACE}/joint_states': JointState,
@@ -374,6 +377,81 @@ def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Work
     assert profile.resolve().is_relative_to(install / 'uvms_common')
     assert profile.read_bytes() == (
         REPO / 'src' / 'uvms_common' / 'uvms_common' / 'fastdds_loopback.xml').read_bytes()
+
+
+def test_build_compiles_the_kernels_of_the_installed_packages(workspace: Workspace) -> None:
+    """setup.py install ran the kernel cache: Numba's index files sit beside the installed code.
+
+    Numba keys its cache by the module's path, so the copies in install/ need caches of their
+    own; the build fills them before any node started (this test runs before the graph).
+    """
+    for package, folder in (('uvms_model', 'uvms_model'), ('uvms_control', 'uvms_control/core')):
+        lib = next((workspace.install / package / 'lib').glob('python3*/site-packages'))
+        indexes = list((lib / folder / '__pycache__').glob('*.nbi'))
+        assert indexes, f'no Numba cache under {lib / folder}'
+    assert 'uvms_control: kernels compiled and cached' in workspace.build_output
+
+
+def test_installed_controller_publishes_within_5_s_of_its_first_start(
+    workspace: Workspace, tmp_path: Path,
+) -> None:
+    """Its first start compiles nothing and logs before loading: a command within 5 s.
+
+    The controller is fed still, valid inputs from this process (timer mode); NUMBA_DEBUG_CACHE
+    makes Numba name every kernel it would save, which only a compilation does.
+    """
+    env = workspace.environment()
+    env['ROS_DOMAIN_ID'] = str(DOMAIN_ID)
+    env['NUMBA_DEBUG_CACHE'] = '1'
+    env['PYTHONUNBUFFERED'] = '1'
+    config = workspace.install / 'uvms_bringup' / 'share' / 'uvms_bringup' / 'config'
+    executable = workspace.install / 'uvms_control' / 'lib' / 'uvms_control' / 'controller'
+    command = [str(executable), '--ros-args', '-r', '__ns:=/first_start',
+               '--params-file', str(config / 'robot.yaml'),
+               '--params-file', str(config / 'controller.yaml'), '-p', 'trigger_mode:=timer']
+    context = Context()
+    rclpy.init(args=[], context=context, domain_id=DOMAIN_ID,
+               signal_handler_options=SignalHandlerOptions.NO)
+    node = rclpy.create_node('first_start_feeder', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    joints = JointState(name=['joint_1', 'joint_2', 'joint_3'], position=[0.0, 0.4, -0.8],
+                        velocity=[0.0] * 3)
+    odometry = Odometry()
+    odometry.header.frame_id, odometry.child_frame_id = 'map_ned', 'base_link_frd'
+    odometry.pose.pose.orientation.w = 1.0
+    inputs = [(node.create_publisher(type(msg), f'/first_start/{topic}', qos), msg)
+              for topic, msg in (('joint_states', joints), ('odometry', odometry),
+                                 ('wrench', WrenchStamped()))]
+    first: list[float] = []
+    node.create_subscription(GeneralizedForce, '/first_start/command/generalized_force',
+                             lambda _msg: first.append(time.monotonic()), qos)
+    output = tmp_path / 'controller.out'
+    with output.open('wb') as stream:
+        start = time.monotonic()
+        process = subprocess.Popen(in_sourced_workspace(workspace, command),
+                                   cwd=workspace.root, env=env, stdin=subprocess.DEVNULL,
+                                   stdout=stream, stderr=subprocess.STDOUT)
+        try:
+            while not first and time.monotonic() - start < GRAPH_TIMEOUT_S:
+                stamp = node.get_clock().now().to_msg()
+                for publisher, msg in inputs:
+                    msg.header.stamp = stamp
+                    publisher.publish(msg)
+                executor.spin_once(timeout_sec=0.01)
+        finally:
+            returncode = stop(process)
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown(context=context)
+    text = output.read_text(errors='replace')
+    assert first, f'no generalized force within {GRAPH_TIMEOUT_S} s:\n{text[-3000:]}'
+    assert 'data saved to' not in text, f'kernels compiled at the first start:\n{text[-3000:]}'
+    assert first[0] - start < FIRST_START_S, f'{first[0] - start:.1f} s:\n{text[-3000:]}'
+    assert returncode == 0, text[-3000:]
+    logs = [line for line in text.splitlines() if 'controller]: ' in line]
+    assert 'loading the model and compiled kernels' in logs[0], logs
 
 
 def test_simulator_publishes_clock_joint_states_and_odometry_in_realtime(

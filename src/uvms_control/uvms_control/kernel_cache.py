@@ -1,0 +1,44 @@
+"""Compile the controller's and allocator's Numba kernels: ``python -m uvms_control.kernel_cache``.
+
+As ``uvms_model.kernel_cache`` for the model: run by ``setup.py install`` on the installed
+copy of the package (its cache lives beside the installed modules), so that an installed
+controller or allocator starts on machine code at its first start.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+from uvms_model.kernel_cache import compile_model_kernels
+from uvms_model.thrusters import ThrusterLayout
+
+from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
+from uvms_control.core.parameters import ControllerParameters
+from uvms_control.core.unified_controller import UnifiedForceController
+
+
+def compile_control_kernels() -> None:
+    """Call every controller and allocator kernel once with the types the nodes use."""
+    model = compile_model_kernels()
+    q = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.6, -1.2])
+    controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
+    controller.step_from_sensors(0.0, q, np.zeros(9), np.zeros(3))
+    controller.step(0.002, q, np.zeros(9), np.array([100.0, 0.0, 0.0]))
+    layout = ThrusterLayout.from_parameters()
+    allocator = ThrusterAllocator(AllocatorParameters(
+        layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 100.0)))
+    allocator.step(np.ones(9), 0.002)
+
+
+def main() -> int:
+    """Compile and cache the kernels; one line on stdout with the time taken."""
+    start = time.monotonic()
+    compile_control_kernels()
+    print(f'uvms_control: kernels compiled and cached ({time.monotonic() - start:.1f} s)')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
