@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from uvms_analysis.analysis import Run, RunMetrics, compute_metrics, load_run
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
@@ -123,3 +124,22 @@ class ScenarioRuns:
                'ROS_DOMAIN_ID': str(SCENARIO_DOMAIN_BASE + self._domains % 50)}
         with self._path(name).with_suffix('.log').open('wb') as log:
             return subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
+
+
+def first_force_peak(result: ScenarioResult) -> tuple[float, float]:
+    """The first local maximum of the true normal force after the first touch: (delay s, N).
+
+    The transient of the touch, wherever it ends: an impact spike that falls back before
+    the force builds up, or the set-point overshoot if the force rises without one. A
+    sample counts if it is at least its predecessor and above its successor (flat tops
+    count once). The simulator's ground truth carries no noise, so no smoothing is needed.
+    """
+    contact = result.run.contact
+    assert contact is not None
+    touch = int(np.flatnonzero(contact.in_contact)[0])
+    force = contact.force[touch:, 0]
+    rising = (force[1:-1] >= force[:-2]) & (force[1:-1] > force[2:])
+    peaks = np.flatnonzero(rising) + 1
+    assert peaks.size, f'{result.name}: the force has no local maximum after the touch'
+    k = int(peaks[0])
+    return float(contact.t[touch + k] - contact.t[touch]), float(force[k])
