@@ -22,8 +22,10 @@ OVERSHOOT_BOUND_N = {'case1_ke1e4': 7.5, 'case1_ke1e5': 3.0}
 #: Settling into F_d ± 5 % (s): measured 0.880 s (1e4) and 0.828 s (1e5): 1.7-1.8x (the
 #: set-point ramp alone takes 1 s of it, so a tighter factor would leave no room at all).
 SETTLING_BOUND_S = 1.5
-#: RMS of F - F_d after settling (N): measured 1.061 N (1e4) and 1.007 N (1e5): 2.4-2.5x.
-RMS_BOUND_N = 2.5
+#: RMS of F - F_d after settling (N): measured 1.061 N (1e4) and 1.007 N (1e5): 1.9-2.0x.
+#: 2.5 N let a force gain K_fp cut to 0.3x pass (2.44 N on 1e4); a doubled error is a loss
+#: of tracking this test must see.
+RMS_BOUND_N = 2.0
 #: The stiff wall's impact spike comes within this time of the touch (s): measured 24 ms.
 SPIKE_WITHIN_S = 0.05
 
@@ -50,8 +52,8 @@ def test_contact_force_settles_within_5_percent_in_under_1_5_s(case1: ScenarioRe
     assert case1.metrics.settling_time < SETTLING_BOUND_S
 
 
-def test_force_tracking_rms_error_is_under_2_5_n(case1: ScenarioResult) -> None:
-    """RMS of F - F_d after settling, up to the release of the wall, is below 2.5 N (1.7 %)."""
+def test_force_tracking_rms_error_is_under_2_n(case1: ScenarioResult) -> None:
+    """RMS of F - F_d after settling, up to the release of the wall, is below 2 N (1.3 %)."""
     assert case1.metrics.force_rms_error is not None
     assert case1.metrics.force_rms_error < RMS_BOUND_N
 
