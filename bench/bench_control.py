@@ -4,8 +4,10 @@ Run: ``.venv/bin/python bench/bench_control.py [--repeat N]``. Each row times th
 code (the controller on the Pinocchio model of the URDF) and, in the same run, the previous
 implementation: the same control law on the previous pure-Python model
 (``test/unit/model/reference_model.py``, evaluated by the separate calls the controller made
-before one-pass ``task_space_terms``), and their ratio. The allocator did not change, so it
-is timed once. Targets (issue 10): a controller step at most 40 µs; an allocator step with
+before one-pass ``task_space_terms``), and their ratio. The allocator rows have no previous
+implementation here (its hot path was compiled too, into Numba kernels, commit 6daedcb; the
+interpreted code it replaced is not kept), so they are timed once, the current code only.
+Targets (issue 10): a controller step at most 40 µs; an allocator step with
 thruster dynamics at most 50 µs (issue 4). Figures only: this script asserts nothing.
 """
 

@@ -10,11 +10,17 @@ message on ``/clock`` (the simulator publishes it with its state every
 (the allocator's 500 Hz tick). Controller and allocator run their timers on ``/clock``
 (``use_sim_time``), so they can at best follow the simulator.
 
-Printed per stream: the wall-clock period between arrivals (mean, p99, max; the
-simulator's per step: publication period / steps), the missed periods against the wall
+The nominal periods are read from the graph as built (``plan_launch``'s parameter files:
+the simulator's ``physics_rate_hz`` and ``publish_rate_hz``, the controller's
+``control_rate_hz``, the allocator's ``rate_hz``), not assumed. Printed per stream: the
+wall-clock period between arrivals (mean, p99, max), the missed periods against the wall
 clock (1 - periods done / periods elapsed) and, for the /clock-driven nodes, against
 simulated time (1 - stamps / 2 ms slots), and each process's CPU use; then how far
-simulated time fell behind the wall clock. It prints figures and asserts nothing.
+simulated time fell behind the wall clock. The simulator publishes no message per physics
+step, so its "step" row is derived, and labelled so: the publication period divided by the
+steps per publication (from the parameters, and checked against the /clock stamps, whose
+increments are printed as the measured steps per publication). It prints figures and asserts
+nothing.
 
 Usage::
 
@@ -43,20 +49,17 @@ for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_b
 
 from uvms_bringup.launch_helpers import (  # noqa: E402
     CONTROLLER,
+    DEFAULT_NAMESPACE,
     SIMULATOR,
     THRUSTER_ALLOCATOR,
+    file_parameters,
     resolve_scenario_path,
 )
 from uvms_bringup.launcher import plan_launch  # noqa: E402
-from uvms_bringup.processes import Launcher, NodeProcess  # noqa: E402
+from uvms_bringup.processes import Launcher, NodeProcess, NodeProcessSpec  # noqa: E402
 from uvms_bringup.scenario import load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
-
-#: Simulator step (ns) and its steps per publication (config/robot.yaml defaults).
-STEP_NS = 1_000_000
-STEPS_PER_PUBLISH = 2
-#: Nominal period (ns) of the controller's and the allocator's ticks (500 Hz).
-CONTROL_PERIOD_NS = 2_000_000
+from uvms_sim.parameters import SIMULATOR_PARAMETERS  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -68,7 +71,8 @@ class Stream:
         topic: Topic name.
         node: Node that publishes it.
         period_ns: Nominal period of what it times (ns).
-        per_publication: Periods per message (the simulator publishes every 2 steps).
+        per_publication: Periods per message (the simulator publishes every
+            ``steps_per_publish`` steps); above 1 the row is derived, not measured.
         sim_driven: Runs on /clock, so missed periods are also counted in simulated time.
     """
 
@@ -80,16 +84,64 @@ class Stream:
     sim_driven: bool = False
 
 
-STREAMS = (
-    Stream('simulator step', '/clock', SIMULATOR.name, STEP_NS, STEPS_PER_PUBLISH),
-    Stream('simulator publish', '/clock', SIMULATOR.name, STEP_NS * STEPS_PER_PUBLISH),
-    Stream('controller step', '/uvms/controller/state', CONTROLLER.name, CONTROL_PERIOD_NS,
-           sim_driven=True),
-    Stream('controller tick', '/uvms/command/generalized_force', CONTROLLER.name,
-           CONTROL_PERIOD_NS, sim_driven=True),
-    Stream('allocator tick', '/uvms/command/actuators', THRUSTER_ALLOCATOR.name,
-           CONTROL_PERIOD_NS, sim_driven=True),
-)
+@dataclass(frozen=True)
+class GraphPeriods:
+    """Nominal periods of the graph as built (ns), from its nodes' parameter files.
+
+    Attributes:
+        step_ns: The simulator's physics step.
+        steps_per_publish: Physics steps per publication of the state and /clock.
+        control_ns: The controller's tick.
+        allocator_ns: The thruster allocator's tick.
+    """
+
+    step_ns: int
+    steps_per_publish: int
+    control_ns: int
+    allocator_ns: int
+
+
+def plan_parameters(plan: NodeProcessSpec) -> dict[str, Any]:
+    """The parameters a planned node process gets: its ``--params-file``s in order, merged."""
+    values: dict[str, Any] = {}
+    command = list(plan.command)
+    for index, arg in enumerate(command[:-1]):
+        if arg == '--params-file':
+            values.update(file_parameters(Path(command[index + 1]), plan.spec.name,
+                                          DEFAULT_NAMESPACE))
+    return values
+
+
+def graph_periods(plans: Sequence[NodeProcessSpec]) -> GraphPeriods:
+    """Read the nominal periods from the planned processes (the simulator's defaults if unset)."""
+    by_node = {plan.spec.name: plan_parameters(plan) for plan in plans}
+    defaults = {spec.name: spec.default for spec in SIMULATOR_PARAMETERS}
+    simulator = {**defaults, **by_node[SIMULATOR.name]}
+    physics_hz = float(simulator['physics_rate_hz'])
+    publish_hz = float(simulator['publish_rate_hz'])
+    controller = by_node.get(CONTROLLER.name, {})
+    allocator = by_node.get(THRUSTER_ALLOCATOR.name, {})
+    return GraphPeriods(
+        step_ns=round(1e9 / physics_hz),
+        steps_per_publish=round(physics_hz / publish_hz),
+        control_ns=round(1e9 / float(controller.get('control_rate_hz', publish_hz))),
+        allocator_ns=round(1e9 / float(allocator.get('rate_hz', publish_hz))),
+    )
+
+
+def streams_of(periods: GraphPeriods) -> tuple[Stream, ...]:
+    """The observed streams with the graph's nominal periods."""
+    n = periods.steps_per_publish
+    return (
+        Stream(f'sim step derived/{n}', '/clock', SIMULATOR.name, periods.step_ns, n),
+        Stream('simulator publish', '/clock', SIMULATOR.name, periods.step_ns * n),
+        Stream('controller step', '/uvms/controller/state', CONTROLLER.name,
+               periods.control_ns, sim_driven=True),
+        Stream('controller tick', '/uvms/command/generalized_force', CONTROLLER.name,
+               periods.control_ns, sim_driven=True),
+        Stream('allocator tick', '/uvms/command/actuators', THRUSTER_ALLOCATOR.name,
+               periods.allocator_ns, sim_driven=True),
+    )
 
 
 def cpu_seconds(pid: int) -> float:
@@ -217,11 +269,13 @@ def main() -> None:
     classes: dict[str, type] = {'/clock': Clock, '/uvms/controller/state': ControllerState,
                                 '/uvms/command/generalized_force': GeneralizedForce,
                                 '/uvms/command/actuators': ActuatorCommand}
-    streams = [s for s in STREAMS if not args.only_simulator or s.node == SIMULATOR.name]
-    topics = {s.topic: classes[s.topic] for s in streams}
     with tempfile.TemporaryDirectory(prefix='uvms_bench_') as parameters_dir:
         plans = plan_launch(scenario, 'realtime', Path(parameters_dir), log_level='warn',
                             extra_overrides=extra)
+        periods = graph_periods(plans)
+        streams = [s for s in streams_of(periods)
+                   if not args.only_simulator or s.node == SIMULATOR.name]
+        topics = {s.topic: classes[s.topic] for s in streams}
         if args.only_simulator:
             plans = [plan for plan in plans if plan.spec is SIMULATOR]
         # Started before this process creates its own DDS participant (and its threads).
@@ -232,14 +286,14 @@ def main() -> None:
                                                       args.seconds, domain_id)
         finally:
             launcher.stop()
-    report(args, scenario.name, streams, classes, arrivals, start_ns, end_ns, cpu,
+    report(args, scenario.name, periods, streams, classes, arrivals, start_ns, end_ns, cpu,
            launcher.processes)
 
 
-def report(args: argparse.Namespace, scenario: str, streams: Sequence[Stream],
-           classes: dict[str, type], arrivals: dict[str, list[tuple[int, bytes]]],
-           start_ns: int, end_ns: int, cpu: dict[str, float],
-           processes: Sequence[NodeProcess]) -> None:
+def report(args: argparse.Namespace, scenario: str, periods: GraphPeriods,
+           streams: Sequence[Stream], classes: dict[str, type],
+           arrivals: dict[str, list[tuple[int, bytes]]], start_ns: int, end_ns: int,
+           cpu: dict[str, float], processes: Sequence[NodeProcess]) -> None:
     """Print the table of periods and the lag of simulated time."""
     from rclpy.serialization import deserialize_message
 
@@ -252,6 +306,9 @@ def report(args: argparse.Namespace, scenario: str, streams: Sequence[Stream],
           f'{args.executor or os.environ.get("UVMS_EXECUTOR", "events")}, integrator '
           f'{args.integrator or "config/robot.yaml"}; {window_ns * 1e-9:.1f} s measured after '
           f'{args.warmup:g} s warm-up; {os.cpu_count()} CPUs')
+    print(f'nominal periods from the built graph: physics step {periods.step_ns * 1e-6:g} ms, '
+          f'{periods.steps_per_publish} steps per publication, controller '
+          f'{periods.control_ns * 1e-6:g} ms, allocator {periods.allocator_ns * 1e-6:g} ms')
     print('periods (ms) from arrival times in a separate observer process; missed periods '
           'against the wall clock and, for /clock-driven nodes, against simulated time')
     print(f'  {"stream":<18s} {"topic":<32s} {"nominal":>7s} {"mean":>8s} {"p99":>8s} '
@@ -260,6 +317,12 @@ def report(args: argparse.Namespace, scenario: str, streams: Sequence[Stream],
         print(row(stream, window[stream.topic], window_ns, cpu.get(stream.node, float('nan'))))
     clock = window['/clock']
     if len(clock) >= 2:
+        increments = np.diff(sorted({stamp_ns(msg) for _, msg in clock}))
+        if increments.size:
+            print(f'  (derived: the simulator publishes no message per step; its row is the '
+                  f'publication period / {periods.steps_per_publish}. Measured in the /clock '
+                  f'stamps: median increment {np.median(increments) * 1e-6:g} ms = '
+                  f'{np.median(increments) / periods.step_ns:g} steps)')
         wall_s = (clock[-1][0] - clock[0][0]) * 1e-9
         sim_s = (stamp_ns(clock[-1][1]) - stamp_ns(clock[0][1])) * 1e-9
         # Wall minus simulated time of each /clock arrival, from the window's first one.

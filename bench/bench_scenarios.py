@@ -81,6 +81,7 @@ class Job:
         log: Its stderr (a temporary file: a pipe could fill up and stall the run).
         start: perf_counter at its start (s).
         wall_s: Wall time from start to exit (s), None while running.
+        ok: True once it exited with status 0 (a run stopped at RUN_TIMEOUT_S is not).
     """
 
     name: str
@@ -89,6 +90,7 @@ class Job:
     log: IO[bytes] | None = None
     start: float = 0.0
     wall_s: float | None = None
+    ok: bool = False
 
 
 def uvms(*args: str) -> list[str]:
@@ -149,6 +151,7 @@ def run_batch(jobs: list[Job], workers: int, duration_s: float | None = None) ->
             stderr = job.log.read().decode(errors='replace')
             job.log.close()
             status = job.process.returncode
+            job.ok = status == 0
             note = '' if status == 0 else f'  FAILED (exit {status}): {stderr.strip()[-300:]}'
             print(f'{job.name:20s} {job.wall_s:6.1f} s{note}', flush=True)
     return time.perf_counter() - batch_start
@@ -198,15 +201,24 @@ def main() -> None:
         jobs = [Job(name, out / f'{name}.mcap') for name in names]
         print(f'{len(jobs)} scenarios, {args.jobs} at a time, recording to {out}')
         batch_s = run_batch(jobs, max(1, args.jobs), args.duration)
-        serial_s = sum(job.wall_s or 0.0 for job in jobs)
-        print(f'{"serial sum":20s} {serial_s:6.1f} s')
-        verdict = 'under' if batch_s < TARGET_S else 'OVER'
-        target = (f'{verdict} the {TARGET_S:.0f} s target' if args.duration is None
-                  else f'{args.duration:g} s each: the target is for the full durations')
+        # A failed run (an error, or stopped at RUN_TIMEOUT_S) has no meaningful wall time:
+        # it counts in neither the sum nor the verdict, and the batch gets no verdict at all.
+        done = [job for job in jobs if job.ok]
+        failed = len(jobs) - len(done)
+        serial_s = sum(job.wall_s or 0.0 for job in done)
+        of = f' (the {len(done)} runs that succeeded)' if failed else ''
+        print(f'{"serial sum":20s} {serial_s:6.1f} s{of}')
+        if failed:
+            target = f'{failed} of {len(jobs)} runs FAILED: no verdict on the target'
+        elif args.duration is not None:
+            target = f'{args.duration:g} s each: the target is for the full durations'
+        else:
+            verdict = 'under' if batch_s < TARGET_S else 'OVER'
+            target = f'{verdict} the {TARGET_S:.0f} s target'
         print(f'{"parallel wall":20s} {batch_s:6.1f} s  ({args.jobs} jobs; {target})')
-        recordings = [str(job.output) for job in jobs if job.output.is_file()]
+        recordings = [str(job.output) for job in done if job.output.is_file()]
         if args.plot:
-            for job in jobs:
+            for job in done:
                 if job.output.is_file():
                     subprocess.run(uvms('plot', str(job.output), '--out', str(out / job.name)),
                                    check=False, env=child_env(), stdout=subprocess.DEVNULL)

@@ -287,17 +287,38 @@ def test_lockstep_stale_input_gives_zero_command_logged_once(
     assert capfd.readouterr().err.count('older than watchdog_timeout_s') == 1
 
 
+def set_sim_time(harness: Harness, node: Node, clock_pub: Any, t_ns: int) -> None:
+    """Publish /clock at t_ns and spin until the node's clock (use_sim_time) reads it."""
+    clock_pub.publish(Clock(clock=Time(sec=t_ns // 1_000_000_000,
+                                       nanosec=t_ns % 1_000_000_000)))
+    assert harness.spin_until(lambda: node.get_clock().now().nanoseconds == t_ns)
+
+
 def test_timer_controller_zeroes_the_command_when_inputs_go_stale(harness: Harness) -> None:
-    """In timer mode, inputs older than watchdog_timeout_s (node clock) give zero commands."""
-    harness.add(
-        ControllerNode, trigger_mode='timer', control_rate_hz=100.0, watchdog_timeout_s=0.1
-    )
+    """In timer mode, inputs older than watchdog_timeout_s (node clock) give zero commands.
+
+    Judged on simulated time (use_sim_time, /clock from this test): inputs 50 ms old still
+    drive the command, 300 ms old give zero, however slowly the machine runs.
+    """
+    node = harness.add(ControllerNode, trigger_mode='timer', control_rate_hz=100.0,
+                       watchdog_timeout_s=0.1, use_sim_time=True)
     probe = harness.probe
-    probe.send_state(0, force=(1.0, 0.0, 0.0))
-    assert harness.spin_until(lambda: len(probe.commands) >= 3)
-    assert np.any(tau_of(probe.commands[0]) != 0.0)
-    harness.spin_for(0.3)
-    np.testing.assert_array_equal(tau_of(probe.commands[-1]), 0.0)
+    clock_pub = probe.node.create_publisher(Clock, '/clock', 10)
+    set_sim_time(harness, node, clock_pub, 3_000_000_000)
+    probe.send_state(3_000_000_000, force=(1.0, 0.0, 0.0))
+
+    def latest_at(t_ns: int) -> Any:
+        stamped = [c for c in probe.commands if stamp_ns(c) == t_ns]
+        return stamped[-1] if stamped else None
+
+    assert harness.spin_until(lambda: latest_at(3_000_000_000) is not None)
+    assert np.any(tau_of(latest_at(3_000_000_000)) != 0.0)
+    set_sim_time(harness, node, clock_pub, 3_050_000_000)
+    assert harness.spin_until(lambda: latest_at(3_050_000_000) is not None)
+    assert np.any(tau_of(latest_at(3_050_000_000)) != 0.0)
+    set_sim_time(harness, node, clock_pub, 3_300_000_000)
+    assert harness.spin_until(lambda: latest_at(3_300_000_000) is not None)
+    np.testing.assert_array_equal(tau_of(latest_at(3_300_000_000)), 0.0)
 
 
 @pytest.mark.parametrize('node_class', [ControllerNode, ThrusterAllocatorNode])
@@ -422,14 +443,38 @@ def test_bad_command_is_rejected_and_the_last_safe_one_held(
 
 
 def test_timer_allocator_zeroes_a_stale_command(harness: Harness) -> None:
-    """In timer mode a command older than watchdog_timeout_s is replaced by zero."""
-    harness.add(ThrusterAllocatorNode, trigger_mode='timer', rate_hz=200.0, watchdog_timeout_s=0.1)
+    """In timer mode a command older than watchdog_timeout_s is replaced by zero.
+
+    Judged on simulated time (use_sim_time, /clock from this test): a command 50 ms old is
+    still applied, one 300 ms old is replaced by zero, however slowly the machine runs.
+    """
+    node = harness.add(ThrusterAllocatorNode, trigger_mode='timer', rate_hz=200.0,
+                       watchdog_timeout_s=0.1, use_sim_time=True)
     probe = harness.probe
-    probe.send_command(0, [40.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 2.0, 3.0])
-    assert harness.spin_until(lambda: len(probe.actuators) >= 5)
-    assert list(probe.actuators[2].joint_torques) == [1.0, 2.0, 3.0]
-    harness.spin_for(0.3)
-    assert list(probe.actuators[-1].joint_torques) == [0.0, 0.0, 0.0]
+    clock_pub = probe.node.create_publisher(Clock, '/clock', 10)
+    set_sim_time(harness, node, clock_pub, 3_000_000_000)
+    probe.send_command(3_000_000_000, [40.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 2.0, 3.0])
+
+    def latest_at(t_ns: int) -> int | None:
+        """Index of the last actuator command stamped t_ns (None if there is none yet)."""
+        stamped = [i for i, a in enumerate(probe.actuators) if stamp_ns(a) == t_ns]
+        return stamped[-1] if stamped else None
+
+    def applied(t_ns: int) -> bool:
+        index = latest_at(t_ns)
+        return index is not None and list(probe.actuators[index].joint_torques) != [0.0] * 3
+
+    assert harness.spin_until(lambda: applied(3_000_000_000))
+    assert list(probe.actuators[-1].joint_torques) == [1.0, 2.0, 3.0]
+    set_sim_time(harness, node, clock_pub, 3_050_000_000)
+    assert harness.spin_until(lambda: latest_at(3_050_000_000) is not None)
+    assert applied(3_050_000_000)
+    set_sim_time(harness, node, clock_pub, 3_300_000_000)
+    assert harness.spin_until(lambda: latest_at(3_300_000_000) is not None)
+    index = latest_at(3_300_000_000)
+    assert index is not None
+    assert list(probe.actuators[index].joint_torques) == [0.0, 0.0, 0.0]
+    assert harness.spin_until(lambda: len(probe.thruster_states) > index)
     assert list(probe.thruster_states[-1].desired_thrust) == [0.0] * 8
 
 

@@ -4,12 +4,13 @@ from pathlib import Path
 
 import pytest
 from uvms_bringup.declared import check_scenario_overrides
-from uvms_bringup.launch_helpers import SIMULATOR
+from uvms_bringup.launch_helpers import SIMULATOR, config_dir
 from uvms_bringup.scenario import ScenarioError, load_scenario
 
 from uvms_cli import cli
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
+CONFIG = config_dir()
 PAPER_SCENARIOS = ('free_motion', 'case1_ke1e4', 'case1_ke1e5', 'case2_noise',
                    'case3_moving_wall', 'case4_model_error')
 VALID = """\
@@ -50,6 +51,25 @@ def test_paper_cases_set_the_paper_values() -> None:
     assert sim('free_motion', 'wall_enabled') is False
     case4 = load_scenario(SCENARIOS / 'case4_model_error.yaml')
     assert case4.overrides['controller']['model.mass_scale'] == 0.9
+
+
+@pytest.mark.parametrize('name', [*PAPER_SCENARIOS, 'impedance_only', 'hybrid_only'])
+def test_every_scenario_tracks_the_papers_150_n(name: str) -> None:
+    """Each scenario's mission is one half circle with F_d = 150 N (paper sec. 5.1, 5.2).
+
+    The scenario tests' claims (RMS error, overshoot, settling band) refer to this F_d, and
+    their times to the path's start at 2 s.
+    """
+    [task] = load_scenario(SCENARIOS / f'{name}.yaml').mission
+    assert task.force_n == 150.0
+    assert task.half_circle is not None and task.half_circle.radius_m == 0.1
+    assert task.start_time_s == 2.0
+
+
+def test_case3_wall_starts_receding_at_the_set_point() -> None:
+    """Case III's wall moves off once the force reaches F_d = 150 N (docs/results.md)."""
+    scenario = load_scenario(SCENARIOS / 'case3_moving_wall.yaml')
+    assert scenario.overrides['simulator']['wall_motion_start_force_n'] == 150.0
 
 
 @pytest.mark.parametrize('name', [*PAPER_SCENARIOS, 'impedance_only', 'hybrid_only'])

@@ -3,7 +3,8 @@
 Every process here runs on one ROS domain of its own (``ROS_DOMAIN_ID``), so that other
 DDS participants of the machine neither disturb nor receive these; the observer that
 subscribes to the topics is an rclpy node in this pytest process, in a Context of its own.
-Rates are asserted within generous bands: the machine is shared and has 2 cores.
+Rates in wall time are only stall detectors (a machine three times slower passes); whether
+the nodes fill their periods is judged per simulated second (message stamps).
 """
 
 from __future__ import annotations
@@ -74,21 +75,26 @@ PUBLIC_TOPICS: dict[str, type] = {
 }
 #: Seconds of steady state the launch is observed for.
 OBSERVE_S = 3.0
-#: Share of the configured rate a topic must reach on this loaded machine: a stall detector,
-#: not a real-time check. Measured on the 2-core machine shared with other work, with the
-#: whole graph running: the simulator published at 16-73 % of its 500 Hz in wall time,
-#: depending on the other load (alone it keeps up; together the nodes need more than two
-#: cores, see bench/bench_realtime.py).
-MIN_RATE_SHARE = 0.1
+#: Share of the configured rate a topic must reach in wall time: a stall detector, not a
+#: real-time check. Measured on the 2-core machine shared with other work, with the whole
+#: graph running: the simulator published at 16-73 % of its 500 Hz in wall time, depending
+#: on the other load (alone it keeps up; together the nodes need more than two cores, see
+#: bench/bench_realtime.py). A machine three times slower would give 5.3 % at the worst
+#: measured load; 2 % (10 Hz, 30 messages in the 3 s window) leaves it a further 2.7x, and a
+#: stalled simulator publishes nothing.
+MIN_RATE_SHARE = 0.02
 #: Exit statuses of a node process stopped by SIGINT without an error (uvms_common.node_main:
 #: 0, as Jazzy's demo nodes; 130 in its earlier form).
 CLEAN_STOP = (0, 130)
 #: Share of the simulated-time slots in which the simulator publishes: every one of them,
 #: whatever the wall clock does, less what the reliable keep-last-10 writers may drop.
 SIMULATOR_SLOT_SHARE = 0.9
-#: Share of its simulated-time slots a /clock-driven node (controller, allocator) must fill;
-#: measured 50-99.6 % (the faster the simulator runs, the more slots the controller misses).
-CONTROL_SLOT_SHARE = 0.3
+#: Share of its simulated-time slots a /clock-driven node (controller, allocator) must fill:
+#: a stall detector. Measured 50-99.6 % (the faster the simulator runs against the
+#: controller, the more slots the controller misses). If only the controller's machine time
+#: tripled while the simulator kept its pace, the worst case would fall to about 17 %; 10 %
+#: passes that, and a stalled controller fills none.
+CONTROL_SLOT_SHARE = 0.1
 
 
 def _simulator_default(name: str) -> Any:
@@ -377,7 +383,7 @@ def _rates_text(rates: Mapping[str, float]) -> str:
 @pytest.mark.parametrize('topic', sorted(WALL_NOMINAL_HZ))
 def test_simulator_topic_rate_is_near_its_configured_rate(launched: LaunchRun,
                                                            topic: str) -> None:
-    """In real time the simulator publishes at MIN_RATE_SHARE of its rate or more."""
+    """In real time the simulator does not stall: MIN_RATE_SHARE of its rate or more."""
     nominal = WALL_NOMINAL_HZ[topic]
     assert launched.rates_hz[topic] > MIN_RATE_SHARE * nominal, (
         f'{topic}: {launched.rates_hz[topic]:.0f} Hz, configured {nominal:g} Hz; wall rates: '

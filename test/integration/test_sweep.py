@@ -202,7 +202,7 @@ def test_point_past_its_timeout_fails_with_reason_timeout_and_is_killed(
 def test_point_asked_to_stop_is_killed_and_reported_interrupted(tmp_path: Path) -> None:
     """`should_stop` True (the sweep's Ctrl-C): the child is killed, the outcome says so."""
     from uvms_sweep.engine import DOMAIN_IDS
-    from uvms_sweep.point import STOP_POLL_S, execute_point
+    from uvms_sweep.point import execute_point
 
     text = GRID.replace('duration_s: 0.3', 'duration_s: 30.0').replace(
         f'{MASS}: [1.0, 20.0]', f'{MASS}: [1.0]').replace(f'{K_E}: [1.0e+4, 1.0e+5]',
@@ -220,17 +220,18 @@ def test_point_asked_to_stop_is_killed_and_reported_interrupted(tmp_path: Path) 
     saved = os.environ.get(name)
     os.environ[name] = value
     try:
-        start = time.monotonic()
         outcome = execute_point(request, DOMAIN_IDS[-1], 120.0, should_stop=should_stop)
-        took = time.monotonic() - start
     finally:
         if saved is None:
             os.environ.pop(name)
         else:
             os.environ[name] = saved
     assert (outcome['status'], outcome['reason']) == ('interrupted', 'interrupted')
+    # Stopped at the third question, not run to its end: execute_point asks every
+    # STOP_POLL_S while the child lives, and a 30 s run (1.75x real time here) would have been
+    # asked dozens of times. Counted in questions, not timed: no wall-clock bound.
     assert len(asked) == 3
-    assert took < 3 * STOP_POLL_S + 5.0  # a 30 s run, stopped at the third question
+    assert outcome['sim_time_s'] is None  # set only by a run that finished
     assert point_processes() == []
 
 

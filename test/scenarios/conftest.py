@@ -73,7 +73,7 @@ def impedance_only(scenario_runs: ScenarioRuns) -> ScenarioResult:
 
 @pytest.fixture(scope='session')
 def hybrid_only(scenario_runs: ScenarioRuns) -> ScenarioResult:
-    """Baseline: hybrid law alone (W = 0), K_e = 1e4 N/m, the first 3 s (see SHORTENED_S)."""
+    """Baseline: hybrid law alone (W = 0), K_e = 1e4 N/m, the first 5 s (see SHORTENED_S)."""
     return scenario_runs.get('hybrid_only')
 
 

@@ -1,4 +1,4 @@
-"""Free motion: the whole graph tracks the paper's half circle within 5 mm after 1 s."""
+"""Free motion: the whole graph tracks the paper's half circle within 0.05 mm after 1 s."""
 
 from __future__ import annotations
 
@@ -14,6 +14,8 @@ SCENARIO = Path(__file__).resolve().parents[2] / 'config' / 'scenarios' / 'free_
 #: Hold at A for 2 s, then 4 s of the 16 s half circle: the start of the arc, where the
 #: reference accelerates from rest (quintic time scaling).
 DURATION_S = 6.0
+#: Largest |X - X_d| from t = 1 s (m): measured 0.024 mm (2.1x).
+TRACKING_BOUND_M = 5e-5
 
 
 def positions(path: Path) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
@@ -44,19 +46,23 @@ def free_motion_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def test_end_effector_follows_half_circle_within_5_mm_after_first_second(
+def test_end_effector_follows_half_circle_within_0_05_mm_after_first_second(
     free_motion_run: Path,
 ) -> None:
-    """|X - X_d| < 5 mm from t = 1 s on, X the simulator's ground truth."""
+    """|X - X_d| < 0.05 mm from t = 1 s on, X the simulator's ground truth."""
     actual, desired = positions(free_motion_run)
     times = sorted(t for t in desired if t >= 1_000_000_000 and t in actual)
     assert times[-1] == round(DURATION_S * 1e9)
     errors = np.array([np.linalg.norm(actual[t] - desired[t]) for t in times])
-    assert errors.max() < 5e-3, f'largest error {errors.max() * 1e3:.2f} mm'
+    largest = errors.max()
+    assert largest < TRACKING_BOUND_M, f'largest error {largest * 1e3:.4f} mm'
 
 
 def test_reference_moves_along_the_circle_during_the_run(free_motion_run: Path) -> None:
-    """The reference leaves A toward +x and down: the test tracks a moving target."""
+    """The reference leaves A toward +x and down: the test tracks a moving target.
+
+    Measured after 6 s: 32 mm along x, 5.2 mm down (the bounds: a third and a fifth of it).
+    """
     _, desired = positions(free_motion_run)
     start, end = desired[0], desired[max(desired)]
     assert end[0] - start[0] > 0.01

@@ -28,11 +28,36 @@ def random_wrenches(count: int, scale: float, seed: int) -> np.ndarray:
     return np.random.default_rng(seed).normal(0.0, scale, (count, 9))
 
 
-def test_configuration_matrix_is_the_uvms_model_one(allocator: ThrusterAllocator) -> None:
-    """E built by the allocator equals uvms_model.thrusters.configuration_matrix (eq. 9)."""
-    np.testing.assert_allclose(
-        allocator.params.configuration_matrix(), LAYOUT.configuration_matrix(3)
-    )
+#: 1/√2: the horizontal thrusters of config/robot.yaml are vectored at 45 degrees.
+C45 = 0.5**0.5
+#: Columns of E (eq. 9) written out from config/robot.yaml's layout: force = direction d,
+#: moment = position r x d, in base_link_frd (not from the code under test).
+HAND_COLUMNS = {
+    # Thruster 0: r = (0.35, 0.25, 0), d = (c, -c, 0): r x d = (0, 0, -0.35 c - 0.25 c).
+    0: [C45, -C45, 0.0, 0.0, 0.0, -0.6 * C45, 0.0, 0.0, 0.0],
+    # Thruster 4: r = (0.25, 0.3, 0), d = (0, 0, 1): r x d = (0.3, -0.25, 0).
+    4: [0.0, 0.0, 1.0, 0.3, -0.25, 0.0, 0.0, 0.0, 0.0],
+}
+
+
+@pytest.mark.parametrize('thruster', sorted(HAND_COLUMNS))
+def test_configuration_matrix_column_is_direction_and_moment_of_the_thruster(
+    allocator: ThrusterAllocator, thruster: int
+) -> None:
+    """Column i of E is [d_i; r_i x d_i] (eq. 9), written out by hand from the layout."""
+    e = allocator.params.configuration_matrix()
+    np.testing.assert_allclose(e[:, thruster], HAND_COLUMNS[thruster], atol=1e-12)
+
+
+def test_configuration_matrix_passes_joint_torques_straight_through(
+    allocator: ThrusterAllocator,
+) -> None:
+    """The arm block of E is I_3 and the thrusters give no joint torque (eq. 9)."""
+    e = allocator.params.configuration_matrix()
+    assert e.shape == (9, LAYOUT.count + 3)
+    np.testing.assert_array_equal(e[6:, LAYOUT.count:], np.eye(3))
+    np.testing.assert_array_equal(e[6:, :LAYOUT.count], 0.0)
+    np.testing.assert_array_equal(e[:6, LAYOUT.count:], 0.0)
 
 
 def test_pseudo_inverse_is_a_right_inverse(allocator: ThrusterAllocator) -> None:

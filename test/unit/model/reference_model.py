@@ -21,22 +21,154 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import lapack  # type: ignore[import-untyped]
-from uvms_model.errors import ModelError, StateError, UnreachableError
-from uvms_model.hydrodynamics import (
-    cylinder_added_mass,
-    cylinder_inertia,
-    hull_quadratic_drag,
-    rigid_body_inertia,
-    spheroid_added_mass,
-    strip_nodes,
-)
-from uvms_model.kinematics import check_pitch
-from uvms_model.model import TaskSpaceTerms
 from uvms_model.parameters import UvmsParameters
+
+# Only the parameter values come from uvms_model; every closed form below is written out here.
+
+FloatArray = NDArray[np.float64]
+
+
+class ModelError(Exception):
+    """The reference model cannot do what was asked (a bad frame, a bad method)."""
+
+
+class StateError(ModelError):
+    """A state or input of the wrong shape or not finite."""
+
+
+class UnreachableError(ModelError):
+    """An end-effector position out of the arm's reach."""
+
+
+class SingularAttitudeError(StateError):
+    """Pitch within a milliradian of +-90 deg, where J2 of sec. 3.2 is singular."""
+
+
+#: |cos(pitch)| below which the Euler-angle rate matrix J2 counts as singular.
+SINGULAR_COS_PITCH = 1e-3
+
+
+def check_pitch(theta: float, name: str = 'q') -> float:
+    """cos(theta), raising SingularAttitudeError near pitch = +-90 deg (paper sec. 3.2)."""
+    c = math.cos(theta)
+    if abs(c) < SINGULAR_COS_PITCH:
+        raise SingularAttitudeError(f'{name}: pitch theta = {theta!r} rad is at +-90 deg')
+    return c
+
+
+class TaskSpaceTerms(NamedTuple):
+    """What the controller needs at one state, field for field as uvms_model's."""
+
+    X: NDArray[np.float64]
+    J: NDArray[np.float64]
+    J_dot_q_dot: NDArray[np.float64]
+    M: NDArray[np.float64]
+    zeta: NDArray[np.float64]
+    B: NDArray[np.float64]
+    rot_ned_from_ee: NDArray[np.float64]
+    q_dot: NDArray[np.float64]
+
+
+def _lamb_factors(a: float, b: float) -> tuple[float, float, float]:
+    """Lamb's (1932, sec. 373) k1 (axial), k2 (lateral), k' (rotation) of a prolate spheroid.
+
+    e = sqrt(1 - b^2/a^2), alpha0 = 2 (1 - e^2)/e^3 (artanh e - e),
+    beta0 = 1/e^2 - (1 - e^2)/e^3 artanh e; k1 = alpha0/(2 - alpha0), k2 = beta0/(2 - beta0),
+    k' = (b^2 - a^2)^2 (alpha0 - beta0) / ((2 (b^2 - a^2) + (b^2 + a^2)(beta0 - alpha0))
+    (a^2 + b^2)).
+    """
+    e = math.sqrt(1.0 - (b / a) ** 2)
+    artanh = math.atanh(e)
+    alpha0 = 2.0 * (1.0 - e * e) / e**3 * (artanh - e)
+    beta0 = 1.0 / (e * e) - (1.0 - e * e) / e**3 * artanh
+    a2, b2 = a * a, b * b
+    k_rot = (b2 - a2) ** 2 * (alpha0 - beta0) / (
+        (2.0 * (b2 - a2) + (b2 + a2) * (beta0 - alpha0)) * (a2 + b2))
+    return alpha0 / (2.0 - alpha0), beta0 / (2.0 - beta0), k_rot
+
+
+def spheroid_added_mass(a: float, b: float, rho: float) -> FloatArray:
+    """M_A (6, 6) of a prolate spheroid (semi-axes a along x, b) at its centre, by Lamb.
+
+    Displaced mass m_f = 4/3 pi rho a b^2: k1 m_f in surge, k2 m_f in sway and heave, none in
+    roll (a body of revolution), k' m_f (a^2 + b^2)/5 in pitch and yaw.
+    """
+    m_f = 4.0 / 3.0 * math.pi * rho * a * b * b
+    k1, k2, k_rot = _lamb_factors(a, b)
+    rotary = k_rot * m_f * (a * a + b * b) / 5.0
+    return np.diag([k1 * m_f, k2 * m_f, k2 * m_f, 0.0, rotary, rotary])
+
+
+def cylinder_added_mass(length: float, radius: float, rho: float) -> FloatArray:
+    """M_A (6, 6) of a slender cylinder along x over [0, L], at x = 0, by strip theory.
+
+    Each strip dx carries rho pi r^2 dx across the axis and moves sideways with v + r x,
+    vertically with w - q x: int_0^L (1, x, x^2) dx = (L, L^2/2, L^3/3) gives the lateral,
+    coupling and rotary terms. Along the axis: Lamb's k1 of the spheroid of semi-axes L/2, r
+    times the cylinder's displaced mass. Roll: none (a circular section).
+    """
+    per_metre = rho * math.pi * radius * radius
+    lateral = per_metre * length
+    coupling = per_metre * length**2 / 2.0
+    rotary = per_metre * length**3 / 3.0
+    added = np.zeros((6, 6))
+    added[0, 0] = _lamb_factors(0.5 * length, radius)[0] * lateral
+    added[1, 1] = added[2, 2] = lateral
+    added[1, 5] = added[5, 1] = coupling  # sway force from yaw rate: v + r x
+    added[2, 4] = added[4, 2] = -coupling  # heave force from pitch rate: w - q x
+    added[4, 4] = added[5, 5] = rotary
+    return added
+
+
+def rigid_body_inertia(mass: float, com: FloatArray, inertia_com: FloatArray) -> FloatArray:
+    """Spatial inertia at the frame origin, [linear; angular]: parallel-axis theorem written out.
+
+    [[m I, -m [c]x], [m [c]x, I_c - m [c]x [c]x]] with [c]x the cross-product matrix.
+    """
+    cx, cy, cz = (float(v) for v in com)
+    skew = np.array([[0.0, -cz, cy], [cz, 0.0, -cx], [-cy, cx, 0.0]])
+    spatial = np.zeros((6, 6))
+    spatial[:3, :3] = mass * np.eye(3)
+    spatial[:3, 3:] = -mass * skew
+    spatial[3:, :3] = mass * skew
+    spatial[3:, 3:] = inertia_com - mass * skew @ skew
+    return spatial
+
+
+def cylinder_inertia(mass: float, length: float, radius: float) -> FloatArray:
+    """Solid cylinder about its centre, axis x: m r^2/2 axial, m (3 r^2 + L^2)/12 across."""
+    across = mass * (3.0 * radius * radius + length * length) / 12.0
+    return np.diag([0.5 * mass * radius * radius, across, across])
+
+
+def hull_quadratic_drag(
+    a: float, b: float, rho: float, cd_trans: float, cd_rot: float
+) -> FloatArray:
+    """Quadratic drag coefficients (6,) of the spheroid hull, 1/2 rho C_D times a silhouette.
+
+    Surge: the disc pi b^2; sway, heave: the ellipse pi a b. Pitch, yaw: int |x|^3 of the
+    strips 2 b sqrt(1 - x^2/a^2) over [-a, a] = 8/15 a^4 b; roll: a and b exchanged.
+    """
+    half = 0.5 * rho
+    return np.array([
+        half * cd_trans * math.pi * b * b,
+        half * cd_trans * math.pi * a * b,
+        half * cd_trans * math.pi * a * b,
+        half * cd_rot * 8.0 / 15.0 * a * b**4,
+        half * cd_rot * 8.0 / 15.0 * a**4 * b,
+        half * cd_rot * 8.0 / 15.0 * a**4 * b,
+    ])
+
+
+def strip_nodes(length: float, count: int) -> tuple[FloatArray, FloatArray]:
+    """Gauss-Legendre nodes mapped from [-1, 1] to [0, L]: strip centres and widths (m)."""
+    xi, weights = np.polynomial.legendre.leggauss(count)
+    return 0.5 * length * (xi + 1.0), 0.5 * length * weights
 
 
 @dataclass(frozen=True)
@@ -76,7 +208,6 @@ class ReferenceRobot:
     vehicle: ReferenceVehicle = field(default_factory=ReferenceVehicle)
     arm: ReferenceArm = field(default_factory=ReferenceArm)
 
-FloatArray = NDArray[np.float64]
 
 N_JOINTS = 3
 N_DOF = 6 + N_JOINTS

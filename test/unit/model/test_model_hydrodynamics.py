@@ -76,13 +76,37 @@ def test_cylinder_added_mass_is_the_strip_integral_of_kinetic_energy(
     assert np.linalg.eigvalsh(added).min() > -1e-12
 
 
-def test_hull_rotational_drag_is_the_strip_integral_over_the_silhouette() -> None:
-    """Pitch drag 1/2 rho C_D int |x|^3 2b sqrt(1 - x^2/a^2) dx, by quadrature."""
-    a, b, rho, cd = 0.5, 0.25, 1025.0, 1.0
-    integral = quad(lambda x: abs(x) ** 3 * 2 * b * np.sqrt(1 - x**2 / a**2), -a, a)[0]
-    coefficients = hull_quadratic_drag(a, b, rho, 1.05, cd)
-    assert coefficients[4] == pytest.approx(0.5 * rho * cd * integral, rel=1e-9)
-    assert coefficients[0] == pytest.approx(0.5 * rho * 1.05 * np.pi * b**2, rel=1e-12)
+HULL_A, HULL_B, HULL_CD_TRANSLATION, HULL_CD_ROTATION = 0.5, 0.25, 1.05, 0.9
+
+
+def _silhouette(half_length: float, half_width: float, power: int) -> float:
+    """An ellipse's strips by quadrature: int |s|^power 2 w sqrt(1 - s^2/l^2) ds on [-l, l]."""
+    return float(quad(lambda s: abs(s) ** power * 2.0 * half_width
+                      * np.sqrt(1.0 - s**2 / half_length**2), -half_length, half_length)[0])
+
+
+#: Per quasi-velocity: (drag coefficient, the integral over the projected silhouette).
+#: Translation: the projected area (a disc of radius b across surge; an ellipse of semi-axes
+#: a, b across sway and heave). Rotation: int |s|^3 h(s) ds over strips along the long axis
+#: (pitch, yaw) and, a and b exchanged, along the short one (roll).
+HULL_DRAG_INTEGRALS = {
+    'surge': (0, HULL_CD_TRANSLATION, lambda: _silhouette(HULL_B, HULL_B, 0)),
+    'sway': (1, HULL_CD_TRANSLATION, lambda: _silhouette(HULL_A, HULL_B, 0)),
+    'heave': (2, HULL_CD_TRANSLATION, lambda: _silhouette(HULL_A, HULL_B, 0)),
+    'roll': (3, HULL_CD_ROTATION, lambda: _silhouette(HULL_B, HULL_A, 3)),
+    'pitch': (4, HULL_CD_ROTATION, lambda: _silhouette(HULL_A, HULL_B, 3)),
+    'yaw': (5, HULL_CD_ROTATION, lambda: _silhouette(HULL_A, HULL_B, 3)),
+}
+
+
+@pytest.mark.parametrize('axis', list(HULL_DRAG_INTEGRALS))
+def test_hull_drag_coefficient_is_the_integral_over_the_silhouette(axis: str) -> None:
+    """D_i = 1/2 rho C_D times the silhouette integral of its axis, by quadrature (all six)."""
+    rho = 1025.0
+    index, cd, integral = HULL_DRAG_INTEGRALS[axis]
+    coefficients = hull_quadratic_drag(HULL_A, HULL_B, rho, HULL_CD_TRANSLATION,
+                                       HULL_CD_ROTATION)
+    assert coefficients[index] == pytest.approx(0.5 * rho * cd * integral(), rel=1e-9)
 
 
 @pytest.mark.parametrize('count', [1, 4, 8])

@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 from uvms_model.kinematics import rot_ned_from_body
-from uvms_model.thrusters import configuration_matrix
 from uvms_sim.errors import CommandError, DivergenceError, SimParameterError, SimulationError
 from uvms_sim.plant import Plant, initial_coordinates
 
@@ -28,13 +27,46 @@ def zero_inputs(plant: Plant) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros(plant.n_thrusters), np.zeros(plant.n_joints)
 
 
-def test_actuators_map_to_body_forces_through_configuration_matrix() -> None:
-    """tau_b = E [thrusts; joint torques] (paper eq. 9)."""
+#: 1/√2: the horizontal thrusters of config/robot.yaml are vectored at 45 degrees.
+C45 = 0.5**0.5
+#: Columns of E (eq. 9) written out from config/robot.yaml's layout: force = direction d,
+#: moment = position r x d, in base_link_frd (not from the code under test).
+HAND_COLUMNS = {
+    # Thruster 0: r = (0.35, 0.25, 0), d = (c, -c, 0): r x d = (0, 0, -0.35 c - 0.25 c).
+    0: [C45, -C45, 0.0, 0.0, 0.0, -0.6 * C45, 0.0, 0.0, 0.0],
+    # Thruster 4: r = (0.25, 0.3, 0), d = (0, 0, 1): r x d = (0.3, -0.25, 0).
+    4: [0.0, 0.0, 1.0, 0.3, -0.25, 0.0, 0.0, 0.0, 0.0],
+}
+
+
+@pytest.mark.parametrize('thruster', sorted(HAND_COLUMNS))
+def test_one_thrust_gives_its_direction_as_force_and_position_cross_direction_as_moment(
+    thruster: int,
+) -> None:
+    """tau_b of a unit thrust on one thruster is [d; r x d] (paper eq. 9), no joint torque."""
+    plant = plant_with_ee_at([1.7, 0.0, -0.1])
+    thrusts = np.zeros(plant.n_thrusters)
+    thrusts[thruster] = 1.0
+    tau = plant.tau_body(thrusts, np.zeros(3))
+    np.testing.assert_allclose(tau, HAND_COLUMNS[thruster], atol=1e-12)
+
+
+def test_joint_motor_torques_pass_straight_to_the_joints() -> None:
+    """The arm block of E is the identity: joint torques appear unchanged, no vehicle wrench."""
+    plant = plant_with_ee_at([1.7, 0.0, -0.1])
+    tau = plant.tau_body(np.zeros(plant.n_thrusters), np.array([1.5, -2.0, 0.25]))
+    np.testing.assert_allclose(tau, [0.0] * 6 + [1.5, -2.0, 0.25], atol=1e-12)
+
+
+def test_actuator_map_is_linear() -> None:
+    """tau_b(a u + b v) = a tau_b(u) + b tau_b(v): E is a matrix (eq. 9)."""
     plant = plant_with_ee_at([1.7, 0.0, -0.1])
     rng = np.random.default_rng(3)
-    thrusts, torques = rng.normal(size=plant.n_thrusters), rng.normal(size=3)
-    expected = configuration_matrix(PARAMS.thrusters, 3) @ np.concatenate((thrusts, torques))
-    np.testing.assert_allclose(plant.tau_body(thrusts, torques), expected, atol=1e-12)
+    u, v = rng.normal(size=(2, plant.n_thrusters + 3))
+    n = plant.n_thrusters
+    combined = plant.tau_body(*np.split(2.0 * u - 3.0 * v, [n]))
+    separate = 2.0 * plant.tau_body(*np.split(u, [n])) - 3.0 * plant.tau_body(*np.split(v, [n]))
+    np.testing.assert_allclose(combined, separate, atol=1e-12)
 
 
 def test_initial_ee_position_is_reached_by_inverse_kinematics() -> None:
