@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import atexit
 import functools
 import importlib
 import sys
@@ -236,6 +237,9 @@ class RecorderNode(Node):
         )
         self._subscriptions_by_topic: dict[str, Any] = {}
         self._lock = threading.Lock()
+        # Closed at exit whatever happens: a stop signal that interrupts the node's start-up
+        # after this point (run_node) leaves no node to close, yet the file gets its summary.
+        atexit.register(self._close_at_exit)
         try:
             for topic, type_name in topics:
                 resolved = self.resolve_topic_name(topic)
@@ -301,6 +305,12 @@ class RecorderNode(Node):
         self.get_logger().info(
             f'closed {self._recorder.path}: {self._recorder.message_count} messages'
         )
+
+    def _close_at_exit(self) -> None:
+        """Close the file if nothing did (no logging: rclpy may be shut down by then)."""
+        with self._lock:
+            if not self._recorder.closed:
+                self._recorder.close()
 
     def destroy_node(self) -> None:
         """Close the recording, then destroy the node."""

@@ -221,3 +221,29 @@ def test_chunk_size_outside_its_range_stops_the_node_with_the_range(context: Con
     """chunk_size_bytes below 1024 is refused by its descriptor, naming the bounds."""
     with pytest.raises(ParameterException, match=r'chunk_size_bytes.*Min: 1024'):
         _recorder(context, tmp_path / 'x.mcap', chunk_size_bytes=5)
+
+
+def test_a_recorder_nobody_closed_leaves_a_complete_file_at_exit(tmp_path: Path) -> None:
+    """A process that loses its recorder node unclosed still leaves a closed MCAP file.
+
+    A stop signal at the very end of the node's start-up leaves run_node no node to close;
+    the node then closes its file at interpreter exit.
+    """
+    import subprocess
+    import sys
+
+    path = tmp_path / 'abandoned.mcap'
+    script = (
+        'import rclpy\n'
+        'from rclpy.parameter import Parameter\n'
+        'from uvms_recording.recorder_node import RecorderNode\n'
+        'rclpy.init()\n'
+        f"RecorderNode(parameter_overrides=[Parameter('output_path', value={str(path)!r})])\n"
+        'raise SystemExit(0)  # the node is neither closed nor destroyed\n'
+    )
+    result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                            timeout=120, check=False)
+    assert result.returncode == 0, result.stderr
+    with path.open('rb') as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None and summary.statistics is not None
