@@ -28,6 +28,7 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.action.client import ClientGoalHandle
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 from rclpy.task import Future
 from uvms_common.node_main import run_node
 
@@ -93,8 +94,11 @@ class MissionNode(Node):
         self._server_seen_s: float | None = None
         self._handle: ClientGoalHandle | None = None
         self.client = ContactTaskClient(self)
-        # The state topic drives the mission: every control step is a chance to start.
-        self.create_subscription(ControllerState, 'controller/state', self._on_state, 1)
+        # The state topic drives the mission: every control step is a chance to start. Taken
+        # raw, and decoded only when a goal is to go out (500 decodes per second cost the
+        # lockstep graph time for nothing while a goal runs).
+        self.create_subscription(ControllerState, 'controller/state', self._on_state, 1,
+                                 raw=True)
         self.get_logger().info(
             f'mission of {len(self.tasks)} task(s) for {self.client.action_name}; waiting for '
             'the action server and controller/state')
@@ -105,11 +109,12 @@ class MissionNode(Node):
         return (self.finished and len(self.results) == len(self.tasks)
                 and all(outcome.succeeded for outcome in self.results))
 
-    def _on_state(self, msg: ControllerState) -> None:
-        p = msg.desired_position
+    def _on_state(self, data: bytes) -> None:
+        if self._busy or self.finished or not self._server_settled():
+            return
+        p = deserialize_message(data, ControllerState).desired_position
         self._target = (p.x, p.y, p.z)
-        if not self._busy and not self.finished and self._server_settled():
-            self._send_next()
+        self._send_next()
 
     def _server_settled(self) -> bool:
         """The action server is discovered, and has had server_settle_s to discover us."""
@@ -167,10 +172,7 @@ class MissionNode(Node):
             self.get_logger().error(outcome.describe())
         done = len(self.results) == len(self.tasks)
         if not done and (outcome.succeeded or self.continue_on_failure):
-            if self._target is not None and self.client.server_is_ready():
-                self._send_next()
-            else:
-                self._busy = False
+            self._busy = False  # the next state message sends it, from the X_d of then
             return
         self._busy = False
         self.finished = True
