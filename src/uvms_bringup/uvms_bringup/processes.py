@@ -257,8 +257,8 @@ class Launcher:
                 return 'stopped', None
             for process in self.processes:
                 status = process.poll()
-                if status is None or (status == 0 and process.plan.spec.finishes):
-                    continue  # running, or done with its job (the mission)
+                if status is None or process.plan.spec.finishes:
+                    continue  # running, or done with its job (a mission logs its own outcome)
                 if process.name == end_node and status == 0:
                     return 'finished', process
                 return 'failed', process

@@ -164,7 +164,7 @@ def run_node(
 
     A ``StopEvent`` already installed (``uvms_common.node_entry``, before the node's
     imports) is taken over, so a signal received during the imports counts too; one received
-    while the node is being built interrupts that (KeyboardInterrupt, exit 0).
+    while the node is being built ends it as soon as it is built (exit 0).
     """
     ros_environment_defaults()
     earlier = active_stop_event()
@@ -176,8 +176,9 @@ def run_node(
     executor: Executor | None = None
     status = 0
     try:
-        with stop.interrupting():
-            node = make_node()
+        # Not interrupted by a stop signal: an exception raised into the model's or Numba's
+        # loading (LLVM callbacks) leaves tracebacks; a stop then ends the node right after.
+        node = make_node()
         executor = make_executor()
         executor.add_node(node)
         built = node
