@@ -218,18 +218,21 @@ class TaskSupervisor:
                                      self.limits.retreat_m, self.limits.retreat_time_s)
 
     def _check_limits(self, result: ControllerResult, f_sensor: FloatArray,
-                      normal: FloatArray) -> tuple[TaskCode, str] | None:
+                      f_normal: float) -> tuple[TaskCode, str] | None:
+        """The first limit breached at this step, with its message; None within all.
+
+        Plain floats: this runs at every control step.
+        """
         limits = self.limits
-        f_normal = float(normal @ result.F_e)
         if f_normal > limits.max_contact_force_n:
             return TaskCode.FORCE_LIMIT, (f'contact force {f_normal:.1f} N exceeds '
                                           f'safety.max_contact_force_n = '
                                           f'{limits.max_contact_force_n} N')
-        reading = float(np.max(np.abs(f_sensor)))
+        reading = max(abs(value) for value in f_sensor.tolist())
         if reading >= SATURATION_SHARE * limits.sensor_range_n:
             return TaskCode.FORCE_LIMIT, (f'wrist sensor saturated: {reading:.1f} N of its '
                                           f'{limits.sensor_range_n} N range')
-        error = float(np.linalg.norm(result.X_d - result.X))
+        error = math.dist(result.X_d.tolist(), result.X.tolist())
         if error > limits.max_position_error_m:
             return TaskCode.TRACKING_LIMIT, (f'position error |X_d - X| = {error:.3f} m '
                                              f'exceeds safety.max_position_error_m = '
@@ -240,12 +243,12 @@ class TaskSupervisor:
                     f_sensor: FloatArray) -> list[TaskEvent]:
         running = self._running
         normal = running.normal if running is not None else self.controller.n
-        breach = self._check_limits(result, f_sensor, normal)
+        f_normal = float(normal @ result.F_e)
+        breach = self._check_limits(result, f_sensor, f_normal)
         self.breach = None if breach is None else breach[1]
         if running is None:
             return []
         task = self.controller.task
-        f_normal = float(normal @ result.F_e)
         running.figures.update(t, dt, f_normal, f_normal >= task.contact_threshold_n,
                                task.force_active and self._at_setpoint(result, running))
         if breach is not None and running.state in (TaskState.FOLLOWING, TaskState.RELEASING):
