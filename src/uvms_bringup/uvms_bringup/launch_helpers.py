@@ -14,9 +14,10 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from uvms_tasks.task_file import Yaml12Loader
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
-from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioLoader
+from uvms_bringup.scenario import ParameterValue, Scenario
 
 #: Namespace of the robot's nodes and topics (``/clock``, ``/tf`` stay global).
 DEFAULT_NAMESPACE = 'uvms'
@@ -101,7 +102,7 @@ def mission_file_text(scenario: Scenario) -> str:
     """The scenario's ``mission:`` as the text of a mission file ('' without a mission)."""
     if not scenario.mission:
         return ''
-    document = yaml.load(scenario.path.read_text(encoding='utf-8'), Loader=ScenarioLoader)
+    document = yaml.load(scenario.path.read_text(encoding='utf-8'), Loader=Yaml12Loader)
     return yaml.safe_dump({'mission': document['mission']}, sort_keys=False)
 
 

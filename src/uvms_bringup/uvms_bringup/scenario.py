@@ -40,7 +40,7 @@ from typing import Any, TypeAlias
 import numpy as np
 import yaml
 from uvms_tasks.errors import TaskFileError
-from uvms_tasks.task_file import TaskSpec, parse_mission
+from uvms_tasks.task_file import TaskSpec, Yaml12Loader, parse_mission
 
 #: A ROS 2 parameter value as a scenario may give it.
 ParameterValue: TypeAlias = (
@@ -59,24 +59,6 @@ _MAX_SEED = 2**31 - 1
 
 class ScenarioError(ValueError):
     """A scenario file cannot be read or does not follow the schema."""
-
-
-class ScenarioLoader(yaml.SafeLoader):
-    """YAML loader that reads ``1e4`` as a float, as ROS 2 parameter files do (YAML 1.2)."""
-
-
-ScenarioLoader.add_implicit_resolver(  # type: ignore[no-untyped-call]
-    'tag:yaml.org,2002:float',
-    re.compile(
-        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-        |\.[0-9_]+(?:[eE][-+][0-9]+)?
-        |[-+]?\.(?:inf|Inf|INF)
-        |\.(?:nan|NaN|NAN))$""",
-        re.VERBOSE,
-    ),
-    list('-+0123456789.'),
-)
 
 
 @dataclass(frozen=True)
@@ -239,7 +221,7 @@ def read_yaml_file(path: Path, what: str, error: type[Exception]) -> Any:
         msg = f'{path}: cannot read the {what}: {exc.strerror or exc}'
         raise error(msg) from exc
     try:
-        return yaml.load(text, Loader=ScenarioLoader)  # a SafeLoader subclass
+        return yaml.load(text, Loader=Yaml12Loader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         msg = f'{path}: not valid YAML: {exc}'
         raise error(msg) from exc

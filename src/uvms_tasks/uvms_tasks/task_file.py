@@ -67,11 +67,11 @@ MAX_POINTS = 10_000
 _REPR_CHARS = 60
 
 
-class _Loader(yaml.SafeLoader):
+class Yaml12Loader(yaml.SafeLoader):
     """YAML loader that reads ``1e4`` as a float, as ROS 2 parameter files do (YAML 1.2)."""
 
 
-_Loader.add_implicit_resolver(  # type: ignore[no-untyped-call]
+Yaml12Loader.add_implicit_resolver(  # type: ignore[no-untyped-call]
     'tag:yaml.org,2002:float',
     re.compile(
         r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
@@ -188,7 +188,7 @@ def load_task_file(path: str | Path) -> list[TaskSpec]:
         msg = f'{path}: cannot read the task file: {exc.strerror or exc}'
         raise TaskFileError(msg) from exc
     try:
-        data = yaml.load(text, Loader=_Loader)  # a SafeLoader subclass
+        data = yaml.load(text, Loader=Yaml12Loader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         detail = ' '.join(str(exc).split())
         msg = f'{path}: not valid YAML: {detail}'
