@@ -27,13 +27,15 @@ DH_ROWS = (
     (0.0, -math.pi / 2.0, 0.0, 0.0),  # fixed: the end-effector frame
 )
 #: DH frame 0 in base_link_frd: the mount (0.19, 0, 0.12) m, z0 along the base tube (forward),
-#: x0 up (-z of base_link_frd).
+#: x0 down (z of base_link_frd).
 MOUNT = np.array([
     [0.0, 0.0, 1.0, 0.19],
-    [0.0, 1.0, 0.0, 0.0],
-    [-1.0, 0.0, 0.0, 0.12],
+    [0.0, -1.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0, 0.12],
     [0.0, 0.0, 0.0, 1.0],
 ])
+#: The working pose (rad): jaw forward, below the front of the vehicle.
+WORKING_POSE = np.array([math.pi, 1.5, 1.5, 0.0])
 #: Reach's inertial table (kg): L0 the fixed base tube, L1..L4 the links of axes E, D, C, B.
 ARM_MASSES = {'alpha_base_link': 0.234, 'link_1': 0.161, 'link_2': 0.380, 'link_3': 0.142,
               'link_4': 0.355}
@@ -141,16 +143,16 @@ def test_forward_kinematics_equals_the_dh_table(model: pin.Model, seed: int) -> 
 def test_sensor_frame_is_the_end_effector_frame(model: pin.Model) -> None:
     """ft_sensor_link reports in ee_link's pose, as the stack's sensor frames do."""
     data = model.createData()
-    pin.framesForwardKinematics(model, data, np.array([0.3, 1.5, 1.5, 0.7]))
+    pin.framesForwardKinematics(model, data, WORKING_POSE + 0.3)
     ee = data.oMf[model.getFrameId('ee_link')]
     sensor = data.oMf[model.getFrameId('ft_sensor_link')]
     np.testing.assert_allclose(sensor.homogeneous, ee.homogeneous, atol=1e-12)
 
 
 def test_arm_hangs_below_the_front_and_works_forward(model: pin.Model) -> None:
-    """At q = (0, 1.5, 1.5, 0) the jaw points forward, ahead of and below the vehicle frame."""
+    """At the working pose the jaw points forward, ahead of and below the vehicle frame."""
     data = model.createData()
-    pin.framesForwardKinematics(model, data, np.array([0.0, 1.5, 1.5, 0.0]))
+    pin.framesForwardKinematics(model, data, WORKING_POSE)
     ee = data.oMf[model.getFrameId('ee_link')]
     assert ee.translation[0] > 0.457 / 2.0 + 0.1
     assert ee.translation[2] > 0.254 / 2.0
