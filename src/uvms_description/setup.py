@@ -13,8 +13,10 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/urdf', glob('urdf/*.urdf')),
-        ('share/' + package_name + '/config', glob('config/*.yaml')),
+        *[
+            ('share/' + package_name + '/' + folder, glob(folder + '/*.*'))
+            for folder in sorted(glob('robots/*'))
+        ],
         ('share/' + package_name + '/meshes', glob('meshes/*.stl')),
         ('share/' + package_name + '/foxglove', glob('foxglove/*.json')),
     ],
@@ -23,8 +25,8 @@ setup(
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
     description=(
-        'Robot description of the UVMS (paper section 5.1): URDF, hydrodynamic parameters '
-        'keyed by link name, hull mesh.'
+        'Robot descriptions of UVMS, one folder per robot: URDF (or xacro), hydrodynamics, '
+        'thrusters, wrist sensor and controller gains; hull mesh, Foxglove layout.'
     ),
     license='Apache-2.0',
     entry_points={

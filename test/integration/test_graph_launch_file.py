@@ -111,7 +111,7 @@ def test_parameter_file_sections_for_one_node_are_merged() -> None:
     robot = file_parameters(config / 'robot.yaml', 'controller', 'uvms')
     gains = file_parameters(config / 'controller.yaml', 'controller', 'uvms')
     assert robot['contact.stiffness_n_m'] == 10000.0
-    assert gains['force.contact_threshold_n'] == 5.0
+    assert gains['fuzzy.no_rule_weight'] == 1.0
     assert 'rate_hz' not in gains  # the allocator's section
 
 

@@ -52,6 +52,7 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     output_path = LaunchConfiguration('output_path').perform(context)
     namespace = LaunchConfiguration('namespace').perform(context)
     foxglove = LaunchConfiguration('foxglove').perform(context).lower() in ('true', '1')
+    robot = LaunchConfiguration('robot').perform(context) or None
     foxglove_address = (LaunchConfiguration('foxglove_host').perform(context),
                         int(LaunchConfiguration('foxglove_port').perform(context)))
     if mode not in MODES:
@@ -60,6 +61,7 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     scenario = None
     if scenario_arg:
         scenario = load_scenario(resolve_scenario_path(scenario_arg, Path(config)))
+        scenario = scenario.with_changes(robot=robot)
         # Typed as uvms run and uvms launch type them (an int on a float parameter is a float).
         scenario = check_scenario_overrides(scenario, config=Path(config),
                                             namespace=namespace or DEFAULT_NAMESPACE)
@@ -68,7 +70,7 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     mission = scenario is not None and bool(scenario.mission)
     for spec in graph_nodes(record=bool(output_path), foxglove=foxglove, mission=mission):
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
-                                    foxglove_address)
+                                    foxglove_address, robot)
         if spec is MISSION:
             assert scenario is not None
             overrides['mission_file'] = str(write_mission_file(
@@ -107,6 +109,11 @@ def generate_launch_description() -> LaunchDescription:
             'scenario', default_value='',
             description='Scenario name (config/scenarios/NAME.yaml) or path to a scenario '
                         'file; empty: the defaults of the parameter files.',
+        ),
+        DeclareLaunchArgument(
+            'robot', default_value='',
+            description="Robot folder of uvms_description (robots/NAME); empty: the "
+                        "scenario's robot:, else paper_uvms.",
         ),
         DeclareLaunchArgument(
             'mode', default_value='realtime', choices=list(MODES),

@@ -83,7 +83,9 @@ def check_scenario_overrides(
             level = rclpy.logging.get_logger_level(logger)
             rclpy.logging.set_logger_level(logger, rclpy.logging.LoggingSeverity.WARN)
             try:
-                node = make_node(spec, {}, config, namespace, context)
+                robot = ({'robot_name': scenario.robot}
+                         if scenario.robot is not None and spec.takes_robot else {})
+                node = make_node(spec, robot, config, namespace, context)
                 try:
                     for name, value in scenario.overrides[spec.name].items():
                         checked[spec.name][name] = _check_override(

@@ -118,6 +118,7 @@ def build_graph(
     config: Path | None = None,
     extra_overrides: Mapping[str, Mapping[str, ParameterValue]] | None = None,
     foxglove: tuple[str, int] | None = None,
+    robot: str | None = None,
 ) -> Graph:
     """Build the nodes of the graph in a fresh rclpy context.
 
@@ -131,6 +132,8 @@ def build_graph(
         extra_overrides: Further parameters per node name (tests, benchmarks).
         foxglove: Host and port of a Foxglove live view (the ``foxglove_server`` node);
             None runs without it.
+        robot: Robot folder (``robot_name`` of the nodes that take it); None: the
+            scenario's ``robot:``, else the nodes' default (paper_uvms).
 
     Raises:
         ScenarioError: A scenario override names no parameter of its node, or has the
@@ -142,11 +145,13 @@ def build_graph(
         duration_s = scenario.duration_s if scenario is not None else 0.0
     specs = graph_nodes(record=output_path is not None, foxglove=foxglove is not None)
     if scenario is not None:
-        scenario = check_scenario_overrides(scenario, specs, config, namespace)
+        scenario = check_scenario_overrides(scenario.with_changes(robot=robot), specs, config,
+                                            namespace)
     overrides = {
         spec.name: {
             **node_parameters(spec, scenario, mode, duration_s,
-                              None if output_path is None else str(output_path), foxglove),
+                              None if output_path is None else str(output_path), foxglove,
+                              robot),
             **(extra_overrides or {}).get(spec.name, {}),
         }
         for spec in specs

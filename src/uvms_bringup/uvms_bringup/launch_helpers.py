@@ -44,6 +44,7 @@ class NodeSpec:
         uses_sim_time: Whether the node runs on ``/clock`` (all but the clock source).
         finishes: Whether the node ends by itself, exit status 0, without ending the run
             (the mission node, once its goals are done).
+        takes_robot: Whether the node declares ``robot_name`` (loads a robot folder).
     """
 
     name: str
@@ -54,20 +55,21 @@ class NodeSpec:
     parameter_files: tuple[str, ...]
     uses_sim_time: bool = True
     finishes: bool = False
+    takes_robot: bool = False
 
 
 SIMULATOR = NodeSpec(
     'simulator', 'uvms_sim', 'simulator', 'uvms_sim.simulator_node', 'SimulatorNode',
-    ('robot.yaml',), uses_sim_time=False,
+    ('robot.yaml',), uses_sim_time=False, takes_robot=True,
 )
 CONTROLLER = NodeSpec(
     'controller', 'uvms_control', 'controller', 'uvms_control.controller_node',
-    'ControllerNode', ('robot.yaml', 'controller.yaml'),
+    'ControllerNode', ('robot.yaml', 'controller.yaml'), takes_robot=True,
 )
 THRUSTER_ALLOCATOR = NodeSpec(
     'thruster_allocator', 'uvms_control', 'thruster_allocator',
     'uvms_control.thruster_allocator_node', 'ThrusterAllocatorNode',
-    ('robot.yaml', 'controller.yaml'),
+    ('robot.yaml', 'controller.yaml'), takes_robot=True,
 )
 VISUALIZER = NodeSpec(
     'visualizer', 'uvms_viz', 'visualizer', 'uvms_viz.visualizer_node',
@@ -120,6 +122,7 @@ def node_parameters(
     duration_s: float | None = None,
     output_path: str | None = None,
     foxglove_address: tuple[str, int] | None = None,
+    robot: str | None = None,
 ) -> dict[str, ParameterValue]:
     """Parameters of one node beyond its parameter files: scenario overrides and mode.
 
@@ -131,6 +134,8 @@ def node_parameters(
             forever.
         output_path: MCAP file of the recorder.
         foxglove_address: Host and port of the Foxglove server (default ones if None).
+        robot: Robot folder for every node that takes ``robot_name``; None: the scenario's
+            ``robot:``, else the nodes' default.
 
     Returns:
         Parameter name to value; later entries win over the parameter files.
@@ -141,6 +146,9 @@ def node_parameters(
     values: dict[str, ParameterValue] = {}
     if scenario is not None:
         values.update(scenario.node_overrides(spec.name))
+    robot = robot if robot is not None else (scenario.robot if scenario is not None else None)
+    if robot is not None and spec.takes_robot:
+        values['robot_name'] = robot
     if spec.uses_sim_time:
         values['use_sim_time'] = True
     if spec is SIMULATOR:

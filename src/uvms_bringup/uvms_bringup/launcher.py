@@ -175,6 +175,7 @@ def launch_graph(
     stop: StopRequest | None = None,
     config: Path | None = None,
     foxglove: tuple[str, int] | None = None,
+    robot: str | None = None,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -193,6 +194,7 @@ def launch_graph(
         config: Directory of the parameter files (``config_dir()`` if None).
         foxglove: Host and port of a Foxglove live view (a ``foxglove_server`` process);
             None starts none.
+        robot: Robot folder (``robot_name`` of the nodes); None: the scenario's or default.
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -204,8 +206,12 @@ def launch_graph(
         LaunchError: A node cannot be started (missing parameter file or executable).
     """
     ros_environment_defaults()
+    extra: dict[str, dict[str, Any]] = {}
     if scenario is not None:
-        scenario = _check_overrides(scenario, namespace, config)
+        scenario = _check_overrides(scenario.with_changes(robot=robot), namespace, config)
+    elif robot is not None:
+        extra = {spec.name: {'robot_name': robot}
+                 for spec in graph_nodes(record=True, foxglove=True) if spec.takes_robot}
     own_stop = None
     if stop is None:
         from uvms_common.stop_event import StopEvent
@@ -215,7 +221,8 @@ def launch_graph(
         with tempfile.TemporaryDirectory(prefix='uvms_launch_') as parameters_dir:
             plans = plan_launch(scenario, mode, Path(parameters_dir), duration_s=duration_s,
                                 output_path=output_path, namespace=namespace, config=config,
-                                log_level='warn' if quiet else None, foxglove=foxglove)
+                                log_level='warn' if quiet else None, foxglove=foxglove,
+                                extra_overrides=extra)
             launcher = Launcher(plans)
             return _run(launcher, stop, mode, duration_s, quiet)
     finally:

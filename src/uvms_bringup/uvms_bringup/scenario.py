@@ -8,6 +8,8 @@ random seed, and overrides ROS parameters of the nodes of the graph::
     paper: Section 5.3.1, Fig. 8      # str, optional: where the paper shows it
     duration_s: 20.0                  # number > 0, required: simulated seconds
     seed: 1                           # int >= 0, optional (0): sensor noise seed (sensor.seed)
+    robot: paper_uvms                 # str, optional (paper_uvms): robot folder of
+                                      # uvms_description (robot_name of every node)
     simulator:                        # mapping, optional: simulator parameters
       contact:
         stiffness_n_m: 1.0e+4         # nested mappings are dotted names: contact.stiffness_n_m
@@ -51,7 +53,7 @@ ParameterValue: TypeAlias = (
 NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder')
 
 _REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
-_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'mission': 'list of tasks'}
+_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'robot': 'str', 'mission': 'list of tasks'}
 _KNOWN_KEYS = (*_REQUIRED, *_OPTIONAL, *NODE_SECTIONS)
 _NAME_SEGMENT = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _MAX_SEED = 2**31 - 1
@@ -75,6 +77,7 @@ class Scenario:
         overrides: Per node name, flat dotted parameter names and their values.
         mission: ContactTask goals the graph sends, in order (none: the graph holds and
             waits for goals).
+        robot: Robot folder of uvms_description (None: the nodes' default, paper_uvms).
     """
 
     path: Path
@@ -85,6 +88,7 @@ class Scenario:
     paper: str | None = None
     overrides: Mapping[str, Mapping[str, ParameterValue]] = field(default_factory=dict)
     mission: tuple[TaskSpec, ...] = ()
+    robot: str | None = None
 
     def node_overrides(self, node: str) -> dict[str, ParameterValue]:
         """Parameter overrides of one node, the seed included for the simulator."""
@@ -93,8 +97,9 @@ class Scenario:
             values['sensor.seed'] = self.seed
         return values
 
-    def with_changes(self, duration_s: float | None = None, seed: int | None = None) -> Scenario:
-        """Copy with the duration or seed replaced (command-line options)."""
+    def with_changes(self, duration_s: float | None = None, seed: int | None = None,
+                     robot: str | None = None) -> Scenario:
+        """Copy with the duration, seed or robot replaced (command-line options)."""
         if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0.0):
             msg = f'duration must be a positive number of seconds, got {duration_s}'
             raise ScenarioError(msg)
@@ -105,6 +110,7 @@ class Scenario:
             self,
             duration_s=self.duration_s if duration_s is None else float(duration_s),
             seed=self.seed if seed is None else seed,
+            robot=self.robot if robot is None else robot,
         )
 
 
@@ -257,6 +263,7 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
     name = _string(data, 'name', path)
     description = _string(data, 'description', path)
     paper = _string(data, 'paper', path) if 'paper' in data else None
+    robot = _string(data, 'robot', path) if 'robot' in data else None
     duration = data['duration_s']
     if isinstance(duration, bool) or not isinstance(duration, int | float):
         raise ScenarioError(type_error_message(path, 'duration_s', 'number (float, s)', duration))
@@ -292,6 +299,7 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         paper=paper,
         overrides=overrides,
         mission=mission,
+        robot=robot,
     )
 
 

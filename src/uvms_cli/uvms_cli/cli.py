@@ -124,6 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
     run.add_argument('--seed', type=_seed, metavar='N',
                      help="sensor noise seed (default: the scenario's)")
+    run.add_argument('--robot', metavar='NAME',
+                     help="robot folder of uvms_description (default: the scenario's robot:, "
+                          'else paper_uvms; uvms doctor lists them)')
     run.add_argument('--quiet', '-q', action='store_true',
                      help='no progress bar, only warnings, errors and the summary line')
     _add_foxglove_arguments(run)
@@ -144,6 +147,9 @@ def build_parser() -> argparse.ArgumentParser:
     launch.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
     launch.add_argument('--mode', choices=('realtime', 'lockstep'), default='realtime',
                         help='execution mode (default: realtime)')
+    launch.add_argument('--robot', metavar='NAME',
+                        help="robot folder of uvms_description (default: the scenario's "
+                             'robot:, else paper_uvms; uvms doctor lists them)')
     launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
     _add_foxglove_arguments(launch)
     for name, (_, help_text) in DELEGATED.items():
@@ -221,7 +227,7 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
                 duration = scenario.duration_s
         return launch_graph(scenario, args.mode, duration_s=duration,
                             output_path=args.output, quiet=args.quiet, stop=stop,
-                            foxglove=_foxglove_address(args))
+                            foxglove=_foxglove_address(args), robot=args.robot)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))
         return EXIT_USAGE
@@ -251,7 +257,7 @@ def _run_in_process(
         if args.quiet:
             _quiet_logs()
         graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration,
-                            foxglove=_foxglove_address(args))
+                            foxglove=_foxglove_address(args), robot=args.robot)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error(command, str(exc))
         return EXIT_USAGE

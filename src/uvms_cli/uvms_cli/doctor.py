@@ -125,7 +125,7 @@ def _sample(cls: type) -> Any:
         elif typ == 'sequence<double>':
             setattr(msg, name, [1.0, -2.5, 3.25])
         elif typ == 'sequence<string>':
-            setattr(msg, name, ['joint_1', 'joint_2', 'joint_3'])
+            setattr(msg, name, ['first', 'second', 'third'])
     return msg
 
 
@@ -151,6 +151,28 @@ def check_messages(types: Sequence[str]) -> tuple[list[tuple[str, str]], bool]:
         all_ok &= outcome.startswith('ok')
         results.append((typename, outcome))
     return results, all_ok
+
+
+def check_robots() -> tuple[list[tuple[str, str]], bool]:
+    """Each robot folder and whether its files are all there: ([(name, outcome)], all ok)."""
+    from uvms_description import robots_directory
+    from uvms_description.robots import RobotFolderError, robot_files, robot_names
+
+    try:
+        names = robot_names()
+        where = robots_directory()
+    except FileNotFoundError as exc:
+        return [('robots/', f'FileNotFoundError: {exc}')], False
+    results: list[tuple[str, str]] = []
+    for name in names:
+        try:
+            files = robot_files(name)
+        except RobotFolderError as exc:
+            results.append((name, str(exc)))
+            continue
+        results.append((name, f'ok ({files.urdf.relative_to(where)}, hydrodynamics and '
+                              f'{len(files.parameter_files)} parameter files)'))
+    return results, bool(results) and all(o.startswith('ok') for _, o in results)
 
 
 def _distribution_versions() -> tuple[list[tuple[str, str]], bool]:
@@ -198,6 +220,12 @@ def report(out: TextIO, types: Sequence[str] = USED_MESSAGE_TYPES) -> bool:
         mark = 'ok  ' if outcome.startswith('ok') else 'FAIL'
         out.write(f'  {mark} {typename}: {outcome}\n')
     ok = ok and messages_ok
+    robots, robots_ok = check_robots()
+    out.write(f'robots: uvms_description robots/ ({len(robots)} found; --robot NAME)\n')
+    for name, outcome in robots:
+        mark = 'ok  ' if outcome.startswith('ok') else 'FAIL'
+        out.write(f'  {mark} {name}: {outcome}\n')
+    ok = ok and robots_ok
     out.write('all good\n' if ok else 'PROBLEMS FOUND (see above)\n')
     return ok
 

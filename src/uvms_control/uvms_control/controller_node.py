@@ -45,6 +45,7 @@ from uvms_common.lifecycle import (
 from uvms_common.node_main import run_node
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
+from uvms_common import robot_parameters as robots
 from uvms_control import conversions, task_conversions
 from uvms_control.core.contact_task import SafetyLimits, TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
@@ -83,10 +84,14 @@ class ControllerNode(LifecycleNode):
             ControlParameterError: a parameter that configure refused, under ``autostart``.
         """
         super().__init__('controller', **kwargs)
-        self._robot = declare_parameters(self, PARAMETER_SPECS)
-        self._node_values = declare_parameters(self, CONTROLLER_NODE_PARAMETER_SPECS)
-        self._gains = declare_parameters(self, CONTROLLER_PARAMETER_SPECS)
-        self._safety = declare_parameters(self, SAFETY_PARAMETER_SPECS)
+        self.robot_name, robot = robots.declare_robot(self)
+        self._robot_files = robot
+        self._robot = robots.robot_model_values(declare_parameters(self, PARAMETER_SPECS, robot),
+                                                self.robot_name)
+        self._node_values = declare_parameters(self, CONTROLLER_NODE_PARAMETER_SPECS, robot)
+        self._gains = declare_parameters(self, CONTROLLER_PARAMETER_SPECS, robot)
+        self._safety = declare_parameters(self, SAFETY_PARAMETER_SPECS, robot)
+        robots.check_all_declared(self, robot)
         starting = declare_autostart(self)
         guard_change_state(self)
         self.core: UnifiedForceController | None = None
@@ -131,8 +136,9 @@ class ControllerNode(LifecycleNode):
             try:
                 model = UvmsModel(UvmsParameters.from_flat_dict(self._robot))
             except ModelError as error:
-                raise ControlParameterError('robot parameters', str(error),
-                                            'config/robot.yaml') from error
+                text = robots.with_robot_source(str(error), self._robot_files)
+                raise ControlParameterError('robot parameters', text,
+                                            f'robot {self.robot_name!r}') from error
             self.core = UnifiedForceController(gains, model)
             self.supervisor = TaskSupervisor(self.core, safety_limits(self._safety))
             self._configure_topics(node, model.joint_names)

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any, Protocol
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+from uvms_common.robot_parameters import robot_default
 
 from uvms_control.core.errors import ControlParameterError
+from uvms_description.robots import RobotParameter
 
 
 class Spec(Protocol):
@@ -63,11 +65,14 @@ def _valid_text(spec: Spec) -> str:
     return f'a {kind}{bounds}: {spec.description}'
 
 
-def declare_parameters(node: Node, specs: Iterable[Spec]) -> dict[str, Any]:
+def declare_parameters(
+    node: Node, specs: Iterable[Spec], robot: Mapping[str, RobotParameter] | None = None
+) -> dict[str, Any]:
     """Declare each spec read-only with its description and range; return name -> value.
 
-    Values come from the parameter files and overrides given to the node; lists come back as
-    Python lists.
+    Values come from the parameter files and overrides given to the node, else from the
+    robot's files (``robot``, see ``uvms_common.robot_parameters``), else the spec's default;
+    lists come back as Python lists.
 
     Raises:
         ControlParameterError: if a value has the wrong type or is outside a declared range.
@@ -75,6 +80,7 @@ def declare_parameters(node: Node, specs: Iterable[Spec]) -> dict[str, Any]:
     values: dict[str, Any] = {}
     for spec in specs:
         default = list(spec.default) if isinstance(spec.default, tuple) else spec.default
+        default = robot_default(robot or {}, spec.name, default)
         try:
             value = node.declare_parameter(spec.name, default, _descriptor(spec)).value
         except ParameterException as error:

@@ -31,6 +31,12 @@ from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, R
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
+from uvms_common.robot_parameters import (
+    check_all_declared,
+    declare_robot,
+    robot_model_values,
+    with_robot_source,
+)
 from uvms_model.thrusters import ThrusterLayout
 
 from uvms_control import conversions
@@ -60,8 +66,12 @@ class ThrusterAllocatorNode(LifecycleNode):
                 that configure refused (named, with its value and valid range).
         """
         super().__init__('thruster_allocator', **kwargs)
-        self._robot = declare_parameters(self, PARAMETER_SPECS)
-        self._values = declare_parameters(self, ALLOCATOR_PARAMETER_SPECS)
+        self.robot_name, robot = declare_robot(self)
+        self._robot_files = robot
+        self._robot = robot_model_values(declare_parameters(self, PARAMETER_SPECS, robot),
+                                         self.robot_name)
+        self._values = declare_parameters(self, ALLOCATOR_PARAMETER_SPECS, robot)
+        check_all_declared(self, robot)
         guard_change_state(self)
         starting = declare_autostart(self)
         self.core: ThrusterAllocator | None = None
@@ -141,7 +151,8 @@ class ThrusterAllocatorNode(LifecycleNode):
             )
         except ModelError as error:
             raise ControlParameterError(
-                'robot parameters', str(error), 'valid values (config/robot.yaml)'
+                'robot parameters', with_robot_source(str(error), self._robot_files),
+                f'valid values (robot {self.robot_name!r})'
             ) from error
         joint_names = description.joint_names
         thruster = thruster_parameters_from_flat_dict(

@@ -1,9 +1,14 @@
-"""Where the UVMS robot description is: its URDF, hydrodynamic parameters and hull mesh.
+"""Where the UVMS robot descriptions are: robots/<name>/ folders, the hull mesh, the layout.
 
-Three layouts are searched, in this order:
+A robot is a folder ``robots/<name>/`` (format: docs/robots.md, "Adding a robot"): its URDF
+(``robot.urdf`` or ``robot.urdf.xacro``), ``hydrodynamics.yaml``, and the ROS 2 parameter
+files ``thrusters.yaml``, ``sensor.yaml`` and ``controller.yaml``. ``uvms_description.robots``
+finds, checks and reads them.
+
+Three layouts are searched for the share directory, in this order:
 
 1. a source checkout or an editable install: the package folder ``src/uvms_description``
-   beside this module (``urdf/``, ``config/``, ``meshes/``);
+   beside this module (``robots/``, ``meshes/``, ``foxglove/``);
 2. the pip wheel: the same folders under ``uvms_description/share`` inside the package;
 3. a colcon install: ``share/uvms_description`` found through the ament index.
 
@@ -16,26 +21,26 @@ from __future__ import annotations
 from pathlib import Path
 
 PACKAGE = 'uvms_description'
-URDF_FILE = 'urdf/uvms.urdf'
-"""The URDF of the paper's UVMS, relative to the share directory."""
-HYDRODYNAMICS_FILE = 'config/hydrodynamics.yaml'
-"""Hydrodynamic parameters keyed by link name, relative to the share directory."""
+ROBOTS_DIR = 'robots'
+"""Folder of the robot folders, relative to the share directory."""
+DEFAULT_ROBOT = 'paper_uvms'
+"""The robot of Cui & Sarkar (sec. 5.1), the default of every node's ``robot_name``."""
 HULL_MESH_FILE = 'meshes/unit_sphere.stl'
-"""Sphere of diameter 1 m that the URDF scales into the ellipsoidal hull."""
+"""Sphere of diameter 1 m that the paper robot's URDF scales into the ellipsoidal hull."""
 FOXGLOVE_LAYOUT_FILE = 'foxglove/uvms_layout.json'
 """Foxglove layout: 3-D view, F_e with F_d, W, position errors (relative to the share dir)."""
 
 
 def share_directory() -> Path:
-    """The directory holding ``urdf/``, ``config/`` and ``meshes/`` of uvms_description.
+    """The directory holding ``robots/``, ``meshes/`` and ``foxglove/`` of uvms_description.
 
     Raises:
-        FileNotFoundError: If none of the three layouts holds ``urdf/uvms.urdf``.
+        FileNotFoundError: If none of the three layouts holds ``robots/``.
     """
     here = Path(__file__).resolve().parent
     tried = [here.parent, here / 'share']
     for candidate in tried:
-        if (candidate / URDF_FILE).is_file():
+        if (candidate / ROBOTS_DIR).is_dir():
             return candidate
     try:
         from ament_index_python.packages import (
@@ -50,23 +55,32 @@ def share_directory() -> Path:
         except PackageNotFoundError:
             pass
         else:
-            if (share / URDF_FILE).is_file():
+            if (share / ROBOTS_DIR).is_dir():
                 return share
             tried.append(share)
     places = ', '.join(str(path) for path in tried)
     raise FileNotFoundError(
-        f'{URDF_FILE} of {PACKAGE} not found in {places} nor in the ament index'
+        f'{ROBOTS_DIR}/ of {PACKAGE} not found in {places} nor in the ament index'
     )
 
 
-def urdf_path() -> Path:
-    """Path of the UVMS URDF (``share/uvms_description/urdf/uvms.urdf``)."""
-    return share_directory() / URDF_FILE
+def robots_directory() -> Path:
+    """The folder of the robot folders (``share/uvms_description/robots``)."""
+    return share_directory() / ROBOTS_DIR
 
 
-def hydrodynamics_path() -> Path:
-    """Path of the hydrodynamic parameters beside the URDF (``config/hydrodynamics.yaml``)."""
-    return share_directory() / HYDRODYNAMICS_FILE
+def urdf_path(robot: str = DEFAULT_ROBOT) -> Path:
+    """Path of a robot's URDF (``robot.urdf`` or ``robot.urdf.xacro`` of its folder)."""
+    from uvms_description.robots import robot_files
+
+    return robot_files(robot).urdf
+
+
+def hydrodynamics_path(robot: str = DEFAULT_ROBOT) -> Path:
+    """Path of a robot's hydrodynamic parameters (``hydrodynamics.yaml`` of its folder)."""
+    from uvms_description.robots import robot_files
+
+    return robot_files(robot).hydrodynamics
 
 
 def foxglove_layout_path() -> Path:

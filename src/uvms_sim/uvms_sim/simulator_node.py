@@ -25,8 +25,15 @@ from tf2_msgs.msg import TFMessage
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.node_main import run_node
 from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
+from uvms_common.robot_parameters import (
+    check_all_declared,
+    declare_robot,
+    robot_default,
+    robot_model_values,
+    with_robot_source,
+)
 
-from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters
+from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError
@@ -48,19 +55,23 @@ class SimulatorNode(Node):
             msg = ("parameter 'use_sim_time' = True: the simulator publishes /clock and keeps "
                    'its own simulated time; valid: False')
             raise SimParameterError(msg)
-        robot = {s.name: self._declare(s.name, s.default, s.description, s.min_value,
-                                       s.max_value) for s in PARAMETER_SPECS}
-        values = {s.name: self._declare(s.name, s.default, s.description, s.min_value,
-                                        s.max_value, s.choices) for s in SIMULATOR_PARAMETERS}
+        self.robot_name, files = declare_robot(self)
+        robot = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
+                                       s.description, s.min_value, s.max_value)
+                 for s in PARAMETER_SPECS}
+        values = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
+                                        s.description, s.min_value, s.max_value, s.choices)
+                  for s in SIMULATOR_PARAMETERS}
+        check_all_declared(self, files)
         try:
-            params = UvmsParameters.from_flat_dict(robot)
+            params = UvmsParameters.from_flat_dict(robot_model_values(robot, self.robot_name))
         except ModelError as exc:
-            raise SimParameterError(f'invalid robot parameter: {exc}') from exc
+            raise SimParameterError(
+                with_robot_source(f'invalid robot parameter: {exc}', files)) from exc
         self._settings = cfg = SimulatorSettings.from_values(values)
         # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
         self.get_logger().info('loading the model and compiled kernels')
-        plant = Plant(params, [0.0] * 9, cfg.physics_dt_ns)
-        q0 = initial_coordinates(plant.model, cfg.vehicle_pose, cfg.joint_positions,
+        q0 = initial_coordinates(UvmsModel(params), cfg.vehicle_pose, cfg.joint_positions,
                                  cfg.ee_position if cfg.arm_from_ee_position else None)
         self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled,
                             cfg.wall_motion_start_force_n)
@@ -87,6 +98,7 @@ class SimulatorNode(Node):
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
         self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
         self._messages = conversions.StateMessages(self._plant.joint_names)
+        self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
         self._command: tuple[int, Any, Any] | None = None
         self._stale = False
@@ -296,7 +308,7 @@ class SimulatorNode(Node):
         self._ee_pub.publish(out.ee_pose)
         self._contact_pub.publish(out.contact)
         if tf_due:
-            self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses))
+            self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses, self._parents))
         self._published += 1
         if self._settings.mode == 'lockstep':
             self._awaiting_since = self.get_clock().now()

@@ -9,6 +9,7 @@ import pytest
 import yaml
 from uvms_model.thrusters import ThrusterLayout
 
+from uvms_description.robots import robot_parameters
 from uvms_model import PARAMETER_SPECS, ParameterError, UvmsParameters
 
 ROBOT_YAML = Path(__file__).resolve().parents[3] / 'config' / 'robot.yaml'
@@ -111,11 +112,19 @@ def test_thrusters_that_cannot_roll_are_rejected() -> None:
         )
 
 
-def test_robot_yaml_is_a_ros2_parameter_file_with_the_default_values() -> None:
-    """config/robot.yaml (/**: ros__parameters:) holds every parameter, equal to the defaults."""
+def test_robot_yaml_and_the_paper_robot_hold_every_parameter_at_its_default() -> None:
+    """config/robot.yaml (the world) and robots/paper_uvms (the robot) give every default.
+
+    No name is in both: the world file would override every robot's values.
+    """
     tree = yaml.safe_load(ROBOT_YAML.read_text())
-    flat = _flatten(tree['/**']['ros__parameters'])
-    assert set(flat) == {spec.name for spec in PARAMETER_SPECS}
+    world = _flatten(tree['/**']['ros__parameters'])
+    robot = {name: item.value for name, item in robot_parameters('paper_uvms', 'simulator').items()
+             if not name.startswith('description.')}
+    assert not set(world) & set(robot)
+    flat = {**world, **robot}
+    assert set(flat) == {spec.name for spec in PARAMETER_SPECS} - {
+        'description.urdf_path', 'description.hydrodynamics_path'}
     loaded = UvmsParameters.from_flat_dict(flat)
     assert loaded == UvmsParameters()
 
