@@ -53,6 +53,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 from uvms_common.node_main import make_executor  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+from uvms_model.description import load_description  # noqa: E402
 from visualization_msgs.msg import MarkerArray  # noqa: E402
 
 from uvms_msgs.msg import (  # noqa: E402
@@ -67,7 +68,8 @@ from uvms_msgs.msg import (  # noqa: E402
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 PERIOD_NS = 2_000_000
 TF_EVERY = 10
-JOINTS = ['joint_1', 'joint_2', 'joint_3']
+#: The paper robot's arm joints, read from its URDF (the message sizes of a real run).
+JOINTS = list(load_description().joint_names)
 THRUSTERS = 8
 #: Away from the test suite's ROS_DOMAIN_IDs (0, 1-100, 150-199).
 DOMAINS = (101, 149)

@@ -32,10 +32,18 @@ for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'te
 from reference_allocator import ReferenceAllocator  # noqa: E402
 from reference_model import ReferenceModel  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_control.core.parameter_specs import CONTROLLER_PARAMETER_SPECS  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
 from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 
+from uvms_description.robots import (  # noqa: E402
+    RobotFolderError,
+    robot_files,
+    robot_names,
+    robot_parameters,
+    with_description_paths,
+)
 from uvms_model import UvmsModel, UvmsParameters  # noqa: E402
 
 TARGET_STEP_US = 40.0
@@ -136,6 +144,44 @@ def main() -> None:
         step_us = results[name]
         verdict = 'met' if step_us <= TARGET_STEP_US else 'MISSED'
         print(f'  {name}: {step_us:.1f} us, target {TARGET_STEP_US:.0f} us {verdict}')
+    robot_figures(args.number, args.repeat)
+
+
+def robot_figures(number: int, repeat: int) -> None:
+    """RK4 step and controller step of every robot folder (its own URDF, files and gains)."""
+    print('per robot (uvms_description robots/): RK4 step, controller step')
+    for name in robot_names():
+        try:
+            robot_files(name)
+        except RobotFolderError as exc:
+            print(f'  {name:<20s} skipped: {exc}')
+            continue
+        model, step, control = _robot_calls(name)
+        rk4_us = per_call_us(step, number, repeat)
+        control_us = per_call_us(control, number, repeat)
+        print(f'  {name:<20s} n = {model.n_joints}: RK4 step {rk4_us:8.1f} us, '
+              f'controller step {control_us:8.1f} us')
+
+
+def _robot_calls(name: str) -> tuple[UvmsModel, Callable[[], object], Callable[[], object]]:
+    """A robot's model, one RK4 step and one controller step on it (gains of its files)."""
+    values = {k: item.value for k, item in robot_parameters(name, 'controller').items()}
+    model_values = with_description_paths(
+        {k: v for k, v in values.items() if k.split('.')[0] in ('thrusters', 'sensor')}, name)
+    model = UvmsModel(UvmsParameters.from_flat_dict(model_values))
+    gains = {spec.name for spec in CONTROLLER_PARAMETER_SPECS}
+    controller = UnifiedForceController(ControllerParameters.from_flat_dict(
+        {k: v for k, v in values.items() if k in gains}), model)
+    q = np.zeros(model.n_dof)
+    w = np.full(model.n_dof, 0.05)
+    tau_b = np.full(model.n_dof, 1.0)
+    clock = [0.0]
+
+    def control() -> object:
+        clock[0] += 0.002
+        return controller.step_from_sensors(clock[0], q, w, np.zeros(3))
+
+    return model, lambda: model.step(q, w, tau_b, None, 1e-3), control
 
 
 if __name__ == '__main__':

@@ -20,9 +20,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / 'src' / 'uvms_bringup'))
 
+from uvms_model.description import load_description  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402
 from uvms_recording.mcap_writer import McapRecorder  # noqa: E402
 from uvms_recording.typestore import uvms_typestore  # noqa: E402
+
+#: The paper robot's arm joints, read from its URDF.
+JOINTS = list(load_description().joint_names)
 
 MIX = (
     ('/uvms/joint_states', 'sensor_msgs/msg/JointState'),
@@ -47,7 +51,7 @@ def _messages(seconds: float) -> list[tuple[str, int, bytes]]:
         q = rng.normal(size=3)
         joint_state = types['sensor_msgs/msg/JointState'](
             header=header(stamp=stamp, frame_id=''),
-            name=['joint_1', 'joint_2', 'joint_3'],
+            name=JOINTS,
             position=q, velocity=rng.normal(size=3), effort=rng.normal(size=3),
         )
         pose = types['geometry_msgs/msg/Pose'](

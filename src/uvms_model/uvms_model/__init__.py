@@ -11,10 +11,8 @@ from uvms_model.errors import (
 )
 from uvms_model.model import TaskSpaceTerms, UvmsModel
 from uvms_model.parameters import PARAMETER_SPECS, ParameterSpec, UvmsParameters
-from uvms_model.pinocchio_models import FRAME_NAMES
 
 __all__ = [
-    'FRAME_NAMES',
     'PARAMETER_SPECS',
     'DescriptionError',
     'ModelError',

@@ -93,8 +93,30 @@ def quadratic_form(function: Callable[[FloatArray], FloatArray], size: int = 6) 
     return q
 
 
+def hull_added_mass_matrix(description: RobotDescription) -> FloatArray | None:
+    """M_A (6, 6) of a hull given by coefficients, about O in base_link_frd; else None.
+
+    M_A = diag(-X_u_dot, -Y_v_dot, -Z_w_dot, -K_p_dot, -M_q_dot, -N_r_dot) (Fossen 2011,
+    eq. 6.50 with the off-diagonal terms of a body with three planes of symmetry zero); the
+    file gives the magnitudes (docs/robots.md).
+
+    >>> from uvms_model.description import HullHydrodynamics
+    >>> from types import SimpleNamespace
+    >>> hull = HullHydrodynamics('coefficients', None, added_mass_kg=(1, 2, 3, 4, 5, 6))
+    >>> hull_added_mass_matrix(SimpleNamespace(hull_hydrodynamics=hull)).diagonal().tolist()
+    [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    """
+    hull = description.hull_hydrodynamics
+    if hull.added_mass != 'coefficients' or hull.added_mass_kg is None:
+        return None
+    return np.diag(np.asarray(hull.added_mass_kg, dtype=float))
+
+
 def added_masses(description: RobotDescription, rho: float) -> list[AddedMass | None]:
-    """Added mass of the hull and link_1..3 from their collision geometry (None: none).
+    """Added mass of the hull and each arm link from their collision geometry (None: none).
+
+    A hull given by coefficients has None here: its M_A (``hull_added_mass_matrix``) is
+    added to the mass matrix of eq. 8 directly.
 
     Args:
         description: The robot description (shapes and hydrodynamic parameters).
@@ -105,7 +127,7 @@ def added_masses(description: RobotDescription, rho: float) -> list[AddedMass | 
     """
     result: list[AddedMass | None] = []
     hull = description.hull
-    if description.hull_hydrodynamics.added_mass == 'prolate_spheroid':
+    if description.hull_hydrodynamics.added_mass == 'prolate_spheroid' and hull is not None:
         a, b, c = hull.semi_axes_m
         if not (a > b and abs(b - c) <= 1e-12 * b):
             raise DescriptionError(

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from uvms_model.added_mass import AddedMass
 from uvms_model.body_forces import BodyForces
-from uvms_model.coordinates import N_DOF, Vec3
+from uvms_model.coordinates import Vec3
 from uvms_model.description import RobotDescription
 from uvms_model.jit import kernel
 from uvms_model.parameters import HydrodynamicsParameters
@@ -41,7 +41,11 @@ class BodyDynamics:
         description: The robot description.
         hydro: Hydrodynamic switches and constants.
         kin: The kinematic model (the URDF as written).
-        added: Added mass of the hull and link_1..3 (None: none).
+        added: Added mass of the hull and each arm link (None: none).
+        hull_added: M_A (6, 6) of a hull given by coefficients (``hull_added_mass_matrix``),
+            None otherwise. The hull is the free-flyer root, whose body Jacobian is [I 0]:
+            M_A enters the mass matrix as its top-left block and ν₀ ×* M_A ν₀ the bias
+            (Kirchhoff), so w_dot is solved from M_b (CRBA and RNEA) instead of by ABA.
     """
 
     def __init__(
@@ -50,18 +54,22 @@ class BodyDynamics:
         hydro: HydrodynamicsParameters,
         kin: pin.Model,
         added: list[AddedMass | None],
+        hull_added: FloatArray | None = None,
     ) -> None:
         model, bodies, sliders = dynamic_model(description, kin, added)
+        self._hull_added = hull_added
         self.model = model
         """The Pinocchio model: rigid bodies, added mass (rigid part + sliders), no gravity."""
         data = model.createData()
         self._data = data
         self._config = pin.neutral(model)  # base at the origin, identity attitude, always
-        self._arm_config: FloatArray = self._config[7:10]  # a view: the arm joints' angles
+        self.n_dof = n_dof = 6 + description.n_joints
+        """Quasi-velocities w: the vehicle's 6 and the n arm joints' rates."""
+        self._arm_config: FloatArray = self._config[7:1 + n_dof]  # a view: the arm's angles
         self._v = np.zeros(model.nv)
-        self._w = self._v[:N_DOF]  # views: the quasi-velocities w ...
+        self._w = self._v[:n_dof]  # views: the quasi-velocities w ...
         self._tau = np.zeros(model.nv)
-        self._tau_b = self._tau[:N_DOF]  # ... and the generalized body forces tau_b
+        self._tau_b = self._tau[:n_dof]  # ... and the generalized body forces tau_b
         self._zero = np.zeros(model.nv)
         self._fext = pin.StdVec_Force()
         for _ in range(model.njoints):
@@ -83,16 +91,16 @@ class BodyDynamics:
 
     @property
     def arm_angles(self) -> FloatArray:
-        """The arm joints' angles (3,) of the posed configuration: a view to write into."""
+        """The arm joints' angles (n,) of the posed configuration: a view to write into."""
         return self._arm_config
 
     @property
     def quasi_velocities(self) -> FloatArray:
-        """The quasi-velocities w (9,) of the posed state: a view to write into."""
+        """The quasi-velocities w (6 + n,) of the posed state: a view to write into."""
         return self._w
 
     def accelerations_as_posed(self, vectors: FloatArray) -> FloatArray:
-        """ABA at the state written into ``arm_angles`` and ``quasi_velocities`` (w_dot: ``[:9]``).
+        """ABA at the state written into ``arm_angles`` and ``quasi_velocities`` (w_dot first).
 
         Args:
             vectors: (3, 2) gravitational acceleration (m/s^2) and the force ON the end
@@ -101,11 +109,13 @@ class BodyDynamics:
         model, data = self.model, self._data
         pin.forwardKinematics(model, data, self._config, self._v)
         self.forces.apply_vectors(vectors)
+        if self._hull_added is not None:
+            return self._solved_w_dot()
         result: FloatArray = pin.aba(model, data, self._config, self._v, self._tau, self._fext)
         return result
 
     def set_tau_b(self, tau_b: FloatArray) -> None:
-        """Hold the generalized body forces tau_b (9,) for the following ``w_dot`` calls."""
+        """Hold the generalized body forces tau_b (6 + n,) for the following ``w_dot`` calls."""
         self._tau_b[:] = tau_b
 
     def w_dot(
@@ -115,30 +125,51 @@ class BodyDynamics:
         gravity_body: Vec3,
         f_ee_body: Vec3 | None,
     ) -> FloatArray:
-        """Accelerations of eq. 8 by ABA at (q_m, w) with the held tau_b: w_dot is ``[:9]``.
+        """Accelerations of eq. 8 by ABA at (q_m, w) with the held tau_b: w_dot is ``[:6 + n]``.
 
         Args:
-            q_m: Arm joint angles (3,) (rad).
-            w: Quasi-velocities (9,).
+            q_m: Arm joint angles (n,) (rad).
+            w: Quasi-velocities (6 + n,).
             gravity_body: Gravitational acceleration in base_link_frd (m/s^2).
             f_ee_body: Force ON the end effector in base_link_frd (N), or None.
 
         Returns:
-            A new array of the dynamic model's accelerations: w_dot (9,), then the sliders'.
+            A new array of the dynamic model's accelerations: w_dot (6 + n,), then the sliders'.
         """
         self._arm_config[:] = q_m
         self._w[:] = w
         model, data = self.model, self._data
         pin.forwardKinematics(model, data, self._config, self._v)
         self.forces.apply(gravity_body, f_ee_body)
+        if self._hull_added is not None:
+            return self._solved_w_dot()
         result: FloatArray = pin.aba(model, data, self._config, self._v, self._tau, self._fext)
         return result
 
+    def _solved_w_dot(self) -> FloatArray:
+        """w_dot = M_b⁻¹ (tau_b - bias_b) at the posed state and forces, hull M_A included."""
+        model, data = self.model, self._data
+        full = pin.crba(model, data, self._config)
+        tau = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
+        assert self._hull_added is not None
+        return solve_with_hull(full, tau, self._slider_mass_inverse, self._hull_added,
+                               self._w, self._tau_b)
+
+    def _with_hull(self, mass_b: FloatArray, bias_b: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """M_b and bias_b with a coefficient hull's M_A and ν₀ ×* M_A ν₀ (none: unchanged)."""
+        if self._hull_added is not None:
+            mass_b[:6, :6] += self._hull_added
+            bias_b[:6] += spatial_cross_force(self._w[:6], self._hull_added @ self._w[:6])
+        return mass_b, bias_b
+
     def mass(self, q_m: list[float]) -> FloatArray:
-        """M_b(q_m) (9, 9) by CRBA with the sliders eliminated (``eliminate_sliders``)."""
+        """M_b(q_m) (6 + n, 6 + n) by CRBA with the sliders eliminated (``eliminate_sliders``)."""
         self._arm_config[:] = q_m
         full = pin.crba(self.model, self._data, self._config)  # a new symmetric array
-        return eliminate_sliders(full, self._zero, self._slider_mass_inverse)[0]
+        mass_b = eliminate_sliders(full, self._zero, self._slider_mass_inverse)[0]
+        if self._hull_added is not None:
+            mass_b[:6, :6] += self._hull_added
+        return mass_b
 
     def mass_and_bias(
         self, q_m: list[float], w: FloatArray, gravity_body: Vec3
@@ -151,7 +182,7 @@ class BodyDynamics:
         pin.forwardKinematics(model, data, self._config, self._v)
         self.forces.apply(gravity_body, None)
         tau = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
-        return eliminate_sliders(full, tau, self._slider_mass_inverse)
+        return self._with_hull(*eliminate_sliders(full, tau, self._slider_mass_inverse))
 
 
 @kernel
@@ -178,3 +209,38 @@ def eliminate_sliders(
                 total -= mass_full[i, n + s] * slider_mass_inverse[s] * mass_full[j, n + s]
             mass_b[i, j] = total
     return mass_b, bias_b
+
+
+@kernel
+def solve_with_hull(
+    mass_full: FloatArray, bias_full: FloatArray, slider_mass_inverse: FloatArray,
+    hull_added: FloatArray, w: FloatArray, tau_b: FloatArray,
+) -> FloatArray:
+    """w_dot of eq. 8 with a coefficient hull: sliders eliminated, M_A and ν₀ ×* M_A ν₀ added.
+
+    (M_b + [M_A 0; 0 0]) w_dot = tau_b - bias_b - [ν₀ ×* M_A ν₀; 0]; compiled.
+    """
+    mass_b, bias_b = eliminate_sliders(mass_full, bias_full, slider_mass_inverse)
+    nu = w[:6].copy()
+    bias_b[:6] += spatial_cross_force(nu, hull_added @ nu)
+    mass_b[:6, :6] += hull_added
+    result: FloatArray = np.linalg.solve(mass_b, tau_b - bias_b)  # type: ignore[assignment]
+    return result
+
+
+@kernel
+def spatial_cross_force(nu: FloatArray, f: FloatArray) -> FloatArray:
+    """ν ×* f = [ω × f_lin; v × f_lin + ω × f_ang] for ν = [v; ω] (Featherstone 2008, 2.9).
+
+    With f = M_A ν this is the Coriolis-centripetal force C_A(ν) ν of added mass (Fossen 2011,
+    eq. 6.43) in Kirchhoff's form. Compiled (numpy's cross costs 60 µs per call here).
+
+    >>> spatial_cross_force(np.array([1.0, 0, 0, 0, 0, 1.0]), np.array([2.0, 0, 0, 0, 0, 0]))
+    array([0., 2., 0., 0., 0., 0.])
+    """
+    out = np.zeros(6)
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        out[i] = nu[3 + j] * f[k] - nu[3 + k] * f[j]
+        out[3 + i] = (nu[j] * f[k] - nu[k] * f[j]) + (nu[3 + j] * f[3 + k] - nu[3 + k] * f[3 + j])
+    return out

@@ -1,7 +1,7 @@
 """External forces on the bodies of the dynamic model (Pinocchio's ``fext``, body frames).
 
 Everything Pinocchio's rigid bodies lack enters here, written into the ``fext`` of the hull
-and link_1..3 at the posed state (after forward kinematics):
+and the arm links at the posed state (after forward kinematics):
 
 - drag (eq. 8, D_b): the hull's quadratic and linear drag per twist component, and the links'
   cross-flow drag, -1/2 rho C_D (2 r) |v_n| v_n per strip (Gauss-Legendre strips along each
@@ -59,6 +59,10 @@ def net_weights(
     if hydro.buoyancy_enabled:
         link_displaced = [rho * cylinder.volume_m3 for cylinder in description.links]
         ratio = description.hull_hydrodynamics.buoyancy_ratio
+        volume = description.hull_hydrodynamics.displaced_volume_m3
+        if ratio is None:
+            assert volume is not None  # one of the two (description._hull_entry)
+            ratio = (rho * volume + sum(link_displaced)) / sum(masses)
         hull_displaced = ratio * sum(masses) - sum(link_displaced)
         if hull_displaced < 0.0:
             floor = sum(link_displaced) / sum(masses)
@@ -81,15 +85,35 @@ def net_weights(
     return weights, moments, hull_displaced
 
 
+def _hull_drag(description: RobotDescription, rho: float) -> tuple[list[float], list[float]]:
+    """The hull's quadratic and linear drag per twist component (eq. 8, D_b).
+
+    ``coefficients``: the file's magnitudes, -(D_q,k |nu_k| + D_l,k) nu_k. Otherwise
+    (``prolate_spheroid``, ``none``): C_D on the ellipsoid's areas and silhouette and the
+    paper's linear coefficients (docs/model.md).
+    """
+    hull = description.hull_hydrodynamics
+    if hull.added_mass == 'coefficients':
+        assert hull.quadratic_damping is not None and hull.linear_damping is not None
+        return list(hull.quadratic_damping), list(hull.linear_damping)
+    assert description.hull is not None
+    a, b = description.hull.semi_axes_m[0], description.hull.semi_axes_m[1]
+    quadratic = hull_quadratic_drag(
+        a, b, rho, hull.drag_coefficient_translation, hull.drag_coefficient_rotation
+    )
+    offsets = [hull.linear_drag_translation_n_s_m] * 3 + [hull.linear_drag_rotation_n_m_s] * 3
+    return [float(v) for v in quadratic], offsets
+
+
 class BodyForces:
     """The maps from the posed state to the bodies' external forces, and their workspace.
 
     Args:
         description: The robot description (shapes, hydrodynamic parameters, ee offset).
         hydro: Hydrodynamic switches and constants.
-        added: Added mass of the hull and link_1..3 (None: none).
+        added: Added mass of the hull and each arm link (None: none).
         kin: The kinematic model (rigid masses and centres).
-        bodies: Joints of the hull and link_1..3 in the dynamic model (consecutive).
+        bodies: Joints of the hull and the arm links in the dynamic model (consecutive).
         twists: (njoints, 6) view of the dynamic model's joint twists.
         placements: (njoints, 12) view of its joint placements (rotation column-major, then
             translation).
@@ -129,13 +153,7 @@ class BodyForces:
         gains: list[float] = []
         linear: list[tuple[FloatArray, float]] = []
         if hydro.drag_enabled:
-            hull = description.hull_hydrodynamics
-            a, b = description.hull.semi_axes_m[0], description.hull.semi_axes_m[1]
-            quadratic = hull_quadratic_drag(
-                a, b, rho, hull.drag_coefficient_translation, hull.drag_coefficient_rotation
-            )
-            offsets = [hull.linear_drag_translation_n_s_m] * 3
-            offsets += [hull.linear_drag_rotation_n_m_s] * 3
+            quadratic, offsets = _hull_drag(description, rho)
             for k in range(6):  # the hull: -(D_k |nu_k| + d_k) nu_k per twist component
                 column = np.zeros(n_rows)
                 column[k] = 1.0

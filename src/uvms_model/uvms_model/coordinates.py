@@ -20,9 +20,6 @@ from uvms_model.kinematics import check_pitch
 
 FloatArray = NDArray[np.float64]
 
-N_DOF = 9
-"""Generalized coordinates: vehicle position and ZYX Euler angles (6), three arm joints."""
-
 Vec3 = tuple[float, float, float]
 Mat3 = tuple[float, float, float, float, float, float, float, float, float]
 """A 3x3 matrix as a row-major 9-tuple."""

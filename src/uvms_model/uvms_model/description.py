@@ -20,27 +20,29 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from uvms_model.errors import DescriptionError
+from uvms_model.hydrodynamics_file import (
+    HullHydrodynamics,
+    LinkHydrodynamics,
+    read_hydrodynamics,
+)
 
 FloatArray = NDArray[np.float64]
 
 ROOT_LINK = 'base_link_frd'
-ARM_LINKS = ('link_1', 'link_2', 'link_3')
 EE_LINK = 'ee_link'
 SENSOR_LINK = 'ft_sensor_link'
-REQUIRED_LINKS = (ROOT_LINK, *ARM_LINKS, EE_LINK, SENSOR_LINK)
+REQUIRED_LINKS = (ROOT_LINK, EE_LINK, SENSOR_LINK)
 """Links the project names (its frames): the URDF must have every one."""
+MIN_ARM_JOINTS = 3
+"""Fewest revolute arm joints: the task space X is 3-D (paper eq. 20-22)."""
 UNIT_SPHERE_MESH = 'unit_sphere.stl'
 """File name of the sphere mesh (diameter 1 m) that a scale turns into an ellipsoid."""
 
-HULL_ADDED_MASS = ('prolate_spheroid', 'none')
-LINK_ADDED_MASS = ('slender_cylinder', 'none')
 
 
 @dataclass(frozen=True)
@@ -73,43 +75,6 @@ class Cylinder:
 
 
 @dataclass(frozen=True)
-class HullHydrodynamics:
-    """Hydrodynamic parameters of the vehicle hull (link ``base_link_frd``)."""
-
-    added_mass: str = 'prolate_spheroid'
-    buoyancy_ratio: float = 1.0
-    center_of_buoyancy_m: tuple[float, float, float] = (0.028, 0.0, 0.0)
-    linear_drag_translation_n_s_m: float = 0.0
-    linear_drag_rotation_n_m_s: float = 0.81
-    drag_coefficient_translation: float = 1.05
-    drag_coefficient_rotation: float = 1.0
-
-
-@dataclass(frozen=True)
-class LinkHydrodynamics:
-    """Hydrodynamic parameters of one arm link (a slender cylinder)."""
-
-    added_mass: str = 'slender_cylinder'
-    cross_flow_drag_coefficient: float = 1.1
-
-
-#: Keys of each entry of the hydrodynamics file: (type, valid range or choices).
-_HULL_KEYS: dict[str, tuple[str, Any]] = {
-    'added_mass': ('choice', HULL_ADDED_MASS),
-    'buoyancy_ratio': ('float', (0.0, 10.0)),
-    'center_of_buoyancy_m': ('vector3', (-100.0, 100.0)),
-    'linear_drag_translation_n_s_m': ('float', (0.0, 1e7)),
-    'linear_drag_rotation_n_m_s': ('float', (0.0, 1e7)),
-    'drag_coefficient_translation': ('float', (0.0, 100.0)),
-    'drag_coefficient_rotation': ('float', (0.0, 100.0)),
-}
-_LINK_KEYS: dict[str, tuple[str, Any]] = {
-    'added_mass': ('choice', LINK_ADDED_MASS),
-    'cross_flow_drag_coefficient': ('float', (0.0, 100.0)),
-}
-
-
-@dataclass(frozen=True)
 class RobotDescription:
     """What the model reads from the URDF and the hydrodynamics file, checked.
 
@@ -117,10 +82,12 @@ class RobotDescription:
         urdf_path: The URDF file.
         hydrodynamics_path: The hydrodynamic parameters file.
         urdf_text: The URDF as read (Pinocchio builds its model from it).
-        joint_names: The arm's revolute joints, base to tip.
-        hull: The hull ellipsoid (collision geometry of ``base_link_frd``).
-        links: The collision cylinders of ``link_1`` .. ``link_3``.
-        ee_offset_m: Position of ``ee_link`` in ``link_3`` (m).
+        joint_names: The arm's revolute joints, base to tip (n >= 3).
+        link_names: The arm links, each the child of one arm joint, base to tip.
+        hull: The hull ellipsoid (collision geometry of ``base_link_frd``); None for a hull
+            given by coefficients.
+        links: The collision cylinders of the arm links.
+        ee_offset_m: Position of ``ee_link`` in the last arm link (m).
         hull_hydrodynamics: Parameters of the hull.
         link_hydrodynamics: Parameters of each arm link.
     """
@@ -129,11 +96,22 @@ class RobotDescription:
     hydrodynamics_path: Path
     urdf_text: str
     joint_names: tuple[str, ...]
-    hull: Ellipsoid
+    link_names: tuple[str, ...]
+    hull: Ellipsoid | None
     links: tuple[Cylinder, ...]
     ee_offset_m: tuple[float, float, float]
     hull_hydrodynamics: HullHydrodynamics
     link_hydrodynamics: tuple[LinkHydrodynamics, ...]
+
+    @property
+    def n_joints(self) -> int:
+        """n, the number of arm joints."""
+        return len(self.joint_names)
+
+    @property
+    def frame_names(self) -> tuple[str, ...]:
+        """The frames the model poses: root, arm links, end effector, sensor."""
+        return (ROOT_LINK, *self.link_names, EE_LINK, SENSOR_LINK)
 
 
 def _default_paths() -> tuple[Path, Path]:
@@ -146,6 +124,16 @@ def _default_paths() -> tuple[Path, Path]:
     try:
         return uvms_description.urdf_path(), uvms_description.hydrodynamics_path()
     except FileNotFoundError as exc:
+        raise DescriptionError(str(exc)) from exc
+
+
+def _urdf_text(path: Path) -> str:
+    """The URDF as text, a ``.xacro`` file expanded (``uvms_description.robots.urdf_text``)."""
+    from uvms_description.robots import RobotFolderError, urdf_text
+
+    try:
+        return urdf_text(path)
+    except RobotFolderError as exc:
         raise DescriptionError(str(exc)) from exc
 
 
@@ -301,98 +289,80 @@ def _check_tree(path: Path, robot: ET.Element) -> tuple[dict[str, ET.Element], l
     return links, joints
 
 
+def _check_masses(path: Path, links: Mapping[str, ET.Element], required: tuple[str, ...]) -> None:
+    """Every ``<mass value>`` positive; the root and the arm links must have one."""
+    for name, link in links.items():
+        mass = link.find('inertial/mass')
+        if mass is None:
+            if name in required:
+                raise DescriptionError(f"{path}: link '{name}' has no <inertial><mass>")
+            continue
+        value = _floats(path, f"link '{name}' <inertial><mass>", 'value', mass.get('value'), 1)[0]
+        if value <= 0.0:
+            raise DescriptionError(
+                f"{path}: link '{name}' <inertial><mass value='{mass.get('value')}'>: "
+                'the mass must be positive'
+            )
+
+
 def _arm_chain(
     path: Path, joints: list[ET.Element]
-) -> tuple[tuple[str, ...], tuple[float, float, float]]:
-    """Revolute joint names from the root to link_3, and the ee_link offset in link_3."""
+) -> tuple[tuple[str, ...], tuple[str, ...], tuple[float, float, float]]:
+    """The arm: its revolute joints and their child links, base to tip, and the EE offset.
+
+    The arm is the path of joints from the root to ``ee_link``: its revolute joints are the
+    arm joints (at least ``MIN_ARM_JOINTS``), fixed joints may sit anywhere on it. Any other
+    movable joint in the file would be a branch Pinocchio turns into extra coordinates.
+    """
     by_child = {j.find('child').get('link'): j for j in joints}  # type: ignore[union-attr]
     chain: list[ET.Element] = []
-    link = SENSOR_LINK
+    link = EE_LINK
     while link in by_child:
         joint = by_child[link]
         chain.append(joint)
         link = joint.find('parent').get('link')  # type: ignore[union-attr,assignment]
     chain.reverse()
-    movable = [j for j in chain if j.get('type') != 'fixed']
-    kinds = [j.get('type') for j in movable]
-    if kinds != ['revolute'] * len(ARM_LINKS):
-        raise DescriptionError(
-            f'{path}: the joints from {ROOT_LINK} to {SENSOR_LINK} must be three revolute ones '
-            f'(the arm of paper sec. 5.1), found {kinds}'
-        )
-    for joint, link_name in zip(movable, ARM_LINKS, strict=True):
-        child = joint.find('child').get('link')  # type: ignore[union-attr]
-        if child != link_name:
+    for joint in chain:
+        if joint.get('type') not in ('revolute', 'fixed'):
             raise DescriptionError(
-                f"{path}: joint '{joint.get('name')}' moves '{child}', expected '{link_name}'"
+                f"{path}: joint '{joint.get('name')}' on the arm ({ROOT_LINK} to {EE_LINK}) is "
+                f"of type '{joint.get('type')}'; the arm takes revolute and fixed joints"
             )
-    ee_joint = by_child[EE_LINK]
-    if ee_joint.find('parent').get('link') != ARM_LINKS[-1] or ee_joint.get('type') != 'fixed':  # type: ignore[union-attr]
-        raise DescriptionError(
-            f"{path}: '{EE_LINK}' must hang on '{ARM_LINKS[-1]}' by a fixed joint"
-        )
-    offset, _ = _origin(path, f"joint '{ee_joint.get('name')}'", ee_joint)
+    on_path = {str(j.get('name')) for j in chain}
+    for joint in joints:
+        if joint.get('type') != 'fixed' and joint.get('name') not in on_path:
+            raise DescriptionError(
+                f"{path}: joint '{joint.get('name')}' ({joint.get('type')}) is not on the arm "
+                f'from {ROOT_LINK} to {EE_LINK}: a branched chain (only fixed joints may '
+                'branch off)'
+            )
+    movable = [j for j in chain if j.get('type') == 'revolute']
     names = tuple(str(j.get('name')) for j in movable)
-    return names, (float(offset[0]), float(offset[1]), float(offset[2]))
-
-
-def _entry(
-    path: Path, link: str, raw: object, keys: Mapping[str, tuple[str, Any]]
-) -> dict[str, Any]:
-    """Validate one link's entry of the hydrodynamics file against its keys."""
-    if not isinstance(raw, Mapping):
-        raise DescriptionError(f'{path}: {link}: expected a mapping of parameters')
-    unknown = sorted(set(raw) - set(keys))
-    if unknown:
-        raise DescriptionError(f'{path}: {link}: unknown keys {unknown}; known: {sorted(keys)}')
-    missing = sorted(set(keys) - set(raw))
-    if missing:
-        raise DescriptionError(f'{path}: {link}: missing keys {missing}')
-    values: dict[str, Any] = {}
-    for key, (kind, valid) in keys.items():
-        value = raw[key]
-        where = f'{path}: {link}.{key} = {value!r}'
-        if kind == 'choice':
-            if value not in valid:
-                raise DescriptionError(f'{where} must be one of {list(valid)}')
-            values[key] = value
-            continue
-        items = value if kind == 'vector3' else [value]
-        if (
-            not isinstance(items, list)
-            or len(items) != (3 if kind == 'vector3' else 1)
-            or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in items)
-        ):
-            expected = '3 numbers' if kind == 'vector3' else 'a number'
-            raise DescriptionError(f'{where} must be {expected}')
-        lo, hi = valid
-        if not all(math.isfinite(v) and lo <= v <= hi for v in items):
-            raise DescriptionError(f'{where} is out of range [{lo}, {hi}]')
-        floats = tuple(float(v) for v in items)
-        values[key] = floats if kind == 'vector3' else floats[0]
-    return values
-
-
-def _hydrodynamics(path: Path) -> tuple[HullHydrodynamics, tuple[LinkHydrodynamics, ...]]:
-    text = _read(path, 'hydrodynamic parameters')
-    try:
-        tree = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise DescriptionError(f'{path}: malformed YAML: {exc}'.replace('\n', ' ')) from exc
-    if not isinstance(tree, Mapping):
-        raise DescriptionError(f'{path}: expected a mapping from link names to parameters')
-    known = (ROOT_LINK, *ARM_LINKS)
-    unknown = sorted(set(tree) - set(known))
-    if unknown:
-        raise DescriptionError(f'{path}: links {unknown} are not links of the model {list(known)}')
-    for link in known:
-        if link not in tree:
-            raise DescriptionError(f'{path}: link {link} has no entry')
-    hull = HullHydrodynamics(**_entry(path, ROOT_LINK, tree[ROOT_LINK], _HULL_KEYS))
-    links = tuple(
-        LinkHydrodynamics(**_entry(path, link, tree[link], _LINK_KEYS)) for link in ARM_LINKS
-    )
-    return hull, links
+    if len(movable) < MIN_ARM_JOINTS:
+        raise DescriptionError(
+            f'{path}: the arm from {ROOT_LINK} to {EE_LINK} has {len(movable)} revolute '
+            f'joints {list(names)}; at least {MIN_ARM_JOINTS} are needed (a 3-D task space)'
+        )
+    link_names = tuple(str(j.find('child').get('link')) for j in movable)  # type: ignore[union-attr]
+    offset = np.zeros(3)
+    rotation = np.eye(3)
+    for joint in chain[chain.index(movable[-1]) + 1:]:
+        xyz, rot = _origin(path, f"joint '{joint.get('name')}'", joint)
+        offset = offset + rotation @ xyz
+        rotation = rotation @ rot
+    link = SENSOR_LINK
+    while link in by_child and link != link_names[-1]:
+        joint = by_child[link]
+        if joint.get('type') != 'fixed':
+            link = ''
+            break
+        link = joint.find('parent').get('link')  # type: ignore[union-attr,assignment]
+    if link != link_names[-1]:
+        raise DescriptionError(
+            f"{path}: '{SENSOR_LINK}' must hang below the last arm link "
+            f"'{link_names[-1]}' by fixed joints"
+        )
+    return names, link_names, (float(offset[0]), float(offset[1]), float(offset[2]))
 
 
 def load_description(
@@ -407,9 +377,10 @@ def load_description(
 
     Raises:
         DescriptionError: For a missing or malformed file, a broken tree (a joint whose
-            parent or child does not exist, several roots), a missing frame, an arm that is
-            not three revolute joints, collision geometry the hydrodynamics cannot size, or a
-            bad hydrodynamic parameter. The one-line message names the file and the element.
+            parent or child does not exist, several roots), a missing frame, an arm of fewer
+            than 3 revolute joints, a branched chain, a mass that is not positive, collision
+            geometry the hydrodynamics cannot size, or a bad hydrodynamic parameter. The
+            one-line message names the file and the element.
     """
     default_urdf, default_hydro = (None, None)
     if not urdf_path or not hydrodynamics_path:
@@ -417,7 +388,7 @@ def load_description(
     urdf = Path(urdf_path) if urdf_path else default_urdf
     hydro = Path(hydrodynamics_path) if hydrodynamics_path else default_hydro
     assert urdf is not None and hydro is not None
-    text = _read(urdf, 'URDF')
+    text = _urdf_text(urdf)
     try:
         robot = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -425,15 +396,17 @@ def load_description(
     if robot.tag != 'robot':
         raise DescriptionError(f'{urdf}: the root element is <{robot.tag}>, expected <robot>')
     links, joints = _check_tree(urdf, robot)
-    joint_names, ee_offset = _arm_chain(urdf, joints)
-    hull_params, link_params = _hydrodynamics(hydro)
+    joint_names, link_names, ee_offset = _arm_chain(urdf, joints)
+    _check_masses(urdf, links, (ROOT_LINK, *link_names))
+    hull_params, link_params = read_hydrodynamics(hydro, ROOT_LINK, link_names)
     return RobotDescription(
         urdf_path=urdf,
         hydrodynamics_path=hydro,
         urdf_text=text,
         joint_names=joint_names,
-        hull=_hull(urdf, links[ROOT_LINK]),
-        links=tuple(_cylinder(urdf, links[name], name) for name in ARM_LINKS),
+        link_names=link_names,
+        hull=None if hull_params.added_mass == 'coefficients' else _hull(urdf, links[ROOT_LINK]),
+        links=tuple(_cylinder(urdf, links[name], name) for name in link_names),
         ee_offset_m=ee_offset,
         hull_hydrodynamics=hull_params,
         link_hydrodynamics=link_params,

@@ -1,6 +1,6 @@
 """Frame kinematics of the UVMS on the URDF's Pinocchio model: poses, the EE Jacobian, IK.
 
-Everything is posed in map_ned from q = [x, y, z, phi, theta, psi, q1, q2, q3]: the
+Everything is posed in map_ned from q = [x, y, z, phi, theta, psi, q_1 .. q_n]: the
 kinematic model's free-flyer configuration is [p (3), quaternion x y z w (4), q_m (3)] and its
 velocity the quasi-velocities w (body twist in base_link_frd, joint rates). Pinocchio's names
 glossed: ``oMf`` placement of a frame in the world, ``LOCAL_WORLD_ALIGNED`` a frame's origin
@@ -15,10 +15,9 @@ import numpy as np
 import pinocchio as pin  # type: ignore[import-untyped]
 from numpy.typing import NDArray
 
-from uvms_model.coordinates import N_DOF, quaternion_xyzw
+from uvms_model.coordinates import quaternion_xyzw
 from uvms_model.description import EE_LINK
 from uvms_model.errors import ModelError, UnreachableError
-from uvms_model.pinocchio_models import FRAME_NAMES
 
 FloatArray = NDArray[np.float64]
 
@@ -30,20 +29,22 @@ class FrameKinematics:
 
     Args:
         model: The kinematic Pinocchio model (``pinocchio_models.kinematic_model``).
+        frame_names: The frames to pose (``RobotDescription.frame_names``).
     """
 
-    def __init__(self, model: pin.Model) -> None:
+    def __init__(self, model: pin.Model, frame_names: Sequence[str]) -> None:
         self.model = model
         self._data = model.createData()
-        self.frame_ids = {name: model.getFrameId(name) for name in FRAME_NAMES}
+        self.frame_names = tuple(frame_names)
+        self.frame_ids = {name: model.getFrameId(name) for name in self.frame_names}
         self._ee_frame = self.frame_ids[EE_LINK]
         self._config = pin.neutral(model)
-        self._zero = np.zeros(N_DOF)
-        self._w = np.zeros(N_DOF)
+        self._zero = np.zeros(model.nv)
+        self._w = np.zeros(model.nv)
 
     def _pose(self, q: Sequence[float]) -> None:
         """Set the configuration (base pose from x, y, z and the Euler angles)."""
-        self._config[:] = (q[0], q[1], q[2], *quaternion_xyzw(q[3], q[4], q[5]), q[6], q[7], q[8])
+        self._config[:] = (q[0], q[1], q[2], *quaternion_xyzw(q[3], q[4], q[5]), *q[6:])
 
     def frame(self, q: Sequence[float], name: str) -> tuple[FloatArray, FloatArray]:
         """(p_ned, rot_ned_from_frame) of one frame, by forward kinematics."""
@@ -58,11 +59,11 @@ class FrameKinematics:
         """{frame: (p_ned, rot_ned_from_frame)} of the named frames.
 
         Raises:
-            ModelError: For a frame name not in ``FRAME_NAMES``.
+            ModelError: For a frame name not in ``frame_names``.
         """
         for name in frames:
             if name not in self.frame_ids:
-                raise ModelError(f'frame {name!r} is not one of {FRAME_NAMES}')
+                raise ModelError(f'frame {name!r} is not one of {self.frame_names}')
         self._pose(q)
         model, data = self.model, self._data
         pin.forwardKinematics(model, data, self._config)
@@ -75,7 +76,7 @@ class FrameKinematics:
     def ee_motion(
         self, q: Sequence[float], w: Sequence[float] | FloatArray | None
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """X, rot_ned_from_ee, J_w (3, 9) and J_w_dot w (3,) of the EE in map_ned (w-based).
+        """X, rot_ned_from_ee, J_w (3, 6 + n) and J_w_dot w (3,) of the EE in map_ned (w-based).
 
         J_w_dot w is the classical acceleration of the EE point at w_dot = 0 (Pinocchio's
         frame classical acceleration); None for w means at rest.

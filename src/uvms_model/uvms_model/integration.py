@@ -13,7 +13,6 @@ from numpy.typing import NDArray
 
 from uvms_model.body_dynamics import BodyDynamics
 from uvms_model.coordinates import (
-    N_DOF,
     mat_t_vec,
     rotation,
     velocity_transform,
@@ -42,11 +41,12 @@ class Rk4Integrator:
     def __init__(self, dynamics: BodyDynamics, g: float) -> None:
         self._dynamics = dynamics
         self._g = g
-        self._state = np.zeros(2 * N_DOF)
-        self._slopes = np.zeros((4, 2 * N_DOF))
+        self._n = n = dynamics.n_dof
+        self._state = np.zeros(2 * n)
+        self._slopes = np.zeros((4, 2 * n))
         self._vectors = np.zeros((3, 2))
         self._force = np.zeros(3)
-        self._no_w_dot = np.zeros(N_DOF)
+        self._no_w_dot = np.zeros(n)
 
     def step(
         self, q: FloatArray, w: FloatArray, f_ned: list[float] | None, dt: float
@@ -60,8 +60,9 @@ class Rk4Integrator:
             SingularAttitudeError: If a stage reaches pitch +-90 deg.
         """
         dynamics, state, slopes = self._dynamics, self._state, self._slopes
-        state[:N_DOF] = q
-        state[N_DOF:] = w
+        n = self._n
+        state[:n] = q
+        state[n:] = w
         has_force = f_ned is not None
         if f_ned is not None:
             self._force[:] = f_ned
@@ -72,9 +73,9 @@ class Rk4Integrator:
                                     has_force, arm, velocities, vectors)
             check_pitch(theta, 'q (during integration)')
             w_dot = dynamics.accelerations_as_posed(vectors)
-        result = np.empty(2 * N_DOF)
+        result = np.empty(2 * n)
         rk4_combine(state, slopes, w_dot, dt, result)
-        return result[:N_DOF], result[N_DOF:]
+        return result[:n], result[n:]
 
 
 @kernel
@@ -142,8 +143,8 @@ def semi_implicit_euler_step(
     """
     rot = rotation(q[3], q[4], q[5])
     f_body = None if f_ned is None else mat_t_vec(rot, f_ned)
-    w_dot = dynamics.w_dot(q[6:9], w, (g * rot[6], g * rot[7], g * rot[8]), f_body)
-    w_new: FloatArray = w + dt * w_dot[:N_DOF]
+    w_dot = dynamics.w_dot(q[6:], w, (g * rot[6], g * rot[7], g * rot[8]), f_body)
+    w_new: FloatArray = w + dt * w_dot[:dynamics.n_dof]
     q_arr = np.asarray(q)
     q_new: FloatArray = q_arr + dt * velocity_transform(q_arr, 'q (during integration)').dot(w_new)
     return q_new, w_new

@@ -22,10 +22,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from uvms_model.added_mass import AddedMass, added_masses
+from uvms_model.added_mass import AddedMass, added_masses, hull_added_mass_matrix
 from uvms_model.body_dynamics import BodyDynamics
 from uvms_model.coordinates import (
-    N_DOF,
     Vec3,
     mat_t_vec,
     rotation,
@@ -39,13 +38,12 @@ from uvms_model.generalized_terms import generalized_terms
 from uvms_model.integration import Rk4Integrator, semi_implicit_euler_step
 from uvms_model.kinematics import check_pitch
 from uvms_model.parameters import UvmsParameters
-from uvms_model.pinocchio_models import FRAME_NAMES, kinematic_model
+from uvms_model.pinocchio_models import kinematic_model
 
 FloatArray = NDArray[np.float64]
 
-N_JOINTS = 3
 
-__all__ = ['FRAME_NAMES', 'N_DOF', 'N_JOINTS', 'TaskSpaceTerms', 'UvmsModel']
+__all__ = ['TaskSpaceTerms', 'UvmsModel']
 
 
 class TaskSpaceTerms(NamedTuple):
@@ -53,13 +51,13 @@ class TaskSpaceTerms(NamedTuple):
 
     Attributes:
         X: End-effector position in map_ned (3,) (m).
-        J: End-effector Jacobian (3, 9) in map_ned with respect to q_dot (eq. 22).
+        J: End-effector Jacobian (3, 6 + n) in map_ned with respect to q_dot (eq. 22).
         J_dot_q_dot: J_dot q_dot (3,) (m/s^2), eq. 23.
-        M: Mass matrix M(q) (9, 9) in generalized coordinates (eq. 18).
-        zeta: Bias zeta(q, q_dot) (9,) of eq. 19.
-        B: Velocity transform B(q) (9, 9) of eq. 4.
+        M: Mass matrix M(q) (6 + n, 6 + n) in generalized coordinates (eq. 18).
+        zeta: Bias zeta(q, q_dot) (6 + n,) of eq. 19.
+        B: Velocity transform B(q) (6 + n, 6 + n) of eq. 4.
         rot_ned_from_ee: ee_link axes in map_ned (3, 3).
-        q_dot: Generalized velocities (9,) of the state.
+        q_dot: Generalized velocities (6 + n,) of the state.
     """
 
     X: FloatArray
@@ -99,12 +97,9 @@ class UvmsModel:
 
     Example:
         >>> model = UvmsModel()
-        >>> q = np.zeros(9); w = np.zeros(9); tau_b = np.zeros(9)
+        >>> q = np.zeros(model.n_dof); w = np.zeros(model.n_dof); tau_b = np.zeros(model.n_dof)
         >>> q, w = model.step(q, w, tau_b, None, 1e-3)
     """
-
-    n_dof: int = N_DOF
-    n_joints: int = N_JOINTS
 
     def __init__(
         self, params: UvmsParameters | None = None, description: RobotDescription | None = None
@@ -117,25 +112,34 @@ class UvmsModel:
             )
         self.description = description
         self.joint_names: tuple[str, ...] = description.joint_names
+        """The arm's revolute joints, base to tip (from the URDF)."""
+        self.n_joints = description.n_joints
+        """n, the number of arm joints."""
+        self.n_dof = 6 + self.n_joints
+        """Generalized coordinates: vehicle position and ZYX Euler angles (6), n joints."""
+        self.frame_names: tuple[str, ...] = description.frame_names
+        """Frames of ``frame_poses``: root, arm links, ee_link, ft_sensor_link."""
         self._method = p.integration.method
         kin = kinematic_model(description)
-        self.frames = FrameKinematics(kin)
+        self.frames = FrameKinematics(kin, self.frame_names)
         """Poses and end-effector motion on the URDF's Pinocchio model."""
         hydro = p.hydrodynamics
         added: list[AddedMass | None] = (
             added_masses(description, hydro.water_density_kg_m3)
             if hydro.added_mass_enabled
-            else [None] * (1 + N_JOINTS)
+            else [None] * (1 + self.n_joints)
         )
+        hull_added = hull_added_mass_matrix(description) if hydro.added_mass_enabled else None
         self.added_mass_vehicle: FloatArray = (
-            added[0].matrix() if added[0] is not None else np.zeros((6, 6))
+            added[0].matrix() if added[0] is not None
+            else hull_added if hull_added is not None else np.zeros((6, 6))
         )
         """Added-mass matrix M_A (6, 6) of the hull at O, base_link_frd axes."""
         self.added_mass_links: FloatArray = np.array(
             [a.matrix() if a is not None else np.zeros((6, 6)) for a in added[1:]]
         )
-        """Added-mass matrices (3, 6, 6) of the links at their joint, link axes."""
-        self.dynamics = BodyDynamics(description, hydro, kin, added)
+        """Added-mass matrices (n, 6, 6) of the links at their joint, link axes."""
+        self.dynamics = BodyDynamics(description, hydro, kin, added, hull_added)
         """Eq. 8 in body form on Pinocchio's dynamic model."""
         self.hull_displaced_mass_kg = self.dynamics.forces.hull_displaced_mass_kg
         """Mass of water displaced by the hull (kg), set by the hull's ``buoyancy_ratio``."""
@@ -150,7 +154,7 @@ class UvmsModel:
         of them, a few s to compile when the cache is cold): at construction, not in the
         first control period of a real-time run.
         """
-        rest = np.zeros(N_DOF)
+        rest = np.zeros(self.n_dof)
         self.step(rest, rest, rest, (0.0, 0.0, 0.0), 1e-3)
         self.step(rest, rest, rest, None, 1e-3)
         self.task_space_terms(rest, w=rest)
@@ -161,29 +165,29 @@ class UvmsModel:
         return (g * rot[6], g * rot[7], g * rot[8])
 
     def _check_q(self, q: ArrayLike) -> FloatArray:
-        return _vector('q', q, N_DOF)
+        return _vector('q', q, self.n_dof)
 
     # ------------------------------------------------------------------ body form (eq. 8)
 
     def mass_matrix_body(self, q: ArrayLike) -> FloatArray:
-        """M_b(q_m) (9, 9) of eq. 8: rigid bodies plus added mass, in quasi-velocities w."""
+        """M_b(q_m) (6 + n, 6 + n) of eq. 8: rigid bodies and added mass, in quasi-velocities w."""
         q = self._check_q(q)
-        return self.dynamics.mass(q.tolist()[6:9])
+        return self.dynamics.mass(q.tolist()[6:])
 
     def bias_body(self, q: ArrayLike, w: ArrayLike) -> FloatArray:
-        """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (9,) of eq. 8, so M_b w_dot + bias = tau_b."""
+        """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (6 + n,) of eq. 8: M_b w_dot + bias = tau_b."""
         q_list = self._check_q(q).tolist()
-        w = _vector('w', w, N_DOF)
+        w = _vector('w', w, self.n_dof)
         gravity = self._gravity_body(rotation(q_list[3], q_list[4], q_list[5]))
-        return self.dynamics.mass_and_bias(q_list[6:9], w, gravity)[1]
+        return self.dynamics.mass_and_bias(q_list[6:], w, gravity)[1]
 
     def gravity_body(self, q: ArrayLike) -> FloatArray:
-        """G_b(q) (9,) of eq. 8: gravity and buoyancy as generalized body forces."""
-        return self.bias_body(q, np.zeros(N_DOF))
+        """G_b(q) (6 + n,) of eq. 8: gravity and buoyancy as generalized body forces."""
+        return self.bias_body(q, np.zeros(self.n_dof))
 
     def kinetic_energy(self, q: ArrayLike, w: ArrayLike) -> float:
         """Kinetic energy T = 1/2 w^T M_b w (J) of bodies and entrained water (added mass)."""
-        w = _vector('w', w, N_DOF)
+        w = _vector('w', w, self.n_dof)
         return 0.5 * float(w @ self.mass_matrix_body(q) @ w)
 
     def forward_dynamics(
@@ -193,25 +197,25 @@ class UvmsModel:
         tau_b: ArrayLike,
         f_ee_ned: ArrayLike | None = None,
     ) -> FloatArray:
-        """Quasi-accelerations w_dot (9,) from eq. 8: M_b w_dot = tau_b + J_w^T f - bias.
+        """Quasi-accelerations w_dot (6 + n,) from eq. 8: M_b w_dot = tau_b + J_w^T f - bias.
 
         Args:
-            q: Generalized coordinates (9,).
-            w: Quasi-velocities (9,).
-            tau_b: Generalized body forces (9,): vehicle force and moment in base_link_frd
+            q: Generalized coordinates (6 + n,).
+            w: Quasi-velocities (6 + n,).
+            tau_b: Generalized body forces (6 + n,): vehicle force and moment in base_link_frd
                 about the body origin, then joint torques.
             f_ee_ned: Force acting ON the end effector, in map_ned (3,) (N); None for none.
                 A wall contact force F_e exerted BY the end effector enters as -F_e.
         """
         q_list = self._check_q(q).tolist()
-        w = _vector('w', w, N_DOF)
-        tau_b = _vector('tau_b', tau_b, N_DOF)
+        w = _vector('w', w, self.n_dof)
+        tau_b = _vector('tau_b', tau_b, self.n_dof)
         f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3).tolist()
         rot = rotation(q_list[3], q_list[4], q_list[5])
         self.dynamics.set_tau_b(tau_b)
         f_body = None if f is None else mat_t_vec(rot, f)
-        w_dot: FloatArray = self.dynamics.w_dot(q_list[6:9], w, self._gravity_body(rot), f_body)
-        return w_dot[:N_DOF]
+        w_dot: FloatArray = self.dynamics.w_dot(q_list[6:], w, self._gravity_body(rot), f_body)
+        return w_dot[:self.n_dof]
 
     # ------------------------------------------------------------------ integration
 
@@ -228,9 +232,9 @@ class UvmsModel:
         """Advance (q, w) by one fixed step dt with tau_b and f_ee_ned held constant.
 
         Args:
-            q: Generalized coordinates (9,).
-            w: Quasi-velocities (9,).
-            tau_b: Generalized body forces (9,) (eq. 8).
+            q: Generalized coordinates (6 + n,).
+            w: Quasi-velocities (6 + n,).
+            tau_b: Generalized body forces (6 + n,) (eq. 8).
             f_ee_ned: Force ON the end effector in map_ned (3,) (N), or None.
             dt: Step (s), positive.
             method: 'rk4' or 'semi_implicit_euler'; None uses ``integration.method``.
@@ -247,15 +251,15 @@ class UvmsModel:
         tau_arr = np.asarray(tau_b, dtype=float)
         q_list = q_arr.tolist()
         if (
-            q_arr.shape != (N_DOF,)
-            or w_arr.shape != (N_DOF,)
-            or tau_arr.shape != (N_DOF,)
+            q_arr.shape != (self.n_dof,)
+            or w_arr.shape != (self.n_dof,)
+            or tau_arr.shape != (self.n_dof,)
             or not math.isfinite(sum(q_list) + sum(w_arr.tolist()) + sum(tau_arr.tolist()))
         ):
             # Slow path, only to name the offending argument.
-            _vector('q', q, N_DOF)
-            _vector('w', w, N_DOF)
-            _vector('tau_b', tau_b, N_DOF)
+            _vector('q', q, self.n_dof)
+            _vector('w', w, self.n_dof)
+            _vector('tau_b', tau_b, self.n_dof)
         f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3).tolist()
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
             raise StateError(f'dt must be a positive finite number of seconds, got {dt!r}')
@@ -278,16 +282,16 @@ class UvmsModel:
     # ------------------------------------------------------------------ generalized coordinates
 
     def velocity_transform(self, q: ArrayLike) -> FloatArray:
-        """B(q) (9, 9) of eq. 4, q_dot = B w: blockdiag(J1, J2, I) (paper sec. 3.2).
+        """B(q) (6 + n, 6 + n) of eq. 4, q_dot = B w: blockdiag(J1, J2, I) (paper sec. 3.2).
 
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg.
-            StateError: If q is not a finite (9,) vector.
+            StateError: If q is not a finite (6 + n,) vector.
         """
         return velocity_transform(self._check_q(q))
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
-        """M(q) = B^-T M_b B^-1 (9, 9) in generalized coordinates (eq. 18).
+        """M(q) = B^-T M_b B^-1 (6 + n, 6 + n) in generalized coordinates (eq. 18).
 
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg (the Euler-angle form of eq. 18).
@@ -295,12 +299,12 @@ class UvmsModel:
         q_arr = self._check_q(q)
         check_pitch(float(q_arr[4]))
         b_inv = velocity_transform_inverse(q_arr)
-        mass = self.dynamics.mass(q_arr.tolist()[6:9])
+        mass = self.dynamics.mass(q_arr.tolist()[6:])
         result: FloatArray = b_inv.T.dot(mass.dot(b_inv))
         return result
 
     def bias(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
-        """zeta(q, q_dot) = C q_dot + D q_dot + G (9,) of eq. 19, so M q_ddot + zeta = tau.
+        """zeta(q, q_dot) = C q_dot + D q_dot + G (6 + n,) of eq. 19, so M q_ddot + zeta = tau.
 
         zeta = B^-T (C_b w + D_b w + G_b - M_b B^-1 B_dot w) with w = B^-1 q_dot (eq. 18).
 
@@ -308,13 +312,13 @@ class UvmsModel:
             SingularAttitudeError: Near pitch = +-90 deg.
         """
         q = self._check_q(q)
-        q_dot = _vector('q_dot', q_dot, N_DOF)
+        q_dot = _vector('q_dot', q_dot, self.n_dof)
         return self.task_space_terms(q, q_dot).zeta
 
     # ------------------------------------------------------------------ end effector
 
     def ee_position(self, q: ArrayLike) -> FloatArray:
-        """End-effector position X (3,) in map_ned (ee_link, the tip of link 3)."""
+        """End-effector position X (3,) in map_ned (ee_link, at the tip of the arm)."""
         return self.frames.frame(self._check_q(q).tolist(), EE_LINK)[0]
 
     def ee_rotation(self, q: ArrayLike) -> FloatArray:
@@ -322,7 +326,7 @@ class UvmsModel:
         return self.frames.frame(self._check_q(q).tolist(), EE_LINK)[1]
 
     def ee_jacobian(self, q: ArrayLike) -> FloatArray:
-        """EE Jacobian J (3, 9) in map_ned with respect to q_dot: X_dot = J q_dot (eq. 22).
+        """EE Jacobian J (3, 6 + n) in map_ned with respect to q_dot: X_dot = J q_dot (eq. 22).
 
         J = J_w B^-1 with J_w the Jacobian with respect to the quasi-velocities w.
 
@@ -347,7 +351,7 @@ class UvmsModel:
             SingularAttitudeError: Near pitch = +-90 deg.
         """
         q = self._check_q(q)
-        q_dot = _vector('q_dot', q_dot, N_DOF)
+        q_dot = _vector('q_dot', q_dot, self.n_dof)
         return self.task_space_terms(q, q_dot).J_dot_q_dot
 
     def task_space_terms(
@@ -359,9 +363,9 @@ class UvmsModel:
         and J_dot q_dot = J_w_dot w - J_w B^-1 B_dot w (eq. 22-23).
 
         Args:
-            q: Generalized coordinates (9,), finite.
-            q_dot: Generalized velocities (9,), finite; or None with ``w``.
-            w: Quasi-velocities (9,) instead of ``q_dot`` (q_dot = B w, eq. 4).
+            q: Generalized coordinates (6 + n,), finite.
+            q_dot: Generalized velocities (6 + n,), finite; or None with ``w``.
+            w: Quasi-velocities (6 + n,) instead of ``q_dot`` (q_dot = B w, eq. 4).
 
         Raises:
             SingularAttitudeError: Near pitch = +-90 deg.
@@ -374,7 +378,7 @@ class UvmsModel:
             w_arr = velocity_transform_inverse(q_arr).dot(np.asarray(q_dot, dtype=float))
         else:
             w_arr = np.asarray(w, dtype=float)
-        mass, bias = self.dynamics.mass_and_bias(q_list[6:9], w_arr, self._gravity_body(rot))
+        mass, bias = self.dynamics.mass_and_bias(q_list[6:], w_arr, self._gravity_body(rot))
         x, rot_ee, jac_w, acc = self.frames.ee_motion(q_list, w_arr)
         jac, j_dot_q_dot, mass_q, zeta, b, q_dot_arr = generalized_terms(
             q_arr, w_arr, mass, bias, jac_w, acc
@@ -393,22 +397,23 @@ class UvmsModel:
     # ------------------------------------------------------------------ poses and IK
 
     def frame_poses(
-        self, q: ArrayLike, frames: Sequence[str] = FRAME_NAMES
+        self, q: ArrayLike, frames: Sequence[str] | None = None
     ) -> dict[str, tuple[FloatArray, FloatArray]]:
-        """Poses of base_link_frd, link_1..3, ee_link, ft_sensor_link in map_ned.
+        """Poses of base_link_frd, the arm links, ee_link, ft_sensor_link in map_ned.
 
         Args:
-            q: Generalized coordinates (9,).
-            frames: The frames to pose, a subset of ``FRAME_NAMES`` (default: all).
+            q: Generalized coordinates (6 + n,).
+            frames: The frames to pose, a subset of ``frame_names`` (None: all).
 
         Returns:
-            {frame: (p_ned (3,), rot_ned_from_frame (3, 3))}; link_i sits at joint i,
-            ee_link and ft_sensor_link at the tip of link 3 with link 3's axes.
+            {frame: (p_ned (3,), rot_ned_from_frame (3, 3))}; an arm link sits at its joint,
+            ee_link and ft_sensor_link where the URDF puts them.
 
         Raises:
-            ModelError: For a frame name not in ``FRAME_NAMES``.
+            ModelError: For a frame name not in ``frame_names``.
         """
-        return self.frames.poses(self._check_q(q).tolist(), frames)
+        return self.frames.poses(self._check_q(q).tolist(),
+                                 self.frame_names if frames is None else frames)
 
     def joint_positions_for_ee_position(
         self,
@@ -420,12 +425,12 @@ class UvmsModel:
         max_iterations: int = 200,
         damping: float = 1e-2,
     ) -> FloatArray:
-        """Arm joint angles (3,) that put the end effector at ``x_ned`` (damped least squares).
+        """Arm joint angles (n,) that put the end effector at ``x_ned`` (damped least squares).
 
         Args:
             q_vehicle: Vehicle pose (6,): position in map_ned and roll, pitch, yaw.
             x_ned: Desired end-effector position in map_ned (3,) (m).
-            q_arm_guess: Initial joint angles (3,) (rad); selects the branch (elbow up/down).
+            q_arm_guess: Initial joint angles (n,) (rad); selects the branch (elbow up/down).
             tolerance_m: Position error at which to stop (m).
             max_iterations: Iteration limit.
             damping: Damping lambda of dq = J^T (J J^T + lambda^2 I)^-1 e (m).
@@ -436,7 +441,7 @@ class UvmsModel:
         return self.frames.joint_positions_for_ee_position(
             _vector('q_vehicle', q_vehicle, 6),
             _vector('x_ned', x_ned, 3),
-            _vector('q_arm_guess', q_arm_guess, N_JOINTS),
+            _vector('q_arm_guess', q_arm_guess, self.n_joints),
             tolerance_m,
             max_iterations,
             damping,

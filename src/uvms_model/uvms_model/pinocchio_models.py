@@ -1,6 +1,6 @@
 """The two Pinocchio models of the UVMS, built once from the URDF (free-flyer root + arm).
 
-- The *kinematic* model is the URDF as written (frames ``base_link_frd``, ``link_1..3``,
+- The *kinematic* model is the URDF as written (frames ``base_link_frd``, the arm links,
   ``ee_link``, ``ft_sensor_link``); its free-flyer velocity is the body twist [v; omega] in
   ``base_link_frd``, the first six quasi-velocities w of eq. 8.
 - The *dynamic* model adds the added mass of the water each body entrains (Kirchhoff: M_A is
@@ -12,11 +12,11 @@
   at c, so ABA, CRBA and RNEA of this model give M_b = M_RB + sum_i J_i^T M_A,i J_i (eq. 8)
   with no approximation. Gravity is off: net weights enter as external forces.
 
-Joint order of the dynamic model: the hull and link_1..3 first (so w, tau_b and w_dot are its
-first nine velocities), then the sliders from the tip's down to the hull's. That order is
-depth-first (every joint's subtree is one span of joints and of velocities: link_2's subtree
-is link_2, link_3, link_3's slider, link_2's slider), which CRBA requires; so one model and
-one workspace serve ABA, RNEA and CRBA.
+Joint order of the dynamic model: the hull and the arm links first (so w, tau_b and w_dot are
+its first 6 + n velocities), then the sliders from the tip's down to the hull's. That order is
+depth-first (every joint's subtree is one span of joints and of velocities: in the paper's
+arm, link_2's subtree is link_2, link_3, link_3's slider, link_2's slider), which CRBA
+requires; so one model and one workspace serve ABA, RNEA and CRBA.
 """
 
 from __future__ import annotations
@@ -29,14 +29,10 @@ import pinocchio as pin  # type: ignore[import-untyped]
 from numpy.typing import NDArray
 
 from uvms_model.added_mass import AddedMass
-from uvms_model.description import ARM_LINKS, EE_LINK, ROOT_LINK, SENSOR_LINK, RobotDescription
+from uvms_model.description import RobotDescription
 from uvms_model.errors import DescriptionError, ModelError
 
 FloatArray = NDArray[np.float64]
-
-FRAME_NAMES = (ROOT_LINK, *ARM_LINKS, EE_LINK, SENSOR_LINK)
-"""Frames of ``UvmsModel.frame_poses``, all posed in map_ned."""
-
 
 def kinematic_model(description: RobotDescription) -> pin.Model:
     """Pinocchio model of the URDF as written, free-flyer root (base_link_frd).
@@ -56,7 +52,7 @@ def kinematic_model(description: RobotDescription) -> pin.Model:
             f'{description.urdf_path}: Pinocchio found the joints {list(names)}, expected '
             f'{list(description.joint_names)}'
         )
-    for frame in FRAME_NAMES:
+    for frame in description.frame_names:
         if not model.existFrame(frame):
             raise DescriptionError(f"{description.urdf_path}: no frame '{frame}'")
     return model
@@ -70,10 +66,11 @@ def dynamic_model(
     Args:
         description: The robot description (for error messages).
         kin: The kinematic model.
-        added: Added mass of the hull and link_1..3 (None: none).
+        added: Added mass of the hull and each arm link (None: none).
 
     Returns:
-        The model, the joints of the hull and link_1..3, and the sliders' joints (tip first).
+        The model, the joints of the hull and the arm links, and the sliders' joints (tip
+        first).
 
     Raises:
         DescriptionError: For an axial added mass above the lateral one (an oblate shape).

@@ -41,14 +41,7 @@ FT_SENSOR_LINK = 'ft_sensor_link'
 MAP_ENU = 'map'
 BASE_LINK_FLU = 'base_link'
 
-#: Parent of each robot frame in the /tf tree (map -> map_ned -> base_link_frd -> ...).
-FRAME_PARENTS: dict[str, str] = {
-    'link_1': BASE_LINK_FRD,
-    'link_2': 'link_1',
-    'link_3': 'link_2',
-    'ee_link': 'link_3',
-    'ft_sensor_link': 'ee_link',
-}
+EE_LINK = 'ee_link'
 
 #: map_ned axes in map (ENU): north = y_enu, east = x_enu, down = -z_enu.
 ROT_ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -220,7 +213,7 @@ class StateMessages:
     The fields hold the messages of the last ``update``, all stamped with its time.
 
     Example:
-        >>> messages = StateMessages(('joint_1', 'joint_2', 'joint_3'))  # doctest: +SKIP
+        >>> messages = StateMessages(('shoulder', 'elbow', 'wrist'))  # doctest: +SKIP
         >>> messages.update(plant.observe())  # doctest: +SKIP
         >>> odometry_publisher.publish(messages.odometry)  # doctest: +SKIP
     """
@@ -257,20 +250,35 @@ def _transform(
     return msg
 
 
+def frame_parents(frame_names: Sequence[str]) -> dict[str, str]:
+    """Parent of each moving robot frame in the /tf tree, from the model's frame list.
+
+    ``frame_names`` is root, the arm links base to tip, ee_link, ft_sensor_link
+    (``UvmsModel.frame_names``): each arm link and ee_link hangs on the frame before it
+    (fixed links between them are folded into these transforms); ft_sensor_link is on
+    /tf_static.
+
+    >>> frame_parents(('base_link_frd', 'upper', 'fore', 'wrist', 'ee_link', 'ft_sensor_link'))
+    {'upper': 'base_link_frd', 'fore': 'upper', 'wrist': 'fore', 'ee_link': 'wrist'}
+    """
+    chain = [name for name in frame_names if name != FT_SENSOR_LINK]
+    return dict(zip(chain[1:], chain[:-1], strict=True))
+
+
 def tf_message(
-    t_ns: int, poses: Mapping[str, tuple[FloatArray, FloatArray]]
+    t_ns: int, poses: Mapping[str, tuple[FloatArray, FloatArray]],
+    parents: Mapping[str, str],
 ) -> TFMessage:
-    """/tf of the robot: map_ned -> base_link_frd -> link_1 -> ... -> ft_sensor_link.
+    """/tf of the robot: map_ned -> base_link_frd -> arm links -> ee_link.
 
     Args:
         t_ns: Simulated time (ns).
         poses: {frame: (p_ned, rot_ned_from_frame)} of the plant.
+        parents: Parent of each moving frame (``frame_parents``).
     """
     p_base, rot_base = poses[BASE_LINK_FRD]
     transforms = [_transform(t_ns, MAP_NED, BASE_LINK_FRD, p_base, rot_base)]
-    for child, parent in FRAME_PARENTS.items():
-        if child == FT_SENSOR_LINK:
-            continue  # fixed to ee_link: on /tf_static
+    for child, parent in parents.items():
         p_parent, rot_parent = poses[parent]
         p_child, rot_child = poses[child]
         transforms.append(_transform(
@@ -290,12 +298,12 @@ def static_tf_message(
     tools that expect ``map`` and ``base_link`` find them; ``ft_sensor_link`` is fixed to
     ``ee_link``.
     """
-    p_ee, rot_ee = poses['ee_link']
+    p_ee, rot_ee = poses[EE_LINK]
     p_s, rot_s = poses[FT_SENSOR_LINK]
     return TFMessage(transforms=[
         _transform(t_ns, MAP_ENU, MAP_NED, np.zeros(3), ROT_ENU_FROM_NED),
         _transform(t_ns, BASE_LINK_FRD, BASE_LINK_FLU, np.zeros(3), ROT_FRD_FROM_FLU),
-        _transform(t_ns, 'ee_link', FT_SENSOR_LINK, rot_ee.T @ (p_s - p_ee), rot_ee.T @ rot_s),
+        _transform(t_ns, EE_LINK, FT_SENSOR_LINK, rot_ee.T @ (p_s - p_ee), rot_ee.T @ rot_s),
     ])
 
 

@@ -121,9 +121,10 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ),
     ParameterSpec(
         'initial.joint_positions', [0.0, 0.4, -0.8],
-        'Initial arm joint angles (rad) when initial.arm is joint_positions; otherwise the '
-        'starting guess of the inverse kinematics (it picks the elbow branch).',
-        -2.0 * math.pi, 2.0 * math.pi, length=3,
+        'Initial arm joint angles (rad), one per arm joint, when initial.arm is '
+        'joint_positions; otherwise the starting guess of the inverse kinematics (it picks '
+        "the elbow branch). The default fits the paper's 3-joint arm.",
+        -2.0 * math.pi, 2.0 * math.pi,
     ),
     ParameterSpec(
         'initial.ee_position', [1.7, 0.0, -0.1],

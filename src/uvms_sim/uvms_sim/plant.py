@@ -19,7 +19,6 @@ from uvms_model.sensors import ForceTorqueSensor, contact_wrench_in_sensor_frame
 from uvms_model.thrusters import configuration_matrix
 
 from uvms_model import (
-    FRAME_NAMES,
     ModelError,
     SingularAttitudeError,
     UnreachableError,
@@ -60,8 +59,8 @@ class Observation:
 
     Attributes:
         t_ns: Simulated time (ns).
-        q: Generalized coordinates (9,).
-        w: Quasi-velocities (9,).
+        q: Generalized coordinates (6 + n,).
+        w: Quasi-velocities (6 + n,).
         joint_torques: Motor torques applied during the last step (N*m).
         poses: {frame: (p_ned, rot_ned_from_frame)} of the robot's frames (only ee_link and
             ft_sensor_link from ``Plant.observe(all_frames=False)``).
@@ -86,12 +85,12 @@ def initial_coordinates(
     joint_positions: ArrayLike,
     ee_position: ArrayLike | None = None,
 ) -> FloatArray:
-    """Generalized coordinates q (9,) of the start, optionally by inverse kinematics.
+    """Generalized coordinates q (6 + n,) of the start, optionally by inverse kinematics.
 
     Args:
         model: The UVMS model.
         vehicle_pose: x, y, z (m) in map_ned and roll, pitch, yaw (rad), shape (6,).
-        joint_positions: Arm joint angles (rad) (3,); with ``ee_position``, the starting guess
+        joint_positions: Arm joint angles (rad) (n,); with ``ee_position``, the starting guess
             of the inverse kinematics (it selects the elbow branch).
         ee_position: End-effector position in map_ned (m) (3,) to start at, or None.
 
@@ -100,6 +99,10 @@ def initial_coordinates(
     """
     pose = np.asarray(vehicle_pose, dtype=float)
     arm = np.asarray(joint_positions, dtype=float)
+    if arm.shape != (model.n_joints,):
+        msg = (f"parameter 'initial.joint_positions' = {arm.tolist()}: expected "
+               f'{model.n_joints} angles, one per arm joint {list(model.joint_names)}')
+        raise SimParameterError(msg)
     if ee_position is not None:
         try:
             arm = model.joint_positions_for_ee_position(pose, ee_position, arm)
@@ -118,7 +121,7 @@ class Plant:
     Args:
         params: Robot parameters (model, ``contact.*``, ``sensor.*``, ``thrusters.*``,
             ``integration.method``).
-        q0: Initial generalized coordinates (9,).
+        q0: Initial generalized coordinates (6 + n,).
         dt_ns: Fixed integration step (ns).
         wall_enabled: Whether the wall exists.
         wall_motion_start_force_n: Contact force (N) at which a moving wall
@@ -127,7 +130,7 @@ class Plant:
         limits: Divergence bounds.
 
     Example:
-        >>> plant = Plant(UvmsParameters(), np.zeros(9))  # doctest: +SKIP
+        >>> plant = Plant(UvmsParameters(), np.zeros(9))  # paper robot; doctest: +SKIP
         >>> plant.step(np.zeros(plant.n_thrusters), np.zeros(3))  # doctest: +SKIP
         >>> plant.t_ns  # doctest: +SKIP
         1000000
@@ -183,12 +186,12 @@ class Plant:
 
     @property
     def q(self) -> FloatArray:
-        """Generalized coordinates (9,): vehicle position and Euler angles, joint angles."""
+        """Generalized coordinates (6 + n,): vehicle position and Euler angles, joint angles."""
         return self._q.copy()
 
     @property
     def w(self) -> FloatArray:
-        """Quasi-velocities (9,): body linear and angular velocity, joint rates."""
+        """Quasi-velocities (6 + n,): body linear and angular velocity, joint rates."""
         return self._w.copy()
 
     @property
@@ -234,7 +237,7 @@ class Plant:
             all_frames: Pose every robot frame; False poses only ee_link and
                 ft_sensor_link, all the sensor topics need (no /tf at this state).
         """
-        poses = self.model.frame_poses(self._q, FRAME_NAMES if all_frames else _SENSOR_FRAMES)
+        poses = self.model.frame_poses(self._q, None if all_frames else _SENSOR_FRAMES)
         contact = self._contact_at(poses['ee_link'][0])
         force, torque = contact_wrench_in_sensor_frame(poses['ft_sensor_link'][1],
                                                        contact.force_ned)
@@ -257,7 +260,7 @@ class Plant:
 
         Args:
             thrusts: Thrust of each thruster (N), shape (p,).
-            joint_torques: Arm motor torques (N*m), shape (3,).
+            joint_torques: Arm motor torques (N*m), shape (n,).
 
         Raises:
             CommandError: Wrong size or non-finite actuator outputs; nothing is integrated.
@@ -329,13 +332,14 @@ class Plant:
         # A finite sum is the cheap test (a huge finite sum may overflow: then look again).
         finite = math.isfinite(sum(q_list) + sum(w_list))
         if not finite and not (np.isfinite(q).all() and np.isfinite(w).all()):
-            names = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', 'joint 1', 'joint 2', 'joint 3')
+            names = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', *self.joint_names)
             label, vector = ('q', q) if not np.isfinite(q).all() else ('w', w)
             i = int(np.flatnonzero(~np.isfinite(vector))[0])
             msg = f'{_where(t_s)}: {label}[{i}] ({names[i]}) = {vector[i]} is not finite'
             raise DivergenceError(msg)
         x, y, z = q_list[:3]
-        u, v, w_, p, q_, r, dq1, dq2, dq3 = w_list
+        u, v, w_, p, q_, r = w_list[:6]
+        joint_rate = max(abs(rate) for rate in w_list[6:])
         checks = (
             ('vehicle distance from the map_ned origin', math.sqrt(x * x + y * y + z * z),
              lim.max_distance_m, 'm'),
@@ -343,7 +347,7 @@ class Plant:
              lim.max_linear_speed_m_s, 'm/s'),
             ('vehicle angular rate |[p, q, r]|', math.sqrt(p * p + q_ * q_ + r * r),
              lim.max_angular_rate_rad_s, 'rad/s'),
-            ('largest arm joint rate', max(abs(dq1), abs(dq2), abs(dq3)),
+            ('largest arm joint rate', joint_rate,
              lim.max_joint_rate_rad_s, 'rad/s'),
         )
         for label, value, limit, unit in checks:

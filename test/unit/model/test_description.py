@@ -13,7 +13,6 @@ import yaml
 
 import uvms_description
 from uvms_model import (
-    FRAME_NAMES,
     DescriptionError,
     UvmsModel,
     UvmsParameters,
@@ -57,7 +56,7 @@ def test_urdf_is_a_tree_with_one_root_and_every_joint_between_existing_links() -
         children.append(child)
     assert len(children) == len(set(children))
     assert [name for name in links if name not in children] == ['base_link_frd']
-    assert set(FRAME_NAMES) <= set(links)
+    assert set(load_description().frame_names) <= set(links)
 
 
 def test_urdf_holds_the_papers_vehicle() -> None:
@@ -147,11 +146,11 @@ def test_hydrodynamics_file_holds_the_papers_coefficients_by_link() -> None:
 
 
 def test_description_is_found_beside_the_package_in_a_source_checkout() -> None:
-    """From src/uvms_description: urdf/uvms.urdf and config/hydrodynamics.yaml."""
+    """From src/uvms_description: robots/paper_uvms/robot.urdf and its hydrodynamics.yaml."""
     share = uvms_description.share_directory()
     assert share == Path(uvms_description.__file__).resolve().parents[1]
-    assert URDF == share / 'urdf' / 'uvms.urdf'
-    assert HYDRODYNAMICS == share / 'config' / 'hydrodynamics.yaml'
+    assert URDF == share / 'robots' / 'paper_uvms' / 'robot.urdf'
+    assert HYDRODYNAMICS == share / 'robots' / 'paper_uvms' / 'hydrodynamics.yaml'
 
 
 def test_description_is_found_through_the_ament_index_of_a_colcon_install(
@@ -160,8 +159,8 @@ def test_description_is_found_through_the_ament_index_of_a_colcon_install(
     """With the module installed elsewhere, share/uvms_description comes from the index."""
     prefix = tmp_path / 'install'
     share = prefix / 'share' / 'uvms_description'
-    (share / 'urdf').mkdir(parents=True)
-    (share / 'urdf' / 'uvms.urdf').write_text(URDF.read_text())
+    (share / 'robots' / 'paper_uvms').mkdir(parents=True)
+    (share / 'robots' / 'paper_uvms' / 'robot.urdf').write_text(URDF.read_text())
     index = prefix / 'share' / 'ament_index' / 'resource_index' / 'packages'
     index.mkdir(parents=True)
     (index / 'uvms_description').write_text('')
@@ -217,10 +216,40 @@ def _edited(tmp_path: Path, old: str, new: str, count: int = -1) -> Path:
         (
             'type="revolute">\n    <parent link="link_2"/>',
             'type="prismatic">\n    <parent link="link_2"/>',
-            r'edited\.urdf: the joints from base_link_frd to ft_sensor_link must be three',
+            r"edited\.urdf: joint 'joint_3' on the arm \(base_link_frd to ee_link\) is of type "
+            r"'prismatic'",
+        ),
+        (
+            'type="revolute">\n    <parent link="link_2"/>',
+            'type="fixed">\n    <parent link="link_2"/>',
+            r"edited\.urdf: the arm from base_link_frd to ee_link has 2 revolute joints "
+            r"\['joint_1', 'joint_2'\]; at least 3",
+        ),
+        (
+            '<link name="ee_link"/>',
+            '<link name="ee_link"/><link name="fin"><inertial><mass value="1.0"/><inertia '
+            'ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link><joint '
+            'name="fin_joint" type="revolute"><parent link="base_link_frd"/><child '
+            'link="fin"/><axis xyz="0 0 1"/><limit effort="1" velocity="1" lower="-1" '
+            'upper="1"/></joint>',
+            r"edited\.urdf: joint 'fin_joint' \(revolute\) is not on the arm from base_link_frd "
+            r'to ee_link: a branched chain',
+        ),
+        (
+            '<mass value="8.0"/>',
+            '<mass value="0.0"/>',
+            r"edited\.urdf: link 'link_2' <inertial><mass value='0.0'>: the mass must be "
+            'positive',
+        ),
+        (
+            '<mass value="530.0"/>',
+            '<mass value="-530.0"/>',
+            r"edited\.urdf: link 'base_link_frd' <inertial><mass value='-530.0'>: the mass "
+            'must be positive',
         ),
     ],
-    ids=['malformed', 'missing frame', 'missing parent', 'two roots', 'bad number', 'prismatic'],
+    ids=['malformed', 'missing frame', 'missing parent', 'two roots', 'bad number', 'prismatic',
+         'two joints', 'branched', 'zero mass', 'negative mass'],
 )
 def test_broken_urdf_stops_start_up_naming_the_file_and_the_element(
     tmp_path: Path, old: str, new: str, pattern: str
@@ -242,7 +271,7 @@ def test_renamed_frame_is_reported_as_missing(tmp_path: Path) -> None:
     ('edit', 'pattern'),
     [
         ({'link_2': {'drag': 1.1}}, r"link_2: unknown keys \['drag'\]"),
-        ({'link_4': {}}, r"links \['link_4'\] are not links of the model"),
+        ({'link_4': {}}, r"links \['link_4'\] are not the hull or arm links of the URDF"),
         ({'base_link_frd': {'buoyancy_ratio': 'neutral'}}, r'base_link_frd\.buoyancy_ratio'),
         ({'link_1': {'added_mass': 'sphere'}}, r'must be one of'),
     ],

@@ -69,8 +69,10 @@ def test_odometry_pose_in_map_ned_twist_in_base_link_frd() -> None:
 
 def test_tf_tree_gives_each_frame_one_parent_and_reaches_map() -> None:
     """/tf and /tf_static form a tree rooted at map, base_link hanging under base_link_frd."""
-    poses = UvmsModel().frame_poses(np.array([0, 0, 0, 0.1, 0.2, 0.3, 0.1, 0.4, -0.8]))
-    transforms = [*conversions.tf_message(0, poses).transforms,
+    model = UvmsModel()
+    poses = model.frame_poses(np.array([0, 0, 0, 0.1, 0.2, 0.3, 0.1, 0.4, -0.8]))
+    tree = conversions.frame_parents(model.frame_names)
+    transforms = [*conversions.tf_message(0, poses, tree).transforms,
                   *conversions.static_tf_message(0, poses).transforms]
     parents: dict[str, str] = {}
     for transform in transforms:
@@ -88,7 +90,8 @@ def test_tf_chain_reproduces_end_effector_pose() -> None:
     q = np.array([0.3, -0.2, 0.5, 0.1, 0.2, 0.3, 0.1, 0.4, -0.8])
     model = UvmsModel()
     poses = model.frame_poses(q)
-    by_child = {t.child_frame_id: t for t in conversions.tf_message(0, poses).transforms}
+    tree = conversions.frame_parents(model.frame_names)
+    by_child = {t.child_frame_id: t for t in conversions.tf_message(0, poses, tree).transforms}
     frame, p, rot = 'ee_link', np.zeros(3), np.eye(3)
     while frame != 'map_ned':
         t = by_child[frame].transform

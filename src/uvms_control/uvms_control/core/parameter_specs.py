@@ -198,7 +198,8 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
     ParameterSpec(
         'null_space.stiffness_1_s2',
         [4.0] * 6 + [2.0] * 3,
-        'Posture stiffness K_n (1/s^2) per coordinate x, y, z, roll, pitch, yaw, q1..q3: '
+        'Posture stiffness K_n (1/s^2) per coordinate x, y, z, roll, pitch, yaw, then one per '
+        'arm joint (6 + n values; the default fits the paper robot): '
         'phi_ddot = K_n (q_0 - q) - D_n q_dot, projected into the null space of J.',
         0.0,
         1e4,

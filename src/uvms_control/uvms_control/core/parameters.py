@@ -188,10 +188,10 @@ class ControllerParameters:
             assert isinstance(value, list)
             return [float(x) for x in value]
 
-        def nine(name: str) -> FloatArray:
+        def per_coordinate(name: str) -> FloatArray:
             data = np.asarray(floats(name))
-            if data.size != 9:
-                raise ControlParameterError(name, data.tolist(), '9 values (one per coordinate)')
+            if data.size < 6 + 3:
+                raise ControlParameterError(name, data.tolist(), PER_COORDINATE)
             return data
 
         fuzzy = FuzzySwitchParameters(
@@ -245,8 +245,8 @@ class ControllerParameters:
             fuzzy=fuzzy,
             contact_threshold=threshold,
             null_space_enabled=enabled,
-            null_space_stiffness=nine('null_space.stiffness_1_s2'),
-            null_space_damping=nine('null_space.damping_1_s'),
+            null_space_stiffness=per_coordinate('null_space.stiffness_1_s2'),
+            null_space_damping=per_coordinate('null_space.damping_1_s'),
         )
 
 
@@ -302,3 +302,21 @@ def validate_node_parameters(
     if mode is not None and mode not in TRIGGER_MODES:
         raise ControlParameterError('trigger_mode', mode, f'one of {list(TRIGGER_MODES)}')
     return merged
+
+
+PER_COORDINATE = '6 + n values: x, y, z, roll, pitch, yaw, then one per arm joint (n >= 3)'
+"""What a per-coordinate gain (K_n, D_n of the null space) holds."""
+
+
+def null_space_gains(params: ControllerParameters, n_dof: int) -> FloatArray:
+    """Rows K_n and D_n (2, 6 + n) of the null-space law (eq. 24), checked against the model.
+
+    Raises:
+        ControlParameterError: A gain vector whose length is not the model's 6 + n.
+    """
+    for name, gains in (('null_space.stiffness_1_s2', params.null_space_stiffness),
+                        ('null_space.damping_1_s', params.null_space_damping)):
+        if gains.size != n_dof:
+            raise ControlParameterError(name, gains.tolist(),
+                                        f'{n_dof} values for this robot; {PER_COORDINATE}')
+    return np.array((params.null_space_stiffness, params.null_space_damping), dtype=float)

@@ -50,7 +50,7 @@ from uvms_control.core.fuzzy_switch import FuzzySwitch
 from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
 from uvms_control.core.null_space import null_space_torque
-from uvms_control.core.parameters import ControllerParameters
+from uvms_control.core.parameters import ControllerParameters, null_space_gains
 from uvms_control.core.reference import ForcePhase
 from uvms_control.core.task_reference import TaskReference
 from uvms_control.core.task_space import (
@@ -156,10 +156,7 @@ class UnifiedForceController:
                                   ramp_from_start=params.switch_mode == 'hybrid')
         self._n_dof = model.n_dof
         self._set_normal(params.force_direction)
-        self._null_gains = np.array((
-            np.broadcast_to(params.null_space_stiffness, (self._n_dof,)),
-            np.broadcast_to(params.null_space_damping, (self._n_dof,)),
-        ))  # fmt: skip
+        self._null_gains = null_space_gains(params, self._n_dof)
         # Load the compiled kernels now (``UvmsModel._load_kernels``), not in the first period.
         self.reset()
         rest = np.zeros(self._n_dof)
@@ -203,10 +200,7 @@ class UnifiedForceController:
         self._set_normal(old.n)
         self.hybrid.carry_state_from(old)
         self.task.set_contact_threshold(params.contact_threshold)
-        self._null_gains = np.array((
-            np.broadcast_to(params.null_space_stiffness, (self._n_dof,)),
-            np.broadcast_to(params.null_space_damping, (self._n_dof,)),
-        ))  # fmt: skip
+        self._null_gains = null_space_gains(params, self._n_dof)
 
     def start_task(self, t: float, goal: ContactTaskGoal) -> None:
         """Follow a contact task from t (s): its path from the running X_d, F_d along its normal.
