@@ -26,7 +26,7 @@ from uvms_bringup.launch_helpers import (
     config_dir,
     graph_nodes,
 )
-from uvms_bringup.node_factory import make_node
+from uvms_bringup.node_factory import GraphError, make_node
 from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
 
 _TYPE_NAMES = {
@@ -83,9 +83,7 @@ def check_scenario_overrides(
             level = rclpy.logging.get_logger_level(logger)
             rclpy.logging.set_logger_level(logger, rclpy.logging.LoggingSeverity.WARN)
             try:
-                robot = ({'robot_name': scenario.robot}
-                         if scenario.robot is not None and spec.takes_robot else {})
-                node = make_node(spec, robot, config, namespace, context)
+                node = _throwaway_node(scenario, spec, config, namespace, context)
                 try:
                     for name, value in scenario.overrides[spec.name].items():
                         checked[spec.name][name] = _check_override(
@@ -97,6 +95,28 @@ def check_scenario_overrides(
     finally:
         rclpy.try_shutdown(context=context)
     return replace(scenario, overrides=checked)
+
+
+def _throwaway_node(scenario: Scenario, spec: NodeSpec, config: Path, namespace: str,
+                    context: Context) -> Node:
+    """The node of ``spec`` built for the check: with the scenario's robot and overrides.
+
+    The overrides go in because a robot may need them to start at all (an initial pose its
+    arm reaches); if the node refuses them (an override of the wrong type), it is built
+    without them, so that ``_check_override`` names the key; if it cannot start without
+    them either, the first error is raised.
+    """
+    robot: dict[str, ParameterValue] = (
+        {'robot_name': scenario.robot} if scenario.robot is not None and spec.takes_robot
+        else {})
+    try:
+        return make_node(spec, {**scenario.overrides[spec.name], **robot}, config, namespace,
+                         context)
+    except GraphError as first:
+        try:
+            return make_node(spec, robot, config, namespace, context)
+        except GraphError:
+            raise first from None
 
 
 def _check_override(

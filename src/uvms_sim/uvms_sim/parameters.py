@@ -123,7 +123,8 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         'initial.joint_positions', [0.0, 0.4, -0.8],
         'Initial arm joint angles (rad), one per arm joint, when initial.arm is '
         'joint_positions; otherwise the starting guess of the inverse kinematics (it picks '
-        "the elbow branch). The default fits the paper's 3-joint arm.",
+        "the elbow branch). The default is the paper arm's elbow-up guess; left at it, an arm "
+        'of another joint count starts from zeros.',
         -2.0 * math.pi, 2.0 * math.pi,
     ),
     ParameterSpec(
@@ -261,3 +262,21 @@ def _check_number(spec: ParameterSpec, number: float, shown: Any) -> None:
 def _message(spec: ParameterSpec, value: Any, problem: str) -> str:
     """Error message naming the parameter, the value and the valid range."""
     return f'parameter {spec.name!r} = {value!r}: {problem}; valid: {spec.range_text()}'
+
+
+def default_joint_positions(joint_positions: np.ndarray, n_joints: int) -> np.ndarray:
+    """``initial.joint_positions``, or zeros (n,) where it was left at the paper arm's default.
+
+    The default [0, 0.4, -0.8] is the elbow-up guess of the paper's 3-joint arm; a robot with
+    another joint count that leaves it alone starts from zeros (a guess for ``ee_position``).
+    A value given explicitly is returned as it is (the plant checks its length).
+
+    >>> default_joint_positions(np.array([0.0, 0.4, -0.8]), 4).tolist()
+    [0.0, 0.0, 0.0, 0.0]
+    >>> default_joint_positions(np.array([0.0, 0.4, -0.8]), 3).tolist()
+    [0.0, 0.4, -0.8]
+    """
+    default = np.array(SPECS_BY_NAME['initial.joint_positions'].default, dtype=float)
+    if joint_positions.shape != (n_joints,) and np.array_equal(joint_positions, default):
+        return np.zeros(n_joints)
+    return joint_positions

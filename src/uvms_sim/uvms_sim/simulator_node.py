@@ -37,7 +37,11 @@ from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError
-from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings
+from uvms_sim.parameters import (
+    SIMULATOR_PARAMETERS,
+    SimulatorSettings,
+    default_joint_positions,
+)
 from uvms_sim.plant import Plant, initial_coordinates
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
@@ -71,7 +75,9 @@ class SimulatorNode(Node):
         self._settings = cfg = SimulatorSettings.from_values(values)
         # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
         self.get_logger().info('loading the model and compiled kernels')
-        q0 = initial_coordinates(UvmsModel(params), cfg.vehicle_pose, cfg.joint_positions,
+        model = UvmsModel(params)
+        q0 = initial_coordinates(model, cfg.vehicle_pose,
+                                 default_joint_positions(cfg.joint_positions, model.n_joints),
                                  cfg.ee_position if cfg.arm_from_ee_position else None)
         self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled,
                             cfg.wall_motion_start_force_n)
