@@ -13,7 +13,8 @@ damping (141 N s^2/m^2 in surge, the robot's hydrodynamics.yaml) the hull alone 
 about 0.85 m/s on 4 x 39.9 N x cos 45 deg; the published 1.5 m/s would need about a third
 of that quadratic damping (Wu 2018's 18.18 gives 2.4 m/s). It prints the speed reached
 beside the published figure of the BlueROV2 Heavy: Blue Robotics' product page, "max forward speed
-1.5 m/s (3 knots)". A benchmark prints figures; it never asserts.
+1.5 m/s (3 knots)", as quoted in issue 21 (not re-checked here: the stored copies of public
+pages hold no copy of that page). A benchmark prints figures; it never asserts.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ from uvms_description.robots import (  # noqa: E402
 from uvms_model import UvmsModel, UvmsParameters  # noqa: E402
 
 PUBLISHED_M_S = 1.5
-"""Blue Robotics, BlueROV2 product page: maximum forward speed 1.5 m/s (3 knots)."""
+"""Blue Robotics, BlueROV2 product page (as quoted in issue 21): 1.5 m/s (3 knots)."""
 
 
 def surge_speed(robot: str, duration_s: float,

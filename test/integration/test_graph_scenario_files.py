@@ -78,6 +78,15 @@ def test_overrides_of_shipped_scenarios_are_declared_parameters(name: str) -> No
     check_scenario_overrides(load_scenario(SCENARIOS / f'{name}.yaml'))
 
 
+@pytest.mark.parametrize('name', ['bluerov2_alpha5_free_motion', 'bluerov2_alpha5_contact'])
+def test_bluerov2_scenarios_name_their_robot_and_declared_parameters(name: str) -> None:
+    """robot: bluerov2_alpha5, and every override is a parameter of that robot's nodes."""
+    scenario = load_scenario(SCENARIOS / f'{name}.yaml')
+    assert scenario.robot == 'bluerov2_alpha5'
+    assert scenario.name == name
+    check_scenario_overrides(scenario)
+
+
 def test_valid_file_gives_flat_dotted_overrides_and_yaml12_floats(tmp_path: Path) -> None:
     """Nested mappings become dotted names; 1e4 reads as a float as in ROS 2 parameter files."""
     scenario = load_scenario(write(tmp_path, VALID))

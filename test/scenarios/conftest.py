@@ -78,7 +78,20 @@ def hybrid_only(scenario_runs: ScenarioRuns) -> ScenarioResult:
 
 
 #: The scenario fixtures above: a selected test that uses one starts its run early.
+@pytest.fixture(scope='session')
+def bluerov2_alpha5_contact(scenario_runs: ScenarioRuns) -> ScenarioResult:
+    """The BlueROV2 Heavy + Alpha 5 contact scenario (Case I scaled to the arm)."""
+    return scenario_runs.get('bluerov2_alpha5_contact')
+
+
+@pytest.fixture(scope='session')
+def bluerov2_alpha5_free_motion(scenario_runs: ScenarioRuns) -> ScenarioResult:
+    """The BlueROV2 Heavy + Alpha 5 free-motion scenario."""
+    return scenario_runs.get('bluerov2_alpha5_free_motion')
+
+
 SCENARIO_FIXTURES = frozenset({
     'free_motion', 'case1_ke1e4', 'case1_ke1e5', 'case2_noise', 'case3_moving_wall',
-    'case4_model_error', 'impedance_only', 'hybrid_only',
+    'case4_model_error', 'impedance_only', 'hybrid_only', 'bluerov2_alpha5_contact',
+    'bluerov2_alpha5_free_motion',
 })
