@@ -186,6 +186,12 @@ class ReferenceVehicle:
     linear_drag_rotation_n_m_s: float = 0.81
     drag_coefficient_translation: float = 1.05
     drag_coefficient_rotation: float = 1.0
+    #: A hull given by coefficients (Fossen's magnitudes) instead of the spheroid: M_A =
+    #: diag(added_mass_kg), drag (D_l + D_q |nu|) nu, buoyancy rho V (None: the spheroid).
+    added_mass_kg: tuple[float, ...] | None = None
+    linear_damping: tuple[float, ...] | None = None
+    quadratic_damping: tuple[float, ...] | None = None
+    displaced_volume_m3: float | None = None
 
 
 @dataclass(frozen=True)
@@ -387,7 +393,8 @@ class ReferenceModel:
             ]
         )
         if hydro.added_mass_enabled:
-            added_vehicle = spheroid_added_mass(a_hull, b_hull, rho)
+            added_vehicle = (spheroid_added_mass(a_hull, b_hull, rho) if veh.added_mass_kg is None
+                             else np.diag(np.array(veh.added_mass_kg, dtype=float)))
             added_links = np.array(
                 [cylinder_added_mass(lengths[i], radii[i], rho) for i in range(N_JOINTS)]
             )
@@ -411,7 +418,9 @@ class ReferenceModel:
         if hydro.buoyancy_enabled:
             link_displaced = [rho * v for v in link_volumes]
             # Non-negative: UvmsParameters checks the ratio against the links' displacement.
-            hull_displaced = veh.buoyancy_ratio * total_mass - sum(link_displaced)
+            hull_displaced = (veh.buoyancy_ratio * total_mass - sum(link_displaced)
+                              if veh.displaced_volume_m3 is None
+                              else rho * veh.displaced_volume_m3)
         else:
             link_displaced = [0.0] * N_JOINTS
             hull_displaced = 0.0
@@ -431,6 +440,9 @@ class ReferenceModel:
         self._hull_quadratic_drag = hull_quadratic_drag(
             a_hull, b_hull, rho, veh.drag_coefficient_translation, veh.drag_coefficient_rotation
         ).tolist()
+        if veh.linear_damping is not None and veh.quadratic_damping is not None:
+            self._hull_linear_drag = [float(v) for v in veh.linear_damping]
+            self._hull_quadratic_drag = [float(v) for v in veh.quadratic_damping]
         nodes = [strip_nodes(length, hydro.drag_strips_per_link) for length in lengths]
         strip_x = np.array([x for x, _ in nodes])  # (3, N)
         strip_dx = np.array([dx for _, dx in nodes])

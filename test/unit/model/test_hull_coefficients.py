@@ -119,3 +119,29 @@ def test_coefficient_vectors_need_six_non_negative_values(tmp_path: Path) -> Non
         load_description(None, _robot(tmp_path, added_mass_kg=[1.0] * 5))
     with pytest.raises(DescriptionError, match=r'linear_damping = .* out of range'):
         load_description(None, _robot(tmp_path, linear_damping=[-1.0] + [0.0] * 5))
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_coefficient_hull_equals_the_independent_reference_model(
+    tmp_path: Path, seed: int
+) -> None:
+    """M_b, bias and one RK4 step equal the pure-Python reference with the same coefficients."""
+    from dataclasses import replace
+
+    from model_oracles import random_state
+    from reference_model import ReferenceModel, ReferenceRobot, ReferenceVehicle
+
+    model = _model(_robot(tmp_path))
+    vehicle = replace(ReferenceVehicle(), added_mass_kg=tuple(ADDED),
+                      linear_damping=tuple(LINEAR), quadratic_damping=tuple(QUADRATIC),
+                      displaced_volume_m3=0.5, center_of_buoyancy_m=(0.0, 0.0, 0.0))
+    reference = ReferenceModel(model.params, ReferenceRobot(vehicle=vehicle))
+    q, w = random_state(seed)
+    np.testing.assert_allclose(model.mass_matrix_body(q), reference.mass_matrix_body(q),
+                               rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(model.bias_body(q, w), reference.bias_body(q, w), rtol=1e-9,
+                               atol=1e-9)
+    tau_b = np.random.default_rng(seed).normal(0.0, 20.0, 9)
+    for actual, expected in zip(model.step(q, w, tau_b, None, 1e-3),
+                                reference.step(q, w, tau_b, None, 1e-3), strict=True):
+        np.testing.assert_allclose(actual, expected, rtol=1e-9, atol=1e-12)
