@@ -340,6 +340,18 @@ def test_description_installs_the_foxglove_layout(workspace: Workspace) -> None:
     assert installed.read_bytes() == (REPO / 'src' / 'uvms_description' / name).read_bytes()
 
 
+def test_description_installs_every_robot_folder(workspace: Workspace) -> None:
+    """share/uvms_description/robots/<name>/ holds each robot's files, unchanged."""
+    source = REPO / 'src' / 'uvms_description' / 'robots'
+    share = workspace.install / 'uvms_description' / 'share' / 'uvms_description' / 'robots'
+    robots = sorted(p.name for p in source.iterdir() if p.is_dir())
+    assert 'paper_uvms' in robots
+    for robot in robots:
+        for file in (source / robot).glob('*.*'):
+            installed = share / robot / file.name
+            assert installed.read_bytes() == file.read_bytes(), str(installed)
+
+
 def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Workspace) -> None:
     """After ``source install/setup.bash`` Python and the ament index find install/ first.
 
