@@ -105,6 +105,22 @@ def test_realtime_mode_puts_controller_and_allocator_on_timers() -> None:
         assert node_parameters(CORE_NODES[0], None, mode)['mode'] == mode
 
 
+def test_robot_reaches_every_node_that_loads_a_robot_folder(tmp_path: Path) -> None:
+    """--robot (or a scenario's robot:) sets robot_name of simulator, controller, allocator."""
+    from uvms_bringup.scenario import parse_scenario
+
+    scenario = parse_scenario({'name': 's', 'description': 'd', 'duration_s': 1.0,
+                               'robot': 'mine'}, tmp_path / 's.yaml')
+    for spec in CORE_NODES:
+        given = node_parameters(spec, scenario, 'lockstep').get('robot_name')
+        assert given == ('mine' if spec.takes_robot else None), spec.name
+        override = node_parameters(spec, scenario, 'lockstep', robot='other').get('robot_name')
+        assert override == ('other' if spec.takes_robot else None), spec.name
+    assert [spec.name for spec in CORE_NODES if spec.takes_robot] == [
+        'simulator', 'controller', 'thruster_allocator']
+    assert 'robot_name' not in node_parameters(RECORDER, scenario, 'lockstep')
+
+
 def test_parameter_file_sections_for_one_node_are_merged() -> None:
     """/** and /**/controller sections apply to /uvms/controller, flattened to dotted names."""
     config = LAUNCH_FILE.parents[3] / 'config'
