@@ -11,7 +11,7 @@ import sys
 import time
 
 import numpy as np
-from uvms_model.kernel_cache import compile_model_kernels
+from uvms_model.kernel_cache import compile_model_kernels, robot_models, warm_state
 from uvms_model.thrusters import ThrusterLayout
 
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
@@ -21,15 +21,19 @@ from uvms_control.core.unified_controller import UnifiedForceController
 
 def compile_control_kernels() -> None:
     """Call every controller and allocator kernel once with the types the nodes use."""
-    model = compile_model_kernels()
-    q = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.6, -1.2])
-    controller = UnifiedForceController(ControllerParameters.from_flat_dict(), model)
-    controller.step_from_sensors(0.0, q, np.zeros(9), np.zeros(3))
-    controller.step(0.002, q, np.zeros(9), np.array([100.0, 0.0, 0.0]))
-    layout = ThrusterLayout.from_parameters()
-    allocator = ThrusterAllocator(AllocatorParameters(
-        layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 100.0)))
-    allocator.step(np.ones(9), 0.002)
+    for model in robot_models():
+        compile_model_kernels(model)
+        q, zeros = warm_state(model), np.zeros(model.n_dof)
+        gains = ControllerParameters.from_flat_dict({
+            'null_space.stiffness_1_s2': [4.0] * model.n_dof,
+            'null_space.damping_1_s': [4.0] * model.n_dof})
+        controller = UnifiedForceController(gains, model)
+        controller.step_from_sensors(0.0, q, zeros, np.zeros(3))
+        controller.step(0.002, q, zeros, np.array([100.0, 0.0, 0.0]))
+        layout = ThrusterLayout.from_parameters()
+        allocator = ThrusterAllocator(AllocatorParameters(
+            layout.thrust_matrix(), layout.max_thrust_n, np.full(model.n_joints, 100.0)))
+        allocator.step(np.ones(model.n_dof), 0.002)
 
 
 def main() -> int:

@@ -15,26 +15,43 @@ import time
 import numpy as np
 
 from uvms_model.model import UvmsModel
+from uvms_model.parameters import UvmsParameters
 
-#: A configuration of the arm away from its singularities (rad), vehicle at the origin.
-_Q_WARM = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.6, -1.2])
+#: Arm angles away from the paper arm's singularities (rad), repeated for longer arms.
+_ARM_WARM = (0.0, 0.6, -1.2)
+
+
+def warm_state(model: UvmsModel) -> np.ndarray:
+    """Q with the vehicle at the origin and the arm bent (``_ARM_WARM``), for warming up."""
+    q = np.zeros(model.n_dof)
+    q[6:] = np.resize(_ARM_WARM, model.n_joints)
+    return q
 
 
 def compile_model_kernels(model: UvmsModel | None = None) -> UvmsModel:
     """Call every model kernel once with the argument types the nodes use; return the model."""
     model = model if model is not None else UvmsModel()
-    zeros = np.zeros(9)
-    model.step(_Q_WARM, zeros, zeros, [1.0, 0.0, 0.0], 1e-3)
-    model.step(_Q_WARM, zeros, zeros, None, 1e-3)
-    model.step(_Q_WARM, zeros, zeros, None, 1e-3, method='semi_implicit_euler')
-    model.task_space_terms(_Q_WARM, zeros)
+    q, zeros = warm_state(model), np.zeros(model.n_dof)
+    model.step(q, zeros, zeros, [1.0, 0.0, 0.0], 1e-3)
+    model.step(q, zeros, zeros, None, 1e-3)
+    model.step(q, zeros, zeros, None, 1e-3, method='semi_implicit_euler')
+    model.task_space_terms(q, zeros)
     return model
+
+
+def robot_models() -> list[UvmsModel]:
+    """The model of every robot folder of uvms_description (a coefficient hull compiles more)."""
+    from uvms_description.robots import robot_names, with_description_paths
+
+    return [UvmsModel(UvmsParameters().updated(with_description_paths({}, name)))
+            for name in robot_names()]
 
 
 def main() -> int:
     """Compile and cache the model's kernels; one line on stdout with the time taken."""
     start = time.monotonic()
-    compile_model_kernels()
+    for model in robot_models():
+        compile_model_kernels(model)
     print(f'uvms_model: kernels compiled and cached ({time.monotonic() - start:.1f} s)')
     return 0
 
