@@ -166,7 +166,7 @@ def generalized_force_message(
     joint_names: Sequence[str],
     out: GeneralizedForce | None = None,
 ) -> GeneralizedForce:
-    """uvms_msgs/GeneralizedForce from tau_b (9,): body wrench in base_link_frd, joint torques."""
+    """uvms_msgs/GeneralizedForce from tau_b (6 + n,): body wrench in base_link_frd, torques."""
     msg = out
     if msg is None:
         msg = GeneralizedForce(header=Header(frame_id=BASE_LINK_FRD))

@@ -40,7 +40,7 @@ def rotation_matrix(phi: float, theta: float, psi: float) -> FloatArray:
 
 @kernel
 def velocity_transforms(q: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """B(q) = blockdiag(J1, J2, I) and B⁻¹ = blockdiag(J1ᵀ, J2⁻¹, I), (9, 9) each (eq. 4).
+    """B(q) = blockdiag(J1, J2, I) and B⁻¹ = blockdiag(J1ᵀ, J2⁻¹, I), (6 + n, 6 + n) each (eq. 4).
 
     q_dot = B w. B⁻¹ is regular at any pitch; B has 1/cos(pitch) entries (inf at +-90 deg):
     the caller checks the pitch (``check_pitch``). Compiled.
@@ -93,7 +93,7 @@ def mat_t_vec(r: Sequence[float], v: Sequence[float]) -> Vec3:
 
 
 def velocity_transform(q: FloatArray, name: str = 'q') -> FloatArray:
-    """B(q) (9, 9) of eq. 4, q_dot = B w (paper sec. 3.2), a new array.
+    """B(q) (6 + n, 6 + n) of eq. 4, q_dot = B w (paper sec. 3.2), a new array.
 
     Raises:
         SingularAttitudeError: Near pitch = +-90 deg (``name`` names q in the message).
@@ -103,5 +103,5 @@ def velocity_transform(q: FloatArray, name: str = 'q') -> FloatArray:
 
 
 def velocity_transform_inverse(q: FloatArray) -> FloatArray:
-    """B^-1 = blockdiag(J1^T, J2^-1, I) (9, 9), regular at any pitch, a new array."""
+    """B^-1 = blockdiag(J1^T, J2^-1, I) (6 + n, 6 + n), regular at any pitch, a new array."""
     return velocity_transforms(q)[1]

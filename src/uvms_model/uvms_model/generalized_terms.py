@@ -27,7 +27,7 @@ FloatArray = NDArray[np.float64]
 
 @kernel
 def b_inverse_b_dot_w(q: FloatArray, w: FloatArray) -> FloatArray:
-    """C = B⁻¹ Ḃ w (9,) = [ω x v; J2⁻¹ J̇2 ω; 0] with η̇ = J2 ω (the pitch is regular)."""
+    """C = B⁻¹ Ḃ w (6 + n,) = [ω x v; J2⁻¹ J̇2 ω; 0] with η̇ = J2 ω (the pitch is regular)."""
     c4, s4 = math.cos(q[3]), math.sin(q[3])
     c5, s5 = math.cos(q[4]), math.sin(q[4])
     t5 = s5 / c5
@@ -52,11 +52,11 @@ def generalized_terms(
     """J, J̇ q̇, M, ζ, B and q̇ (new arrays) from the body-form terms (eq. 4, 18, 22-23).
 
     Args:
-        q: Generalized coordinates (9,); the pitch is regular (the caller checks it).
-        w: Quasi-velocities (9,).
-        mass_b: M_b (9, 9) of eq. 8.
-        bias_b: C_b w + D_b w + G_b (9,) of eq. 8.
-        jac_w: End-effector Jacobian (3, 9) with respect to w, map_ned.
+        q: Generalized coordinates (6 + n,); the pitch is regular (the caller checks it).
+        w: Quasi-velocities (6 + n,).
+        mass_b: M_b (6 + n, 6 + n) of eq. 8.
+        bias_b: C_b w + D_b w + G_b (6 + n,) of eq. 8.
+        jac_w: End-effector Jacobian (3, 6 + n) with respect to w, map_ned.
         acc_w: J̇_w w (3,), map_ned.
     """
     b, b_inv = velocity_transforms(q)

@@ -248,7 +248,7 @@ class ThrusterAllocator:
         self.thrusters.reset()
 
     def allocate(self, tau_b: npt.ArrayLike) -> AllocationResult:
-        """Desired thrusts and motor torques for tau_b (9,) (eq. 10), saturated by scaling.
+        """Desired thrusts and motor torques for tau_b (6 + n,) (eq. 10), saturated by scaling.
 
         Raises:
             ControlInputError: if tau_b is not a finite (6 + n,) vector.

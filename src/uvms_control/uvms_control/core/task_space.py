@@ -30,12 +30,12 @@ class TaskSpaceModel:
     Attributes:
         X: end-effector position in map_ned (3,) (m).
         X_dot: end-effector velocity J q_dot (3,) (m/s), eq. 22.
-        J: end-effector Jacobian (3, 9), eq. 22.
+        J: end-effector Jacobian (3, 6 + n), eq. 22.
         J_dot_q_dot: J_dot q_dot (3,) (m/s²), eq. 23.
-        J_pinv: J⁺ = Jᵀ (J Jᵀ)⁻¹ (9, 3), eq. 24.
-        Jt_pinv: J̃⁺ = (Jᵀ)⁺ = (J Jᵀ)⁻¹ J (3, 9), eq. 27.
-        M: joint-space inertia M(q) (9, 9), eq. 18.
-        zeta: joint-space bias ζ(q, q_dot) (9,), eq. 19.
+        J_pinv: J⁺ = Jᵀ (J Jᵀ)⁻¹ (6 + n, 3), eq. 24.
+        Jt_pinv: J̃⁺ = (Jᵀ)⁺ = (J Jᵀ)⁻¹ J (3, 6 + n), eq. 27.
+        M: joint-space inertia M(q) (6 + n, 6 + n), eq. 18.
+        zeta: joint-space bias ζ(q, q_dot) (6 + n,), eq. 19.
         M_tilde: task-space inertia M̃ = J̃⁺ M J⁺ (3, 3) (kg), eq. 28.
         zeta_tilde: task-space bias ζ̃ = J̃⁺ ζ - M̃ J̇ q̇ (3,) (N), eq. 28.
         Jt_pinv_zeta: J̃⁺ ζ (3,) (N), the first term of ζ̃.
@@ -65,14 +65,14 @@ def task_space_model(
 
     Args:
         model: the controller's UVMS model.
-        q: generalized coordinates (9,).
-        q_dot: generalized velocities (9,).
+        q: generalized coordinates (6 + n,).
+        q_dot: generalized velocities (6 + n,).
         X: unused (the model's one pass gives the end-effector position); kept for callers.
 
     Example:
         >>> model = UvmsModel()
         >>> q = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1, 0.5, -0.8])
-        >>> ts = task_space_model(model, q, np.zeros(9))
+        >>> ts = task_space_model(model, q, np.zeros(model.n_dof))
         >>> bool(np.allclose(ts.J @ ts.J_pinv, np.eye(3)))
         True
     """

@@ -79,9 +79,9 @@ class ControllerResult:
     """Output and internals of one controller step (task-space vectors in map_ned).
 
     Attributes:
-        tau_b: generalized force in body form (9,): vehicle force (N) and moment (N m) in
+        tau_b: generalized force in body form (6 + n,): vehicle force (N) and moment (N m) in
             base_link_frd, then joint torques (N m).
-        tau: generalized force in generalized coordinates (9,), eq. 26 (+ null space).
+        tau: generalized force in generalized coordinates (6 + n,), eq. 26 (+ null space).
         W: fuzzy weight in [0, 1], 1 = impedance.
         X: end-effector position (m).
         X_d: reference position (m).
@@ -140,7 +140,7 @@ class UnifiedForceController:
     Example:
         >>> controller = UnifiedForceController(ControllerParameters.from_flat_dict(), UvmsModel())
         >>> q = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.6, -1.2])
-        >>> result = controller.step(0.0, q, np.zeros(9), np.zeros(3))
+        >>> result = controller.step(0.0, q, np.zeros(9), np.zeros(3))  # the paper robot: n = 3
         >>> result.W, result.phase.name
         (1.0, 'FREE_MOTION')
     """
@@ -250,8 +250,8 @@ class UnifiedForceController:
 
         Args:
             t: time (s).
-            q: generalized coordinates (9,).
-            w: quasi-velocities (9,) (vehicle twist in base_link_frd, joint rates), eq. 4.
+            q: generalized coordinates (6 + n,).
+            w: quasi-velocities (6 + n,) (vehicle twist in base_link_frd, joint rates), eq. 4.
             f_sensor: force the end effector exerts on the environment, in ft_sensor_link
                 (axes of ee_link) (N).
 
@@ -274,8 +274,8 @@ class UnifiedForceController:
 
         Args:
             t: time (s); references count from the first step's t.
-            q: generalized coordinates (9,).
-            q_dot: generalized velocities (9,).
+            q: generalized coordinates (6 + n,).
+            q_dot: generalized velocities (6 + n,).
             f_e_ned: contact force the end effector exerts on the environment, map_ned (N).
 
         Raises:
