@@ -51,7 +51,7 @@ class ThrusterLayout:
         """Vehicle block T (6, p) of E: column i is [d_i; r_i x d_i]."""
         return np.vstack((self.directions.T, np.cross(self.positions_m, self.directions).T))
 
-    def configuration_matrix(self, n_joints: int = 3) -> FloatArray:
+    def configuration_matrix(self, n_joints: int) -> FloatArray:
         """Thruster-actuator configuration matrix E (6 + n, p + n) of eq. 9.
 
         Args:
@@ -77,8 +77,6 @@ class ThrusterLayout:
         return e
 
 
-def configuration_matrix(
-    params: ThrusterParameters | None = None, n_joints: int = 3
-) -> FloatArray:
+def configuration_matrix(params: ThrusterParameters | None, n_joints: int) -> FloatArray:
     """E (6 + n, p + n) of eq. 9 for the ``thrusters.*`` parameters; see ThrusterLayout."""
     return ThrusterLayout.from_parameters(params).configuration_matrix(n_joints)

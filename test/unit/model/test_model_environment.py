@@ -124,7 +124,7 @@ def test_sensor_rejects_nan_input() -> None:
 
 def test_configuration_matrix_has_full_row_rank_and_joint_identity() -> None:
     """E (eq. 9) is 9 x 11 of rank 9, the motor block is the identity."""
-    e = configuration_matrix(ThrusterParameters())
+    e = configuration_matrix(ThrusterParameters(), 3)  # the paper robot's arm
     assert e.shape == (9, 11)
     assert np.linalg.matrix_rank(e) == 9
     np.testing.assert_array_equal(e[6:, 8:], np.eye(3))
@@ -134,7 +134,7 @@ def test_configuration_matrix_has_full_row_rank_and_joint_identity() -> None:
 def test_thrust_column_is_force_and_moment_about_body_origin() -> None:
     """Column i of E is [d_i; r_i x d_i]; equal thrusts of the horizontal four give pure surge."""
     layout = ThrusterLayout.from_parameters()
-    e = layout.configuration_matrix()
+    e = layout.configuration_matrix(3)
     thrust = np.zeros(11)
     thrust[:4] = 100.0
     tau_b = e @ thrust
