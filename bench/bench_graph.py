@@ -460,6 +460,9 @@ def main() -> None:
                              'last run keeps it)')
     parser.add_argument('--integrator', choices=('rk4', 'semi_implicit_euler'), default=None,
                         help="simulator's integration.method (default: config/robot.yaml)")
+    parser.add_argument('--side-rates', type=float, default=None, metavar='HZ',
+                        help='rate of the topics no node of the loop needs (ee_pose, contact, '
+                             'controller/state, thrusters/state; default: every step)')
     parser.add_argument('--no-breakdown', dest='breakdown', action='store_false',
                         help='skip the instrumented run (where the time goes)')
     args = parser.parse_args()
@@ -469,8 +472,14 @@ def main() -> None:
     scenario = load_scenario(resolve_scenario_path(args.scenario))
     if args.duration is not None:
         scenario = scenario.with_changes(duration_s=args.duration)
-    extra = ({SIMULATOR.name: {'integration.method': args.integrator}}
-             if args.integrator else None)
+    extra: dict[str, dict[str, ParameterValue]] = {
+        SIMULATOR.name: {}, CONTROLLER.name: {}, THRUSTER_ALLOCATOR.name: {}}
+    if args.integrator:
+        extra[SIMULATOR.name]['integration.method'] = args.integrator
+    if args.side_rates is not None:
+        extra[SIMULATOR.name]['ground_truth_rate_hz'] = args.side_rates
+        extra[CONTROLLER.name]['state_rate_hz'] = args.side_rates
+        extra[THRUSTER_ALLOCATOR.name]['state_rate_hz'] = args.side_rates
     kinds = EXECUTORS if args.executor == 'both' else (args.executor,)
 
     probe = build_graph(scenario, 'lockstep', extra_overrides=extra)
@@ -485,7 +494,9 @@ def main() -> None:
           f'lockstep, recording on, integrator {integrator}')
     print(f'rates               simulator {1e9 / settings.physics_dt_ns:g} Hz, control '
           f'{1e9 / (settings.physics_dt_ns * settings.steps_per_publish):g} Hz, /tf every '
-          f'{settings.publishes_per_tf} states')
+          f'{settings.publishes_per_tf} states, ee_pose and contact every '
+          f'{settings.publishes_per_ground_truth}, controller and thruster state '
+          f'{"every step" if args.side_rates is None else f"at {args.side_rates:g} Hz"}')
     print(f'machine             {os.cpu_count()} CPUs, load average {load} (1, 5, 15 min); '
           f'ROS_DOMAIN_ID {os.environ["ROS_DOMAIN_ID"]}')
 
