@@ -193,6 +193,17 @@ def test_lockstep_controller_answers_each_state_with_its_stamp(harness: Harness)
     assert probe.states[0].header.frame_id == 'map_ned'
 
 
+def test_controller_state_at_a_lower_rate_leaves_every_command(harness: Harness) -> None:
+    """state_rate_hz = 100 on 2 ms states: controller/state at 0 and 10 ms, commands at all 6."""
+    harness.add(ControllerNode, state_rate_hz=100.0)
+    probe = harness.probe
+    for k in range(6):
+        probe.send_state(2 * MS * k)
+        assert harness.spin_until(lambda k=k: len(probe.commands) == k + 1)
+    harness.spin_for(0.1)
+    assert [stamp_ns(s) for s in probe.states] == [0, 10 * MS]
+
+
 def test_lockstep_controller_waits_for_all_three_inputs(harness: Harness) -> None:
     """Without the wrench of t_k no command is computed."""
     harness.add(ControllerNode)
@@ -396,6 +407,18 @@ def test_lockstep_allocator_answers_each_command_with_its_stamp(harness: Harness
     state = probe.thruster_states[-1]
     assert state.saturation_scale == 1.0
     assert len(state.desired_thrust) == len(state.propeller_speed) == 8
+
+
+def test_thruster_state_at_a_lower_rate_leaves_every_actuator_command(
+        harness: Harness) -> None:
+    """state_rate_hz = 250 on 2 ms commands: thrusters/state every other one, actuators all."""
+    harness.add(ThrusterAllocatorNode, state_rate_hz=250.0)
+    probe = harness.probe
+    for k in range(4):
+        probe.send_command(2 * MS * k, [0.0] * 9)
+        assert harness.spin_until(lambda k=k: len(probe.actuators) == k + 1)
+    harness.spin_for(0.1)
+    assert [stamp_ns(s) for s in probe.thruster_states] == [0, 4 * MS]
 
 
 def test_allocator_thrusts_reach_the_commanded_wrench(harness: Harness) -> None:

@@ -274,6 +274,18 @@ def test_tf_is_published_at_its_own_rate(harness: Harness) -> None:
     assert [t.transforms[0].header.stamp.nanosec for t in tf] == [0, 20_000_000, 40_000_000]
 
 
+def test_ground_truth_topics_at_their_own_rate(harness: Harness) -> None:
+    """ground_truth_rate_hz = 100: ee_pose and contact every 5th state, the sensors every one."""
+    slow = {name: collect(harness, msg_type, name) for name, msg_type in [
+        ('ee_pose', PoseStamped), ('contact', ContactState)]}
+    wrench = collect(harness, WrenchStamped, 'wrench')
+    sim = harness.start(duration_s=0.02, ground_truth_rate_hz=100.0)
+    harness.spin_until(lambda: sim.finished)
+    for name, received in slow.items():
+        assert [stamp_ns(m) for m in received] == [0, 10_000_000, 20_000_000], name
+    assert [stamp_ns(m) for m in wrench] == [2_000_000 * k for k in range(11)]
+
+
 def test_invalid_parameter_stops_start_up_naming_it(harness: Harness) -> None:
     """An out-of-range parameter raises at construction with name, value and range."""
     with pytest.raises(SimParameterError) as info:

@@ -22,7 +22,6 @@ import rclpy.logging
 from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 from uvms_common.node_main import StopEvent, make_executor
 from uvms_tasks.mission_node import MissionNode
@@ -172,8 +171,7 @@ def build_graph(
             # The scenario's goals go through the controller's ContactTask action, as a
             # user's would; their start times are on /clock, so lockstep stays deterministic.
             graph.nodes['mission'] = MissionNode(
-                scenario.mission, namespace=namespace, context=context,
-                parameter_overrides=[Parameter('use_sim_time', value=True)])
+                scenario.mission, namespace=namespace, context=context)
     except BaseException:
         graph.destroy()
         raise

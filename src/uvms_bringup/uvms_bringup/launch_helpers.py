@@ -84,9 +84,11 @@ RECORDER = NodeSpec(
 )
 
 #: Sends a scenario's mission through the ContactTask action (``uvms_tasks``), then exits.
+#: Not on /clock: its goals carry their start times on the controller's clock, and a /clock
+#: subscription would cost every lockstep period a message for nothing.
 MISSION = NodeSpec(
     'mission', 'uvms_tasks', 'mission', 'uvms_tasks.mission_node', 'MissionNode', (),
-    finishes=True,
+    uses_sim_time=False, finishes=True,
 )
 
 #: The nodes that always run, in start order; the Foxglove server joins for a live view and

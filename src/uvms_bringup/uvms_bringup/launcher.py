@@ -158,7 +158,7 @@ def _mission_process(scenario: Scenario, namespace: str, parameters_dir: Path,
     mission_file = write_mission_file(scenario, parameters_dir)
     generated = parameters_dir / 'mission_parameters.yaml'
     generated.write_text(parameters_file_text({f'/{namespace.strip("/")}/mission': {
-        'use_sim_time': True, 'mission_file': str(mission_file)}}), encoding='utf-8')
+        'mission_file': str(mission_file)}}), encoding='utf-8')
     command = [*node_executable(MISSION, bin_dir),
                *ros_arguments(MISSION, namespace, [generated], log_level)]
     return NodeProcessSpec(MISSION, f'{MISSION.executable}-{index}', tuple(command), generated)

@@ -43,6 +43,7 @@ from uvms_common.lifecycle import (
     state_label,
 )
 from uvms_common.node_main import run_node
+from uvms_common.rate_gate import RateGate
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
 from uvms_common import robot_parameters as robots
@@ -175,6 +176,7 @@ class ControllerNode(LifecycleNode):
         self._command_pub = self.create_publisher(GeneralizedForce, 'command/generalized_force',
                                                   qos)
         self._state_pub = self.create_publisher(ControllerState, 'controller/state', qos)
+        self._state_gate = RateGate(float(node['state_rate_hz']))
         self._entities = [(self.destroy_publisher, self._command_pub),
                           (self.destroy_publisher, self._state_pub)]
         readers = {
@@ -345,8 +347,10 @@ class ControllerNode(LifecycleNode):
         self._last_tau_b = result.tau_b
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
-        self._state_msg = conversions.controller_state_message(t_ns, result, self._state_msg)
-        self._state_pub.publish(self._state_msg)
+        if self._state_gate.due(t_ns):
+            self._state_msg = conversions.controller_state_message(t_ns, result,
+                                                                   self._state_msg)
+            self._state_pub.publish(self._state_msg)
         self.tasks.finish(events)
         self.tasks.publish_feedback(self.supervisor, t)
         breach = self.supervisor.breach

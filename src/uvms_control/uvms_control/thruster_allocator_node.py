@@ -30,6 +30,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
+from uvms_common.rate_gate import RateGate
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 from uvms_common.robot_parameters import (
     check_all_declared,
@@ -204,6 +205,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._actuator_pub = self.create_publisher(ActuatorCommand, 'command/actuators', qos)
         self._state_pub = self.create_publisher(ThrusterState, 'thrusters/state', qos)
+        self._state_gate = RateGate(float(values['state_rate_hz']))
         self._entities = [
             (self.destroy_publisher, self._actuator_pub),
             (self.destroy_publisher, self._state_pub),
@@ -319,8 +321,9 @@ class ThrusterAllocatorNode(LifecycleNode):
             t_ns, output.thrust, self._joint_names, output.joint_torques, self._actuator_msg
         )
         self._actuator_pub.publish(self._actuator_msg)
-        self._state_msg = conversions.thruster_state_message(t_ns, output, self._state_msg)
-        self._state_pub.publish(self._state_msg)
+        if self._state_gate.due(t_ns):
+            self._state_msg = conversions.thruster_state_message(t_ns, output, self._state_msg)
+            self._state_pub.publish(self._state_msg)
 
     def _publish_zero(self, t_ns: int) -> None:
         """Zero thrust and zero joint torque stamped t_ns (inactive, or leaving active)."""

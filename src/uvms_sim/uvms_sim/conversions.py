@@ -226,14 +226,19 @@ class StateMessages:
         self.ee_pose = PoseStamped(header=Header(frame_id=MAP_NED))
         self.contact = ContactState(header=Header(frame_id=MAP_NED))
 
-    def update(self, seen: Observation) -> None:
-        """Refill every message from one observation of the plant, stamped seen.t_ns."""
+    def update(self, seen: Observation, ground_truth: bool = True) -> None:
+        """Refill the messages from one observation of the plant, stamped seen.t_ns.
+
+        ``ground_truth`` False leaves ee_pose and contact as they were (not due).
+        """
         stamp = time_from_ns(seen.t_ns)
         q, w = seen.q.tolist(), seen.w.tolist()
         self.clock.clock = stamp
         _fill_joint_state(self.joint_state, stamp, seen.q[6:], seen.w[6:], seen.joint_torques)
         _fill_odometry(self.odometry, stamp, q[:6], w[:6])
         _fill_wrench(self.wrench, stamp, seen.sensor_force.tolist(), seen.sensor_torque.tolist())
+        if not ground_truth:
+            return
         p_ee, rot_ee = seen.poses['ee_link']
         _fill_pose(self.ee_pose, stamp, p_ee.tolist(), rot_ee)
         _fill_contact(self.contact, stamp, seen.contact)

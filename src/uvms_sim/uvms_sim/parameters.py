@@ -82,6 +82,13 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         0.0, 100000.0,
     ),
     ParameterSpec(
+        'ground_truth_rate_hz', 500.0,
+        'Rate of ee_pose and contact (Hz), rounded to a whole number of sensor publications '
+        '(at or above publish_rate_hz: with every state); no node of the control loop needs '
+        'them, so a lower rate saves a lockstep run time (the recording holds fewer).',
+        1.0, 100000.0,
+    ),
+    ParameterSpec(
         'lockstep_timeout_s', 1.0,
         'Lockstep: wall-clock time to wait for the actuator command of the published state '
         'before stepping with the last command anyway (s).',
@@ -145,6 +152,7 @@ class SimulatorSettings:
     physics_dt_ns: int
     steps_per_publish: int
     publishes_per_tf: int
+    publishes_per_ground_truth: int
     lockstep_timeout_s: float
     watchdog_timeout_ns: int
     duration_ns: int
@@ -197,11 +205,13 @@ class SimulatorSettings:
                 '(at most publish_rate_hz)'
             )
             raise SimParameterError(msg)
+        ground_truth_hz = min(float(checked['ground_truth_rate_hz']), publish_hz)
         return cls(
             mode=str(checked['mode']),
             physics_dt_ns=dt_ns,
             steps_per_publish=round(ratio),
             publishes_per_tf=max(1, round(publish_hz / tf_hz)) if tf_hz > 0.0 else 0,
+            publishes_per_ground_truth=max(1, round(publish_hz / ground_truth_hz)),
             lockstep_timeout_s=float(checked['lockstep_timeout_s']),
             watchdog_timeout_ns=round(float(checked['watchdog_timeout_s']) * 1e9),
             duration_ns=round(float(checked['duration_s']) * 1e9),

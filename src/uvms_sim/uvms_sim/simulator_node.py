@@ -301,18 +301,20 @@ class SimulatorNode(Node):
         return Report(OK, 'running', values)
 
     def _publish_state(self) -> None:
-        """Publish /clock, the sensor topics and, when due, /tf, all stamped t_k."""
+        """Publish /clock, the sensor topics and, when due, ee_pose, contact and /tf (at t_k)."""
         tf_due = (self._tf_pub is not None
                   and self._published % self._settings.publishes_per_tf == 0)
+        ground_truth_due = self._published % self._settings.publishes_per_ground_truth == 0
         seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
-        out.update(seen)
+        out.update(seen, ground_truth=ground_truth_due)
         self._clock_pub.publish(out.clock)
         self._joint_pub.publish(out.joint_state)
         self._odom_pub.publish(out.odometry)
         self._wrench_pub.publish(out.wrench)
-        self._ee_pub.publish(out.ee_pose)
-        self._contact_pub.publish(out.contact)
+        if ground_truth_due:
+            self._ee_pub.publish(out.ee_pose)
+            self._contact_pub.publish(out.contact)
         if tf_due:
             self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses, self._parents))
         self._published += 1

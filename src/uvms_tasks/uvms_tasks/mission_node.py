@@ -29,6 +29,7 @@ from rclpy.action.client import ClientGoalHandle
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message
+from rclpy.subscription import Subscription
 from rclpy.task import Future
 from uvms_common.node_main import run_node
 
@@ -95,10 +96,10 @@ class MissionNode(Node):
         self._handle: ClientGoalHandle | None = None
         self.client = ContactTaskClient(self)
         # The state topic drives the mission: every control step is a chance to start. Taken
-        # raw, and decoded only when a goal is to go out (500 decodes per second cost the
-        # lockstep graph time for nothing while a goal runs).
-        self.create_subscription(ControllerState, 'controller/state', self._on_state, 1,
-                                 raw=True)
+        # raw, and decoded only when a goal is to go out; unsubscribed while a goal runs (its
+        # 500 messages per second cost a lockstep graph time for nothing).
+        self._state_subscription: Subscription | None = None
+        self._listen_to_state()
         self.get_logger().info(
             f'mission of {len(self.tasks)} task(s) for {self.client.action_name}; waiting for '
             'the action server and controller/state')
@@ -108,6 +109,16 @@ class MissionNode(Node):
         """Whether every task of the mission ended SUCCEEDED."""
         return (self.finished and len(self.results) == len(self.tasks)
                 and all(outcome.succeeded for outcome in self.results))
+
+    def _listen_to_state(self) -> None:
+        if self._state_subscription is None:
+            self._state_subscription = self.create_subscription(
+                ControllerState, 'controller/state', self._on_state, 1, raw=True)
+
+    def _stop_listening_to_state(self) -> None:
+        if self._state_subscription is not None:
+            self.destroy_subscription(self._state_subscription)
+            self._state_subscription = None
 
     def _on_state(self, data: bytes) -> None:
         if self._busy or self.finished or not self._server_settled():
@@ -146,6 +157,8 @@ class MissionNode(Node):
 
     def _on_goal_response(self, future: Future) -> None:
         handle: ClientGoalHandle = future.result()
+        # Not in _send_next: that runs inside the state callback, whose subscription this is.
+        self._stop_listening_to_state()
         if not handle.accepted:
             self._finish_task(TaskOutcome(self._current_name(), int(handle.status),
                                           rejected=True))
@@ -173,6 +186,7 @@ class MissionNode(Node):
         done = len(self.results) == len(self.tasks)
         if not done and (outcome.succeeded or self.continue_on_failure):
             self._busy = False  # the next state message sends it, from the X_d of then
+            self._listen_to_state()
             return
         self._busy = False
         self.finished = True

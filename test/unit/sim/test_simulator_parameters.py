@@ -49,6 +49,19 @@ def test_tf_rate_above_publish_rate_is_rejected() -> None:
         SimulatorSettings.from_values({**DEFAULTS, 'tf_rate_hz': 1000.0})
 
 
+def test_ground_truth_rate_above_publish_rate_is_every_state() -> None:
+    """ee_pose and contact come at most with every state (the default at 250 Hz states)."""
+    settings = SimulatorSettings.from_values({**DEFAULTS, 'publish_rate_hz': 250.0})
+    assert settings.publishes_per_ground_truth == 1
+
+
+def test_ground_truth_rate_in_whole_state_publications() -> None:
+    """At 500 Hz states, 100 Hz ground truth is every 5th state; the default every state."""
+    assert SimulatorSettings.from_values(DEFAULTS).publishes_per_ground_truth == 1
+    settings = SimulatorSettings.from_values({**DEFAULTS, 'ground_truth_rate_hz': 100.0})
+    assert settings.publishes_per_ground_truth == 5
+
+
 def test_zero_tf_rate_disables_tf() -> None:
     """tf_rate_hz = 0 turns /tf off."""
     settings = SimulatorSettings.from_values({**DEFAULTS, 'tf_rate_hz': 0.0})

@@ -32,6 +32,13 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec('control_rate_hz', 500.0, 'Control rate in timer mode (Hz).', 1.0, 10000.0),
     ParameterSpec(
+        'state_rate_hz', 0.0,
+        'Rate of controller/state (Hz): the first step of each 1/rate window; 0 publishes it '
+        'with every step. No node of the loop needs it; a lower rate saves a lockstep run time '
+        '(the recording and the metrics then see fewer samples).',
+        0.0, 10000.0,
+    ),
+    ParameterSpec(
         'watchdog_timeout_s',
         0.2,
         'Inputs older than this (node-clock time) are stale: the controller then publishes '
@@ -272,6 +279,12 @@ ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [
         "the time between command stamps; 'timer': step at rate_hz on the latest command.",
     ),
     ParameterSpec('rate_hz', 500.0, 'Allocator rate in timer mode (Hz).', 1.0, 10000.0),
+    ParameterSpec(
+        'state_rate_hz', 0.0,
+        'Rate of thrusters/state (Hz): the first step of each 1/rate window; 0 publishes it '
+        'with every step. No node of the loop needs it.',
+        0.0, 10000.0,
+    ),
     ParameterSpec(
         'watchdog_timeout_s',
         0.2,
