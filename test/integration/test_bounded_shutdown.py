@@ -25,7 +25,7 @@ import pytest
 import rclpy
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
-from mcap.records import Chunk
+from mcap.records import Channel, Chunk, Message
 from mcap.stream_reader import StreamReader
 from rclpy.context import Context
 from rclpy.node import Node
@@ -180,6 +180,26 @@ def holds_a_chunk(path: Path) -> bool:
         return False  # the writer's last record is not complete yet
 
 
+def holds_a_message_on(path: Path, topic: str) -> bool:
+    """Whether a complete chunk of the recording being written holds a message on topic.
+
+    A chunk alone is not enough: under load the recorder may have matched the simulator's
+    publishers but not yet another process's (discovery runs per pair of processes).
+    """
+    if not path.exists():
+        return False
+    channels: set[int] = set()
+    try:
+        for record in StreamReader(io.BytesIO(path.read_bytes())).records:
+            if isinstance(record, Channel) and record.topic == topic:
+                channels.add(record.id)
+            elif isinstance(record, Message) and record.channel_id in channels:
+                return True
+    except (McapError, EOFError, struct.error):
+        pass  # the writer's last record is not complete yet
+    return False
+
+
 def test_uvms_launch_with_stuck_teardowns_exits_130_without_sigkill(tmp_path: Path) -> None:
     """Simulator and recorder hang in destroy_node: each ends itself, the launch exits 130.
 
@@ -191,7 +211,8 @@ def test_uvms_launch_with_stuck_teardowns_exits_130_without_sigkill(tmp_path: Pa
         [str(BIN / 'uvms'), 'launch', 'case1_ke1e4', '--output', str(output)],
         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=stuck_environment(tmp_path / 'site', 'simulator,recorder'))
-    wait_until(lambda: holds_a_chunk(output), START_TIMEOUT_S, 'a recorded chunk', process)
+    wait_until(lambda: holds_a_message_on(output, '/uvms/command/actuators'), START_TIMEOUT_S,
+               'a recorded actuator command', process)
     time.sleep(1.0)
     took_s, err = ended_by_itself(process, signal.SIGINT)
     assert process.returncode == 130, err
