@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import shutil
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -16,6 +18,8 @@ from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
 import uvms_description
 
 PAPER = uvms_description.robots_directory() / 'paper_uvms'
+BIN = Path(sys.executable).parent
+SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 
 
 @pytest.fixture
@@ -67,3 +71,33 @@ def test_misspelt_key_in_a_robot_file_stops_start_up_naming_the_file(
     with pytest.raises(RobotParameterError, match=r"mine/thrusters\.yaml: parameter "
                                                   r"'thrusters\.max_thrust' is not a parameter"):
         _allocator(context, str(folder))
+
+
+def _uvms_run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([str(BIN / 'uvms'), 'run', *args], capture_output=True, text=True,
+                          timeout=300, check=False)
+
+
+def test_readme_bluerov_idle_wall_runs_at_the_robots_default_start() -> None:
+    """``uvms run config/scenarios/idle_wall.yaml --robot bluerov2_alpha5`` runs (README)."""
+    result = _uvms_run(str(SCENARIOS / 'idle_wall.yaml'), '--robot', 'bluerov2_alpha5',
+                       '--duration', '0.2')
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert 'simulated 0.20 s' in result.stderr
+
+
+def test_failed_node_start_says_why_once_without_rosout_warning(tmp_path: Path) -> None:
+    """A start out of reach: one error naming robot and default, no duplicate-rosout warning.
+
+    The scenario check builds the simulator with the override, then without it: the first
+    node, whose constructor raised, must be gone before the second is built.
+    """
+    scenario = tmp_path / 'far.yaml'
+    scenario.write_text('name: far\ndescription: point A of the paper robot, on the BlueROV2\n'
+                        'duration_s: 1.0\nseed: 1\nrobot: bluerov2_alpha5\nsimulator:\n'
+                        '  initial:\n    ee_position: [1.70, 0.0, -0.10]\n')
+    result = _uvms_run(str(scenario))
+    assert result.returncode != 0
+    assert 'Publisher already registered' not in result.stderr
+    assert "robot 'bluerov2_alpha5': parameter 'initial.ee_position'" in result.stderr
+    assert 'initial.ee_position = [0.37, 0.0, -0.07]' in result.stderr

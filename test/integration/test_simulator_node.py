@@ -357,3 +357,29 @@ def test_lockstep_timeouts_are_reported_as_a_warning(harness: Harness) -> None:
     assert status.level == DiagnosticStatus.WARN
     assert status.message == 'lockstep timeouts: stepping on the last command'
     assert 0 < int(values['lockstep_timeouts']) <= sim.timeouts
+
+
+@pytest.mark.parametrize(('robot', 'ee_position'), [
+    ('paper_uvms', [1.70, 0.0, -0.10]),
+    ('bluerov2_alpha5', [0.37, 0.0, -0.07]),
+])
+def test_robot_starts_at_its_default_start_when_none_is_given(
+    harness: Harness, robot: str, ee_position: list[float]
+) -> None:
+    """No initial.* given: the parameters and the first ee_pose are the robot's start.yaml."""
+    poses = collect(harness, PoseStamped, 'ee_pose')
+    simulator = harness.start(robot_name=robot)
+    assert list(simulator.get_parameter('initial.ee_position').value) == ee_position
+    harness.spin_until(lambda: len(poses) > 0)
+    position = poses[0].pose.position
+    assert [position.x, position.y, position.z] == pytest.approx(ee_position, abs=1e-6)
+
+
+def test_out_of_reach_start_names_robot_residual_and_default(harness: Harness) -> None:
+    """The paper's point A given to the BlueROV2: robot, residual and its own start named."""
+    with pytest.raises(SimParameterError) as info:
+        harness.start(robot_name='bluerov2_alpha5', initial__ee_position=[1.7, 0.0, -0.1])
+    message = str(info.value)
+    assert message.startswith("robot 'bluerov2_alpha5': parameter 'initial.ee_position'")
+    assert 'residual 1.4' in message
+    assert 'initial.ee_position = [0.37, 0.0, -0.07]' in message

@@ -15,6 +15,7 @@ from rclpy.node import Node
 
 from uvms_description import DEFAULT_ROBOT
 from uvms_description.robots import (
+    START_PREFIX,
     RobotFolderError,
     RobotParameter,
     robot_parameters,
@@ -69,6 +70,11 @@ def robot_default(values: Mapping[str, RobotParameter], name: str, default: Any)
             isinstance(v, float) for v in default):
         return [float(v) for v in value]
     return value
+
+
+def robot_start_values(values: Mapping[str, RobotParameter]) -> dict[str, Any]:
+    """The robot's default start among its values: ``initial.*`` of its ``start.yaml``."""
+    return {name: item.value for name, item in values.items() if name.startswith(START_PREFIX)}
 
 
 def check_all_declared(node: Node, values: Mapping[str, RobotParameter],

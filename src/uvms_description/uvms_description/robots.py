@@ -3,8 +3,9 @@
 A robot is a folder ``robots/<name>/`` of the share directory (docs/robots.md, "Adding a
 robot"). Its URDF (``robot.urdf``, or ``robot.urdf.xacro`` expanded here with the PyPI
 ``xacro`` package) and ``hydrodynamics.yaml`` are read by ``uvms_model.description``; its
-``thrusters.yaml``, ``sensor.yaml`` and ``controller.yaml`` are ROS 2 parameter files whose
-values a node takes as its defaults (``robot_parameters``). Pure Python: no rclpy.
+``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and ``start.yaml`` (its default start:
+the simulator's ``initial.*``) are ROS 2 parameter files whose values a node takes as its
+defaults (``robot_parameters``). Pure Python: no rclpy.
 """
 
 from __future__ import annotations
@@ -22,7 +23,10 @@ from uvms_description import DEFAULT_ROBOT, robots_directory
 URDF_FILES = ('robot.urdf', 'robot.urdf.xacro')
 """A robot's URDF: exactly one of these."""
 HYDRODYNAMICS_FILE = 'hydrodynamics.yaml'
-PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml')
+START_FILE = 'start.yaml'
+"""The robot's default start: the simulator's ``initial.*`` where a scenario sets none."""
+START_PREFIX = 'initial.'
+PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml', START_FILE)
 """The robot's ROS 2 parameter files, in the order their values are merged."""
 _NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _SECTION = re.compile(r'^(/\*\*|/\*\*/(?P<node>[A-Za-z_][A-Za-z0-9_]*))$')
@@ -41,7 +45,8 @@ class RobotFiles:
         directory: The folder.
         urdf: ``robot.urdf`` or ``robot.urdf.xacro``.
         hydrodynamics: ``hydrodynamics.yaml``.
-        parameter_files: ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``.
+        parameter_files: ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``,
+            ``start.yaml``.
     """
 
     name: str
@@ -177,23 +182,39 @@ def robot_parameters(
 ) -> dict[str, RobotParameter]:
     """The values a node takes as defaults from robot ``name``'s parameter files.
 
-    Every value of ``thrusters.yaml``, ``sensor.yaml`` and ``controller.yaml`` for ``node``
-    (flat dotted names). The URDF and hydrodynamics paths are not among them (a recording
-    would carry this machine's paths): ``with_description_paths`` fills them in.
+    Every value of ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and
+    ``start.yaml`` for ``node`` (flat dotted names). The URDF and hydrodynamics paths are not
+    among them (a recording would carry this machine's paths): ``with_description_paths``
+    fills them in.
 
     Raises:
         RobotFolderError: See ``robot_files`` and ``parameter_file_values``; also a name given
-            by two of the files.
+            by two of the files, a start parameter (``initial.*``) outside ``start.yaml`` or
+            another parameter in it.
     """
     files = robot_files(name, directory)
     values: dict[str, RobotParameter] = {}
     for path in files.parameter_files:
         for key, item in parameter_file_values(path, node).items():
+            if (path.name == START_FILE) != key.startswith(START_PREFIX):
+                msg = (f'{path}: parameter {key!r}: the start parameters ({START_PREFIX}*) '
+                       f'belong in {START_FILE}, and only they (docs/robots.md)')
+                raise RobotFolderError(msg)
             if key in values:
                 msg = f'{path}: parameter {key!r} is also given by {values[key].source}'
                 raise RobotFolderError(msg)
             values[key] = item
     return values
+
+
+def robot_start(name: str = DEFAULT_ROBOT, directory: Path | None = None) -> dict[str, Any]:
+    """Robot ``name``'s default start: the simulator's ``initial.*`` values of ``start.yaml``.
+
+    Raises:
+        RobotFolderError: See ``robot_parameters``.
+    """
+    return {key: item.value for key, item in robot_parameters(name, 'simulator', directory).items()
+            if key.startswith(START_PREFIX)}
 
 
 def with_description_paths(values: Mapping[str, Any], name: str = DEFAULT_ROBOT,

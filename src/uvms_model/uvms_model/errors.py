@@ -18,7 +18,16 @@ class SingularAttitudeError(ModelError):
 
 
 class UnreachableError(ModelError):
-    """The inverse kinematics found no arm configuration that reaches the requested point."""
+    """The inverse kinematics found no arm configuration that reaches the requested point.
+
+    Attributes:
+        residual_m: Distance (m) left between the end effector and the point after the last
+            iteration (NaN where unknown).
+    """
+
+    def __init__(self, message: str, residual_m: float = float('nan')) -> None:
+        super().__init__(message)
+        self.residual_m = residual_m
 
 
 class DescriptionError(ModelError):

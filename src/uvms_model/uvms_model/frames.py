@@ -128,7 +128,7 @@ class FrameKinematics:
             raise UnreachableError(
                 f'x_ned = {target.tolist()!r} is out of reach of the arm from the vehicle pose '
                 f'q_vehicle = {q_vehicle.tolist()!r}: residual {residual:.3g} m after '
-                f'{max_iterations} iterations'
+                f'{max_iterations} iterations', residual
             )
         result: FloatArray = np.arctan2(np.sin(qm), np.cos(qm))
         return result

@@ -117,7 +117,8 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ),
     ParameterSpec(
         'initial.vehicle_pose', [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        'Initial vehicle pose in map_ned: x, y, z (m), roll, pitch, yaw (rad).',
+        'Initial vehicle pose in map_ned: x, y, z (m), roll, pitch, yaw (rad); default: the '
+        "robot's start.yaml.",
         -1000.0, 1000.0, length=6,
     ),
     ParameterSpec(
@@ -136,7 +137,8 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ),
     ParameterSpec(
         'initial.ee_position', [1.7, 0.0, -0.1],
-        'Initial end-effector position in map_ned (m), used when initial.arm is ee_position.',
+        'Initial end-effector position in map_ned (m), used when initial.arm is ee_position; '
+        "default: the robot's start.yaml.",
         -1000.0, 1000.0, length=3,
     ),
 )

@@ -9,8 +9,9 @@ time is kept in integer nanoseconds, so stamps are exact and runs repeat bit for
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -84,6 +85,8 @@ def initial_coordinates(
     vehicle_pose: ArrayLike,
     joint_positions: ArrayLike,
     ee_position: ArrayLike | None = None,
+    robot: str = '',
+    robot_start: Mapping[str, Any] | None = None,
 ) -> FloatArray:
     """Generalized coordinates q (6 + n,) of the start, optionally by inverse kinematics.
 
@@ -93,26 +96,41 @@ def initial_coordinates(
         joint_positions: Arm joint angles (rad) (n,); with ``ee_position``, the starting guess
             of the inverse kinematics (it selects the elbow branch).
         ee_position: End-effector position in map_ned (m) (3,) to start at, or None.
+        robot: The robot's name, for the error message.
+        robot_start: The robot's default start (``initial.*`` of its ``start.yaml``), named
+            in the error message as what fits the robot.
 
     Raises:
-        SimParameterError: The end-effector position is out of reach, naming it.
+        SimParameterError: The end-effector position is out of reach (naming the robot, the
+            residual and the robot's default start), or the joint angles do not fit the arm.
     """
     pose = np.asarray(vehicle_pose, dtype=float)
     arm = np.asarray(joint_positions, dtype=float)
+    whose = f'robot {robot!r}: ' if robot else ''
     if arm.shape != (model.n_joints,):
-        msg = (f"parameter 'initial.joint_positions' = {arm.tolist()}: expected "
+        msg = (f"{whose}parameter 'initial.joint_positions' = {arm.tolist()}: expected "
                f'{model.n_joints} angles, one per arm joint {list(model.joint_names)}')
-        raise SimParameterError(msg)
+        raise SimParameterError(msg + _default_start_hint(robot_start))
     if ee_position is not None:
         try:
             arm = model.joint_positions_for_ee_position(pose, ee_position, arm)
         except UnreachableError as exc:
             msg = (
-                f"parameter 'initial.ee_position' = {np.asarray(ee_position, float).tolist()}: "
-                f'out of reach from initial.vehicle_pose = {pose.tolist()} ({exc})'
+                f"{whose}parameter 'initial.ee_position' = "
+                f'{np.asarray(ee_position, float).tolist()}: out of reach of the arm from '
+                f'initial.vehicle_pose = {pose.tolist()} (residual {exc.residual_m:.3g} m)'
             )
-            raise SimParameterError(msg) from exc
+            raise SimParameterError(msg + _default_start_hint(robot_start)) from exc
     return np.concatenate((pose, arm))
+
+
+def _default_start_hint(robot_start: Mapping[str, Any] | None) -> str:
+    """'; the robot's default start: initial.x = v, ...' for an error message, or ''."""
+    if not robot_start:
+        return ''
+    values = ', '.join(f'{name} = {value}' for name, value in robot_start.items())
+    return (f"; the robot's default start (its start.yaml, taken where initial.* is not set): "
+            f'{values}')
 
 
 class Plant:

@@ -30,6 +30,7 @@ from uvms_common.robot_parameters import (
     declare_robot,
     robot_default,
     robot_model_values,
+    robot_start_values,
     with_robot_source,
 )
 
@@ -78,7 +79,8 @@ class SimulatorNode(Node):
         model = UvmsModel(params)
         q0 = initial_coordinates(model, cfg.vehicle_pose,
                                  default_joint_positions(cfg.joint_positions, model.n_joints),
-                                 cfg.ee_position if cfg.arm_from_ee_position else None)
+                                 cfg.ee_position if cfg.arm_from_ee_position else None,
+                                 self.robot_name, robot_start_values(files))
         self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled,
                             cfg.wall_motion_start_force_n)
 
