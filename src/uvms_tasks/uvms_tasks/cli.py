@@ -147,6 +147,7 @@ class _TaskRun:
             outcome = self.run_task(task)
             if outcome is None:
                 return EXIT_INTERRUPTED
+            self.progress.end()
             print(outcome.describe(), flush=True)
             if not outcome.succeeded:
                 skipped = len(tasks) - i - 1
@@ -187,7 +188,11 @@ class _TaskRun:
         self.progress.end()
         print(f'uvms task: interrupted: canceling {task.name}', file=sys.stderr, flush=True)
         self.client.cancel_async(handle)
-        if self.client.spin_until(result.done, CANCEL_WAIT_S):
+        done = self.client.spin_until(result.done, CANCEL_WAIT_S)
+        # The feedback of the retreat redrew the progress line while waiting: leave it, or
+        # the result (stdout, the same terminal) is glued onto it.
+        self.progress.end()
+        if done:
             response = result.result()
             print(TaskOutcome(task.name, int(response.status), response.result).describe(),
                   flush=True)
