@@ -115,8 +115,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest='command', metavar='COMMAND')
     run = sub.add_parser(
         'run', help='run a scenario in lockstep (deterministic, as fast as possible)',
-        description='Run the whole graph (simulator, controller, thruster allocator, '
-                    'recorder) in one process, in lockstep on simulated time.')
+        description='Run the whole graph (simulator, controller, thruster_allocator, '
+                    'visualizer; mission when the scenario has a mission:, foxglove_server '
+                    'with --foxglove, recorder with --output) in one process, in lockstep on '
+                    "simulated time, until the scenario's duration_s or --duration.")
     run.add_argument('scenario', metavar='SCENARIO.yaml',
                      help='scenario file, or a name of config/scenarios/NAME.yaml')
     run.add_argument('--duration', type=_positive_seconds, metavar='S',
@@ -131,10 +133,13 @@ def build_parser() -> argparse.ArgumentParser:
                      help='no progress bar, only warnings, errors and the summary line')
     _add_foxglove_arguments(run)
     launch = sub.add_parser(
-        'launch', help='run the graph, one process per node, in real time until Ctrl-C',
-        description='Start simulator, controller, thruster_allocator (and recorder with '
-                    '--output) each as its own process, as ros2 launch uvms_bringup '
-                    'uvms.launch.py would, on wall-clock timers by default. Ctrl-C or '
+        'launch', help="run the graph, one process per node, in real time for the scenario's "
+                       'duration_s',
+        description='Start simulator, controller, thruster_allocator, visualizer (and '
+                    'mission when the scenario has a mission:, foxglove_server with '
+                    '--foxglove, recorder with --output) each as its own process, as ros2 '
+                    'launch uvms_bringup uvms.launch.py would, on wall-clock timers by '
+                    'default. Ctrl-C or '
                     "SIGTERM stops every node (exit 130); the run ends when the simulator "
                     "reaches the scenario's duration_s or --duration (exit 0; --duration 0 "
                     'runs on until stopped); a node that fails is named and the others are '
