@@ -11,9 +11,11 @@ line plots failed points are red crosses at the bottom, unstable ones open red c
 those that ended early open orange squares. The legend lists the marks a figure uses.
 Sweeps over three or more axes get the table only.
 
-Legible at any grid size: a heatmap is at least ``_MIN_FIGSIZE_IN``, axis labels are the
-full parameter names wrapped at their dots and underscores, and the colour bar (line plots:
-the y axis) carries the metric's label and unit from ``uvms_analysis.report.COLUMNS``.
+A line plot's axis is logarithmic where it was given as ``logspace`` or its positive values
+span a decade or more (``log_scale``). Legible at any grid size: a heatmap is at least
+``_MIN_FIGSIZE_IN``, axis labels are the full parameter names wrapped at their dots and
+underscores, and the colour bar (line plots: the y axis) carries the metric's label and unit
+from ``uvms_analysis.report.COLUMNS``.
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ _LABEL_CHARS_PER_IN = 11.0
 _FAILED = ('failed', '0.6', 'xx', '0.3')
 _UNSTABLE = ('unstable', 'none', '//', 'red')
 _ENDED = (ENDED_BEFORE_SETTLING, 'none', '..', 'darkorange')
+#: Ratio of the largest to the smallest positive value from which a line plot's axis is log.
+_DECADE = 10.0
 
 
 def metric_label(metric: str) -> str:
@@ -73,6 +77,28 @@ def wrap_name(name: str, width: int) -> str:
             lines.append('')
         lines[-1] += piece
     return '\n'.join(lines)
+
+
+def log_scale(axis: Axis) -> bool:
+    """Whether a line plot draws ``axis`` on a log scale.
+
+    Yes for an axis given as ``logspace``, and for positive numbers that span a decade or
+    more (a list ``[1.0e+4, 1.0e+5]`` of stiffnesses): on a linear scale their small values
+    crowd into one corner.
+
+    Example:
+        >>> log_scale(Axis('simulator.contact.stiffness_n_m', (1.0e4, 1.0e5)))
+        True
+        >>> log_scale(Axis('controller.model.mass_scale', (0.5, 1.0, 1.5)))
+        False
+    """
+    if axis.spacing == 'logspace':
+        return True
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in axis.values):
+        return False
+    values = np.array(axis.values, dtype=float)
+    return bool(values.size > 1 and np.all(values > 0.0)
+                and values.max() >= _DECADE * values.min())
 
 
 def _axis_label(axis: Axis, length_in: float) -> str:
@@ -224,7 +250,7 @@ def _line(
     if ended.any():
         ax.plot(x[ended], mean[ended], 's', markerfacecolor='none', color='darkorange',
                 markersize=12, label=ENDED_BEFORE_SETTLING)
-    if axis.spacing == 'logspace':
+    if numeric and log_scale(axis):
         ax.set_xscale('log')
     if not numeric:
         ax.set_xticks(x, axis_labels(axis))
