@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import shutil
+import signal
 import subprocess
 import sys
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -101,3 +103,28 @@ def test_failed_node_start_says_why_once_without_rosout_warning(tmp_path: Path) 
     assert 'Publisher already registered' not in result.stderr
     assert "robot 'bluerov2_alpha5': parameter 'initial.ee_position'" in result.stderr
     assert 'initial.ee_position = [0.37, 0.0, -0.07]' in result.stderr
+
+
+def test_readme_bluerov_simulator_command_starts() -> None:
+    """README: ``simulator --ros-args ... -p robot_name:=bluerov2_alpha5`` starts and waits."""
+    config = SCENARIOS.parent
+    command = [str(BIN / 'simulator'), '--ros-args', '-r', '__ns:=/uvms', '--params-file',
+               str(config / 'robot.yaml'), '-p', 'robot_name:=bluerov2_alpha5']
+    with subprocess.Popen(command, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                          text=True) as process:
+        watchdog = threading.Timer(120.0, process.kill)  # a hang fails below, never blocks
+        watchdog.start()
+        lines = []
+        try:
+            assert process.stderr is not None
+            for line in process.stderr:
+                lines.append(line)
+                if 'waiting for the first actuator command' in line:
+                    break
+        finally:
+            watchdog.cancel()
+            process.send_signal(signal.SIGINT)
+            process.wait(timeout=30)
+    text = ''.join(lines)
+    assert 'waiting for the first actuator command' in text, text[-2000:]
+    assert 'FATAL' not in text
