@@ -4,7 +4,7 @@ States (``SupervisorState``): HOLD (no goal: the hold point at rest), WAITING (a
 its stamp), FOLLOWING (its path), RELEASING (F_d ramps down at the path's end, then X_d backs
 off until the contact is gone), RETREATING (a cancel or a limit: back off along the measured
 force from the measured position) and SAFE_HOLD (a limit breached during a retreat: F_d = 0,
-X_d = X at rest, until ``reset``). The limits (``safety_checks.check_limits``: |F_e|, sensor
+X_d = X at rest, following X while in contact, until ``reset``). The limits (``safety_checks.check_limits``: |F_e|, sensor
 saturation, |X_d - X|) are checked at every step in every state. A breach outside a retreat
 starts a protected retreat that no goal can preempt: a goal arriving then is refused
 (INVALID_GOAL, the message names the retreat), and the running goal's result (with the
@@ -409,8 +409,11 @@ class TaskSupervisor:
             running.figures.update(t, dt, f_normal, f_normal >= task.contact_threshold_n,
                                    task.force_active and self._at_setpoint(result, running))
         if state == SupervisorState.SAFE_HOLD:
-            if breach is not None and breach.code == TaskCode.TRACKING_LIMIT:
-                task.hold(result.X.tolist())  # never pull back hard toward a stale point
+            # In contact or far from X_d the hold follows X: the arm yields to the surface (no
+            # pressing on through the impedance law) and never pulls back toward a stale point.
+            if (breach is not None and breach.code == TaskCode.TRACKING_LIMIT) \
+                    or float(np.linalg.norm(result.F_e)) >= task.contact_threshold_n:
+                task.hold(result.X.tolist())
             return []
         self.breach = None if breach is None else breach.message
         if state == SupervisorState.RETREATING:
