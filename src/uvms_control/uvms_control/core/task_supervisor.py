@@ -4,21 +4,20 @@ States (``SupervisorState``): HOLD (no goal: the hold point at rest), WAITING (a
 its stamp), FOLLOWING (its path), RELEASING (F_d ramps down at the path's end, then X_d backs
 off until the contact is gone), RETREATING (a cancel or a limit: back off along the measured
 force from the measured position) and SAFE_HOLD (a limit breached during a retreat: F_d = 0,
-X_d = X at rest, following X while in contact, until ``reset``). The limits (``safety_checks.check_limits``: |F_e|, sensor
-saturation, |X_d - X|) are checked at every step in every state. A breach outside a retreat
-starts a protected retreat that no goal can preempt: a goal arriving then is refused
-(INVALID_GOAL, the message names the retreat), and the running goal's result (with the
-breach's code) comes when the retreat is done. Everything happens inside ``step``, on the
-control loop's own clock, so a lockstep run stays deterministic. The diagram: docs/interfaces.md,
-"Safety".
+X_d = X at rest, following X while in contact, until ``reset``). The limits
+(``safety_checks.check_limits``: |F_e|, sensor saturation, |X_d - X|) are checked at every
+step in every state. A breach outside a retreat starts a protected retreat that no goal can
+preempt: a goal arriving then is refused (INVALID_GOAL, the message names the retreat), and
+the running goal's result (with the breach's code) comes when the retreat is done.
+Everything happens inside ``step``, on the control loop's own clock, so a lockstep run stays
+deterministic. The diagram: docs/interfaces.md, "Safety".
 """
 
 from __future__ import annotations
 
-import enum
 import math
 from collections.abc import Hashable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
@@ -29,7 +28,6 @@ from uvms_control.core.contact_task import (
     TaskCode,
     TaskFigures,
     TaskGoalError,
-    TaskResult,
     validate_goal,
 )
 from uvms_control.core.safety_checks import (
@@ -41,74 +39,21 @@ from uvms_control.core.safety_checks import (
     check_limits,
     force_direction,
 )
+from uvms_control.core.task_states import (
+    TASK_STATE,
+    RunningTask,
+    SupervisorState,
+    TaskEvent,
+    TaskProgress,
+    TaskState,
+    empty_result,
+)
 from uvms_control.core.unified_controller import ControllerResult, UnifiedForceController
 
 __all__ = ['SATURATION_SHARE', 'SupervisorState', 'TaskEvent', 'TaskProgress', 'TaskState',
            'TaskSupervisor', 'with_limits']
 
 FloatArray = npt.NDArray[np.float64]
-
-
-class TaskState(enum.IntEnum):
-    """Where the running task is (values of ContactTask.Feedback.STATE_*)."""
-
-    WAITING = 0
-    FOLLOWING = 1
-    RELEASING = 2
-    RETREATING = 3
-    SAFE_HOLD = 4
-
-
-class SupervisorState(enum.IntEnum):
-    """The supervisor's state, goal or no goal."""
-
-    HOLD = 0
-    WAITING = 1
-    FOLLOWING = 2
-    RELEASING = 3
-    RETREATING = 4
-    SAFE_HOLD = 5
-
-
-_TASK_STATE = {SupervisorState.WAITING: TaskState.WAITING,
-               SupervisorState.FOLLOWING: TaskState.FOLLOWING,
-               SupervisorState.RELEASING: TaskState.RELEASING,
-               SupervisorState.RETREATING: TaskState.RETREATING,
-               SupervisorState.SAFE_HOLD: TaskState.SAFE_HOLD}
-
-
-@dataclass(frozen=True)
-class TaskEvent:
-    """A task that ended, with its result."""
-
-    goal_id: Hashable
-    result: TaskResult
-
-
-@dataclass(frozen=True)
-class TaskProgress:
-    """The running task at the last step (the action's feedback)."""
-
-    goal_id: Hashable
-    state: TaskState
-    progress: float
-    force_n: float
-    force_desired_n: float
-
-
-@dataclass
-class _Running:
-    goal_id: Hashable
-    goal: ContactTaskGoal
-    normal: FloatArray
-    figures: TaskFigures
-    start_s: float | None = None
-    end_code: TaskCode = TaskCode.SUCCEEDED
-    end_message: str = ''
-
-
-def _empty_result(code: TaskCode, message: str) -> TaskResult:
-    return TaskResult(code, message, 0.0, 0.0, math.nan, math.nan)
 
 
 class TaskSupervisor:
@@ -127,7 +72,7 @@ class TaskSupervisor:
         self.breach: str | None = None
         #: Why the last ``set_target`` was refused.
         self.refusal: str | None = None
-        self._running: _Running | None = None
+        self._running: RunningTask | None = None
         self._queued: list[tuple[Hashable, ContactTaskGoal]] = []
         self._pending: list[TaskEvent] = []
         self._cancel_requested = False
@@ -166,7 +111,7 @@ class TaskSupervisor:
         share = (path.progress(self._t_last or 0.0)
                  if path is not None and self.state == SupervisorState.FOLLOWING
                  else 1.0 if self.state == SupervisorState.RELEASING else 0.0)
-        return TaskProgress(running.goal_id, _TASK_STATE[self.state], share,
+        return TaskProgress(running.goal_id, TASK_STATE[self.state], share,
                             float(running.normal @ last.F_e), float(running.normal @ last.F_d))
 
     # ------------------------------------------------------------------------ commands
@@ -186,12 +131,12 @@ class TaskSupervisor:
             self._queued.append((goal_id, goal))
             return []
         if self.state == SupervisorState.RETREATING:
-            return [TaskEvent(goal_id, _empty_result(TaskCode.INVALID_GOAL, (
+            return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
                 f'refused: the arm is retreating ({self._retreat_reason}) until '
                 f't = {self._retreat_end_s:.3f} s; no goal preempts a retreat, send it again '
                 'after it')))]
         if self.state == SupervisorState.SAFE_HOLD:
-            return [TaskEvent(goal_id, _empty_result(TaskCode.INVALID_GOAL, (
+            return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
                 f'refused: the controller is in safe hold ({self._safe_hold_reason}); '
                 'deactivate and activate it to clear the safe hold')))]
         last = self._last
@@ -201,14 +146,14 @@ class TaskSupervisor:
             validate_goal(goal, last.X, self.limits, task.contact_threshold_n,
                           now_s=now_s, start=np.asarray(start))
         except TaskGoalError as error:
-            return [TaskEvent(goal_id, _empty_result(TaskCode.INVALID_GOAL, str(error)))]
+            return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, str(error)))]
         events: list[TaskEvent] = []
         if self._running is not None:
             if self.state in (SupervisorState.FOLLOWING, SupervisorState.RELEASING):
                 self._begin_release(now_s, self._running.normal, hold_measured=True)
             events = self._end_running(TaskCode.PREEMPTED, 'preempted by a new goal')
         normal = np.asarray(goal.normal, dtype=np.float64)
-        self._running = _Running(goal_id, goal, normal / float(np.linalg.norm(normal)),
+        self._running = RunningTask(goal_id, goal, normal / float(np.linalg.norm(normal)),
                                  TaskFigures(goal.force_n), goal.start_time_s)
         self.state = SupervisorState.WAITING
         self._cancel_requested = False
@@ -247,7 +192,7 @@ class TaskSupervisor:
         for k, (queued_id, _) in enumerate(self._queued):
             if queued_id == goal_id:
                 del self._queued[k]
-                self._pending.append(TaskEvent(goal_id, _empty_result(TaskCode.CANCELED,
+                self._pending.append(TaskEvent(goal_id, empty_result(TaskCode.CANCELED,
                                                                       'canceled')))
                 return True
         if self._running is None or self._running.goal_id != goal_id:
@@ -262,7 +207,7 @@ class TaskSupervisor:
         (a SAFE_HOLD stays latched); goals arriving until then wait for that step.
         """
         events = self._take_pending() + self._end_running(code, message)
-        events += [TaskEvent(goal_id, _empty_result(code, message))
+        events += [TaskEvent(goal_id, empty_result(code, message))
                    for goal_id, _ in self._queued]
         self._queued = []
         self.recapture_hold()
@@ -337,7 +282,7 @@ class TaskSupervisor:
                                 ramp_s=running.goal.force_ramp_s)
         return []
 
-    def _start(self, t: float, running: _Running) -> list[TaskEvent]:
+    def _start(self, t: float, running: RunningTask) -> list[TaskEvent]:
         """Start a waiting goal from the reference at rest, checked again as it will run."""
         assert self._last is not None
         try:
@@ -459,7 +404,7 @@ class TaskSupervisor:
             f'path done; |F_e| = {float(np.linalg.norm(self._last.F_e)):.1f} N left after '
             'backing off the whole release distance'))
 
-    def _at_setpoint(self, result: ControllerResult, running: _Running) -> bool:
+    def _at_setpoint(self, result: ControllerResult, running: RunningTask) -> bool:
         """F_d has reached force_n (the ramp is over)."""
         return abs(float(running.normal @ result.F_d) - running.goal.force_n) \
             <= 1e-9 * running.goal.force_n
