@@ -55,6 +55,8 @@ settings.register_profile('ci', max_examples=500, derandomize=True, **_COMMON)
 settings.register_profile('quick', max_examples=50, derandomize=True, **_COMMON)
 settings.register_profile('random', max_examples=500, **_COMMON)
 settings.register_profile('explore', max_examples=300, phases=[Phase.generate], **_COMMON)
+settings.register_profile('ci-unshrunk', max_examples=500, derandomize=True,
+                          phases=[Phase.generate], **_COMMON)
 PROFILE = settings.get_profile(os.environ.get('UVMS_HYPOTHESIS_PROFILE', 'ci'))
 
 

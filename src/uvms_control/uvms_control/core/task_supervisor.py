@@ -84,6 +84,7 @@ class TaskSupervisor:
         self._retreat_force_cap_n = math.inf
         self._retreat_reason = ''
         self._safe_hold_reason: str | None = None
+        self._capturing = True  # the hold point is captured at the next step
 
     # ------------------------------------------------------------------------ queries
 
@@ -217,12 +218,16 @@ class TaskSupervisor:
     def recapture_hold(self) -> None:
         """Hold the position measured at the next step, at rest, with no force (on resume).
 
-        Meant after ``abort_all``; a goal still running ends INPUTS_STALE at the next step.
+        Meant after ``abort_all``; a goal still running ends INPUTS_STALE at the next step. If
+        that step finds a contact, the hold point then backs off as a release does, until the
+        contact is let go (a hold captured in contact would otherwise press on through the
+        impedance law).
         """
         if self._running is not None:
             self._pending += self._end_running(TaskCode.INPUTS_STALE,
                                                'the hold point was re-captured')
         self.controller.task.hold()
+        self._capturing = True
         self._release = None
         self._target = None
         self._t_last = None
@@ -361,6 +366,12 @@ class TaskSupervisor:
                 task.hold(result.X.tolist())
             return []
         self.breach = None if breach is None else breach.message
+        if self._capturing:
+            self._capturing = False
+            # Captured in contact (activation, resume after stale inputs): let the contact go.
+            if breach is None and state == SupervisorState.HOLD and self._release is None \
+                    and float(np.linalg.norm(result.F_e)) >= task.contact_threshold_n:
+                self._begin_release(t, self.controller.n, hold_measured=True)
         if state == SupervisorState.RETREATING:
             return self._check_retreat(t, result, breach)
         if breach is not None:
