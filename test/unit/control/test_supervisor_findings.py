@@ -371,6 +371,21 @@ def test_f8_stale_inputs_end_the_goal_and_resume_holds_the_measured_position() -
     assert loop.supervisor.state == SupervisorState.HOLD
 
 
+def test_f8_resume_in_contact_lets_the_contact_go() -> None:
+    """Finding 8: a hold re-captured while pressing backs off instead of pressing on (~20 N)."""
+    loop = Loop(SafetyLimits())
+    loop.step()
+    loop.supervisor.submit('press', press_goal(), loop.t)
+    loop.run(4.0)
+    assert loop.contact_force() > 50.0
+    loop.supervisor.abort_all(TaskCode.INPUTS_STALE, 'inputs stale')
+    loop.gap(0.02)
+    loop.supervisor.recapture_hold()
+    loop.run(2.0)
+    assert loop.contact_force() < THRESHOLD_N
+    assert loop.supervisor.state == SupervisorState.HOLD
+
+
 # ---------------------------------------------------------------------------- finding 9
 
 
