@@ -142,7 +142,8 @@ class TaskSupervisor:
                 'deactivate and activate it to clear the safe hold')))]
         last = self._last
         task = self.controller.task
-        start = task.state(now_s)[:3] if self._running is None and task.ready else last.X
+        holding = self.state in (SupervisorState.HOLD, SupervisorState.WAITING) and task.ready
+        start = task.state(now_s)[:3] if holding else last.X  # where the new path will start
         try:
             validate_goal(goal, last.X, self.limits, task.contact_threshold_n,
                           now_s=now_s, start=np.asarray(start))
@@ -155,7 +156,7 @@ class TaskSupervisor:
             events = self._end_running(TaskCode.PREEMPTED, 'preempted by a new goal')
         normal = np.asarray(goal.normal, dtype=np.float64)
         self._running = RunningTask(goal_id, goal, normal / float(np.linalg.norm(normal)),
-                                 TaskFigures(goal.force_n), goal.start_time_s)
+                                    TaskFigures(goal.force_n), goal.start_time_s)
         self.state = SupervisorState.WAITING
         self._cancel_requested = False
         self._target = None
