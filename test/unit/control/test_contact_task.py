@@ -35,7 +35,8 @@ GOAL = ContactTaskGoal(
     [
         GOAL,
         replace(GOAL, force_n=0.0, force_ramp_s=0.0),
-        replace(GOAL, velocities=np.zeros((3, 3)), accelerations=np.ones((3, 3))),
+        replace(GOAL, velocities=np.zeros((3, 3)),
+                accelerations=np.array([[1.0, 1.0, 1.0], [0.1, 0.0, 0.1], [0.0, 0.0, 0.0]])),
         replace(GOAL, start_time_s=12.0),
     ],
 )

@@ -219,3 +219,21 @@ def test_a_task_taking_over_ramps_from_the_running_force() -> None:
     first = setpoint.update(0.0, 100.0, 1.0, 1.0, 0.0)
     assert first.f_d == 100.0 and first.f_d_dot == 0.0
     assert setpoint.update(1.0, 150.0, 1.0, 1.0, 0.0).f_d == pytest.approx(150.0)
+
+
+@pytest.mark.parametrize('contact_first', [True, False])
+def test_final_release_never_rearms(contact_first: bool) -> None:
+    """release(final=True): F_d stays zero after the ramp, whatever contact follows.
+
+    Also when released before any contact (a cancel while approaching): the back-off that then
+    meets the surface must not ramp the force up (issue 28, finding 4).
+    """
+    fs = ForceSetpoint(magnitude=100.0, ramp_time=0.5, contact_threshold=5.0)
+    if contact_first:
+        fs.update(0.0, 10.0, 1.0, 1.0, 0.0)
+        fs.update(1.0, 100.0, 1.0, 1.0, 0.0)
+    fs.release(1.0, 0.5, final=True)
+    samples = [fs.update(1.0 + 0.01 * k, force, 1.0, 1.0, 0.0).f_d
+               for k, force in enumerate([100.0] * 60 + [0.0] * 20 + [50.0] * 100)]
+    assert samples[-1] == 0.0 and fs.phase == ForcePhase.IDLE and fs.final
+    assert all(f == 0.0 for f in samples[60:])

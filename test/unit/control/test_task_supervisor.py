@@ -95,19 +95,25 @@ def test_goal_waits_for_its_start_time() -> None:
     assert float(NORMAL @ (following[-1].X_d - X)) == pytest.approx(0.01, abs=1e-9)
 
 
-def test_second_goal_preempts_the_first() -> None:
-    """A new valid goal ends the running one PREEMPTED and continues X_d without a jump."""
+def test_preempted_goal_releases_its_force_at_the_measured_position() -> None:
+    """A new valid goal ends the running one PREEMPTED; X_d holds X at rest, F_d ramps down."""
     run = Run()
     run.step()
     run.supervisor.submit('a', goal(), run.t)
-    before = run.run(0.4)[-1]
-    events = run.supervisor.submit('b', goal(force_n=60.0), run.t)
-    after = run.step()
+    pressing = run.run(0.7, force_normal_n=100.0)[-1]
+    assert float(NORMAL @ pressing.F_d) == pytest.approx(100.0)
+    events = run.supervisor.submit('b', goal(start_time_s=run.t + 5.0, force_n=60.0), run.t)
     assert [(event.goal_id, event.result.code) for event in events] == [('a', TaskCode.PREEMPTED)]
     assert run.supervisor.goal_id == 'b'
-    assert float(np.linalg.norm(after.X_d - before.X_d)) < 2.0 * DT * float(
-        np.linalg.norm(before.X_dot_d)
-    ) + 1e-9
+    released = run.run(LIMITS.retreat_time_s + DT, force_normal_n=100.0)
+    for result in released:
+        np.testing.assert_allclose(result.X_d, X, atol=1e-12)  # the measured position
+        np.testing.assert_allclose(result.X_dot_d, 0.0, atol=1e-12)
+    forces = [float(NORMAL @ result.F_d) for result in released]
+    assert all(later <= earlier + 1e-9 for earlier, later in itertools.pairwise(forces))
+    assert forces[0] > 90.0 and forces[-1] == pytest.approx(0.0, abs=1e-9)
+    progress = run.supervisor.progress()
+    assert progress is not None and progress.state == TaskState.WAITING
 
 
 def test_cancel_releases_the_force_and_ends_after_the_retreat() -> None:

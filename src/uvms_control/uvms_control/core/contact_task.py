@@ -16,10 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from uvms_control.core.task_path import TaskPath
+
 FloatArray = npt.NDArray[np.float64]
 
 #: A force within this share of F_d counts as settled (the result's RMS error starts there).
 SETTLED_BAND = 0.05
+
+#: Peak of ds/dσ of the quintic rest-to-rest time scaling 10σ³ - 15σ⁴ + 6σ⁵ (at σ = 1/2).
+QUINTIC_PEAK_SPEED = 1.875
 
 
 class TaskCode(enum.IntEnum):
@@ -33,6 +38,7 @@ class TaskCode(enum.IntEnum):
     PREEMPTED = 5
     CANCELED = 6
     INACTIVE = 7
+    INPUTS_STALE = 8
 
 
 class TaskGoalError(ValueError):
@@ -72,17 +78,28 @@ class ContactTaskGoal:
 
 @dataclass(frozen=True)
 class SafetyLimits:
-    """Limits the controller enforces on every task (parameters ``safety.*``).
+    """Limits the controller enforces in every state, goal or no goal (parameters ``safety.*``).
 
     Attributes:
-        max_contact_force_n: largest measured force along the normal (N); also caps force_n.
+        max_contact_force_n: largest measured contact force |F_e| (N), whatever its direction;
+            also caps force_n.
         sensor_range_n: wrist-sensor full scale per axis (N): a reading at 99.9 % of it is
             taken as saturated.
         max_position_error_m: largest |X_d - X| (m).
-        max_path_distance_m: largest distance of a goal's waypoint from X at acceptance (m).
+        max_path_distance_m: largest distance of a goal's interpolated path, and of a
+            streamed target, from X at acceptance (m).
         retreat_m: back-off along -normal after a cancel or a breach (m).
         retreat_time_s: time of that back-off and of the force ramp-down with it (s).
         max_target_speed_m_s: speed limit of the streamed hold target (m/s).
+        max_goal_delay_s: how far ahead of the controller clock a goal's stamp may be (s).
+        max_path_speed_m_s: largest |Ẋ_d| of a goal's interpolated path (m/s).
+        max_path_acceleration_m_s2: largest |Ẍ_d| of a goal's interpolated path (m/s²).
+        min_ramp_s: shortest force ramp (a goal's force_ramp_s) and retreat_time_s (s).
+
+    Raises:
+        ValueError: retreat_time_s shorter than min_ramp_s, or a back-off (retreat_m over
+            retreat_time_s, peak speed 1.875 retreat_m / retreat_time_s on its quintic)
+            faster than max_path_speed_m_s.
     """
 
     max_contact_force_n: float = 400.0
@@ -92,6 +109,20 @@ class SafetyLimits:
     retreat_m: float = 0.05
     retreat_time_s: float = 1.0
     max_target_speed_m_s: float = 0.1
+    max_goal_delay_s: float = 60.0
+    max_path_speed_m_s: float = 0.5
+    max_path_acceleration_m_s2: float = 1.0
+    min_ramp_s: float = 0.1
+
+    def __post_init__(self) -> None:
+        if self.retreat_time_s < self.min_ramp_s:
+            raise ValueError(f'safety.retreat_time_s = {self.retreat_time_s} s must be at least '
+                             f'safety.min_ramp_s = {self.min_ramp_s} s')
+        speed = QUINTIC_PEAK_SPEED * self.retreat_m / self.retreat_time_s
+        if speed > self.max_path_speed_m_s:
+            raise ValueError(f'safety.retreat_m = {self.retreat_m} m over safety.retreat_time_s '
+                             f'= {self.retreat_time_s} s peaks at {speed:.3g} m/s, more than '
+                             f'safety.max_path_speed_m_s = {self.max_path_speed_m_s} m/s')
 
 
 def _finite(field: str, values: npt.ArrayLike) -> FloatArray:
@@ -106,6 +137,8 @@ def validate_goal(
     X: FloatArray,
     limits: SafetyLimits,
     contact_threshold_n: float,
+    now_s: float | None = None,
+    start: FloatArray | None = None,
 ) -> None:
     """Check a goal before it may replace the running one.
 
@@ -115,6 +148,9 @@ def validate_goal(
         limits: the safety limits.
         contact_threshold_n: force that counts as contact (N); a non-zero force_n must
             exceed it.
+        now_s: the controller clock (s): the stamp may be at most
+            ``limits.max_goal_delay_s`` ahead of it; None: not checked.
+        start: the reference position the path will start from, at rest (m); None: X.
 
     Raises:
         TaskGoalError: naming the first field that is wrong, with its value.
@@ -141,6 +177,9 @@ def validate_goal(
         if array.shape != path.shape:
             raise TaskGoalError(name, f'{len(array)} vectors',
                                 f'needs none or one per waypoint ({path.shape[0]})')
+        if np.any(array[-1] != 0.0):
+            raise TaskGoalError(f'{name}[{len(array) - 1}]', array[-1].tolist(),
+                                'must be zero at the last waypoint (the path ends at rest)')
     normal = _finite('normal', goal.normal)
     if normal.shape != (3,) or float(np.linalg.norm(normal)) < 1e-9:
         raise TaskGoalError('normal', normal.tolist(), 'must be a non-zero 3-vector')
@@ -154,17 +193,59 @@ def validate_goal(
         raise TaskGoalError('force_n', force, f'must exceed the contact threshold '
                                               f'{contact_threshold_n} N (or be 0)')
     ramp = float(_finite('force_ramp_s', goal.force_ramp_s))
-    if force > 0.0 and ramp <= 0.0:
-        raise TaskGoalError('force_ramp_s', ramp, 'must be > 0 s when force_n > 0')
+    if force > 0.0 and ramp < limits.min_ramp_s:
+        raise TaskGoalError('force_ramp_s', ramp, f'must be at least safety.min_ramp_s = '
+                                                  f'{limits.min_ramp_s} s when force_n > 0')
     if goal.start_time_s is not None:
-        _finite('header.stamp', goal.start_time_s)
-    distance = np.linalg.norm(path - np.asarray(X, dtype=np.float64), axis=1)
+        stamp = float(_finite('header.stamp', goal.start_time_s))
+        if now_s is not None and stamp - now_s > limits.max_goal_delay_s:
+            raise TaskGoalError(
+                'header.stamp', f'{stamp:.3f} s',
+                f'is {stamp - now_s:.3f} s ahead of the controller clock ({now_s:.3f} s), '
+                f'more than safety.max_goal_delay_s = {limits.max_goal_delay_s} s')
+    X = np.asarray(X, dtype=np.float64)
+    distance = np.linalg.norm(path - X, axis=1)
     far = int(np.argmax(distance))
     if distance[far] > limits.max_path_distance_m:
         raise TaskGoalError(
             f'path[{far}]', np.round(path[far], 4).tolist(),
             f'is {distance[far]:.3f} m from the end effector, more than '
             f'safety.max_path_distance_m = {limits.max_path_distance_m} m')
+    _check_interpolated_path(goal, X, X if start is None else start, limits)
+
+
+def _check_interpolated_path(goal: ContactTaskGoal, X: FloatArray, start: npt.ArrayLike,
+                             limits: SafetyLimits) -> None:
+    """The path as it will run (from ``start`` at rest, user velocities included) within limits.
+
+    Speed, acceleration and distance from X are sampled 64 times per quintic segment; a
+    violation names the waypoint that ends the segment.
+    """
+    state = [*np.asarray(start, dtype=np.float64).tolist(), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    path = TaskPath.from_state(0.0, state, np.asarray(goal.times, dtype=np.float64),
+                               goal.path, goal.velocities, goal.accelerations)
+    positions, velocities, accelerations = path.sample()
+    shift = 0 if goal.times[0] > 0.0 else 1  # a segment prepended from the start ends at path[0]
+    checks = (
+        (np.linalg.norm(velocities, axis=2), limits.max_path_speed_m_s, 'm/s',
+         'reaches a speed of', 'safety.max_path_speed_m_s', 'time_from_start_s'),
+        (np.linalg.norm(accelerations, axis=2), limits.max_path_acceleration_m_s2, 'm/s²',
+         'reaches an acceleration of', 'safety.max_path_acceleration_m_s2',
+         'time_from_start_s'),
+        (np.linalg.norm(positions - X, axis=2), limits.max_path_distance_m, 'm',
+         'swings away from the end effector by', 'safety.max_path_distance_m', 'path'),
+    )
+    for values, limit, unit, what, name, field in checks:
+        segment, _ = np.unravel_index(int(np.argmax(values)), values.shape)
+        peak = float(values[segment].max())
+        if peak > limit:
+            k = int(segment) + shift
+            value = (float(goal.times[k]) if field == 'time_from_start_s'
+                     else np.round(goal.path[k], 4).tolist())
+            raise TaskGoalError(
+                f'{field}[{k}]', value,
+                f'the interpolated path (user velocities included) {what} {peak:.3g} {unit} '
+                f'on its way to path[{k}], more than {name} = {limit} {unit}')
 
 
 @dataclass(frozen=True)

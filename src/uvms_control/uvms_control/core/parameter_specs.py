@@ -269,6 +269,27 @@ SAFETY_PARAMETER_SPECS: list[ParameterSpec] = [
         'Speed limit of the streamed hold target (target_position topic) (m/s).', 1e-4, 10.0,
         False,
     ),
+    ParameterSpec(
+        'safety.max_goal_delay_s', 60.0,
+        "How far ahead of the controller clock a goal's header.stamp may be (s); a later "
+        'stamp is refused (INVALID_GOAL).', 0.0, 1e6, False,
+    ),
+    ParameterSpec(
+        'safety.max_path_speed_m_s', 0.5,
+        "Largest speed |X_d dot| of a goal's interpolated path, user velocities included "
+        '(m/s); also bounds the back-off, 1.875 retreat_m / retreat_time_s.', 1e-3, 100.0,
+        False,
+    ),
+    ParameterSpec(
+        'safety.max_path_acceleration_m_s2', 1.0,
+        "Largest acceleration |X_d ddot| of a goal's interpolated path (m/s^2).", 1e-3, 1000.0,
+        False,
+    ),
+    ParameterSpec(
+        'safety.min_ramp_s', 0.1,
+        "Shortest force ramp (a goal's force_ramp_s) and safety.retreat_time_s (s): 50 "
+        'control periods at 500 Hz.', 1e-3, 100.0, False,
+    ),
 ]
 
 ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [

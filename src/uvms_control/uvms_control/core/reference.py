@@ -223,6 +223,7 @@ class ForceSetpoint:
         self._f1 = 0.0
         self._x_contact: float | None = None
         self._started = False
+        self._final = False
         self._duration = self.ramp_time
 
     @property
@@ -243,11 +244,20 @@ class ForceSetpoint:
         """F_d at t (N) without advancing the set-point; 0 while idle."""
         return 0.0 if self.phase == ForcePhase.IDLE else self._ramp(t)[0]
 
-    def release(self, t: float, ramp_s: float | None = None) -> None:
+    @property
+    def final(self) -> bool:
+        """Released for good: the set-point never arms again (``release(final=True)``)."""
+        return self._final
+
+    def release(self, t: float, ramp_s: float | None = None, final: bool = False) -> None:
         """Ramp F_d from its value at t (s) down to zero over ``ramp_s`` (s; default ramp_time).
 
-        Ends a task's force (path done, cancel, safety limit); nothing happens while idle.
+        Ends a task's force (path done, cancel, safety limit); the ramp itself does nothing
+        while idle. ``final``: the set-point stays at zero after the ramp and never re-arms on
+        a contact (the end of a task, a retreat), where a plain release re-arms once the force
+        has fallen under half the threshold (the path leaving the surface and coming back).
         """
+        self._final = self._final or final
         if self.phase != ForcePhase.RAMP_UP:
             return
         f_now = self._ramp(t)[0]
@@ -273,7 +283,7 @@ class ForceSetpoint:
             x_d_dot_normal: reference velocity along n, n·Ẋ_d (m/s).
         """
         in_contact = f_normal >= self.contact_threshold
-        if self.phase == ForcePhase.IDLE:
+        if self.phase == ForcePhase.IDLE and not self._final:
             if not self._armed and f_normal < 0.5 * self.contact_threshold:
                 self._armed = True
             if self.start_immediately and not self._started:

@@ -75,9 +75,8 @@ class TaskPath:
         self.end_time: float = float(times[-1])
         self._breaks: list[float] = times.tolist()
         # coefficients[i][axis] = (c5, ..., c0) of segment i in powers of (t - t_i), highest first.
-        self._coefficients: list[list[list[float]]] = (
-            np.transpose(polynomial.c, (1, 2, 0)).tolist()
-        )
+        self._coefficient_array: FloatArray = np.transpose(polynomial.c, (1, 2, 0))
+        self._coefficients: list[list[list[float]]] = self._coefficient_array.tolist()
         self._end: list[float] = points[-1].tolist()
         self._start: list[float] = [*points[0].tolist(), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 
@@ -154,3 +153,27 @@ class TaskPath:
             out[3 + axis] = (((5.0 * c5 * x + 4.0 * c4) * x + 3.0 * c3) * x + 2.0 * c2) * x + c1
             out[6 + axis] = ((20.0 * c5 * x + 12.0 * c4) * x + 6.0 * c3) * x + 2.0 * c2
         return out
+
+    def sample(self, per_segment: int = 64) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """X_d, Ẋ_d, Ẍ_d at ``per_segment`` + 1 evenly spaced times of every segment.
+
+        Returns:
+            Three arrays (segments, per_segment + 1, 3) (m, m/s, m/s²): the checks of a goal's
+            interpolated path (speed, acceleration, excursion) read them.
+
+        Example:
+            >>> path = TaskPath(np.array([0.0, 2.0]), np.array([[0.0, 0, 0], [1.0, 0, 0]]))
+            >>> _, velocity, _ = path.sample(2)
+            >>> velocity[0, :, 0].tolist()  # the quintic's peak 1.875 / 2 s at the middle
+            [0.0, 0.9375, 0.0]
+        """
+        widths = np.diff(self.times)
+        x = widths[:, np.newaxis] * np.linspace(0.0, 1.0, per_segment + 1)  # (segments, k)
+        c = self._coefficient_array[:, :, :, np.newaxis]  # (segments, 3, 6, 1)
+        x = x[:, np.newaxis, :]  # (segments, 1, k)
+        c5, c4, c3, c2, c1, c0 = (c[:, :, i] for i in range(6))
+        position = ((((c5 * x + c4) * x + c3) * x + c2) * x + c1) * x + c0
+        velocity = (((5.0 * c5 * x + 4.0 * c4) * x + 3.0 * c3) * x + 2.0 * c2) * x + c1
+        acceleration = ((20.0 * c5 * x + 12.0 * c4) * x + 6.0 * c3) * x + 2.0 * c2
+        return (np.transpose(position, (0, 2, 1)), np.transpose(velocity, (0, 2, 1)),
+                np.transpose(acceleration, (0, 2, 1)))

@@ -90,33 +90,74 @@ class TaskReference:
             raise RuntimeError('the reference holds no point yet (no step since activation)')
         return [*self._hold, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 
+    @property
+    def ready(self) -> bool:
+        """The reference holds a point or follows a path (a task may start from it)."""
+        return self.path is not None or self._hold is not None
+
     def start(self, t: float, goal: ContactTaskGoal) -> None:
-        """Follow a goal's path from t (s), from the running reference, with its force."""
+        """Follow a goal's path from t (s), from the running reference, with its force.
+
+        A goal without force takes over a set-point still ramping down (a preempted goal's)
+        and lets it end; a goal with force starts its own.
+        """
         self.path = TaskPath.from_state(
             t, self.state(t), t + goal.times, goal.path, goal.velocities, goal.accelerations
         )
         self._hold = None
+        if goal.force_n <= 0.0:
+            if self.force is not None and (self.force.phase != ForcePhase.RELEASE):
+                self.force = None
+            return
         # A task that takes over from a pressing one ramps from the running F_d, not from 0.
         running = self.force.desired(t) if self.force is not None else 0.0
-        self.force = (
-            ForceSetpoint(goal.force_n, goal.force_ramp_s, self.contact_threshold_n,
-                          start_immediately=self.ramp_from_start, start_force=running)
-            if goal.force_n > 0.0 else None
-        )
+        self.force = ForceSetpoint(goal.force_n, goal.force_ramp_s, self.contact_threshold_n,
+                                   start_immediately=self.ramp_from_start, start_force=running)
 
-    def release(self, t: float, ramp_s: float | None = None) -> None:
-        """Ramp F_d down to zero from t (s), over ``ramp_s`` or the task's ramp time."""
+    def release(self, t: float, ramp_s: float | None = None, final: bool = False) -> None:
+        """Ramp F_d down to zero from t (s), over ``ramp_s`` or the task's ramp time.
+
+        ``final``: the set-point never re-arms afterwards (``ForceSetpoint.release``).
+        """
         if self.force is not None:
-            self.force.release(t, ramp_s)
+            self.force.release(t, ramp_s, final)
 
-    def retreat(self, t: float, X: Sequence[float], normal: FloatArray, distance_m: float,
+    def hold_releasing(self, t: float, position: Sequence[float], ramp_s: float) -> None:
+        """Hold a point (m) at rest from t (s) while F_d ramps down over ramp_s (s), for good."""
+        self.path = None
+        self._hold = list(position)
+        self.release(t, ramp_s, final=True)
+
+    def hold_reached(self, t: float) -> None:
+        """Hold X_d of t (s) at rest instead of the path (the path has ended), keeping F_d."""
+        if self.path is not None:
+            self._hold = self.path.evaluate_floats(t)[:3]
+            self.path = None
+
+    def drop_idle_force(self) -> None:
+        """Forget a set-point released for good once its ramp-down is over."""
+        if self.force is not None and self.force.final and self.force.phase == ForcePhase.IDLE:
+            self.force = None
+
+    def shift_hold(self, offset: Sequence[float]) -> None:
+        """Move the hold point by offset (m), at rest (a back-off step)."""
+        if self._hold is not None:
+            self._hold = [h + o for h, o in zip(self._hold, offset, strict=True)]
+
+    def retreat(self, t: float, X: Sequence[float], direction: FloatArray, distance_m: float,
                 duration_s: float) -> None:
-        """Back off to X - distance n from the running reference over duration (s), no force."""
-        target = np.asarray(X, dtype=np.float64) - distance_m * normal
-        self.path = TaskPath.from_state(t, self.state(t), np.array([t + duration_s]),
+        """Back off from X (m, measured) at rest to X - distance direction over duration (s).
+
+        F_d ramps to zero over the same time and never re-arms, even if the back-off meets
+        a contact: the retreat starts where the end effector is, not where the reference
+        was heading, so it neither continues the reference's motion nor jumps back to it.
+        """
+        start = [*X, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        target = np.asarray(X, dtype=np.float64) - distance_m * direction
+        self.path = TaskPath.from_state(t, start, np.array([t + duration_s]),
                                         target[np.newaxis, :])
         self._hold = None
-        self.release(t, duration_s)
+        self.release(t, duration_s, final=True)
 
     def force_sample(self, t: float, f_normal: float, x_normal: float, x_d_normal: float,
                      x_d_dot_normal: float) -> ForceSetpointSample:

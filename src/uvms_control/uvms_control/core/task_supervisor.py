@@ -1,21 +1,23 @@
-"""The life of contact tasks around the control step: start, limits, release, results.
+"""The life of contact tasks around the control step: one state machine with the limits always on.
 
-One goal runs at a time. ``submit`` checks a goal (``validate_goal``) and lets it replace
-the running one (which ends PREEMPTED); the goal waits for its start time, follows its path,
-and when the path ends with a force still applied, F_d ramps down before the result. A
-cancel, a force beyond ``safety.max_contact_force_n``, a saturated wrist sensor or a
-tracking error beyond ``safety.max_position_error_m`` end the task the same way: F_d ramps
-to zero while X_d backs off ``safety.retreat_m`` along -n, and the result comes when that
-retreat is done. Everything happens inside ``step``, on the control loop's own clock, so a
-lockstep run stays deterministic.
+States (``SupervisorState``): HOLD (no goal: the hold point at rest), WAITING (a goal waits for
+its stamp), FOLLOWING (its path), RELEASING (F_d ramps down at the path's end, then X_d backs
+off until the contact is gone), RETREATING (a cancel or a limit: back off along the measured
+force from the measured position) and SAFE_HOLD (a limit breached during a retreat: F_d = 0,
+X_d = X at rest, following X while in contact, until ``reset``). The limits
+(``safety_checks.check_limits``: |F_e|, sensor saturation, |X_d - X|) are checked at every
+step in every state. A breach outside a retreat starts a protected retreat that no goal can
+preempt: a goal arriving then is refused (INVALID_GOAL, the message names the retreat), and
+the running goal's result (with the breach's code) comes when the retreat is done.
+Everything happens inside ``step``, on the control loop's own clock, so a lockstep run stays
+deterministic. The diagram: docs/interfaces.md, "Safety".
 """
 
 from __future__ import annotations
 
-import enum
 import math
 from collections.abc import Hashable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
@@ -26,63 +28,36 @@ from uvms_control.core.contact_task import (
     TaskCode,
     TaskFigures,
     TaskGoalError,
-    TaskResult,
     validate_goal,
+)
+from uvms_control.core.safety_checks import (
+    MAX_MOTION_STEP_S,
+    RETREAT_FORCE_MARGIN,
+    SATURATION_SHARE,
+    Breach,
+    Release,
+    check_limits,
+    force_direction,
+)
+from uvms_control.core.task_states import (
+    TASK_STATE,
+    RunningTask,
+    SupervisorState,
+    TaskEvent,
+    TaskProgress,
+    TaskState,
+    empty_result,
 )
 from uvms_control.core.unified_controller import ControllerResult, UnifiedForceController
 
+__all__ = ['SATURATION_SHARE', 'SupervisorState', 'TaskEvent', 'TaskProgress', 'TaskState',
+           'TaskSupervisor', 'with_limits']
+
 FloatArray = npt.NDArray[np.float64]
-
-#: A wrist-sensor axis at this share of its range counts as saturated.
-SATURATION_SHARE = 0.999
-
-
-class TaskState(enum.IntEnum):
-    """Where the running task is (values of ContactTask.Feedback.STATE_*)."""
-
-    WAITING = 0
-    FOLLOWING = 1
-    RELEASING = 2
-    RETREATING = 3
-
-
-@dataclass(frozen=True)
-class TaskEvent:
-    """A task that ended, with its result."""
-
-    goal_id: Hashable
-    result: TaskResult
-
-
-@dataclass(frozen=True)
-class TaskProgress:
-    """The running task at the last step (the action's feedback)."""
-
-    goal_id: Hashable
-    state: TaskState
-    progress: float
-    force_n: float
-    force_desired_n: float
-
-
-@dataclass
-class _Running:
-    goal_id: Hashable
-    goal: ContactTaskGoal
-    normal: FloatArray
-    figures: TaskFigures
-    state: TaskState = TaskState.WAITING
-    start_s: float | None = None
-    end_code: TaskCode = TaskCode.SUCCEEDED
-    end_message: str = ''
-
-
-def _empty_result(code: TaskCode, message: str) -> TaskResult:
-    return TaskResult(code, message, 0.0, 0.0, math.nan, math.nan)
 
 
 class TaskSupervisor:
-    """Runs contact tasks on a controller, one at a time, checking the safety limits.
+    """Runs contact tasks on a controller, one at a time, with the safety limits always on.
 
     Args:
         controller: the unified force controller.
@@ -92,13 +67,26 @@ class TaskSupervisor:
     def __init__(self, controller: UnifiedForceController, limits: SafetyLimits) -> None:
         self.controller = controller
         self.limits = limits
-        self._running: _Running | None = None
+        self.state = SupervisorState.HOLD
+        #: The breach of the last step, or the one that latched SAFE_HOLD (ERROR on /diagnostics).
+        self.breach: str | None = None
+        #: Why the last ``set_target`` was refused.
+        self.refusal: str | None = None
+        self._running: RunningTask | None = None
+        self._queued: list[tuple[Hashable, ContactTaskGoal]] = []
+        self._pending: list[TaskEvent] = []
         self._cancel_requested = False
         self._last: ControllerResult | None = None
         self._t_last: float | None = None
-        self.breach: str | None = None
         self._target: list[float] | None = None
-        self._queued: list[tuple[Hashable, ContactTaskGoal]] = []
+        self._release: Release | None = None
+        self._retreat_end_s = 0.0
+        self._retreat_force_cap_n = math.inf
+        self._retreat_reason = ''
+        self._safe_hold_reason: str | None = None
+        self._capturing = True  # the hold point is captured at the next step
+
+    # ------------------------------------------------------------------------ queries
 
     @property
     def goal_id(self) -> Hashable | None:
@@ -107,71 +95,13 @@ class TaskSupervisor:
 
     @property
     def last_result(self) -> ControllerResult | None:
-        """The last controller step's output."""
+        """The last controller step's output (None before the first step after a reset)."""
         return self._last
 
-    def submit(self, goal_id: Hashable, goal: ContactTaskGoal, now_s: float) -> list[TaskEvent]:
-        """Take a new goal at time now_s (s); return the tasks that ended by it.
-
-        An invalid goal ends at once (INVALID_GOAL, the field named) and leaves the running
-        task alone; a valid one preempts it (PREEMPTED) and starts at its start time, or at
-        the next step if that has passed. A goal that arrives before the first step (no
-        state yet) is checked at that step.
-        """
-        if self._last is None:
-            self._queued.append((goal_id, goal))
-            return []
-        try:
-            validate_goal(goal, self._last.X, self.limits,
-                          self.controller.task.contact_threshold_n)
-        except TaskGoalError as error:
-            return [TaskEvent(goal_id, _empty_result(TaskCode.INVALID_GOAL, str(error)))]
-        events = self._end_running(TaskCode.PREEMPTED, 'preempted by a new goal')
-        normal = np.asarray(goal.normal, dtype=np.float64)
-        self._running = _Running(goal_id, goal, normal / float(np.linalg.norm(normal)),
-                                 TaskFigures(goal.force_n))
-        self._running.start_s = goal.start_time_s
-        self._cancel_requested = False
-        self._target = None
-        return events
-
-    def set_target(self, target: list[float]) -> bool:
-        """Stream a new hold target (m, map_ned); refused (False) while a task runs.
-
-        The hold point moves toward it at most ``limits.max_target_speed_m_s``.
-        """
-        if self._running is not None:
-            return False
-        self._target = list(target)
-        return True
-
-    def cancel(self, goal_id: Hashable) -> bool:
-        """Ask the running task to end CANCELED (F_d down, back off); False if not running."""
-        if self._running is None or self._running.goal_id != goal_id:
-            return False
-        self._cancel_requested = True
-        return True
-
-    def abort_all(self, code: TaskCode, message: str) -> list[TaskEvent]:
-        """End the running task at once (deactivation: INACTIVE) and hold where X_d is."""
-        events = self._end_running(code, message)
-        if self._t_last is not None and self._last is not None:
-            self.controller.task.hold(self._last.X_d.tolist())
-        return events
-
-    def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
-             f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
-        """One control step at t (s) from the sensors (``step_from_sensors``) and its events."""
-        self._before_step(t)
-        result = self.controller.step_from_sensors(t, q, w, f_sensor)
-        self._last = result
-        dt = 0.0 if self._t_last is None else max(t - self._t_last, 0.0)
-        self._t_last = t
-        events = self._after_step(t, dt, result, np.asarray(f_sensor, dtype=np.float64))
-        queued, self._queued = self._queued, []
-        for goal_id, goal in queued:
-            events += self.submit(goal_id, goal, t)
-        return result, events
+    @property
+    def safe_hold(self) -> bool:
+        """In SAFE_HOLD (latched until ``reset``)."""
+        return self.state == SupervisorState.SAFE_HOLD
 
     def progress(self) -> TaskProgress | None:
         """The running task's feedback, or None."""
@@ -180,106 +110,316 @@ class TaskSupervisor:
             return None
         path = self.controller.task.path
         share = (path.progress(self._t_last or 0.0)
-                 if path is not None and running.state != TaskState.WAITING else 0.0)
-        return TaskProgress(running.goal_id, running.state, share,
+                 if path is not None and self.state == SupervisorState.FOLLOWING
+                 else 1.0 if self.state == SupervisorState.RELEASING else 0.0)
+        return TaskProgress(running.goal_id, TASK_STATE[self.state], share,
                             float(running.normal @ last.F_e), float(running.normal @ last.F_d))
 
-    def _before_step(self, t: float) -> None:
-        running = self._running
-        if running is None:
-            if self._target is not None and self._t_last is not None:
-                self.controller.task.move_hold_toward(
-                    self._target, self.limits.max_target_speed_m_s * max(t - self._t_last, 0.0))
-            return
+    # ------------------------------------------------------------------------ commands
+
+    def submit(self, goal_id: Hashable, goal: ContactTaskGoal, now_s: float) -> list[TaskEvent]:
+        """Take a new goal at time now_s (s); return the tasks that ended by it.
+
+        An invalid goal ends at once (INVALID_GOAL, the field named) and leaves the running
+        task alone; so does any goal during a retreat or the safe hold (the message says
+        which). A valid one preempts the running task (PREEMPTED): its force ramps down over
+        ``retreat_time_s`` while X_d holds the measured position at rest and then backs off
+        until the contact is gone; the new goal starts from there at its stamp. A goal that
+        arrives before the first step after activation or a stale-input abort (no state yet)
+        is checked at that step.
+        """
+        if self._last is None:
+            self._queued.append((goal_id, goal))
+            return []
+        if self.state == SupervisorState.RETREATING:
+            return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
+                f'refused: the arm is retreating ({self._retreat_reason}) until '
+                f't = {self._retreat_end_s:.3f} s; no goal preempts a retreat, send it again '
+                'after it')))]
+        if self.state == SupervisorState.SAFE_HOLD:
+            return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
+                f'refused: the controller is in safe hold ({self._safe_hold_reason}); '
+                'deactivate and activate it to clear the safe hold')))]
+        last = self._last
         task = self.controller.task
-        if running.state == TaskState.WAITING and (running.start_s is None
-                                                   or t >= running.start_s):
-            self.controller.start_task(t, running.goal)
-            running.start_s = t
-            running.state = TaskState.FOLLOWING
-        if self._cancel_requested and running.state != TaskState.RETREATING:
+        holding = self.state in (SupervisorState.HOLD, SupervisorState.WAITING) and task.ready
+        start = task.state(now_s)[:3] if holding else last.X  # where the new path will start
+        try:
+            validate_goal(goal, last.X, self.limits, task.contact_threshold_n,
+                          now_s=now_s, start=np.asarray(start))
+        except TaskGoalError as error:
+            return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, str(error)))]
+        events: list[TaskEvent] = []
+        if self._running is not None:
+            if self.state in (SupervisorState.FOLLOWING, SupervisorState.RELEASING):
+                self._begin_release(now_s, self._running.normal, hold_measured=True)
+            events = self._end_running(TaskCode.PREEMPTED, 'preempted by a new goal')
+        normal = np.asarray(goal.normal, dtype=np.float64)
+        self._running = RunningTask(goal_id, goal, normal / float(np.linalg.norm(normal)),
+                                    TaskFigures(goal.force_n), goal.start_time_s)
+        self.state = SupervisorState.WAITING
+        self._cancel_requested = False
+        self._target = None
+        return events
+
+    def set_target(self, target: list[float]) -> bool:
+        """Stream a new hold target (m, map_ned); False (``refusal`` says why) unless holding.
+
+        Refused while a goal runs, during a retreat or the safe hold, before the first step,
+        and when farther than ``limits.max_path_distance_m`` from the end effector. The hold
+        point moves toward it at most ``limits.max_target_speed_m_s``.
+        """
+        if self.state != SupervisorState.HOLD or self._last is None:
+            self.refusal = (f'target_position refused in state {self.state.name}'
+                            if self._last is not None else
+                            'target_position refused: no state since activation')
+            return False
+        distance = math.dist(target, self._last.X.tolist())
+        if not math.isfinite(distance) or distance > self.limits.max_path_distance_m:
+            self.refusal = (f'target_position {[round(v, 4) for v in target]} is '
+                            f'{distance:.3f} m from the end effector, more than '
+                            f'safety.max_path_distance_m = {self.limits.max_path_distance_m} m')
+            return False
+        self.refusal = None
+        self._target = list(target)
+        return True
+
+    def cancel(self, goal_id: Hashable) -> bool:
+        """Ask a goal to end CANCELED; False if it is neither running nor queued.
+
+        A waiting or queued goal ends at the next step; a moving or pressing one releases its
+        force and backs off first (``retreat_time_s``); a retreating one ends with the
+        retreat's own code.
+        """
+        for k, (queued_id, _) in enumerate(self._queued):
+            if queued_id == goal_id:
+                del self._queued[k]
+                self._pending.append(TaskEvent(goal_id, empty_result(TaskCode.CANCELED,
+                                                                      'canceled')))
+                return True
+        if self._running is None or self._running.goal_id != goal_id:
+            return False
+        self._cancel_requested = True
+        return True
+
+    def abort_all(self, code: TaskCode, message: str) -> list[TaskEvent]:
+        """End every goal at once (deactivation: INACTIVE; stale inputs: INPUTS_STALE).
+
+        The supervisor then holds, with no force, the position measured at the next step
+        (a SAFE_HOLD stays latched); goals arriving until then wait for that step.
+        """
+        events = self._take_pending() + self._end_running(code, message)
+        events += [TaskEvent(goal_id, empty_result(code, message))
+                   for goal_id, _ in self._queued]
+        self._queued = []
+        self.recapture_hold()
+        self._last = None
+        return events
+
+    def recapture_hold(self) -> None:
+        """Hold the position measured at the next step, at rest, with no force (on resume).
+
+        Meant after ``abort_all``; a goal still running ends INPUTS_STALE at the next step. If
+        that step finds a contact, the hold point then backs off as a release does, until the
+        contact is let go (a hold captured in contact would otherwise press on through the
+        impedance law).
+        """
+        if self._running is not None:
+            self._pending += self._end_running(TaskCode.INPUTS_STALE,
+                                               'the hold point was re-captured')
+        self.controller.task.hold()
+        self._capturing = True
+        self._release = None
+        self._target = None
+        self._t_last = None
+        if self.state != SupervisorState.SAFE_HOLD:
+            self.state = SupervisorState.HOLD
+
+    def reset(self) -> list[TaskEvent]:
+        """Start afresh (activation): every goal ends INACTIVE, the safe hold is cleared.
+
+        The hold point is re-captured at the next step; goals arriving before it are queued.
+        """
+        events = self.abort_all(TaskCode.INACTIVE, 'the controller was reset (activated)')
+        self.state = SupervisorState.HOLD
+        self.breach = self._safe_hold_reason = None
+        self.controller.task.hold()
+        return events
+
+    # ------------------------------------------------------------------------ the step
+
+    def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
+             f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
+        """One control step at t (s) from the sensors (``step_from_sensors``) and its events."""
+        dt = 0.0 if self._t_last is None else min(max(t - self._t_last, 0.0), MAX_MOTION_STEP_S)
+        events = self._take_pending() + self._before_step(t, dt)
+        result = self.controller.step_from_sensors(t, q, w, f_sensor)
+        self._last = result
+        self._t_last = t
+        events += self._after_step(t, dt, result, np.asarray(f_sensor, dtype=np.float64))
+        queued, self._queued = self._queued, []
+        for goal_id, goal in queued:
+            events += self.submit(goal_id, goal, t)
+        return result, events
+
+    def _before_step(self, t: float, dt: float) -> list[TaskEvent]:
+        """Transitions that change this step's reference: starts, cancels, path ends."""
+        task, running, state = self.controller.task, self._running, self.state
+        if state == SupervisorState.HOLD and self._target is not None and self._release is None:
+            task.move_hold_toward(self._target, self.limits.max_target_speed_m_s * dt)
+        if self._release is not None and self._last is not None:
+            self._release.step(t, self._last.F_e, dt)
+        if running is None:
+            return []
+        if self._cancel_requested and state != SupervisorState.RETREATING:
             self._cancel_requested = False
-            if running.state == TaskState.WAITING:
-                running.end_code, running.end_message = TaskCode.CANCELED, 'canceled'
-                running.state = TaskState.RETREATING  # nothing moved: ends at this step
-                return
+            if state == SupervisorState.WAITING:
+                self.state = SupervisorState.HOLD
+                return self._end_running(TaskCode.CANCELED, 'canceled before it started')
             self._retreat(t, TaskCode.CANCELED, 'canceled: force released, backing off')
-        if running.state == TaskState.FOLLOWING and task.path is not None \
+            return []
+        if state == SupervisorState.WAITING and (running.start_s is None or t >= running.start_s) \
+                and task.ready:
+            return self._start(t, running)
+        if state == SupervisorState.FOLLOWING and task.path is not None \
                 and t >= task.path.end_time:
-            task.release(t)  # F_d down over the task's ramp (nothing to do without force)
-            running.state = TaskState.RELEASING
+            self.state = SupervisorState.RELEASING
+            self._begin_release(t, running.normal, hold_measured=False,
+                                ramp_s=running.goal.force_ramp_s)
+        return []
+
+    def _start(self, t: float, running: RunningTask) -> list[TaskEvent]:
+        """Start a waiting goal from the reference at rest, checked again as it will run."""
+        assert self._last is not None
+        try:
+            validate_goal(replace(running.goal, start_time_s=None), self._last.X, self.limits,
+                          self.controller.task.contact_threshold_n,
+                          start=np.asarray(self.controller.task.state(t)[:3]))
+        except TaskGoalError as error:
+            self.state = SupervisorState.HOLD
+            return self._end_running(TaskCode.INVALID_GOAL, f'at its start: {error}')
+        self._release = None
+        self.controller.start_task(t, running.goal)
+        running.start_s = t
+        self.state = SupervisorState.FOLLOWING
+        return []
+
+    def _begin_release(self, t: float, normal: FloatArray, hold_measured: bool,
+                       ramp_s: float | None = None) -> None:
+        """F_d down (for good), then back off from the contact (``Release``)."""
+        assert self._last is not None
+        task = self.controller.task
+        if hold_measured:
+            task.hold_releasing(t, self._last.X.tolist(), self.limits.retreat_time_s)
+        else:
+            task.release(t, ramp_s, final=True)
+        direction = force_direction(self._last.F_e, normal, task.contact_threshold_n)
+        speed = self.limits.retreat_m / self.limits.retreat_time_s
+        # How far X_d is held inside the surface beyond X: the back-off may need it too.
+        penetration = (0.0 if hold_measured else
+                       max(float(direction @ (self._last.X_d - self._last.X)), 0.0))
+        self._release = Release(task, direction, speed, self.limits.retreat_m + penetration,
+                                task.contact_threshold_n)
 
     def _retreat(self, t: float, code: TaskCode, message: str) -> None:
-        running = self._running
-        assert running is not None and self._last is not None
-        running.end_code, running.end_message = code, message
-        running.state = TaskState.RETREATING
-        self.controller.task.retreat(t, self._last.X.tolist(), running.normal,
-                                     self.limits.retreat_m, self.limits.retreat_time_s)
+        """Back off along the measured force (or -n) from the measured position, protected."""
+        assert self._last is not None
+        last, limits, task = self._last, self.limits, self.controller.task
+        normal = self._running.normal if self._running is not None else self.controller.n
+        if self._running is not None:
+            self._running.end_code, self._running.end_message = code, message
+        self.state = SupervisorState.RETREATING
+        self._release = None
+        self._target = None
+        self._retreat_reason = message
+        self._retreat_end_s = t + limits.retreat_time_s
+        magnitude = float(np.linalg.norm(last.F_e))
+        self._retreat_force_cap_n = RETREAT_FORCE_MARGIN * max(limits.max_contact_force_n,
+                                                               magnitude)
+        direction = force_direction(last.F_e, normal, task.contact_threshold_n)
+        task.retreat(t, last.X.tolist(), direction, limits.retreat_m, limits.retreat_time_s)
 
-    def _check_limits(self, result: ControllerResult, f_sensor: FloatArray,
-                      f_normal: float) -> tuple[TaskCode, str] | None:
-        """The first limit breached at this step, with its message; None within all.
-
-        Plain floats: this runs at every control step.
-        """
-        limits = self.limits
-        if f_normal > limits.max_contact_force_n:
-            return TaskCode.FORCE_LIMIT, (f'contact force {f_normal:.1f} N exceeds '
-                                          f'safety.max_contact_force_n = '
-                                          f'{limits.max_contact_force_n} N')
-        reading = max(abs(value) for value in f_sensor.tolist())
-        if reading >= SATURATION_SHARE * limits.sensor_range_n:
-            return TaskCode.FORCE_LIMIT, (f'wrist sensor saturated: {reading:.1f} N of its '
-                                          f'{limits.sensor_range_n} N range')
-        error = math.dist(result.X_d.tolist(), result.X.tolist())
-        if error > limits.max_position_error_m:
-            return TaskCode.TRACKING_LIMIT, (f'position error |X_d - X| = {error:.3f} m '
-                                             f'exceeds safety.max_position_error_m = '
-                                             f'{limits.max_position_error_m} m')
-        return None
+    def _enter_safe_hold(self, code: TaskCode, reason: str) -> list[TaskEvent]:
+        """F_d = 0 at once and X_d = X at rest, latched until ``reset``."""
+        assert self._last is not None
+        self.state = SupervisorState.SAFE_HOLD
+        self._safe_hold_reason = reason
+        self.breach = f'safe hold: {reason}'
+        self._release = None
+        self.controller.task.hold(self._last.X.tolist())
+        return self._end_running(code, f'safe hold: {reason}')
 
     def _after_step(self, t: float, dt: float, result: ControllerResult,
                     f_sensor: FloatArray) -> list[TaskEvent]:
-        running = self._running
+        """Limits, figures and the ends of releases and retreats, after the step."""
+        running, task, state = self._running, self.controller.task, self.state
         normal = running.normal if running is not None else self.controller.n
         f_normal = float(normal @ result.F_e)
-        breach = self._check_limits(result, f_sensor, f_normal)
-        self.breach = None if breach is None else breach[1]
-        if running is None:
+        breach = check_limits(result, f_sensor, f_normal, self.limits)
+        if running is not None:
+            running.figures.update(t, dt, f_normal, f_normal >= task.contact_threshold_n,
+                                   task.force_active and self._at_setpoint(result, running))
+        if state == SupervisorState.SAFE_HOLD:
+            # In contact or far from X_d the hold follows X: the arm yields to the surface (no
+            # pressing on through the impedance law) and never pulls back toward a stale point.
+            if (breach is not None and breach.code == TaskCode.TRACKING_LIMIT) \
+                    or float(np.linalg.norm(result.F_e)) >= task.contact_threshold_n:
+                task.hold(result.X.tolist())
             return []
-        task = self.controller.task
-        running.figures.update(t, dt, f_normal, f_normal >= task.contact_threshold_n,
-                               task.force_active and self._at_setpoint(result, running))
-        if breach is not None and running.state in (TaskState.FOLLOWING, TaskState.RELEASING):
-            self._retreat(t, *breach)
+        self.breach = None if breach is None else breach.message
+        if self._capturing:
+            self._capturing = False
+            # Captured in contact (activation, resume after stale inputs): let the contact go.
+            if breach is None and state == SupervisorState.HOLD and self._release is None \
+                    and float(np.linalg.norm(result.F_e)) >= task.contact_threshold_n:
+                self._begin_release(t, self.controller.n, hold_measured=True)
+        if state == SupervisorState.RETREATING:
+            return self._check_retreat(t, result, breach)
+        if breach is not None:
+            self._retreat(t, breach.code, breach.message)
             return []
-        done = (running.state in (TaskState.RELEASING, TaskState.RETREATING)
-                and task.force_idle
-                and (task.path is None or t >= task.path.end_time))
+        release = self._release
+        if release is not None and release.done(result.F_e):
+            self._release = None
+            task.drop_idle_force()
+            if state == SupervisorState.RELEASING:
+                return self._finish_goal(release.released(result.F_e))
+        return []
+
+    def _check_retreat(self, t: float, result: ControllerResult,
+                       breach: Breach | None) -> list[TaskEvent]:
+        """A breach during a retreat goes to SAFE_HOLD; a retreat done ends its goal."""
+        magnitude = float(np.linalg.norm(result.F_e))
+        done = t >= self._retreat_end_s and self.controller.task.force_idle
+        if breach is not None and (breach.code == TaskCode.TRACKING_LIMIT
+                                   or magnitude > self._retreat_force_cap_n or done):
+            return self._enter_safe_hold(breach.code, f'{breach.message}, during a retreat')
         if not done:
             return []
-        code, message = running.end_code, running.end_message
-        if code == TaskCode.SUCCEEDED:
-            if running.goal.require_contact and running.figures.first_contact_s is None:
-                code, message = TaskCode.NO_CONTACT, 'the path ended without contact'
-            else:
-                message = 'path done'
-        return self._finish(code, message)
+        self.controller.task.hold(result.X_d.tolist())
+        self.state = SupervisorState.HOLD
+        if self._running is None:
+            return []
+        return self._end_running(self._running.end_code, self._running.end_message)
 
-    def _at_setpoint(self, result: ControllerResult, running: _Running) -> bool:
+    def _finish_goal(self, released: bool) -> list[TaskEvent]:
+        """The end of a released goal: SUCCEEDED or NO_CONTACT, then hold X_d."""
+        running = self._running
+        assert running is not None and self._last is not None
+        self.controller.task.hold(self._last.X_d.tolist())
+        self.state = SupervisorState.HOLD
+        if running.goal.require_contact and running.figures.first_contact_s is None:
+            return self._end_running(TaskCode.NO_CONTACT, 'the path ended without contact')
+        if released:
+            return self._end_running(TaskCode.SUCCEEDED, 'path done, contact released')
+        return self._end_running(TaskCode.SUCCEEDED, (
+            f'path done; |F_e| = {float(np.linalg.norm(self._last.F_e)):.1f} N left after '
+            'backing off the whole release distance'))
+
+    def _at_setpoint(self, result: ControllerResult, running: RunningTask) -> bool:
         """F_d has reached force_n (the ramp is over)."""
         return abs(float(running.normal @ result.F_d) - running.goal.force_n) \
             <= 1e-9 * running.goal.force_n
-
-    def _finish(self, code: TaskCode, message: str) -> list[TaskEvent]:
-        running = self._running
-        assert running is not None
-        self._running = None
-        self._cancel_requested = False
-        if self._last is not None:
-            self.controller.task.hold(self._last.X_d.tolist())
-        return [TaskEvent(running.goal_id, running.figures.result(code, message))]
 
     def _end_running(self, code: TaskCode, message: str) -> list[TaskEvent]:
         if self._running is None:
@@ -288,6 +428,10 @@ class TaskSupervisor:
         self._running = None
         self._cancel_requested = False
         return [TaskEvent(running.goal_id, running.figures.result(code, message))]
+
+    def _take_pending(self) -> list[TaskEvent]:
+        events, self._pending = self._pending, []
+        return events
 
 
 def with_limits(limits: SafetyLimits, **changes: float) -> SafetyLimits:

@@ -1,0 +1,70 @@
+"""Every shipped task file and scenario mission passes its robot's goal checks and path limits."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, validate_goal
+from uvms_tasks.task_file import TaskSpec, load_task_file, parse_mission
+
+from uvms_description.robots import robot_parameters
+
+CONFIG = Path(__file__).resolve().parents[3] / 'config'
+SCENARIOS = sorted((CONFIG / 'scenarios').glob('*.yaml'))
+TASK_FILES = sorted((CONFIG / 'tasks').glob('*.yaml'))
+IDLE_WALL = CONFIG / 'scenarios' / 'idle_wall.yaml'  # the graph the task files are sent to
+
+
+def robot_limits(robot: str) -> tuple[SafetyLimits, float]:
+    """The robot folder's safety limits and contact threshold (N)."""
+    values = {key: item.value for key, item in robot_parameters(robot, 'controller').items()}
+    safety = {key.removeprefix('safety.'): float(value) for key, value in values.items()
+              if key.startswith('safety.')}
+    limits = SafetyLimits(**safety)  # as the controller node builds them
+    return limits, float(values['force.contact_threshold_n'])
+
+
+def as_goal(task: TaskSpec, start: np.ndarray) -> ContactTaskGoal:
+    """The goal the controller gets from a task file's task (a half circle expanded at start)."""
+    task = task.expanded(start.tolist())
+    return ContactTaskGoal(path=task.path, times=task.time_from_start_s,
+                           velocities=task.velocity, accelerations=task.acceleration,
+                           normal=task.normal, force_n=task.force_n,
+                           force_ramp_s=task.force_ramp_s, require_contact=task.require_contact,
+                           start_time_s=task.start_time_s)
+
+
+def scenario(path: Path) -> dict[str, object]:
+    """A scenario file's mapping."""
+    data = yaml.safe_load(path.read_text())
+    assert isinstance(data, dict)
+    return data
+
+
+def start_of(data: dict[str, object]) -> np.ndarray:
+    """The end effector's initial position of a scenario (m, map_ned)."""
+    initial = data['simulator']['initial']  # type: ignore[index]
+    return np.array(initial['ee_position'], dtype=np.float64)
+
+
+@pytest.mark.parametrize('path', [p for p in SCENARIOS if 'mission' in scenario(p)],
+                         ids=lambda p: p.stem)
+def test_scenario_missions_pass_the_goal_checks(path: Path) -> None:
+    """Each mission task is accepted at the first step, from the scenario's start."""
+    data = scenario(path)
+    limits, threshold = robot_limits(str(data.get('robot', 'paper_uvms')))
+    start = start_of(data)
+    for task in parse_mission(data['mission'], str(path)):
+        validate_goal(as_goal(task, start), start, limits, threshold, now_s=0.0)
+
+
+@pytest.mark.parametrize('path', TASK_FILES, ids=lambda p: p.stem)
+def test_task_files_pass_the_goal_checks_from_idle_wall(path: Path) -> None:
+    """Each task file is accepted by the paper robot held at idle_wall's point A."""
+    limits, threshold = robot_limits('paper_uvms')
+    start = start_of(scenario(IDLE_WALL))
+    for task in load_task_file(path):
+        validate_goal(as_goal(task, start), start, limits, threshold, now_s=0.0)
