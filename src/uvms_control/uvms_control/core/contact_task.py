@@ -33,6 +33,7 @@ class TaskCode(enum.IntEnum):
     PREEMPTED = 5
     CANCELED = 6
     INACTIVE = 7
+    INPUTS_STALE = 8
 
 
 class TaskGoalError(ValueError):

@@ -159,6 +159,21 @@ class TaskSupervisor:
             self.controller.task.hold(self._last.X_d.tolist())
         return events
 
+    def reset(self) -> list[TaskEvent]:
+        """End queued and running goals INACTIVE, clear the target; capture the hold anew."""
+        events = self._end_running(TaskCode.INACTIVE, 'the controller was reset')
+        events += [TaskEvent(goal_id, _empty_result(TaskCode.INACTIVE, 'the controller was reset'))
+                   for goal_id, _ in self._queued]
+        self._queued, self._target = [], None
+        self.controller.reset()
+        self.recapture_hold()
+        return events
+
+    def recapture_hold(self) -> None:
+        """Hold the measured position from the next step (goals wait for that step)."""
+        self.controller.task.hold()
+        self._last = self._t_last = None
+
     def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
              f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
         """One control step at t (s) from the sensors (``step_from_sensors``) and its events."""
