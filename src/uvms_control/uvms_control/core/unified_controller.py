@@ -47,6 +47,7 @@ import numpy.typing as npt
 from uvms_control.core.contact_task import ContactTaskGoal
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.fuzzy_switch import FuzzySwitch
+from uvms_control.core.gain_stability import check_gain_stability
 from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
 from uvms_control.core.null_space import null_space_torque
@@ -64,6 +65,24 @@ FloatArray = npt.NDArray[np.float64]
 
 #: W at or below which the hybrid law dominates and the task counts as constrained motion.
 CONSTRAINED_WEIGHT = 0.1
+#: Control period (s) the integrations and the gain check assume unless told: 500 Hz.
+DEFAULT_CONTROL_PERIOD_S = 0.002
+#: Control periods over which new gains take over (``set_gains``): 50 ms at 500 Hz.
+GAIN_RAMP_PERIODS = 25
+#: A gap longer than this many periods restarts the force-derivative filter.
+GAP_RESTART_PERIODS = 5
+
+
+@dataclass(slots=True)
+class _GainRamp:
+    """Old and new linear gains of a run-time change, blended over GAIN_RAMP_PERIODS steps."""
+
+    law_map: tuple[FloatArray, FloatArray]
+    null_gains: tuple[FloatArray, FloatArray]
+    force_gains: tuple[tuple[float, float, float, float], tuple[float, float, float, float]]
+    fuzzy: FuzzySwitch
+    steps: int = 0
+    share: float = 0.0
 
 
 class Phase(enum.IntEnum):
@@ -136,6 +155,12 @@ class UnifiedForceController:
     Args:
         params: validated controller parameters.
         model: the controller's own UVMS model (its estimate of the plant).
+        control_period_s: the control period T (s): no step integrates the force integral or
+            the derivative filter over more than T, and gains are checked for stability at T.
+
+    Raises:
+        ControlParameterError: gains that do not fit the model or whose sampled loops are
+            unstable at T (``check_gains``).
 
     Example:
         >>> controller = UnifiedForceController(ControllerParameters.from_flat_dict(), UvmsModel())
@@ -145,16 +170,21 @@ class UnifiedForceController:
         (1.0, 'FREE_MOTION')
     """
 
-    def __init__(self, params: ControllerParameters, model: UvmsModel) -> None:
+    def __init__(self, params: ControllerParameters, model: UvmsModel,
+                 control_period_s: float = DEFAULT_CONTROL_PERIOD_S) -> None:
         self.params = params
         self.model = model
+        self.control_period_s = control_period_s
+        self._n_dof = model.n_dof
+        self._M_tilde: FloatArray | None = None
+        self._ramp: _GainRamp | None = None
+        self.check_gains(params)
         self.impedance = ImpedanceLaw(
             params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
         )
         self.fuzzy = FuzzySwitch(params.fuzzy)
         self.task = TaskReference(params.contact_threshold,
                                   ramp_from_start=params.switch_mode == 'hybrid')
-        self._n_dof = model.n_dof
         self._set_normal(params.force_direction)
         self._null_gains = null_space_gains(params, self._n_dof)
         # Load the compiled kernels now (``UvmsModel._load_kernels``), not in the first period.
@@ -163,6 +193,7 @@ class UnifiedForceController:
         with contextlib.suppress(ControlInputError):  # then the first real step says why
             self.step(0.0, rest, rest, np.zeros(3))
         self.reset()
+        self._M_tilde = None  # the rest pose is no working configuration
 
     def _set_normal(self, normal: npt.ArrayLike) -> None:
         """Make n the force direction of the hybrid law (S = n nᵀ) and rebuild its maps."""
@@ -184,23 +215,74 @@ class UnifiedForceController:
         self._S: list[list[float]] = self.hybrid.S.tolist()
         self._I_minus_S: list[list[float]] = self.hybrid.I_minus_S.tolist()
 
-    def set_gains(self, params: ControllerParameters) -> None:
-        """Take new gains while running (runtime parameters), keeping the force law's state.
+    def check_gains(self, params: ControllerParameters) -> None:
+        """Refuse gains that do not fit this robot or whose sampled loops are unstable.
 
-        The impedance, hybrid and fuzzy laws and the null-space gains are rebuilt from
-        ``params``; the force integral, the derivative filter (when its cut-off is unchanged),
-        the task, the posture and the time origin carry over.
+        The null-space gains must hold 6 + n values; every loop of ``gain_stability`` must be
+        stable at the control period on ``stability.max_environment_stiffness_n_m``, with the
+        task-space inertia M̃ of the last step (isotropic before the first one). Nothing
+        changes.
+
+        Raises:
+            ControlParameterError: naming the parameter(s), the value and what is expected.
         """
-        old = self.hybrid
+        null_space_gains(params, self._n_dof)
+        check_gain_stability(params, self.control_period_s, params.max_environment_stiffness,
+                             self._M_tilde)
+
+    def set_gains(self, params: ControllerParameters) -> None:
+        """Take new gains while running (runtime parameters), checked first, without a bump.
+
+        ``check_gains`` runs before anything changes. The impedance, hybrid and fuzzy laws and
+        the null-space gains are rebuilt from ``params``; the force integral and derivative
+        filter, the task, the posture and the time origin carry over. The laws are linear in
+        their gains (P⁻¹K, P⁻¹B_d, P⁻¹, K_pp, K_pv, K_fp, K_fi, K_fv, c, K_n, D_n), so blending
+        those gains is blending the old and new laws' outputs: over the next
+        ``GAIN_RAMP_PERIODS`` steps they move linearly from the old to the new values, and the
+        fuzzy weight W from the old sets' to the new sets'. A task that starts meanwhile
+        takes the new gains at once.
+
+        Raises:
+            ControlParameterError: from ``check_gains``; the controller is then unchanged.
+        """
+        self.check_gains(params)
+        self._end_ramp()
+        old_map, old_null, old_force = self._law_map, self._null_gains, self.hybrid.force_gains
+        old_fuzzy, old_hybrid = self.fuzzy, self.hybrid
         self.params = params
         self.impedance = ImpedanceLaw(
             params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
         )
         self.fuzzy = FuzzySwitch(params.fuzzy)
-        self._set_normal(old.n)
-        self.hybrid.carry_state_from(old)
+        self._set_normal(old_hybrid.n)
+        self.hybrid.carry_state_from(old_hybrid)
         self.task.set_contact_threshold(params.contact_threshold)
         self._null_gains = null_space_gains(params, self._n_dof)
+        self._ramp = _GainRamp((old_map, self._law_map), (old_null, self._null_gains),
+                               (old_force, self.hybrid.force_gains), old_fuzzy)
+        self._law_map, self._null_gains = old_map, old_null
+        self.hybrid.force_gains = old_force
+
+    def _advance_ramp(self, ramp: _GainRamp) -> None:
+        """One step further from the old gains to the new (``set_gains``)."""
+        ramp.steps += 1
+        share = ramp.share = min(ramp.steps / GAIN_RAMP_PERIODS, 1.0)
+        old_map, new_map = ramp.law_map
+        old_null, new_null = ramp.null_gains
+        (a0, a1, a2, a3), (b0, b1, b2, b3) = ramp.force_gains
+        self._law_map = old_map + share * (new_map - old_map)
+        self._null_gains = old_null + share * (new_null - old_null)
+        self.hybrid.force_gains = (a0 + share * (b0 - a0), a1 + share * (b1 - a1),
+                                   a2 + share * (b2 - a2), a3 + share * (b3 - a3))
+        if ramp.steps >= GAIN_RAMP_PERIODS:
+            self._end_ramp()
+
+    def _end_ramp(self) -> None:
+        """Take the new gains of a running ramp at once."""
+        ramp, self._ramp = self._ramp, None
+        if ramp is not None:
+            self._law_map, self._null_gains = ramp.law_map[1], ramp.null_gains[1]
+            self.hybrid.force_gains = ramp.force_gains[1]
 
     def start_task(self, t: float, goal: ContactTaskGoal) -> None:
         """Follow a contact task from t (s): its path from the running X_d, F_d along its normal.
@@ -208,6 +290,7 @@ class UnifiedForceController:
         The goal must have passed ``contact_task.validate_goal``. The force law starts afresh
         (integral and derivative filter) along the new normal.
         """
+        self._end_ramp()
         self._set_normal(goal.normal)
         self.task.start(t, goal)
 
@@ -302,9 +385,18 @@ class UnifiedForceController:
             self._t_prev = t
             self._q0 = q.copy()
         self.task.capture(ts.X.tolist())
-        dt = max(t - self._t_prev, 0.0)
+        self._M_tilde = ts.M_tilde
+        # No step integrates more than one control period: after a gap (stale inputs, a
+        # paused simulation) the integral must not take in the whole gap at once.
+        gap = t - self._t_prev
+        dt = min(max(gap, 0.0), self.control_period_s)
+        if gap > GAP_RESTART_PERIODS * self.control_period_s:
+            self.hybrid.restart_derivative()
         self._t_prev = max(t, self._t_prev)
         p = self.params
+        ramp = self._ramp
+        if ramp is not None:
+            self._advance_ramp(ramp)
 
         reference = self.task.state(t)
         d0, d1, d2, w0, w1, w2 = reference[:6]
@@ -331,6 +423,8 @@ class UnifiedForceController:
             W = 1.0  # no force set-point: the impedance law holds or follows the path
         elif p.switch_mode == 'fuzzy':
             W = self.fuzzy.weight(force_ratio, v_e)
+            if ramp is not None and ramp.share < 1.0:
+                W = ramp.share * W + (1.0 - ramp.share) * ramp.fuzzy.weight(force_ratio, v_e)
         else:
             W = 1.0 if p.switch_mode == 'impedance' else 0.0
         a_f = self.hybrid.force_acceleration(
