@@ -6,16 +6,22 @@ Subscribes ``joint_states``, ``odometry``, ``wrench`` and ``controller/target_po
 ``controller/contact_task`` (relative names: run it in ``/uvms``). ``trigger_mode:
 lockstep`` computes once the three inputs with one stamp have arrived and stamps the
 command alike; ``timer`` computes at ``control_rate_hz`` of the steady clock on the latest
-inputs. Rejected inputs are logged; stale inputs (older than ``watchdog_timeout_s``) give a
-zero command, logged once.
+inputs. Rejected inputs are logged; stale inputs (older than ``watchdog_timeout_s``, or a
+gap that long between two steps) give a zero command, logged once, and end a running task
+INPUTS_STALE; so does a thruster allocator that is not active (its ``transition_event``,
+``node_safety.AllocatorWatch``). Control resumes holding the position measured then.
 
 A managed node (``autostart``: it activates itself unless false): configure builds the model
-and the controller; activate holds the end effector where it is at the first step;
-deactivate ends a running task INACTIVE and commands zero generalized force, in answer to
-every lockstep stamp (so the exchange never stalls) or at the control rate. Gains, the
-contact threshold, null-space gains and ``safety.*`` change at run time (``set_parameters``,
-checked like the parameter files); the rest is read-only. ``/diagnostics`` reports rates,
-input ages, rejections, the lifecycle state, the task and any safety limit reached.
+and the controller; activate resets the task supervisor (no target, no queued goal) and holds
+the end effector where it is at the first step; deactivate ends running and queued tasks
+INACTIVE and commands zero generalized force, in answer to every lockstep stamp (so the
+exchange never stalls) or at the control rate. Gains, the contact threshold, null-space gains
+and ``safety.*`` change at run time (``set_parameters``): a call is checked whole (ranges,
+list lengths against the robot, stability of the sampled loops) before anything changes, and
+new gains take over over a few periods; the rest is read-only. No exception escapes a
+callback: it is answered with zero generalized force (running tasks end INACTIVE), logged,
+counted and reported. ``/diagnostics`` reports rates, input ages, rejections, faults, the
+allocator's state, the lifecycle state, the task and any safety limit reached.
 """
 
 from __future__ import annotations
@@ -58,6 +64,7 @@ from uvms_control.core.parameter_specs import (
 from uvms_control.core.parameters import ControllerParameters, validate_node_parameters
 from uvms_control.core.task_supervisor import TaskSupervisor
 from uvms_control.core.unified_controller import UnifiedForceController
+from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
@@ -104,6 +111,9 @@ class ControllerNode(LifecycleNode):
         self._inputs: dict[str, Input | None] = dict.fromkeys(TOPICS)
         self._pending = PendingStamps(TOPICS)
         self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0}
+        self._faults = FaultLog(self.get_logger())
+        self._allocator: AllocatorWatch | None = None
+        self._halted: str | None = None  # why control stopped (stale, allocator); None: runs
         self._rate = RateMeter()
         self._breach: str | None = None
         self._stale = False
@@ -113,7 +123,8 @@ class ControllerNode(LifecycleNode):
         self._state_msg: ControllerState | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.tasks = ContactTaskServer(self, lambda: self.supervisor if self._active else None,
-                                       lambda: self.get_clock().now().nanoseconds * 1e-9)
+                                       lambda: self.get_clock().now().nanoseconds * 1e-9,
+                                       on_error=self._fault)
         self.create_subscription(PointStamped, 'controller/target_position', self._on_target,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
@@ -140,9 +151,11 @@ class ControllerNode(LifecycleNode):
                 text = robots.with_robot_source(str(error), self._robot_files)
                 raise ControlParameterError('robot parameters', text,
                                             f'robot {self.robot_name!r}') from error
-            self.core = UnifiedForceController(gains, model)
+            self.core = UnifiedForceController(gains, model,
+                                               1.0 / float(node['control_rate_hz']))
             self.supervisor = TaskSupervisor(self.core, safety_limits(self._safety))
             self._configure_topics(node, model.joint_names)
+            self._watch_allocator(str(node['allocator_node']))
         except Exception as error:  # rclpy would turn it into ERROR silently
             self._release()
             return self._failed('configure', error)
@@ -196,18 +209,20 @@ class ControllerNode(LifecycleNode):
                 clock=Clock(clock_type=ClockType.STEADY_TIME))))
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Hold the end effector where it is at the next step, from a fresh controller."""
-        assert self.core is not None
-        self.core.reset()
+        """Reset the supervisor (no target, no goal); hold the end effector where it is next."""
+        assert self.supervisor is not None
+        self.tasks.finish(self.supervisor.reset())
+        self._halted = None
         self._active = True
         return super().on_activate(state)
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """End a running task INACTIVE and command zero generalized force."""
+        """End running and queued tasks INACTIVE, drop the target, command zero."""
         self._active = False
         if self.supervisor is not None:
             self.tasks.finish(self.supervisor.abort_all(TaskCode.INACTIVE,
                                                         'the controller was deactivated'))
+            self.tasks.finish(self.supervisor.reset())
         self._zero(self.get_clock().now().nanoseconds, None)
         return super().on_deactivate(state)
 
@@ -234,6 +249,7 @@ class ControllerNode(LifecycleNode):
 
     def _release(self) -> None:
         self._active = False
+        self._allocator = None
         for destroy, entity in reversed(self._entities):
             destroy(entity)
         self._entities = []
@@ -248,6 +264,7 @@ class ControllerNode(LifecycleNode):
 
     # ------------------------------------------------------------------------ inputs
 
+    @guarded('input callback')
     def _on_input(self, topic: str, read: Any, msg: Any) -> None:
         """Convert and keep one input; in lockstep, compute once a stamp is complete."""
         stamp = conversions.stamp_ns(msg.header.stamp)
@@ -278,6 +295,7 @@ class ControllerNode(LifecycleNode):
             self._zeroed_stamp_ns = stamp  # answer the stamp once, so the simulation goes on
             self._zero(stamp, 'an input is older than watchdog_timeout_s')
 
+    @guarded('control timer')
     def _on_timer(self) -> None:
         """Timer mode: compute on the latest inputs, or zero the command when they are stale."""
         now = self.get_clock().now().nanoseconds
@@ -301,8 +319,10 @@ class ControllerNode(LifecycleNode):
         self._staleness_log.log(self._staleness.observe(now, stale))
         if stale:
             self._zero(now, None)
+            self._halt('inputs older than watchdog_timeout_s')
         return not stale
 
+    @guarded('target_position callback')
     def _on_target(self, msg: PointStamped) -> None:
         """A streamed hold target: taken while no task runs, else refused with a log line."""
         try:
@@ -333,6 +353,8 @@ class ControllerNode(LifecycleNode):
         if t_ns == self._last_stamp_ns:
             self._publish_command(t_ns, self._last_tau_b)  # a re-published state: same answer
             return
+        if not self._may_step(t_ns):
+            return
         (positions, velocities), (eta, nu), force = (i.value for i in inputs if i is not None)
         t = t_ns * 1e-9
         try:
@@ -342,6 +364,9 @@ class ControllerNode(LifecycleNode):
             self.get_logger().error(f'control step failed, holding: {error}',
                                     throttle_duration_sec=1.0)
             self._publish_command(t_ns, self._last_tau_b)
+            return
+        except Exception as error:  # nothing escapes: zero command, tasks ended, logged
+            self._fault('control step', error, t_ns)
             return
         self._counts['steps'] += 1
         self._last_tau_b = result.tau_b
@@ -362,6 +387,7 @@ class ControllerNode(LifecycleNode):
         if reason is not None and not self._stale:
             self._stale = True
             self.get_logger().warn(f'{reason}: publishing zero generalized force')
+            self._halt(reason)
         self._counts['zeroed'] += 1
         if self._entities:
             self._last_tau_b = np.zeros_like(self._last_tau_b)
@@ -375,7 +401,39 @@ class ControllerNode(LifecycleNode):
     # ------------------------------------------------------------------------ parameters
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        """Take new gains or limits at run time, checked like the files; all or nothing."""
+        """Take new gains or limits at run time: checked whole first, then all or nothing.
+
+        Ranges and types as in the files, list lengths against the robot's 6 + n, the
+        stability of the sampled loops (``UnifiedForceController.check_gains``) and a contact
+        threshold below every open goal's force; only then does anything change, and the new
+        gains ramp in (``set_gains``). Any exception refuses the call with its text.
+        """
+        try:
+            gains, safety, params, limits = self._checked_parameters(parameters)
+        except Exception as error:  # a refused call, never a dead node
+            reason = (str(error) if isinstance(error, (ControlParameterError, TypeError,
+                                                       ValueError))
+                      else f'{type(error).__name__}: {error}')
+            return SetParametersResult(successful=False, reason=reason)
+        try:
+            if self.core is not None:
+                self.core.set_gains(params)
+            if self.supervisor is not None:
+                self.supervisor.limits = limits
+        except Exception as error:
+            self._fault('set_parameters', error)
+            return SetParametersResult(successful=False, reason=f'{type(error).__name__}: '
+                                                                f'{error}')
+        self._gains, self._safety = gains, safety
+        return SetParametersResult(successful=True)
+
+    def _checked_parameters(self, parameters: list[Parameter]) -> tuple[
+            dict[str, Any], dict[str, Any], ControllerParameters, SafetyLimits]:
+        """The gains and limits a set_parameters call asks for, checked whole; nothing changes.
+
+        Raises:
+            ControlParameterError: naming the parameter, its value and what is valid.
+        """
         gains, safety = dict(self._gains), dict(self._safety)
         for parameter in parameters:
             value = parameter.value
@@ -384,17 +442,79 @@ class ControllerNode(LifecycleNode):
                 gains[parameter.name] = value
             elif parameter.name in safety:
                 safety[parameter.name] = value
-        try:
-            params = ControllerParameters.from_flat_dict(gains)
-            limits = safety_limits(safety)
-        except (ControlParameterError, TypeError, ValueError) as error:
-            return SetParametersResult(successful=False, reason=str(error))
-        self._gains, self._safety = gains, safety
+        params = ControllerParameters.from_flat_dict(gains)
+        limits = safety_limits(safety)
         if self.core is not None:
-            self.core.set_gains(params)
-        if self.supervisor is not None:
-            self.supervisor.limits = limits
-        return SetParametersResult(successful=True)
+            self.core.check_gains(params)
+        forces = [force for force in self.tasks.open_goal_forces() if force > 0.0]
+        if forces and params.contact_threshold >= min(forces):
+            raise ControlParameterError('force.contact_threshold_n', params.contact_threshold,
+                                        f'below the force_n = {min(forces):g} N of an open '
+                                        'contact task')
+        return gains, safety, params, limits
+
+    # ------------------------------------------------------------------------ safety
+
+    def _watch_allocator(self, allocator: str) -> None:
+        """Follow the thruster allocator's lifecycle state (its transition_event), if named."""
+        if not allocator:
+            return
+        self._allocator = AllocatorWatch(self, allocator, self._on_allocator_change)
+        self._entities.append((self.destroy_subscription, self._allocator.subscription))
+
+    @guarded('allocator transition callback')
+    def _on_allocator_change(self, active: bool, label: str) -> None:
+        """Allocator inactive: end a running task INPUTS_STALE and command zero; active: resume."""
+        if active:
+            self.get_logger().info('the thruster allocator is active: control resumes')
+            return
+        reason = f'the thruster allocator is {label}'
+        self.get_logger().warn(f'{reason}: publishing zero generalized force')
+        self._halt(reason)
+        if self._entities and self._active:
+            self._zero(self.get_clock().now().nanoseconds, None)
+
+    def _halt(self, reason: str) -> None:
+        """Control stopped (stale inputs, allocator): end a running task INPUTS_STALE, once."""
+        if self._halted is not None:
+            return
+        self._halted = reason
+        if self.supervisor is not None and self._active:
+            self.tasks.finish(self.supervisor.abort_all(TaskCode.INPUTS_STALE, reason))
+
+    def _may_step(self, t_ns: int) -> bool:
+        """Whether control may step at t_ns; zero command when not, hold re-captured on resume.
+
+        Not while the allocator is inactive. A gap longer than watchdog_timeout_s since the
+        last step ends a running task (the path's time ran on without control) and, as on any
+        resume, the hold point becomes the position measured at this step.
+        """
+        if self._allocator is not None and not self._allocator.active:
+            self._zero(t_ns, None)
+            return False
+        if self._last_stamp_ns >= 0 and t_ns - self._last_stamp_ns > self._watchdog_ns:
+            self._halt(f'no control step for {(t_ns - self._last_stamp_ns) * 1e-9:.3f} s '
+                       '(more than watchdog_timeout_s)')
+        if self._halted is not None:
+            assert self.supervisor is not None
+            self.supervisor.recapture_hold()
+            self._halted = None
+        return True
+
+    def _fault(self, where: str, error: BaseException, t_ns: int | None = None) -> None:
+        """Answer an exception: zero command, running tasks ended INACTIVE, logged, counted."""
+        text = self._faults.record(where, error, 'zero generalized force, tasks ended, '
+                                   'holding the measured position at the next step')
+        try:
+            if self.supervisor is not None and self._active:
+                self.tasks.finish(self.supervisor.abort_all(
+                    TaskCode.INACTIVE, f'the controller failed ({text}): task ended'))
+                self.supervisor.recapture_hold()
+            if self._entities:
+                self._zero(self.get_clock().now().nanoseconds if t_ns is None else t_ns, None)
+        except Exception as again:  # the answer itself failed: log, go on
+            self.get_logger().error(f'answering a fault failed too: {type(again).__name__}: '
+                                    f'{again}', throttle_duration_sec=1.0)
 
     # ------------------------------------------------------------------------ diagnostics
 
@@ -417,7 +537,15 @@ class ControllerNode(LifecycleNode):
         message = 'stale inputs: zero command' if stale else state
         if not stale and self._staleness.stale:
             message = f'{state}: waiting for fresh inputs (start-up)'
+        allocator = self._allocator
+        if allocator is not None and not allocator.active:
+            level, message = WARN, f'thruster allocator {allocator.label}: zero command'
+        if self._faults.recent:
+            level, message = ERROR, f'survived a fault: {self._faults.last}'
         return Report(level, message, {'lifecycle_state': state, 'rate_hz': rate,
+                                       'allocator': allocator.label if allocator
+                                       else 'not watched',
+                                       **self._faults.values(),
                                        'rejected_inputs': self._counts['rejected'],
                                        'zero_commands': self._counts['zeroed'],
                                        'missed_periods': misses.missed if misses else None,

@@ -158,7 +158,8 @@ def check_gain_stability(params: ControllerParameters, period_s: float,
     for radius in loop_radii(params, period_s, max_stiffness_n_m, M_tilde):
         if not radius.stable:
             raise ControlParameterError(
-                ', '.join(radius.parameters), 'the new values',
-                f'gains whose sampled {radius.loop} loop is stable at T = {period_s:g} s: '
-                f'spectral radius {radius.radius:.4g} >= {min(radius.limit, 1.0):g} '
-                '(docs/controller.md, "Gains at run time")')
+                ', '.join(radius.parameters),
+                f'spectral radius {radius.radius:.4g} of the sampled {radius.loop} loop at '
+                f'T = {period_s:g} s',
+                f'gains whose sampled loops are stable (spectral radius < {radius.limit:g}; '
+                'docs/controller.md, "Gains at run time")')

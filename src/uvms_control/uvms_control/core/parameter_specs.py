@@ -46,6 +46,13 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         1e-3,
         60.0,
     ),
+    ParameterSpec(
+        'allocator_node',
+        'thruster_allocator',
+        "Name of the thruster allocator node (in the controller's namespace) whose "
+        "'<name>/transition_event' tells the controller when it is not active: the controller "
+        "then ends a running task INPUTS_STALE and commands zero. '' watches no allocator.",
+    ),
 ]
 
 CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
