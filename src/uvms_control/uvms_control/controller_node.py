@@ -487,7 +487,8 @@ class ControllerNode(LifecycleNode):
 
         Not while the allocator is inactive. A gap longer than watchdog_timeout_s since the
         last step ends a running task (the path's time ran on without control) and, as on any
-        resume, the hold point becomes the position measured at this step.
+        resume, the hold point becomes the position measured at this step; a goal that
+        arrived while control was stopped ends INPUTS_STALE then.
         """
         if self._allocator is not None and not self._allocator.active:
             self._zero(t_ns, None)
@@ -497,6 +498,9 @@ class ControllerNode(LifecycleNode):
                        '(more than watchdog_timeout_s)')
         if self._halted is not None:
             assert self.supervisor is not None
+            # A goal taken while control was stopped was checked against an old position.
+            self.tasks.finish(self.supervisor.abort_all(
+                TaskCode.INPUTS_STALE, f'arrived while control was stopped ({self._halted})'))
             self.supervisor.recapture_hold()
             self._halted = None
         return True
