@@ -311,7 +311,7 @@ def test_timer_controller_zeroes_the_command_when_inputs_go_stale(harness: Harne
     Judged on simulated time (use_sim_time, /clock from this test): inputs 50 ms old still
     drive the command, 300 ms old give zero, however slowly the machine runs.
     """
-    # At 100 Hz the shipped force gains hold walls up to about 1e4 N/m, not the default 1e5.
+    # At 100 Hz the shipped force gains hold walls up to about 4e4 N/m, not the default 1e5.
     node = harness.add(ControllerNode, trigger_mode='timer', control_rate_hz=100.0,
                        watchdog_timeout_s=0.1, use_sim_time=True,
                        **{'stability.max_environment_stiffness_n_m': 1.0e4})
