@@ -348,3 +348,27 @@ def test_streamed_target_does_not_survive_deactivate_activate(harness: Harness) 
         step(harness, 2 * MS * k)
     state = state_at(harness, 2 * MS * 29)
     np.testing.assert_allclose(xyz(state.desired_position), X_HOLD, atol=1e-9)
+
+
+def test_goal_after_reactivation_is_checked_against_the_new_position(harness: Harness) -> None:
+    """After deactivate/activate a goal is checked against X of the first new step.
+
+    The arm moved 5 cm while the controller was inactive; a goal 1 cm from the new X (and
+    6 cm from the old one) is within safety.max_path_distance_m = 0.03 m only from the new.
+    """
+    node = harness.add(ControllerNode, **{'safety.max_path_distance_m': 0.03})
+    tasks = Tasks(harness)
+    step(harness, 0)
+    node.trigger_deactivate()
+    moved = [0.0, 0.55, -1.511]
+    x_moved = UvmsModel().ee_position(np.array([0.0] * 6 + moved))
+    assert 0.04 < float(np.linalg.norm(x_moved - X_HOLD)) < 0.06
+    node.trigger_activate()
+    goal = motion_goal()
+    x, y, z = x_moved.tolist()
+    goal.path = [Point(x=x, y=y, z=z), Point(x=x, y=y, z=z + 0.01)]
+    tasks.send('near_new', goal)
+    for k in range(1, 4):
+        step(harness, 2 * MS * k, arm=moved)
+    assert 'near_new' not in tasks.results  # accepted and running, not refused
+    assert node.supervisor.progress() is not None
