@@ -19,7 +19,8 @@ from geometry_msgs.msg import Point, Vector3
 from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
-from test_control_nodes import ARM, MS, Harness, stamp_ns, tau_of
+from rosgraph_msgs.msg import Clock
+from test_control_nodes import ARM, MS, Harness, set_sim_time, stamp_ns, tau_of
 from uvms_control.controller_node import ControllerNode
 from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
 
@@ -372,3 +373,21 @@ def test_goal_after_reactivation_is_checked_against_the_new_position(harness: Ha
         step(harness, 2 * MS * k, arm=moved)
     assert 'near_new' not in tasks.results  # accepted and running, not refused
     assert node.supervisor.progress() is not None
+
+
+def test_timer_mode_stale_inputs_end_the_goal_inputs_stale(harness: Harness) -> None:
+    """Timer mode on simulated time: inputs 300 ms old give zero and end the goal INPUTS_STALE."""
+    node = harness.add(ControllerNode, trigger_mode='timer', watchdog_timeout_s=0.1,
+                       use_sim_time=True)
+    tasks = Tasks(harness)
+    probe = harness.probe
+    clock_pub = probe.node.create_publisher(Clock, '/clock', 10)
+    set_sim_time(harness, node, clock_pub, 3_000_000_000)
+    probe.send_state(3_000_000_000)
+    assert harness.spin_until(lambda: any(stamp_ns(c) == 3_000_000_000 for c in probe.commands))
+    tasks.send('running', motion_goal())
+    set_sim_time(harness, node, clock_pub, 3_300_000_000)
+    assert tasks.result('running').error_code == Result.INPUTS_STALE
+    assert harness.spin_until(lambda: any(stamp_ns(c) == 3_300_000_000 for c in probe.commands))
+    np.testing.assert_array_equal(
+        tau_of([c for c in probe.commands if stamp_ns(c) == 3_300_000_000][-1]), 0.0)

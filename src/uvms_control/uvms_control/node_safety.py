@@ -79,9 +79,12 @@ class FaultLog:
 class AllocatorWatch:
     """The thruster allocator's lifecycle state, from its ``transition_event`` topic.
 
-    Until the first event the state is unknown and counts as active: a graph without an
-    allocator (another one, a test probe, hardware) runs as before. A killed allocator sends
-    no event; the simulator's own command watchdog covers that case.
+    The allocator counts as active until it is seen leaving the active state (a transition
+    that starts from active: deactivating, shutting down), and again once a transition ends
+    in active. Its start-up transitions (configuring, activating) change nothing, so a graph
+    whose nodes start in any order, or one without an allocator (another one, a test probe,
+    hardware), runs as before. A killed allocator sends no event; the simulator's own
+    command watchdog covers that case.
 
     Args:
         node: the controller node (relative names: the allocator in its namespace).
@@ -99,8 +102,13 @@ class AllocatorWatch:
             QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
 
     def _on_event(self, msg: TransitionEvent) -> None:
-        active = msg.goal_state.id == State.PRIMARY_STATE_ACTIVE
         self.label = msg.goal_state.label or str(msg.goal_state.id)
+        if msg.goal_state.id == State.PRIMARY_STATE_ACTIVE:
+            active = True
+        elif msg.start_state.id == State.PRIMARY_STATE_ACTIVE:
+            active = False
+        else:
+            return
         if active != self.active:
             self.active = active
             self._on_change(active, self.label)

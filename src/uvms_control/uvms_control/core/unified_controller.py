@@ -37,16 +37,16 @@ first step (vehicle pose and arm posture). With ``null_space_enabled = False`` t
 from __future__ import annotations
 
 import contextlib
-import enum
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
 from uvms_control.core.contact_task import ContactTaskGoal
+from uvms_control.core.controller_result import ControllerResult, Phase
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.fuzzy_switch import FuzzySwitch
+from uvms_control.core.gain_ramp import GainRamp
 from uvms_control.core.gain_stability import check_gain_stability
 from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
@@ -63,78 +63,14 @@ from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
 
 FloatArray = npt.NDArray[np.float64]
 
+__all__ = ['CONSTRAINED_WEIGHT', 'ControllerResult', 'Phase', 'UnifiedForceController']
+
 #: W at or below which the hybrid law dominates and the task counts as constrained motion.
 CONSTRAINED_WEIGHT = 0.1
 #: Control period (s) the integrations and the gain check assume unless told: 500 Hz.
 DEFAULT_CONTROL_PERIOD_S = 0.002
-#: Control periods over which new gains take over (``set_gains``): 50 ms at 500 Hz.
-GAIN_RAMP_PERIODS = 25
 #: A gap longer than this many periods restarts the force-derivative filter.
 GAP_RESTART_PERIODS = 5
-
-
-@dataclass(slots=True)
-class _GainRamp:
-    """Old and new linear gains of a run-time change, blended over GAIN_RAMP_PERIODS steps."""
-
-    law_map: tuple[FloatArray, FloatArray]
-    null_gains: tuple[FloatArray, FloatArray]
-    force_gains: tuple[tuple[float, float, float, float], tuple[float, float, float, float]]
-    fuzzy: FuzzySwitch
-    steps: int = 0
-    share: float = 0.0
-
-
-class Phase(enum.IntEnum):
-    """Task phase (values of uvms_msgs/ControllerState.PHASE_*)."""
-
-    FREE_MOTION = 0
-    CONTACT_TRANSITION = 1
-    CONSTRAINED = 2
-
-
-@dataclass(slots=True)
-class ControllerResult:
-    """Output and internals of one controller step (task-space vectors in map_ned).
-
-    Attributes:
-        tau_b: generalized force in body form (6 + n,): vehicle force (N) and moment (N m) in
-            base_link_frd, then joint torques (N m).
-        tau: generalized force in generalized coordinates (6 + n,), eq. 26 (+ null space).
-        W: fuzzy weight in [0, 1], 1 = impedance.
-        X: end-effector position (m).
-        X_d: reference position (m).
-        X_dot: end-effector velocity (m/s).
-        X_dot_d: reference velocity (m/s).
-        F_e: contact force exerted on the environment (N).
-        F_d: desired contact force (N).
-        F_c: blended task-space command (N), eq. 2.
-        F_IP: impedance law output (N), eq. 31.
-        F_H: hybrid law output (N), eq. 35.
-        v_e: velocity along the environment normal, positive toward it (m/s).
-        force_ratio: n·F_e over the force set-point (-).
-        phase: task phase.
-        M_hat: inertia estimate M̂ = s M̃ (kg), eq. 29.
-        zeta_hat: bias estimate ζ̂ = ζ̃ (N), eq. 29.
-    """
-
-    tau_b: FloatArray
-    tau: FloatArray
-    W: float
-    X: FloatArray
-    X_d: FloatArray
-    X_dot: FloatArray
-    X_dot_d: FloatArray
-    F_e: FloatArray
-    F_d: FloatArray
-    F_c: FloatArray
-    F_IP: FloatArray
-    F_H: FloatArray
-    v_e: float
-    force_ratio: float
-    phase: Phase
-    M_hat: FloatArray
-    zeta_hat: FloatArray
 
 
 def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
@@ -159,8 +95,7 @@ class UnifiedForceController:
             the derivative filter over more than T, and gains are checked for stability at T.
 
     Raises:
-        ControlParameterError: gains that do not fit the model or whose sampled loops are
-            unstable at T (``check_gains``).
+        ControlParameterError: gains that ``check_gains`` refuses.
 
     Example:
         >>> controller = UnifiedForceController(ControllerParameters.from_flat_dict(), UvmsModel())
@@ -177,7 +112,7 @@ class UnifiedForceController:
         self.control_period_s = control_period_s
         self._n_dof = model.n_dof
         self._M_tilde: FloatArray | None = None
-        self._ramp: _GainRamp | None = None
+        self._ramp: GainRamp | None = None
         self.check_gains(params)
         self.impedance = ImpedanceLaw(
             params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
@@ -218,10 +153,7 @@ class UnifiedForceController:
     def check_gains(self, params: ControllerParameters) -> None:
         """Refuse gains that do not fit this robot or whose sampled loops are unstable.
 
-        The null-space gains must hold 6 + n values; every loop of ``gain_stability`` must be
-        stable at the control period on ``stability.max_environment_stiffness_n_m``, with the
-        task-space inertia M̃ of the last step (isotropic before the first one). Nothing
-        changes.
+        6 + n null-space gains; ``gain_stability`` at T with M̃ of the last step. No change.
 
         Raises:
             ControlParameterError: naming the parameter(s), the value and what is expected.
@@ -231,16 +163,10 @@ class UnifiedForceController:
                              self._M_tilde)
 
     def set_gains(self, params: ControllerParameters) -> None:
-        """Take new gains while running (runtime parameters), checked first, without a bump.
+        """Take new gains while running, checked first (``check_gains``), without a bump.
 
-        ``check_gains`` runs before anything changes. The impedance, hybrid and fuzzy laws and
-        the null-space gains are rebuilt from ``params``; the force integral and derivative
-        filter, the task, the posture and the time origin carry over. The laws are linear in
-        their gains (P⁻¹K, P⁻¹B_d, P⁻¹, K_pp, K_pv, K_fp, K_fi, K_fv, c, K_n, D_n), so blending
-        those gains is blending the old and new laws' outputs: over the next
-        ``GAIN_RAMP_PERIODS`` steps they move linearly from the old to the new values, and the
-        fuzzy weight W from the old sets' to the new sets'. A task that starts meanwhile
-        takes the new gains at once.
+        The force integral and filter, task, posture and time origin carry over; the gains ramp
+        in (``gain_ramp``; a task that starts meanwhile takes them at once).
 
         Raises:
             ControlParameterError: from ``check_gains``; the controller is then unchanged.
@@ -250,31 +176,22 @@ class UnifiedForceController:
         old_map, old_null, old_force = self._law_map, self._null_gains, self.hybrid.force_gains
         old_fuzzy, old_hybrid = self.fuzzy, self.hybrid
         self.params = params
-        self.impedance = ImpedanceLaw(
-            params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
-        )
+        self.impedance = ImpedanceLaw(params.impedance_inertia, params.impedance_damping,
+                                      params.impedance_stiffness)
         self.fuzzy = FuzzySwitch(params.fuzzy)
         self._set_normal(old_hybrid.n)
         self.hybrid.carry_state_from(old_hybrid)
         self.task.set_contact_threshold(params.contact_threshold)
         self._null_gains = null_space_gains(params, self._n_dof)
-        self._ramp = _GainRamp((old_map, self._law_map), (old_null, self._null_gains),
-                               (old_force, self.hybrid.force_gains), old_fuzzy)
+        self._ramp = GainRamp((old_map, self._law_map), (old_null, self._null_gains),
+                              (old_force, self.hybrid.force_gains), old_fuzzy)
         self._law_map, self._null_gains = old_map, old_null
         self.hybrid.force_gains = old_force
 
-    def _advance_ramp(self, ramp: _GainRamp) -> None:
+    def _advance_ramp(self, ramp: GainRamp) -> None:
         """One step further from the old gains to the new (``set_gains``)."""
-        ramp.steps += 1
-        share = ramp.share = min(ramp.steps / GAIN_RAMP_PERIODS, 1.0)
-        old_map, new_map = ramp.law_map
-        old_null, new_null = ramp.null_gains
-        (a0, a1, a2, a3), (b0, b1, b2, b3) = ramp.force_gains
-        self._law_map = old_map + share * (new_map - old_map)
-        self._null_gains = old_null + share * (new_null - old_null)
-        self.hybrid.force_gains = (a0 + share * (b0 - a0), a1 + share * (b1 - a1),
-                                   a2 + share * (b2 - a2), a3 + share * (b3 - a3))
-        if ramp.steps >= GAIN_RAMP_PERIODS:
+        self._law_map, self._null_gains, self.hybrid.force_gains = ramp.advance()
+        if ramp.done:
             self._end_ramp()
 
     def _end_ramp(self) -> None:
@@ -423,8 +340,8 @@ class UnifiedForceController:
             W = 1.0  # no force set-point: the impedance law holds or follows the path
         elif p.switch_mode == 'fuzzy':
             W = self.fuzzy.weight(force_ratio, v_e)
-            if ramp is not None and ramp.share < 1.0:
-                W = ramp.share * W + (1.0 - ramp.share) * ramp.fuzzy.weight(force_ratio, v_e)
+            if ramp is not None:
+                W = ramp.blend_weight(W, force_ratio, v_e)
         else:
             W = 1.0 if p.switch_mode == 'impedance' else 0.0
         a_f = self.hybrid.force_acceleration(
