@@ -311,8 +311,10 @@ def test_timer_controller_zeroes_the_command_when_inputs_go_stale(harness: Harne
     Judged on simulated time (use_sim_time, /clock from this test): inputs 50 ms old still
     drive the command, 300 ms old give zero, however slowly the machine runs.
     """
+    # At 100 Hz the shipped force gains hold walls up to about 4e4 N/m, not the default 1e5.
     node = harness.add(ControllerNode, trigger_mode='timer', control_rate_hz=100.0,
-                       watchdog_timeout_s=0.1, use_sim_time=True)
+                       watchdog_timeout_s=0.1, use_sim_time=True,
+                       **{'stability.max_environment_stiffness_n_m': 1.0e4})
     probe = harness.probe
     clock_pub = probe.node.create_publisher(Clock, '/clock', 10)
     set_sim_time(harness, node, clock_pub, 3_000_000_000)
@@ -341,7 +343,8 @@ def test_timer_mode_keeps_its_rate_while_sim_time_stands_still(
     A timer on /clock time would fire at most once per /clock message, so a burst of /clock
     messages (a late simulator, a loaded machine) would drop control periods.
     """
-    rates = {'control_rate_hz': 100.0} if node_class is ControllerNode else {'rate_hz': 100.0}
+    rates = ({'control_rate_hz': 100.0, 'stability.max_environment_stiffness_n_m': 1.0e4}
+             if node_class is ControllerNode else {'rate_hz': 100.0})
     harness.add(node_class, trigger_mode='timer', use_sim_time=True, watchdog_timeout_s=5.0,
                 **rates)
     probe = harness.probe

@@ -6,16 +6,20 @@ Subscribes ``joint_states``, ``odometry``, ``wrench`` and ``controller/target_po
 ``controller/contact_task`` (relative names: run it in ``/uvms``). ``trigger_mode:
 lockstep`` computes once the three inputs with one stamp have arrived and stamps the
 command alike; ``timer`` computes at ``control_rate_hz`` of the steady clock on the latest
-inputs. Rejected inputs are logged; stale inputs (older than ``watchdog_timeout_s``) give a
-zero command, logged once.
+inputs. Rejected inputs are logged; stale inputs (older than ``watchdog_timeout_s``, or a
+gap that long between two steps) give a zero command, logged once, and end a running task
+INPUTS_STALE; so does a thruster allocator that is not active (its ``transition_event``,
+``node_safety.AllocatorWatch``). Control resumes holding the position measured then.
 
 A managed node (``autostart``: it activates itself unless false): configure builds the model
-and the controller; activate holds the end effector where it is at the first step;
-deactivate ends a running task INACTIVE and commands zero generalized force, in answer to
-every lockstep stamp (so the exchange never stalls) or at the control rate. Gains, the
-contact threshold, null-space gains and ``safety.*`` change at run time (``set_parameters``,
-checked like the parameter files); the rest is read-only. ``/diagnostics`` reports rates,
-input ages, rejections, the lifecycle state, the task and any safety limit reached.
+and the controller; activate resets the task supervisor (no target, no queued goal) and holds
+the end effector where it is at the first step; deactivate ends running and queued tasks
+INACTIVE and commands zero generalized force, in answer to every lockstep stamp (so the
+exchange never stalls) or at the control rate. Gains, the contact threshold, null-space gains
+and ``safety.*`` change at run time (``set_parameters``, checked whole first, then ramped
+in); the rest is read-only. No exception escapes a callback (``controller_safety``).
+``/diagnostics`` reports rates, input ages, rejections, faults, the allocator's state, the
+lifecycle state, the task and any safety limit reached.
 """
 
 from __future__ import annotations
@@ -27,11 +31,9 @@ from typing import Any
 import numpy as np
 from geometry_msgs.msg import PointStamped, WrenchStamped
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
-from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
@@ -48,7 +50,8 @@ from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, Stalen
 
 from uvms_common import robot_parameters as robots
 from uvms_control import conversions, task_conversions
-from uvms_control.core.contact_task import SafetyLimits, TaskCode, TaskGoalError
+from uvms_control.controller_safety import ControllerSafety, safety_limits
+from uvms_control.core.contact_task import TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
 from uvms_control.core.parameter_specs import (
     CONTROLLER_NODE_PARAMETER_SPECS,
@@ -58,6 +61,7 @@ from uvms_control.core.parameter_specs import (
 from uvms_control.core.parameters import ControllerParameters, validate_node_parameters
 from uvms_control.core.task_supervisor import TaskSupervisor
 from uvms_control.core.unified_controller import UnifiedForceController
+from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
@@ -69,13 +73,7 @@ SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
 
 
-def safety_limits(values: dict[str, Any]) -> SafetyLimits:
-    """``safety.*`` parameter values as limits."""
-    return SafetyLimits(**{name.removeprefix('safety.'): float(value)
-                           for name, value in values.items()})
-
-
-class ControllerNode(LifecycleNode):
+class ControllerNode(ControllerSafety, LifecycleNode):
     """Unified force controller: sensor topics and tasks in, generalized force and state out."""
 
     def __init__(self, **kwargs: Any) -> None:
@@ -104,6 +102,9 @@ class ControllerNode(LifecycleNode):
         self._inputs: dict[str, Input | None] = dict.fromkeys(TOPICS)
         self._pending = PendingStamps(TOPICS)
         self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0}
+        self._faults = FaultLog(self.get_logger())
+        self._allocator: AllocatorWatch | None = None
+        self._halted: str | None = None  # why control stopped (stale, allocator); None: runs
         self._rate = RateMeter()
         self._breach: str | None = None
         self._stale = False
@@ -113,7 +114,8 @@ class ControllerNode(LifecycleNode):
         self._state_msg: ControllerState | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.tasks = ContactTaskServer(self, lambda: self.supervisor if self._active else None,
-                                       lambda: self.get_clock().now().nanoseconds * 1e-9)
+                                       lambda: self.get_clock().now().nanoseconds * 1e-9,
+                                       on_error=self._fault)
         self.create_subscription(PointStamped, 'controller/target_position', self._on_target,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
@@ -140,9 +142,11 @@ class ControllerNode(LifecycleNode):
                 text = robots.with_robot_source(str(error), self._robot_files)
                 raise ControlParameterError('robot parameters', text,
                                             f'robot {self.robot_name!r}') from error
-            self.core = UnifiedForceController(gains, model)
+            self.core = UnifiedForceController(gains, model,
+                                               1.0 / float(node['control_rate_hz']))
             self.supervisor = TaskSupervisor(self.core, safety_limits(self._safety))
             self._configure_topics(node, model.joint_names)
+            self._watch_allocator(str(node['allocator_node']))
         except Exception as error:  # rclpy would turn it into ERROR silently
             self._release()
             return self._failed('configure', error)
@@ -196,18 +200,21 @@ class ControllerNode(LifecycleNode):
                 clock=Clock(clock_type=ClockType.STEADY_TIME))))
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Hold the end effector where it is at the next step, from a fresh controller."""
-        assert self.core is not None
+        """Reset the supervisor (no target, no goal); hold the end effector where it is next."""
+        assert self.core is not None and self.supervisor is not None
         self.core.reset()
+        self.tasks.finish(self.supervisor.reset())
+        self._halted = None
         self._active = True
         return super().on_activate(state)
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """End a running task INACTIVE and command zero generalized force."""
+        """End running and queued tasks INACTIVE, drop the target, command zero."""
         self._active = False
         if self.supervisor is not None:
             self.tasks.finish(self.supervisor.abort_all(TaskCode.INACTIVE,
                                                         'the controller was deactivated'))
+            self.tasks.finish(self.supervisor.reset())
         self._zero(self.get_clock().now().nanoseconds, None)
         return super().on_deactivate(state)
 
@@ -234,6 +241,7 @@ class ControllerNode(LifecycleNode):
 
     def _release(self) -> None:
         self._active = False
+        self._allocator = None
         for destroy, entity in reversed(self._entities):
             destroy(entity)
         self._entities = []
@@ -248,6 +256,7 @@ class ControllerNode(LifecycleNode):
 
     # ------------------------------------------------------------------------ inputs
 
+    @guarded('input callback')
     def _on_input(self, topic: str, read: Any, msg: Any) -> None:
         """Convert and keep one input; in lockstep, compute once a stamp is complete."""
         stamp = conversions.stamp_ns(msg.header.stamp)
@@ -278,6 +287,7 @@ class ControllerNode(LifecycleNode):
             self._zeroed_stamp_ns = stamp  # answer the stamp once, so the simulation goes on
             self._zero(stamp, 'an input is older than watchdog_timeout_s')
 
+    @guarded('control timer')
     def _on_timer(self) -> None:
         """Timer mode: compute on the latest inputs, or zero the command when they are stale."""
         now = self.get_clock().now().nanoseconds
@@ -301,8 +311,10 @@ class ControllerNode(LifecycleNode):
         self._staleness_log.log(self._staleness.observe(now, stale))
         if stale:
             self._zero(now, None)
+            self._halt('inputs older than watchdog_timeout_s')
         return not stale
 
+    @guarded('target_position callback')
     def _on_target(self, msg: PointStamped) -> None:
         """A streamed hold target: taken while no task runs, else refused with a log line."""
         try:
@@ -315,8 +327,7 @@ class ControllerNode(LifecycleNode):
             self.get_logger().warn('target_position ignored: the controller is not active',
                                    throttle_duration_sec=5.0)
         elif not self.supervisor.set_target(target):
-            self.get_logger().warn('target_position ignored while a contact task runs',
-                                   throttle_duration_sec=5.0)
+            self.get_logger().warn(f'{self.supervisor.refusal}', throttle_duration_sec=5.0)
 
     # ------------------------------------------------------------------------ control
 
@@ -333,6 +344,8 @@ class ControllerNode(LifecycleNode):
         if t_ns == self._last_stamp_ns:
             self._publish_command(t_ns, self._last_tau_b)  # a re-published state: same answer
             return
+        if not self._may_step(t_ns):
+            return
         (positions, velocities), (eta, nu), force = (i.value for i in inputs if i is not None)
         t = t_ns * 1e-9
         try:
@@ -342,6 +355,9 @@ class ControllerNode(LifecycleNode):
             self.get_logger().error(f'control step failed, holding: {error}',
                                     throttle_duration_sec=1.0)
             self._publish_command(t_ns, self._last_tau_b)
+            return
+        except Exception as error:  # nothing escapes: zero command, tasks ended, logged
+            self._fault('control step', error, t_ns)
             return
         self._counts['steps'] += 1
         self._last_tau_b = result.tau_b
@@ -362,6 +378,7 @@ class ControllerNode(LifecycleNode):
         if reason is not None and not self._stale:
             self._stale = True
             self.get_logger().warn(f'{reason}: publishing zero generalized force')
+            self._halt(reason)
         self._counts['zeroed'] += 1
         if self._entities:
             self._last_tau_b = np.zeros_like(self._last_tau_b)
@@ -371,30 +388,6 @@ class ControllerNode(LifecycleNode):
         self._command_msg = conversions.generalized_force_message(
             t_ns, tau_b, self._joint_names, self._command_msg)
         self._command_pub.publish(self._command_msg)
-
-    # ------------------------------------------------------------------------ parameters
-
-    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        """Take new gains or limits at run time, checked like the files; all or nothing."""
-        gains, safety = dict(self._gains), dict(self._safety)
-        for parameter in parameters:
-            value = parameter.value
-            value = list(value) if not isinstance(value, (str, bool, int, float)) else value
-            if parameter.name in gains:
-                gains[parameter.name] = value
-            elif parameter.name in safety:
-                safety[parameter.name] = value
-        try:
-            params = ControllerParameters.from_flat_dict(gains)
-            limits = safety_limits(safety)
-        except (ControlParameterError, TypeError, ValueError) as error:
-            return SetParametersResult(successful=False, reason=str(error))
-        self._gains, self._safety = gains, safety
-        if self.core is not None:
-            self.core.set_gains(params)
-        if self.supervisor is not None:
-            self.supervisor.limits = limits
-        return SetParametersResult(successful=True)
 
     # ------------------------------------------------------------------------ diagnostics
 
@@ -417,7 +410,15 @@ class ControllerNode(LifecycleNode):
         message = 'stale inputs: zero command' if stale else state
         if not stale and self._staleness.stale:
             message = f'{state}: waiting for fresh inputs (start-up)'
+        allocator = self._allocator
+        if allocator is not None and not allocator.active:
+            level, message = WARN, f'thruster allocator {allocator.label}: zero command'
+        if self._faults.recent:
+            level, message = ERROR, f'survived a fault: {self._faults.last}'
         return Report(level, message, {'lifecycle_state': state, 'rate_hz': rate,
+                                       'allocator': allocator.label if allocator
+                                       else 'not watched',
+                                       **self._faults.values(),
                                        'rejected_inputs': self._counts['rejected'],
                                        'zero_commands': self._counts['zeroed'],
                                        'missed_periods': misses.missed if misses else None,

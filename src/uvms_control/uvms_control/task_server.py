@@ -44,12 +44,15 @@ class ContactTaskServer:
             active (goals then end INACTIVE at once).
         now_s: the controller's clock (s).
         callback_group: where the action's callbacks run.
+        on_error: told of an exception in a goal or cancel callback (where, error); the goal
+            then ends INVALID_GOAL naming it, a cancel is rejected.
     """
 
     def __init__(self, node: Node, supervisor: Callable[[], TaskSupervisor | None],
-                 now_s: Callable[[], float], callback_group: CallbackGroup | None = None
-                 ) -> None:
+                 now_s: Callable[[], float], callback_group: CallbackGroup | None = None,
+                 on_error: Callable[[str, Exception], None] | None = None) -> None:
         self._node = node
+        self._on_error = on_error
         self._supervisor = supervisor
         self._now_s = now_s
         self._handles: dict[bytes, ServerGoalHandle] = {}
@@ -71,7 +74,21 @@ class ContactTaskServer:
         self.finish_all(TaskCode.INACTIVE, 'the controller shut down')
         self._server.destroy()
 
+    def open_goal_forces(self) -> list[float]:
+        """force_n of every goal not ended yet (N)."""
+        return [float(handle.request.force_n) for handle in self._handles.values()]
+
     def _accepted(self, handle: ServerGoalHandle) -> None:
+        try:
+            self._take(handle)
+        except Exception as error:  # nothing escapes into the executor
+            self._finish(_goal_key(handle), TaskResult(
+                TaskCode.INVALID_GOAL, f'the controller could not take the goal: '
+                f'{type(error).__name__}: {error}', 0.0, 0.0, float('nan'), float('nan')))
+            if self._on_error is not None:
+                self._on_error('contact task goal callback', error)
+
+    def _take(self, handle: ServerGoalHandle) -> None:
         key = _goal_key(handle)
         self._handles[key] = handle
         self.goals_received += 1
@@ -93,9 +110,13 @@ class ContactTaskServer:
                 f'{goal.times[-1]:.2f} s, F_d {goal.force_n:g} N')
 
     def _cancel(self, handle: ServerGoalHandle) -> CancelResponse:
-        supervisor = self._supervisor()
-        if supervisor is not None and supervisor.cancel(_goal_key(handle)):
-            return CancelResponse.ACCEPT
+        try:
+            supervisor = self._supervisor()
+            if supervisor is not None and supervisor.cancel(_goal_key(handle)):
+                return CancelResponse.ACCEPT
+        except Exception as error:  # nothing escapes into the executor
+            if self._on_error is not None:
+                self._on_error('contact task cancel callback', error)
         return CancelResponse.REJECT
 
     def publish_feedback(self, supervisor: TaskSupervisor, now_s: float) -> None:

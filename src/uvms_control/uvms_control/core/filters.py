@@ -38,6 +38,10 @@ class DirtyDerivative:
         self._y = 0.0
         self._initialised = False
 
+    def continue_from(self, other: DirtyDerivative) -> None:
+        """Take over another filter's input and output (a new cut-off without a bump)."""
+        self._x_prev, self._y, self._initialised = other._x_prev, other._y, other._initialised
+
     def reset(self) -> None:
         """Forget the past: the next sample restarts the filter."""
         self._initialised = False

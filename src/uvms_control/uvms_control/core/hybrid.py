@@ -85,12 +85,24 @@ class HybridLaw:
     def carry_state_from(self, other: HybridLaw) -> None:
         """Continue another law's integral and force-derivative filter (new gains, no bump).
 
-        The integral is clamped to this law's limit; the filter carries over at the same
-        cut-off only.
+        The integral is clamped to this law's limit; the filter keeps its input and output
+        (at a new cut-off, its time constant changes from the next sample on).
         """
         self.integral = min(max(other.integral, -self.integral_limit), self.integral_limit)
-        if other._derivative.tau == self._derivative.tau:
-            self._derivative = other._derivative
+        self._derivative.continue_from(other._derivative)
+
+    @property
+    def force_gains(self) -> tuple[float, float, float, float]:
+        """(K_fp, K_fi, K_fv, c) of eq. 39, the gains a run-time change ramps."""
+        return self.k_fp, self.k_fi, self.k_fv, self.c_ff
+
+    @force_gains.setter
+    def force_gains(self, gains: tuple[float, float, float, float]) -> None:
+        self.k_fp, self.k_fi, self.k_fv, self.c_ff = gains
+
+    def restart_derivative(self) -> None:
+        """Restart the force-derivative filter (after a gap its derivative is unknown)."""
+        self._derivative.reset()
 
     def reset(self) -> None:
         """Clear the integral and the derivative filter."""

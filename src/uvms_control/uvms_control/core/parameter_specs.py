@@ -46,6 +46,13 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         1e-3,
         60.0,
     ),
+    ParameterSpec(
+        'allocator_node',
+        'thruster_allocator',
+        "Name of the thruster allocator node (in the controller's namespace) whose "
+        "'<name>/transition_event' tells the controller when it is not active: the controller "
+        "then ends a running task INPUTS_STALE and commands zero. '' watches no allocator.",
+    ),
 ]
 
 CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
@@ -219,6 +226,15 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
         0.0,
         1e4,
     ),
+    ParameterSpec(
+        'stability.max_environment_stiffness_n_m',
+        1.0e5,
+        'Stiffest surface K_e (N/m) the gains must hold: configure and set_parameters refuse '
+        'gains whose sampled impedance, hybrid or blended loop on a wall this stiff, or in free '
+        "motion, is unstable at control_rate_hz (the paper's stiffest wall, Case I: 1e5).",
+        1.0,
+        1e9,
+    ),
 ]
 
 #: Controller parameters that ``set_parameters`` may change while the node runs: the gains of
@@ -227,7 +243,7 @@ CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [
 RUNTIME_PREFIXES = ('impedance.', 'hybrid.position_', 'hybrid.force_k',
                     'hybrid.force_feedforward', 'hybrid.force_derivative',
                     'hybrid.force_integral', 'fuzzy.', 'force.', 'null_space.stiffness',
-                    'null_space.damping', 'safety.')
+                    'null_space.damping', 'safety.', 'stability.')
 
 CONTROLLER_PARAMETER_SPECS = [
     spec._replace(read_only=not spec.name.startswith(RUNTIME_PREFIXES))

@@ -167,6 +167,7 @@ class ControllerParameters:
     null_space_enabled: bool
     null_space_stiffness: FloatArray
     null_space_damping: FloatArray
+    max_environment_stiffness: float = 1.0e5
 
     @classmethod
     def from_flat_dict(cls, values: Mapping[str, object] | None = None) -> ControllerParameters:
@@ -247,6 +248,7 @@ class ControllerParameters:
             null_space_enabled=enabled,
             null_space_stiffness=per_coordinate('null_space.stiffness_1_s2'),
             null_space_damping=per_coordinate('null_space.damping_1_s'),
+            max_environment_stiffness=number('stability.max_environment_stiffness_n_m'),
         )
 
 

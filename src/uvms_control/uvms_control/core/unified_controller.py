@@ -37,16 +37,17 @@ first step (vehicle pose and arm posture). With ``null_space_enabled = False`` t
 from __future__ import annotations
 
 import contextlib
-import enum
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
 from uvms_control.core.contact_task import ContactTaskGoal
+from uvms_control.core.controller_result import ControllerResult, Phase
 from uvms_control.core.errors import ControlInputError
 from uvms_control.core.fuzzy_switch import FuzzySwitch
+from uvms_control.core.gain_ramp import GainRamp
+from uvms_control.core.gain_stability import check_gain_stability
 from uvms_control.core.hybrid import HybridLaw
 from uvms_control.core.impedance import ImpedanceLaw
 from uvms_control.core.null_space import null_space_torque
@@ -62,60 +63,14 @@ from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
 
 FloatArray = npt.NDArray[np.float64]
 
+__all__ = ['CONSTRAINED_WEIGHT', 'ControllerResult', 'Phase', 'UnifiedForceController']
+
 #: W at or below which the hybrid law dominates and the task counts as constrained motion.
 CONSTRAINED_WEIGHT = 0.1
-
-
-class Phase(enum.IntEnum):
-    """Task phase (values of uvms_msgs/ControllerState.PHASE_*)."""
-
-    FREE_MOTION = 0
-    CONTACT_TRANSITION = 1
-    CONSTRAINED = 2
-
-
-@dataclass(slots=True)
-class ControllerResult:
-    """Output and internals of one controller step (task-space vectors in map_ned).
-
-    Attributes:
-        tau_b: generalized force in body form (6 + n,): vehicle force (N) and moment (N m) in
-            base_link_frd, then joint torques (N m).
-        tau: generalized force in generalized coordinates (6 + n,), eq. 26 (+ null space).
-        W: fuzzy weight in [0, 1], 1 = impedance.
-        X: end-effector position (m).
-        X_d: reference position (m).
-        X_dot: end-effector velocity (m/s).
-        X_dot_d: reference velocity (m/s).
-        F_e: contact force exerted on the environment (N).
-        F_d: desired contact force (N).
-        F_c: blended task-space command (N), eq. 2.
-        F_IP: impedance law output (N), eq. 31.
-        F_H: hybrid law output (N), eq. 35.
-        v_e: velocity along the environment normal, positive toward it (m/s).
-        force_ratio: n·F_e over the force set-point (-).
-        phase: task phase.
-        M_hat: inertia estimate M̂ = s M̃ (kg), eq. 29.
-        zeta_hat: bias estimate ζ̂ = ζ̃ (N), eq. 29.
-    """
-
-    tau_b: FloatArray
-    tau: FloatArray
-    W: float
-    X: FloatArray
-    X_d: FloatArray
-    X_dot: FloatArray
-    X_dot_d: FloatArray
-    F_e: FloatArray
-    F_d: FloatArray
-    F_c: FloatArray
-    F_IP: FloatArray
-    F_H: FloatArray
-    v_e: float
-    force_ratio: float
-    phase: Phase
-    M_hat: FloatArray
-    zeta_hat: FloatArray
+#: Control period (s) the integrations and the gain check assume unless told: 500 Hz.
+DEFAULT_CONTROL_PERIOD_S = 0.002
+#: A gap longer than this many periods restarts the force-derivative filter.
+GAP_RESTART_PERIODS = 5
 
 
 def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
@@ -136,6 +91,11 @@ class UnifiedForceController:
     Args:
         params: validated controller parameters.
         model: the controller's own UVMS model (its estimate of the plant).
+        control_period_s: the control period T (s): no step integrates the force integral or
+            the derivative filter over more than T, and gains are checked for stability at T.
+
+    Raises:
+        ControlParameterError: gains that ``check_gains`` refuses.
 
     Example:
         >>> controller = UnifiedForceController(ControllerParameters.from_flat_dict(), UvmsModel())
@@ -145,16 +105,21 @@ class UnifiedForceController:
         (1.0, 'FREE_MOTION')
     """
 
-    def __init__(self, params: ControllerParameters, model: UvmsModel) -> None:
+    def __init__(self, params: ControllerParameters, model: UvmsModel,
+                 control_period_s: float = DEFAULT_CONTROL_PERIOD_S) -> None:
         self.params = params
         self.model = model
+        self.control_period_s = control_period_s
+        self._n_dof = model.n_dof
+        self._M_tilde: FloatArray | None = None
+        self._ramp: GainRamp | None = None
+        self.check_gains(params)
         self.impedance = ImpedanceLaw(
             params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
         )
         self.fuzzy = FuzzySwitch(params.fuzzy)
         self.task = TaskReference(params.contact_threshold,
                                   ramp_from_start=params.switch_mode == 'hybrid')
-        self._n_dof = model.n_dof
         self._set_normal(params.force_direction)
         self._null_gains = null_space_gains(params, self._n_dof)
         # Load the compiled kernels now (``UvmsModel._load_kernels``), not in the first period.
@@ -163,6 +128,7 @@ class UnifiedForceController:
         with contextlib.suppress(ControlInputError):  # then the first real step says why
             self.step(0.0, rest, rest, np.zeros(3))
         self.reset()
+        self._M_tilde = None  # the rest pose is no working configuration
 
     def _set_normal(self, normal: npt.ArrayLike) -> None:
         """Make n the force direction of the hybrid law (S = n nᵀ) and rebuild its maps."""
@@ -184,23 +150,56 @@ class UnifiedForceController:
         self._S: list[list[float]] = self.hybrid.S.tolist()
         self._I_minus_S: list[list[float]] = self.hybrid.I_minus_S.tolist()
 
-    def set_gains(self, params: ControllerParameters) -> None:
-        """Take new gains while running (runtime parameters), keeping the force law's state.
+    def check_gains(self, params: ControllerParameters) -> None:
+        """Refuse gains that do not fit this robot or whose sampled loops are unstable.
 
-        The impedance, hybrid and fuzzy laws and the null-space gains are rebuilt from
-        ``params``; the force integral, the derivative filter (when its cut-off is unchanged),
-        the task, the posture and the time origin carry over.
+        6 + n null-space gains; ``gain_stability`` at T with M̃ of the last step. No change.
+
+        Raises:
+            ControlParameterError: naming the parameter(s), the value and what is expected.
         """
-        old = self.hybrid
+        null_space_gains(params, self._n_dof)
+        check_gain_stability(params, self.control_period_s, params.max_environment_stiffness,
+                             self._M_tilde)
+
+    def set_gains(self, params: ControllerParameters) -> None:
+        """Take new gains while running, checked first (``check_gains``), without a bump.
+
+        The force integral and filter, task, posture and time origin carry over; the gains ramp
+        in (``gain_ramp``; a task that starts meanwhile takes them at once).
+
+        Raises:
+            ControlParameterError: from ``check_gains``; the controller is then unchanged.
+        """
+        self.check_gains(params)
+        self._end_ramp()
+        old_map, old_null, old_force = self._law_map, self._null_gains, self.hybrid.force_gains
+        old_fuzzy, old_hybrid = self.fuzzy, self.hybrid
         self.params = params
-        self.impedance = ImpedanceLaw(
-            params.impedance_inertia, params.impedance_damping, params.impedance_stiffness
-        )
+        self.impedance = ImpedanceLaw(params.impedance_inertia, params.impedance_damping,
+                                      params.impedance_stiffness)
         self.fuzzy = FuzzySwitch(params.fuzzy)
-        self._set_normal(old.n)
-        self.hybrid.carry_state_from(old)
+        self._set_normal(old_hybrid.n)
+        self.hybrid.carry_state_from(old_hybrid)
         self.task.set_contact_threshold(params.contact_threshold)
         self._null_gains = null_space_gains(params, self._n_dof)
+        self._ramp = GainRamp((old_map, self._law_map), (old_null, self._null_gains),
+                              (old_force, self.hybrid.force_gains), old_fuzzy)
+        self._law_map, self._null_gains = old_map, old_null
+        self.hybrid.force_gains = old_force
+
+    def _advance_ramp(self, ramp: GainRamp) -> None:
+        """One step further from the old gains to the new (``set_gains``)."""
+        self._law_map, self._null_gains, self.hybrid.force_gains = ramp.advance()
+        if ramp.done:
+            self._end_ramp()
+
+    def _end_ramp(self) -> None:
+        """Take the new gains of a running ramp at once."""
+        ramp, self._ramp = self._ramp, None
+        if ramp is not None:
+            self._law_map, self._null_gains = ramp.law_map[1], ramp.null_gains[1]
+            self.hybrid.force_gains = ramp.force_gains[1]
 
     def start_task(self, t: float, goal: ContactTaskGoal) -> None:
         """Follow a contact task from t (s): its path from the running X_d, F_d along its normal.
@@ -208,6 +207,7 @@ class UnifiedForceController:
         The goal must have passed ``contact_task.validate_goal``. The force law starts afresh
         (integral and derivative filter) along the new normal.
         """
+        self._end_ramp()
         self._set_normal(goal.normal)
         self.task.start(t, goal)
 
@@ -302,9 +302,18 @@ class UnifiedForceController:
             self._t_prev = t
             self._q0 = q.copy()
         self.task.capture(ts.X.tolist())
-        dt = max(t - self._t_prev, 0.0)
+        self._M_tilde = ts.M_tilde
+        # No step integrates more than one control period: after a gap (stale inputs, a
+        # paused simulation) the integral must not take in the whole gap at once.
+        gap = t - self._t_prev
+        dt = min(max(gap, 0.0), self.control_period_s)
+        if gap > GAP_RESTART_PERIODS * self.control_period_s:
+            self.hybrid.restart_derivative()
         self._t_prev = max(t, self._t_prev)
         p = self.params
+        ramp = self._ramp
+        if ramp is not None:
+            self._advance_ramp(ramp)
 
         reference = self.task.state(t)
         d0, d1, d2, w0, w1, w2 = reference[:6]
@@ -331,6 +340,8 @@ class UnifiedForceController:
             W = 1.0  # no force set-point: the impedance law holds or follows the path
         elif p.switch_mode == 'fuzzy':
             W = self.fuzzy.weight(force_ratio, v_e)
+            if ramp is not None:
+                W = ramp.blend_weight(W, force_ratio, v_e)
         else:
             W = 1.0 if p.switch_mode == 'impedance' else 0.0
         a_f = self.hybrid.force_acceleration(
