@@ -207,6 +207,8 @@ class RunMetrics:
         tracking_error: Largest ``‖X_d - X‖`` out of contact after the first second (m).
         vehicle_displacement: Largest distance of the vehicle from its start position (m).
         vehicle_rotation: Largest attitude change from the start attitude (rad).
+        current_speed: Mean speed of the ocean current (m/s), None in still water.
+        current_speed_max: Largest speed of the ocean current (m/s), None in still water.
     """
 
     name: str
@@ -228,6 +230,8 @@ class RunMetrics:
     tracking_error: float | None = None
     vehicle_displacement: float | None = None
     vehicle_rotation: float | None = None
+    current_speed: float | None = None
+    current_speed_max: float | None = None
 
 
 @dataclass(frozen=True)
@@ -308,6 +312,10 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
         values['vehicle_rotation'] = float(
             np.max(rotation_angle_from(run.odometry.quaternion[0], run.odometry.quaternion))
         )
+    if run.current is not None and run.current.t.size:
+        speed = np.linalg.norm(run.current.velocity, axis=1)
+        values['current_speed'] = float(np.mean(speed))
+        values['current_speed_max'] = float(np.max(speed))
     return RunMetrics(**values)
 
 
