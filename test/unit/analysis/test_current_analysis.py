@@ -67,3 +67,13 @@ def test_current_messages_become_a_series() -> None:
     assert run.current is not None
     np.testing.assert_allclose(run.current.t, [0.0, 1.0])
     np.testing.assert_allclose(run.current.velocity[:, 1], [0.2, 0.25])
+
+
+def test_thrust_saturation_metric_is_the_smallest_scale() -> None:
+    """saturation_scale_min: the smallest wrench scale of the allocator over the run."""
+    from uvms_analysis.series import ThrusterSeries
+
+    p = np.zeros((T.size, 8))
+    thrusters = ThrusterSeries(T, p, p, p, p, p, np.array([1.0, 1.0, 0.7, 0.9, 1.0]))
+    run = Run('saturated', thrusters=thrusters)
+    assert compute_metrics(run).saturation_scale_min == pytest.approx(0.7)
