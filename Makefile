@@ -16,7 +16,7 @@ BIN := $(VENV)/bin
 .PHONY: demo test test-py312 setup clean sweeps
 
 #: The shipped sweeps whose maps docs/results.md shows (config/sweeps/NAME.yaml).
-SWEEPS ?= stiffness_model_error noise_filter
+SWEEPS ?= stiffness_model_error noise_filter current
 SWEEP_WORKERS ?= 2
 
 setup: $(VENV)/.interfaces $(VENV)/.kernels

@@ -90,8 +90,20 @@ def bluerov2_alpha5_free_motion(scenario_runs: ScenarioRuns) -> ScenarioResult:
     return scenario_runs.get('bluerov2_alpha5_free_motion')
 
 
+@pytest.fixture(scope='session')
+def case1_current(scenario_runs: ScenarioRuns) -> ScenarioResult:
+    """Case I in an ocean current of 0.2 m/s along the wall's plane, the first 14 s."""
+    return scenario_runs.get('case1_current')
+
+
+@pytest.fixture(scope='session')
+def bluerov2_alpha5_current(scenario_runs: ScenarioRuns) -> ScenarioResult:
+    """The BlueROV2 + Alpha 5 contact task in 0.2 m/s along the wall's plane, first 14 s."""
+    return scenario_runs.get('bluerov2_alpha5_current')
+
+
 SCENARIO_FIXTURES = frozenset({
     'free_motion', 'case1_ke1e4', 'case1_ke1e5', 'case2_noise', 'case3_moving_wall',
     'case4_model_error', 'impedance_only', 'hybrid_only', 'bluerov2_alpha5_contact',
-    'bluerov2_alpha5_free_motion',
+    'bluerov2_alpha5_free_motion', 'case1_current', 'bluerov2_alpha5_current',
 })

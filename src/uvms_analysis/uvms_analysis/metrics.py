@@ -207,6 +207,10 @@ class RunMetrics:
         tracking_error: Largest ``‖X_d - X‖`` out of contact after the first second (m).
         vehicle_displacement: Largest distance of the vehicle from its start position (m).
         vehicle_rotation: Largest attitude change from the start attitude (rad).
+        current_speed: Mean speed of the ocean current (m/s), None in still water.
+        current_speed_max: Largest speed of the ocean current (m/s), None in still water.
+        saturation_scale_min: Smallest scale the allocator applied to the vehicle wrench to
+            keep the thrusts within their limits (1: never saturated).
     """
 
     name: str
@@ -228,6 +232,9 @@ class RunMetrics:
     tracking_error: float | None = None
     vehicle_displacement: float | None = None
     vehicle_rotation: float | None = None
+    current_speed: float | None = None
+    current_speed_max: float | None = None
+    saturation_scale_min: float | None = None
 
 
 @dataclass(frozen=True)
@@ -308,6 +315,12 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
         values['vehicle_rotation'] = float(
             np.max(rotation_angle_from(run.odometry.quaternion[0], run.odometry.quaternion))
         )
+    if run.thrusters is not None and run.thrusters.t.size:
+        values['saturation_scale_min'] = float(np.min(run.thrusters.saturation_scale))
+    if run.current is not None and run.current.t.size:
+        speed = np.linalg.norm(run.current.velocity, axis=1)
+        values['current_speed'] = float(np.mean(speed))
+        values['current_speed_max'] = float(np.max(speed))
     return RunMetrics(**values)
 
 

@@ -29,7 +29,7 @@ from matplotlib.figure import Figure
 from uvms_analysis.figure_style import FIGSIZE_TALL, _figure, _save
 from uvms_analysis.fuzzy_plots import plot_fuzzy
 from uvms_analysis.metrics import SETTLING_BAND, compute_metrics, contact_intervals, normal_force
-from uvms_analysis.series import AnalysisError, FloatArray, Run, load_run
+from uvms_analysis.series import AnalysisError, CurrentSeries, FloatArray, Run, load_run
 
 AXIS_COLORS = ('tab:red', 'tab:green', 'tab:blue')
 
@@ -244,14 +244,21 @@ def figure_position_errors(run: Run) -> Figure | None:
 
 
 def figure_vehicle_motion(run: Run) -> Figure | None:
-    """Vehicle position and attitude change from the start over time (paper Fig. 14)."""
+    """Vehicle position and attitude change from the start over time (paper Fig. 14).
+
+    With an ocean current in the recording, a third panel shows it (map_ned, m/s).
+    """
     if run.odometry is None or run.odometry.t.size == 0:
         return None
     odom = run.odometry
+    current = run.current if run.current is not None and run.current.t.size else None
     fig = _figure(FIGSIZE_TALL)
-    ax_p, ax_a = fig.subplots(2, 1, sharex=True)
+    axes = fig.subplots(2 if current is None else 3, 1, sharex=True)
+    ax_p, ax_a = axes[0], axes[1]
     _shade_contact(ax_p, run)
     _shade_contact(ax_a, run, label=False)
+    if current is not None:
+        _draw_current(axes[2], run, current)
     displacement_mm = (odom.position - odom.position[0]) * 1e3
     for k, axis in enumerate('xyz'):
         ax_p.plot(
@@ -270,12 +277,22 @@ def figure_vehicle_motion(run: Run) -> Figure | None:
         )
     ax_p.set_ylabel('position change, map_ned (mm)')
     ax_a.set_ylabel('attitude change (deg)')
-    ax_a.set_xlabel('time t (s)')
+    axes[-1].set_xlabel('time t (s)')
     ax_p.set_title(f'Vehicle motion during force control: {run.name}')
-    for ax in (ax_p, ax_a):
+    for ax in axes:
         ax.grid(True, alpha=0.4)
         ax.legend(loc='best', fontsize='small')
     return fig
+
+
+def _draw_current(ax: Axes, run: Run, current: CurrentSeries) -> None:
+    """The ocean current's components in map_ned (m/s) and its speed."""
+    _shade_contact(ax, run, label=False)
+    for k, axis in enumerate(('north', 'east', 'down')):
+        ax.plot(current.t, current.velocity[:, k], color=AXIS_COLORS[k], label=f'{axis}')
+    ax.plot(current.t, np.linalg.norm(current.velocity, axis=1), color='black', lw=0.8,
+            ls='--', label='speed')
+    ax.set_ylabel('ocean current, map_ned (m/s)')
 
 
 #: Line style and marker per thruster: symmetric thrusters carry the same thrust, so their

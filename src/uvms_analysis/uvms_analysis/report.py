@@ -92,6 +92,9 @@ COLUMNS = (
         _scaled('vehicle_rotation', 180.0 / math.pi),
         2,
     ),
+    Column('current\nmean', 'm/s', 'current_speed_m_s', _attr('current_speed'), 3),
+    Column('current\nmax', 'm/s', 'current_speed_max_m_s', _attr('current_speed_max'), 3),
+    Column('thrust\nscale', '', 'saturation_scale_min', _attr('saturation_scale_min'), 3),
     Column('force\nfrom', '', 'force_source', _attr('force_source')),
 )
 #: Columns that name a run rather than measure it (left-aligned; no sweep metric).
@@ -109,6 +112,8 @@ LEGEND = (
     'e = X_d - X of the end effector, in contact and over the whole run.',
     f'tracking error: max |X_d - X| out of contact after t = {TRACKING_START_S:g} s.',
     'vehicle displace / rotation: largest position / attitude change from the start.',
+    'current mean / max: speed of the ocean current (/uvms/ocean/current); n/a: still water.',
+    'thrust scale: smallest allocator scale of the vehicle wrench (1: thrusts never saturated).',
     'n/a: does not apply (e.g. force metrics of a run without contact).',
 )
 

@@ -31,6 +31,7 @@ TOPIC_CONTACT = '/uvms/contact'
 TOPIC_ODOMETRY = '/uvms/odometry'
 TOPIC_EE_POSE = '/uvms/ee_pose'
 TOPIC_THRUSTERS = '/uvms/thrusters/state'
+TOPIC_OCEAN_CURRENT = '/uvms/ocean/current'
 
 #: The topics that ``load_run`` turns into series.
 ANALYSIS_TOPICS = (
@@ -39,6 +40,7 @@ ANALYSIS_TOPICS = (
     TOPIC_ODOMETRY,
     TOPIC_EE_POSE,
     TOPIC_THRUSTERS,
+    TOPIC_OCEAN_CURRENT,
 )
 
 
@@ -167,6 +169,14 @@ class ThrusterSeries:
 
 
 @dataclass(frozen=True)
+class CurrentSeries:
+    """Ocean current samples: t (s) and the water's velocity in map_ned (m/s), (n, 3)."""
+
+    t: FloatArray
+    velocity: FloatArray
+
+
+@dataclass(frozen=True)
 class Run:
     """One recording as time series; a topic absent from the recording is None.
 
@@ -178,6 +188,7 @@ class Run:
         odometry: /uvms/odometry.
         ee_pose: /uvms/ee_pose.
         thrusters: /uvms/thrusters/state.
+        current: /uvms/ocean/current (None in still water: nothing is published).
         metadata: The recording's metadata records, by record name.
         time_origin_ns: Stamp (or log time) of t = 0 (ns).
         problem: What was lost if the recording was cut short, else None.
@@ -190,6 +201,7 @@ class Run:
     odometry: OdometrySeries | None = None
     ee_pose: PoseSeries | None = None
     thrusters: ThrusterSeries | None = None
+    current: CurrentSeries | None = None
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     time_origin_ns: int = 0
     problem: str | None = None
@@ -315,12 +327,18 @@ def thruster_series(t: FloatArray, msgs: Sequence[Any]) -> ThrusterSeries:
     )
 
 
+def current_series(t: FloatArray, msgs: Sequence[Any]) -> CurrentSeries:
+    """TwistStamped messages of the ocean current (linear part, map_ned) as a series."""
+    return CurrentSeries(t=t, velocity=_xyz(msg.twist.linear for msg in msgs))
+
+
 _SERIES_BUILDERS = {
     TOPIC_CONTROLLER_STATE: ('controller', controller_series),
     TOPIC_CONTACT: ('contact', contact_series),
     TOPIC_ODOMETRY: ('odometry', odometry_series),
     TOPIC_EE_POSE: ('ee_pose', pose_series),
     TOPIC_THRUSTERS: ('thrusters', thruster_series),
+    TOPIC_OCEAN_CURRENT: ('current', current_series),
 }
 
 

@@ -85,6 +85,7 @@ class BodyDynamics:
             strided_rows([data.v[k].vector for k in range(n)], 6),
             strided_rows([data.oMi[k].rotation[:, 0] for k in range(n)], 12),
             strided_rows([self._fext[k].vector for k in range(n)], 6),
+            hull_added,
         )
         # Sliders: M_ss is diagonal and constant (each carries its point mass only).
         self._slider_mass_inverse = 1.0 / np.array([model.inertias[j].mass for j in sliders])
@@ -124,6 +125,7 @@ class BodyDynamics:
         w: FloatArray | list[float],
         gravity_body: Vec3,
         f_ee_body: Vec3 | None,
+        current_body: Vec3 | None = None,
     ) -> FloatArray:
         """Accelerations of eq. 8 by ABA at (q_m, w) with the held tau_b: w_dot is ``[:6 + n]``.
 
@@ -132,6 +134,7 @@ class BodyDynamics:
             w: Quasi-velocities (6 + n,).
             gravity_body: Gravitational acceleration in base_link_frd (m/s^2).
             f_ee_body: Force ON the end effector in base_link_frd (N), or None.
+            current_body: The water's velocity in base_link_frd (m/s), or None (still water).
 
         Returns:
             A new array of the dynamic model's accelerations: w_dot (6 + n,), then the sliders'.
@@ -140,7 +143,7 @@ class BodyDynamics:
         self._w[:] = w
         model, data = self.model, self._data
         pin.forwardKinematics(model, data, self._config, self._v)
-        self.forces.apply(gravity_body, f_ee_body)
+        self.forces.apply(gravity_body, f_ee_body, current_body)
         if self._hull_added is not None:
             return self._solved_w_dot()
         result: FloatArray = pin.aba(model, data, self._config, self._v, self._tau, self._fext)
@@ -172,15 +175,20 @@ class BodyDynamics:
         return mass_b
 
     def mass_and_bias(
-        self, q_m: list[float], w: FloatArray, gravity_body: Vec3
+        self, q_m: list[float], w: FloatArray, gravity_body: Vec3,
+        current_body: Vec3 | None = None,
     ) -> tuple[FloatArray, FloatArray]:
-        """M_b(q_m) and C_b w + D_b w + G_b (eq. 8): CRBA and RNEA, sliders eliminated."""
+        """M_b(q_m) and C_b w + D_b w + G_b (eq. 8): CRBA and RNEA, sliders eliminated.
+
+        With ``current_body`` (v_c in base_link_frd, m/s) the bias is the relative-velocity
+        form's (``uvms_model.relative_flow``).
+        """
         self._w[:] = w
         self._arm_config[:] = q_m
         model, data = self.model, self._data
         full = pin.crba(model, data, self._config)  # a new symmetric array
         pin.forwardKinematics(model, data, self._config, self._v)
-        self.forces.apply(gravity_body, None)
+        self.forces.apply(gravity_body, None, current_body)
         tau = pin.rnea(model, data, self._config, self._v, self._zero, self._fext)
         return self._with_hull(*eliminate_sliders(full, tau, self._slider_mass_inverse))
 

@@ -10,7 +10,11 @@ and the arm links at the posed state (after forward kinematics):
   body twist;
 - gravity and buoyancy (G_b): each body's net weight W = m - rho V at its first moment
   h = m c_g - rho V c_b, along the gravity direction in the body frame;
-- the force on the end effector (contact), applied at ``ee_link``.
+- the force on the end effector (contact), applied at ``ee_link``;
+- with an ocean current (``current_base``, ``has_current``): drag on each body's velocity
+  relative to the water, nu_r = nu - [u_i; 0], and the added mass's terms turned into their
+  relative form (``uvms_model.relative_flow``, Fossen 2011 sec. 8.3). Without one, the kernel
+  runs exactly the arithmetic it ran before currents existed (bit-identical results).
 
 Speed: one compiled kernel (``external_forces``, Numba) on preallocated arrays. Every column
 of the linear maps touches one body, so each is kept as (body, six numbers): the twists give
@@ -37,6 +41,7 @@ from uvms_model.hydrodynamics import hull_quadratic_drag
 from uvms_model.jit import kernel
 from uvms_model.kinematics import skew
 from uvms_model.parameters import HydrodynamicsParameters
+from uvms_model.relative_flow import added_mass_flow_force, flow_in_bodies
 
 FloatArray = NDArray[np.float64]
 
@@ -118,6 +123,8 @@ class BodyForces:
         placements: (njoints, 12) view of its joint placements (rotation column-major, then
             translation).
         forces: (njoints, 6) view of its ``fext``.
+        hull_added: M_A (6, 6) of a hull given by coefficients, None otherwise (for the
+            current's added-mass terms; the others come from ``added``).
     """
 
     def __init__(
@@ -130,6 +137,7 @@ class BodyForces:
         twists: FloatArray,
         placements: FloatArray,
         forces: FloatArray,
+        hull_added: FloatArray | None = None,
     ) -> None:
         first_body, count = bodies[0], len(bodies)
         if bodies != list(range(first_body, first_body + count)):
@@ -228,14 +236,31 @@ class BodyForces:
         self._values = np.zeros(len(back))
         self._vectors = np.zeros((3, 2))  # [gravity direction, ee force] in base_link_frd
         self._vectors_flat = self._vectors.reshape(-1)
+        # The current: v_c in base_link_frd (written by the caller), each body's u_i, and the
+        # bodies whose added mass the current's relative form corrects.
+        self.current_base = np.zeros(3)
+        self.has_current = False
+        self._flow = np.zeros((count, 3))
+        matrices = [(body, body_added.matrix() if body_added is not None
+                     else hull_added if body == 0 else None)
+                    for body, body_added in enumerate(added)]
+        kept = [(body, m) for body, m in matrices if m is not None and np.any(m != 0.0)]
+        self._added_bodies = np.array([body for body, _ in kept], dtype=np.intp)
+        self._added_matrices = np.array([m for _, m in kept], dtype=float).reshape(-1, 6, 6)
 
-    def apply(self, gravity_body: Vec3, f_ee_body: Vec3 | None) -> None:
+    def apply(
+        self, gravity_body: Vec3, f_ee_body: Vec3 | None, current_body: Vec3 | None = None
+    ) -> None:
         """Write every body's external force into ``fext`` at the posed state (after FK).
 
         Args:
             gravity_body: Gravitational acceleration in base_link_frd (m/s^2).
             f_ee_body: Force ON the end effector in base_link_frd (N), or None.
+            current_body: The water's velocity v_c in base_link_frd (m/s), or None (still).
         """
+        self.has_current = current_body is not None
+        if current_body is not None:
+            self.current_base[:] = current_body
         g0, g1, g2 = gravity_body
         if f_ee_body is None:
             self._vectors_flat[:] = (g0, 0.0, g1, 0.0, g2, 0.0)
@@ -245,11 +270,15 @@ class BodyForces:
         self.apply_vectors(self._vectors)
 
     def apply_vectors(self, vectors: FloatArray) -> None:
-        """``apply`` with [gravity direction, ee force] (3, 2), base_link_frd, as one array."""
+        """``apply`` with [gravity direction, ee force] (3, 2), base_link_frd, as one array.
+
+        The current is ``current_base`` when ``has_current`` is set.
+        """
         external_forces(
             self._twists, self._rotations, vectors, self._forward_body, self._forward,
             self._back_body, self._back, self._n_linear, self._n_forms, self._n_strips,
-            self._values, self._forces,
+            self._values, self._forces, self.has_current, self.current_base, self._flow,
+            self._added_bodies, self._added_matrices,
         )  # fmt: skip
 
 
@@ -277,6 +306,8 @@ def external_forces(
     forward_body: NDArray[np.intp], forward: FloatArray,
     back_body: NDArray[np.intp], back: FloatArray,
     n_linear: int, n_forms: int, n_strips: int, values: FloatArray, forces: FloatArray,
+    has_current: bool, current_base: FloatArray, flow: FloatArray,
+    added_bodies: NDArray[np.intp], added_matrices: FloatArray,
 ) -> None:
     """The bodies' external forces (``forces``, 6 per body) from their twists and rotations.
 
@@ -285,13 +316,24 @@ def external_forces(
     (two normal directions), then the rotated vectors ``rotations @ vectors`` (gravity
     direction and ee force in each body frame, 4 rows a body, the translation row unused).
     Then ``forces = sum_j back_j values_j`` (drag gains, eigenvalues and net weights are in
-    ``back``).
+    ``back``). With ``has_current``, the drag speeds (linear and strips, not the slider forms)
+    are taken relative to the water, u_i = ``flow``[i] in body i's frame, and the added mass's
+    current terms are added (``relative_flow.added_mass_flow_force``).
     """
+    if has_current:
+        flow_in_bodies(rotations, current_base, flow)
     for j in range(n_linear + n_forms + 2 * n_strips):
-        base = 6 * forward_body[j]
+        body = forward_body[j]
+        base = 6 * body
         total = 0.0
-        for i in range(6):
-            total += twists[base + i] * forward[j, i]
+        if has_current and (j < n_linear or j >= n_linear + n_forms):
+            for i in range(3):
+                total += (twists[base + i] - flow[body, i]) * forward[j, i]
+            for i in range(3, 6):
+                total += twists[base + i] * forward[j, i]
+        else:
+            for i in range(6):
+                total += twists[base + i] * forward[j, i]
         values[j] = total
     for j in range(n_linear, n_linear + n_forms):
         values[j] = values[j] * values[j]
@@ -316,3 +358,5 @@ def external_forces(
         if value != 0.0:
             for i in range(6):
                 forces[base + i] += back[j, i] * value
+    if has_current:
+        added_mass_flow_force(twists, flow, added_bodies, added_matrices, forces)

@@ -14,6 +14,7 @@ the numpy calls that would make them.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,6 +24,30 @@ from uvms_model.jit import kernel
 from uvms_model.loop_products import matmul, matvec
 
 FloatArray = NDArray[np.float64]
+
+
+class TaskSpaceTerms(NamedTuple):
+    """What the controller needs at one state (q, q_dot), from one pass of the model.
+
+    Attributes:
+        X: End-effector position in map_ned (3,) (m).
+        J: End-effector Jacobian (3, 6 + n) in map_ned with respect to q_dot (eq. 22).
+        J_dot_q_dot: J_dot q_dot (3,) (m/s^2), eq. 23.
+        M: Mass matrix M(q) (6 + n, 6 + n) in generalized coordinates (eq. 18).
+        zeta: Bias zeta(q, q_dot) (6 + n,) of eq. 19.
+        B: Velocity transform B(q) (6 + n, 6 + n) of eq. 4.
+        rot_ned_from_ee: ee_link axes in map_ned (3, 3).
+        q_dot: Generalized velocities (6 + n,) of the state.
+    """
+
+    X: FloatArray
+    J: FloatArray
+    J_dot_q_dot: FloatArray
+    M: FloatArray
+    zeta: FloatArray
+    B: FloatArray
+    rot_ned_from_ee: FloatArray
+    q_dot: FloatArray
 
 
 @kernel

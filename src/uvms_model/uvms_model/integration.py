@@ -15,6 +15,7 @@ from uvms_model.body_dynamics import BodyDynamics
 from uvms_model.coordinates import (
     mat_t_vec,
     rotation,
+    rotation_matrix,
     velocity_transform,
     velocity_transforms,
 )
@@ -47,11 +48,16 @@ class Rk4Integrator:
         self._vectors = np.zeros((3, 2))
         self._force = np.zeros(3)
         self._no_w_dot = np.zeros(n)
+        self._current_ned = np.zeros(3)
 
     def step(
-        self, q: FloatArray, w: FloatArray, f_ned: list[float] | None, dt: float
+        self, q: FloatArray, w: FloatArray, f_ned: list[float] | None, dt: float,
+        current_ned: FloatArray | None = None,
     ) -> tuple[FloatArray, FloatArray]:
         """One step from (q, w) with the force ON the end effector f_ned (N, map_ned) or None.
+
+        ``current_ned`` is the water's velocity v_c (m/s, map_ned), held over the step, or None
+        for still water (then every stage runs as it did before currents existed).
 
         Returns:
             (q, w) at t + dt, views of one new array.
@@ -68,9 +74,16 @@ class Rk4Integrator:
             self._force[:] = f_ned
         arm, velocities, vectors = dynamics.arm_angles, dynamics.quasi_velocities, self._vectors
         w_dot = self._no_w_dot
+        forces = dynamics.forces
+        forces.has_current = has_current = current_ned is not None
+        if current_ned is not None:
+            self._current_ned[:] = current_ned
         for stage, h in enumerate((0.0, 0.5 * dt, 0.5 * dt, dt)):
             theta = rk4_stage_input(state, slopes, stage, w_dot, h, self._g, self._force,
                                     has_force, arm, velocities, vectors)
+            if has_current:
+                rotate_to_body(state, slopes, stage, h, self._current_ned,
+                               forces.current_base)
             check_pitch(theta, 'q (during integration)')
             w_dot = dynamics.accelerations_as_posed(vectors)
         result = np.empty(2 * n)
@@ -112,6 +125,21 @@ def rk4_stage_input(
 
 
 @kernel
+def rotate_to_body(
+    state: FloatArray, slopes: FloatArray, stage: int, h: float, v_ned: FloatArray,
+    out: FloatArray,
+) -> None:
+    """R^T v_ned (base_link_frd) at the attitude of RK4 stage ``stage`` (as rk4_stage_input)."""
+    phi, theta, psi = state[3], state[4], state[5]
+    if stage > 0:
+        k = slopes[stage - 1]
+        phi, theta, psi = phi + h * k[3], theta + h * k[4], psi + h * k[5]
+    rot = rotation_matrix(phi, theta, psi)
+    for i in range(3):
+        out[i] = rot[0, i] * v_ned[0] + rot[1, i] * v_ned[1] + rot[2, i] * v_ned[2]
+
+
+@kernel
 def rk4_combine(
     state: FloatArray, slopes: FloatArray, w_dot_last: FloatArray, dt: float, out: FloatArray
 ) -> None:
@@ -133,6 +161,7 @@ def semi_implicit_euler_step(
     w: FloatArray,
     f_ned: list[float] | None,
     dt: float,
+    current_ned: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """One semi-implicit (symplectic) Euler step: w first, then q with the new w.
 
@@ -143,7 +172,8 @@ def semi_implicit_euler_step(
     """
     rot = rotation(q[3], q[4], q[5])
     f_body = None if f_ned is None else mat_t_vec(rot, f_ned)
-    w_dot = dynamics.w_dot(q[6:], w, (g * rot[6], g * rot[7], g * rot[8]), f_body)
+    current = None if current_ned is None else mat_t_vec(rot, current_ned.tolist())
+    w_dot = dynamics.w_dot(q[6:], w, (g * rot[6], g * rot[7], g * rot[8]), f_body, current)
     w_new: FloatArray = w + dt * w_dot[:dynamics.n_dof]
     q_arr = np.asarray(q)
     q_new: FloatArray = q_arr + dt * velocity_transform(q_arr, 'q (during integration)').dot(w_new)

@@ -35,6 +35,8 @@ def compile_model_kernels(model: UvmsModel | None = None) -> UvmsModel:
     model.step(q, zeros, zeros, [1.0, 0.0, 0.0], 1e-3)
     model.step(q, zeros, zeros, None, 1e-3)
     model.step(q, zeros, zeros, None, 1e-3, method='semi_implicit_euler')
+    model.step(q, zeros, zeros, None, 1e-3, current_ned=[0.1, 0.05, 0.0])
+    model.bias_body(q, zeros, [0.1, 0.05, 0.0])
     model.task_space_terms(q, zeros)
     return model
 

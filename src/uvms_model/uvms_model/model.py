@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,7 +33,7 @@ from uvms_model.coordinates import (
 from uvms_model.description import EE_LINK, RobotDescription, load_description
 from uvms_model.errors import ModelError, StateError
 from uvms_model.frames import FrameKinematics
-from uvms_model.generalized_terms import generalized_terms
+from uvms_model.generalized_terms import TaskSpaceTerms, generalized_terms
 from uvms_model.integration import Rk4Integrator, semi_implicit_euler_step
 from uvms_model.kinematics import check_pitch
 from uvms_model.parameters import UvmsParameters
@@ -44,30 +43,6 @@ FloatArray = NDArray[np.float64]
 
 
 __all__ = ['TaskSpaceTerms', 'UvmsModel']
-
-
-class TaskSpaceTerms(NamedTuple):
-    """What the controller needs at one state (q, q_dot), from one pass of the model.
-
-    Attributes:
-        X: End-effector position in map_ned (3,) (m).
-        J: End-effector Jacobian (3, 6 + n) in map_ned with respect to q_dot (eq. 22).
-        J_dot_q_dot: J_dot q_dot (3,) (m/s^2), eq. 23.
-        M: Mass matrix M(q) (6 + n, 6 + n) in generalized coordinates (eq. 18).
-        zeta: Bias zeta(q, q_dot) (6 + n,) of eq. 19.
-        B: Velocity transform B(q) (6 + n, 6 + n) of eq. 4.
-        rot_ned_from_ee: ee_link axes in map_ned (3, 3).
-        q_dot: Generalized velocities (6 + n,) of the state.
-    """
-
-    X: FloatArray
-    J: FloatArray
-    J_dot_q_dot: FloatArray
-    M: FloatArray
-    zeta: FloatArray
-    B: FloatArray
-    rot_ned_from_ee: FloatArray
-    q_dot: FloatArray
 
 
 def _vector(name: str, value: ArrayLike, size: int) -> FloatArray:
@@ -157,6 +132,7 @@ class UvmsModel:
         rest = np.zeros(self.n_dof)
         self.step(rest, rest, rest, (0.0, 0.0, 0.0), 1e-3)
         self.step(rest, rest, rest, None, 1e-3)
+        self.step(rest, rest, rest, None, 1e-3, current_ned=(0.1, 0.0, 0.0))
         self.task_space_terms(rest, w=rest)
 
     def _gravity_body(self, rot: Sequence[float]) -> Vec3:
@@ -174,12 +150,26 @@ class UvmsModel:
         q = self._check_q(q)
         return self.dynamics.mass(q.tolist()[6:])
 
-    def bias_body(self, q: ArrayLike, w: ArrayLike) -> FloatArray:
-        """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (6 + n,) of eq. 8: M_b w_dot + bias = tau_b."""
+    def bias_body(
+        self, q: ArrayLike, w: ArrayLike, current_ned: ArrayLike | None = None
+    ) -> FloatArray:
+        """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (6 + n,) of eq. 8: M_b w_dot + bias = tau_b.
+
+        With ``current_ned`` (the water's velocity v_c in map_ned, m/s) the drag and the added
+        mass's terms are those of the relative velocity nu_r = nu - nu_c, and the bias holds
+        the current's term -M_A nu_c_dot (Fossen 2011, sec. 8.3; ``uvms_model.relative_flow``).
+        """
         q_list = self._check_q(q).tolist()
         w = _vector('w', w, self.n_dof)
-        gravity = self._gravity_body(rotation(q_list[3], q_list[4], q_list[5]))
-        return self.dynamics.mass_and_bias(q_list[6:], w, gravity)[1]
+        rot = rotation(q_list[3], q_list[4], q_list[5])
+        current = self._current_body(rot, current_ned)
+        return self.dynamics.mass_and_bias(q_list[6:], w, self._gravity_body(rot), current)[1]
+
+    def _current_body(self, rot: Sequence[float], current_ned: ArrayLike | None) -> Vec3 | None:
+        """R^T v_c (base_link_frd) of a current in map_ned, or None (still water)."""
+        if current_ned is None:
+            return None
+        return mat_t_vec(rot, _vector('current_ned', current_ned, 3).tolist())
 
     def gravity_body(self, q: ArrayLike) -> FloatArray:
         """G_b(q) (6 + n,) of eq. 8: gravity and buoyancy as generalized body forces."""
@@ -196,6 +186,7 @@ class UvmsModel:
         w: ArrayLike,
         tau_b: ArrayLike,
         f_ee_ned: ArrayLike | None = None,
+        current_ned: ArrayLike | None = None,
     ) -> FloatArray:
         """Quasi-accelerations w_dot (6 + n,) from eq. 8: M_b w_dot = tau_b + J_w^T f - bias.
 
@@ -206,6 +197,8 @@ class UvmsModel:
                 about the body origin, then joint torques.
             f_ee_ned: Force acting ON the end effector, in map_ned (3,) (N); None for none.
                 A wall contact force F_e exerted BY the end effector enters as -F_e.
+            current_ned: The water's velocity v_c in map_ned (3,) (m/s), or None for still
+                water (``bias_body``).
         """
         q_list = self._check_q(q).tolist()
         w = _vector('w', w, self.n_dof)
@@ -214,7 +207,8 @@ class UvmsModel:
         rot = rotation(q_list[3], q_list[4], q_list[5])
         self.dynamics.set_tau_b(tau_b)
         f_body = None if f is None else mat_t_vec(rot, f)
-        w_dot: FloatArray = self.dynamics.w_dot(q_list[6:], w, self._gravity_body(rot), f_body)
+        w_dot: FloatArray = self.dynamics.w_dot(q_list[6:], w, self._gravity_body(rot), f_body,
+                                                self._current_body(rot, current_ned))
         return w_dot[:self.n_dof]
 
     # ------------------------------------------------------------------ integration
@@ -228,8 +222,9 @@ class UvmsModel:
         dt: float,
         *,
         method: str | None = None,
+        current_ned: ArrayLike | None = None,
     ) -> tuple[FloatArray, FloatArray]:
-        """Advance (q, w) by one fixed step dt with tau_b and f_ee_ned held constant.
+        """Advance (q, w) by one fixed step dt with tau_b, f_ee_ned and the current held.
 
         Args:
             q: Generalized coordinates (6 + n,).
@@ -238,6 +233,8 @@ class UvmsModel:
             f_ee_ned: Force ON the end effector in map_ned (3,) (N), or None.
             dt: Step (s), positive.
             method: 'rk4' or 'semi_implicit_euler'; None uses ``integration.method``.
+            current_ned: The water's velocity v_c in map_ned (3,) (m/s), uniform and held over
+                the step, or None for still water (``bias_body``).
 
         Returns:
             (q, w) at t + dt.
@@ -246,6 +243,7 @@ class UvmsModel:
             StateError: For a wrong shape, a non-finite input or a non-finite result.
             SingularAttitudeError: If the pitch reaches +-90 deg.
         """
+        current = None if current_ned is None else _vector('current_ned', current_ned, 3)
         q_arr = np.asarray(q, dtype=float)
         w_arr = np.asarray(w, dtype=float)
         tau_arr = np.asarray(tau_b, dtype=float)
@@ -267,9 +265,10 @@ class UvmsModel:
         self.dynamics.set_tau_b(tau_arr)
         dt = float(dt)
         if method == 'rk4':
-            q_new, w_new = self._rk4.step(q_arr, w_arr, f, dt)
+            q_new, w_new = self._rk4.step(q_arr, w_arr, f, dt, current)
         elif method == 'semi_implicit_euler':
-            q_new, w_new = semi_implicit_euler_step(self.dynamics, self._g, q_list, w_arr, f, dt)
+            q_new, w_new = semi_implicit_euler_step(self.dynamics, self._g, q_list, w_arr, f, dt,
+                                                    current)
         else:
             raise ModelError(f"method = {method!r} must be 'rk4' or 'semi_implicit_euler'")
         if not math.isfinite(sum(q_new.tolist()) + sum(w_new.tolist())):

@@ -48,6 +48,7 @@ DEFAULT_TOPICS = (
     '/tf_static:tf2_msgs/msg/TFMessage',
     '/robot_description:std_msgs/msg/String',
     'markers:visualization_msgs/msg/MarkerArray',
+    'ocean/current:geometry_msgs/msg/TwistStamped',
 )
 
 COMPRESSIONS = ('zstd', 'lz4', 'none')

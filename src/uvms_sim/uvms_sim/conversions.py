@@ -345,3 +345,15 @@ def actuator_command_arrays(
             msg_text = f'{field} holds a non-finite value: {values.tolist()}'
             raise CommandError(msg_text)
     return ns_from_time(msg.header.stamp), thrusts, torques
+
+
+def current_message(t_ns: int, v_ned: FloatArray) -> Any:
+    """geometry_msgs/TwistStamped of the ocean current: the water's velocity in map_ned (m/s).
+
+    The angular part is zero (a uniform, irrotational current).
+    """
+    from geometry_msgs.msg import TwistStamped
+
+    msg = TwistStamped(header=Header(frame_id=MAP_NED, stamp=time_from_ns(t_ns)))
+    msg.twist.linear = _vector3(v_ned)
+    return msg

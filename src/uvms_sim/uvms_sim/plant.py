@@ -16,6 +16,7 @@ from typing import Any, NoReturn
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from uvms_model.contact import ContactState, WallContact
+from uvms_model.ocean_current import CurrentParameters, OceanCurrent
 from uvms_model.sensors import ForceTorqueSensor, contact_wrench_in_sensor_frame
 from uvms_model.thrusters import configuration_matrix
 
@@ -146,6 +147,8 @@ class Plant:
             (``contact.wall_speed_m_s``) starts to move; 0 starts it at the first touch, as
             ``uvms_model.contact`` does.
         limits: Divergence bounds.
+        current: The ocean current's process (``uvms_model.ocean_current``), seeded with
+            ``sensor.seed`` (the scenario's seed); None or all zero: still water.
 
     Example:
         >>> plant = Plant(UvmsParameters(), np.zeros(9))  # paper robot; doctest: +SKIP
@@ -162,6 +165,7 @@ class Plant:
         wall_enabled: bool = True,
         wall_motion_start_force_n: float = 0.0,
         limits: DivergenceLimits | None = None,
+        current: CurrentParameters | None = None,
     ) -> None:
         if dt_ns <= 0:
             msg = f'dt_ns must be a positive number of nanoseconds, got {dt_ns}'
@@ -190,6 +194,7 @@ class Plant:
         self._thrusts = np.zeros(self.n_thrusters)
         self._joint_torques = np.zeros(self.n_joints)
         self._failure: SimulationError | None = None
+        self._current = OceanCurrent(current, params.sensor.seed)
         self._check_state(None)
 
     @property
@@ -211,6 +216,20 @@ class Plant:
     def w(self) -> FloatArray:
         """Quasi-velocities (6 + n,): body linear and angular velocity, joint rates."""
         return self._w.copy()
+
+    @property
+    def current_ned(self) -> FloatArray:
+        """The water's velocity (m/s, map_ned) the next step applies (zero in still water)."""
+        return self._current.velocity_ned
+
+    @property
+    def current_parameters(self) -> CurrentParameters:
+        """The ocean current's parameters in force."""
+        return self._current.params
+
+    def set_current(self, params: CurrentParameters) -> None:
+        """Replace the current's parameters (at run time too); it restarts at their means."""
+        self._current.configure(params)
 
     @property
     def joint_torques(self) -> FloatArray:
@@ -304,8 +323,11 @@ class Plant:
                 contact = self._wall.update(t_s, p_ee, self._ee_velocity())
             if contact.in_contact:
                 f_on_ee = -contact.force_ned
+        # Still water takes the model's path without a current (bit-identical to no current).
+        current = self._current.velocity_ned if self._current.enabled else None
         try:
-            q, w = self.model.step(self._q, self._w, tau_b, f_on_ee, self._dt_s)
+            q, w = self.model.step(self._q, self._w, tau_b, f_on_ee, self._dt_s,
+                                   current_ned=current)
         except SingularAttitudeError as exc:
             self._fail(DivergenceError(
                 f'the vehicle pitch reached the Euler-angle singularity (+-90 deg) at '
@@ -324,6 +346,7 @@ class Plant:
             self._fail(exc)
         self._thrusts = thrusts
         self._joint_torques = joint_torques
+        self._current.step(self._dt_s)
         self._t_ns += self._dt_ns
 
     def _fail(self, error: SimulationError) -> NoReturn:

@@ -38,6 +38,7 @@ from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError
+from uvms_sim.ocean_node import OceanCurrentInterface
 from uvms_sim.parameters import (
     SIMULATOR_PARAMETERS,
     SimulatorSettings,
@@ -91,6 +92,8 @@ class SimulatorNode(Node):
         self._wrench_pub = self.create_publisher(WrenchStamped, 'wrench', reliable)
         self._ee_pub = self.create_publisher(PoseStamped, 'ee_pose', reliable)
         self._contact_pub = self.create_publisher(ContactState, 'contact', reliable)
+        # ocean.current.* (writable at run time) and ocean/current, at the ground-truth rate.
+        self._ocean = OceanCurrentInterface(self, self._plant, reliable)
         self._tf_pub = self._static_tf_pub = None
         if cfg.publishes_per_tf:
             self._tf_pub = self.create_publisher(TFMessage, '/tf', QoSProfile(depth=100))
@@ -317,6 +320,7 @@ class SimulatorNode(Node):
         if ground_truth_due:
             self._ee_pub.publish(out.ee_pose)
             self._contact_pub.publish(out.contact)
+            self._ocean.publish(seen.t_ns)
         if tf_due:
             self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses, self._parents))
         self._published += 1

@@ -411,6 +411,13 @@ class ReferenceModel:
             block = slice(6 * i + 6, 6 * i + 12)
             self._inertia_blocks[block, block] = rigid_links[i] + added_links[i]
         self._inertia_link_blocks = self._inertia_blocks[6:, 6:].copy()
+        # Added mass alone, for the current's relative velocity (Fossen 2011, sec. 8.3).
+        self._added_blocks = np.zeros((4 * 6, 4 * 6))
+        self._added_blocks[:6, :6] = added_vehicle
+        for i in range(N_JOINTS):
+            block = slice(6 * i + 6, 6 * i + 12)
+            self._added_blocks[block, block] = added_links[i]
+        self._rigid_blocks = self._inertia_blocks - self._added_blocks
 
         # Gravity and buoyancy as net ("wet") masses W_i and first moments W_i c_i.
         total_mass = veh.mass_kg + sum(masses)
@@ -566,25 +573,47 @@ class ReferenceModel:
         w: FloatArray,
         f_ee_ned: list[float] | None,
         rot: Mat3 | None = None,
+        current_ned: list[float] | None = None,
     ) -> FloatArray:
         """C_b w + D_b w + G_b - J_ee^T f_ee (9,): RNEA at w_dot = 0 (eq. 8).
 
-        ``rot`` is rot_ned_from_body of q when the caller has it already.
+        ``rot`` is rot_ned_from_body of q when the caller has it already. With a current
+        (``current_ned``, m/s, uniform and constant), each body's velocity relative to the
+        water nu_r,i = nu_i - [u_i; 0], u_i = R_i^T v_c, replaces nu_i in drag and added mass:
+        f_i = I_i a_i + nu_i x* I_RB,i nu_i + nu_r,i x* M_A,i nu_r,i - M_A,i nu_c_dot,i with
+        nu_c_dot,i = [-omega_i x u_i; 0] (Fossen 2011, sec. 8.3).
         """
         nu = cfg.jac_local.dot(w)  # body twists, own frames (24,)
         bias_acc = self._bias_accelerations(cfg, nu.tolist(), w_list)
-        # f_i = I_i a_i + nu_i x* I_i nu_i.
-        momenta = self._inertia_blocks.dot(nu).reshape(4, 1, 6)
-        forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36).dot(self._force_cross)
-        forces[1:] += self._inertia_link_blocks.dot(bias_acc).reshape(N_JOINTS, 6)
         if rot is None:
             rot = _rotation(q[3], q[4], q[5])
-        forces -= np.array(self._body_wrenches(cfg, rot, w_list, f_ee_ned)).reshape(4, 6)
+        nu_r, drag_w = nu, w_list
+        if current_ned is None:
+            # f_i = I_i a_i + nu_i x* I_i nu_i.
+            momenta = self._inertia_blocks.dot(nu).reshape(4, 1, 6)
+            forces = (nu.reshape(4, 6, 1) * momenta).reshape(4, 36).dot(self._force_cross)
+        else:
+            u_body = _mat_t_vec(rot, current_ned)
+            flows = [u_body] + [_mat_t_vec(cfg.rotations[i], u_body) for i in range(N_JOINTS)]
+            flow = np.zeros((4, 6))
+            nu_c_dot = np.zeros((4, 6))
+            for i, u in enumerate(flows):
+                flow[i, :3] = u
+                nu_c_dot[i, :3] = [-c for c in _cross(nu[6 * i + 3 : 6 * i + 6].tolist(), u)]
+            nu_r = nu - flow.reshape(-1)
+            drag_w = [w_list[k] - u_body[k] if k < 3 else w_list[k] for k in range(N_DOF)]
+            rigid = self._rigid_blocks.dot(nu).reshape(4, 1, 6)
+            added = self._added_blocks.dot(nu_r).reshape(4, 1, 6)
+            forces = (nu.reshape(4, 6, 1) * rigid).reshape(4, 36).dot(self._force_cross)
+            forces += (nu_r.reshape(4, 6, 1) * added).reshape(4, 36).dot(self._force_cross)
+            forces -= self._added_blocks.dot(nu_c_dot.reshape(-1)).reshape(4, 6)
+        forces[1:] += self._inertia_link_blocks.dot(bias_acc).reshape(N_JOINTS, 6)
+        forces -= np.array(self._body_wrenches(cfg, rot, drag_w, f_ee_ned)).reshape(4, 6)
         if self._drag_enabled:
             # Cross-flow strips: dF = -1/2 rho C_D (2 r) |v_n| v_n dx. The strip rows map a
             # link twist to the normal velocities at the strips, their transpose the strip
             # forces back to a link wrench.
-            normal = nu[6:].dot(self._strip_map).reshape(N_JOINTS, 2, self._strip_count)
+            normal = nu_r[6:].dot(self._strip_map).reshape(N_JOINTS, 2, self._strip_count)
             normal *= (self._strip_gain * np.hypot(normal[:, 0], normal[:, 1]))[:, None, :]
             forces[1:] += self._strip_map.dot(normal.reshape(-1)).reshape(N_JOINTS, 6)
         result: FloatArray = forces.reshape(4 * 6).dot(cfg.jac_local)
@@ -688,22 +717,24 @@ class ReferenceModel:
         return result
 
     def _w_dot(
-        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f_ee_ned: list[float] | None
+        self, q: FloatArray, w: FloatArray, tau_b: FloatArray, f_ee_ned: list[float] | None,
+        current_ned: list[float] | None = None,
     ) -> FloatArray:
         q_list = q.tolist()
         cfg = self._configuration(q_list[6], q_list[7], q_list[8])
-        bias = self._bias(cfg, q_list, w.tolist(), w, f_ee_ned)
+        bias = self._bias(cfg, q_list, w.tolist(), w, f_ee_ned, None, current_ned)
         return self._solve(self._mass(cfg), tau_b - bias)
 
     def _derivative(
-        self, state: FloatArray, tau_b: FloatArray, f_ee_ned: list[float] | None
+        self, state: FloatArray, tau_b: FloatArray, f_ee_ned: list[float] | None,
+        current_ned: list[float] | None = None,
     ) -> FloatArray:
         """(q_dot, w_dot) (18,) of the state (q, w) (18,): eq. 4 and eq. 8."""
         values = state.tolist()
         q, w = values[:9], values[9:]
         cfg = self._configuration(q[6], q[7], q[8])
         rot = _rotation(q[3], q[4], q[5])
-        bias = self._bias(cfg, q, w, state[9:], f_ee_ned, rot)
+        bias = self._bias(cfg, q, w, state[9:], f_ee_ned, rot, current_ned)
         derivative = np.empty(2 * N_DOF)
         derivative[:9] = self._q_dot(q, w, rot)
         derivative[9:] = self._solve(self._mass(cfg), tau_b - bias)
@@ -738,13 +769,16 @@ class ReferenceModel:
         q = self._check_q(q)
         return self._mass(self._configuration(*q[6:].tolist())).copy()
 
-    def bias_body(self, q: ArrayLike, w: ArrayLike) -> FloatArray:
+    def bias_body(
+        self, q: ArrayLike, w: ArrayLike, current_ned: ArrayLike | None = None
+    ) -> FloatArray:
         """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (9,) of eq. 8, so M_b w_dot + bias = tau_b."""
         q = self._check_q(q)
         w = _vector('w', w, N_DOF)
         q_list = q.tolist()
         cfg = self._configuration(*q_list[6:])
-        return self._bias(cfg, q_list, w.tolist(), w, None)
+        current = None if current_ned is None else _vector('current_ned', current_ned, 3).tolist()
+        return self._bias(cfg, q_list, w.tolist(), w, None, None, current)
 
     def gravity_body(self, q: ArrayLike) -> FloatArray:
         """G_b(q) (9,) of eq. 8: gravity and buoyancy as generalized body forces."""
@@ -768,6 +802,7 @@ class ReferenceModel:
         w: ArrayLike,
         tau_b: ArrayLike,
         f_ee_ned: ArrayLike | None = None,
+        current_ned: ArrayLike | None = None,
     ) -> FloatArray:
         """Quasi-accelerations w_dot (9,) from eq. 8: M_b w_dot = tau_b + J_w^T f - bias.
 
@@ -778,12 +813,14 @@ class ReferenceModel:
                 about the body origin, then joint torques.
             f_ee_ned: Force acting ON the end effector, in map_ned (3,) (N); None for none.
                 A wall contact force F_e exerted BY the end effector enters as -F_e.
+            current_ned: The water's velocity in map_ned (3,) (m/s), or None (still water).
         """
         q = self._check_q(q)
         w = _vector('w', w, N_DOF)
         tau_b = _vector('tau_b', tau_b, N_DOF)
         f = None if f_ee_ned is None else _vector('f_ee_ned', f_ee_ned, 3).tolist()
-        return self._w_dot(q, w, tau_b, f)
+        current = None if current_ned is None else _vector('current_ned', current_ned, 3).tolist()
+        return self._w_dot(q, w, tau_b, f, current)
 
     def step(
         self,
@@ -794,8 +831,9 @@ class ReferenceModel:
         dt: float,
         *,
         method: str | None = None,
+        current_ned: ArrayLike | None = None,
     ) -> tuple[FloatArray, FloatArray]:
-        """Advance (q, w) by one fixed step dt with tau_b and f_ee_ned held constant.
+        """Advance (q, w) by one fixed step dt with tau_b, f_ee_ned and the current held.
 
         Args:
             q: Generalized coordinates (9,).
@@ -804,6 +842,7 @@ class ReferenceModel:
             f_ee_ned: Force ON the end effector in map_ned (3,) (N), or None.
             dt: Step (s), positive.
             method: 'rk4' or 'semi_implicit_euler'; None uses ``integration.method``.
+            current_ned: The water's velocity in map_ned (3,) (m/s), or None (still water).
 
         Returns:
             (q, w) at t + dt.
@@ -827,11 +866,12 @@ class ReferenceModel:
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
             raise StateError(f'dt must be a positive finite number of seconds, got {dt!r}')
         method = self._method if method is None else method
+        current = None if current_ned is None else _vector('current_ned', current_ned, 3).tolist()
         if method == 'rk4':
-            state_new = self._rk4(state, tau_b, f, float(dt))
+            state_new = self._rk4(state, tau_b, f, float(dt), current)
         elif method == 'semi_implicit_euler':
             q, w = state[:N_DOF], state[N_DOF:]
-            w_new = w + dt * self._w_dot(q, w, tau_b, f)
+            w_new = w + dt * self._w_dot(q, w, tau_b, f, current)
             q_new = q + dt * np.array(self._q_dot(q.tolist(), w_new.tolist()))
             state_new = np.concatenate((q_new, w_new))
         else:
@@ -846,14 +886,15 @@ class ReferenceModel:
         return q_new, w_new
 
     def _rk4(
-        self, state: FloatArray, tau_b: FloatArray, f: list[float] | None, dt: float
+        self, state: FloatArray, tau_b: FloatArray, f: list[float] | None, dt: float,
+        current: list[float] | None = None,
     ) -> FloatArray:
         """Classical fourth-order Runge-Kutta step of (q_dot, w_dot) = (B w, M_b^-1 (...))."""
         half = 0.5 * dt
-        k1 = self._derivative(state, tau_b, f)
-        k2 = self._derivative(state + half * k1, tau_b, f)
-        k3 = self._derivative(state + half * k2, tau_b, f)
-        k4 = self._derivative(state + dt * k3, tau_b, f)
+        k1 = self._derivative(state, tau_b, f, current)
+        k2 = self._derivative(state + half * k1, tau_b, f, current)
+        k3 = self._derivative(state + half * k2, tau_b, f, current)
+        k4 = self._derivative(state + dt * k3, tau_b, f, current)
         result: FloatArray = state + (dt / 6.0) * (k1 + k4 + 2.0 * (k2 + k3))
         return result
 

@@ -96,7 +96,7 @@ def test_bad_sweep_file_names_the_key(tmp_path: Path, old: str, new: str, key: s
     assert key in str(error.value)
 
 
-@pytest.mark.parametrize('name', ['stiffness_model_error', 'noise_filter'])
+@pytest.mark.parametrize('name', ['stiffness_model_error', 'noise_filter', 'current'])
 def test_shipped_sweeps_follow_the_schema(name: str) -> None:
     """config/sweeps/*.yaml load; their grids are the ones docs/results.md describes."""
     sweep = load_sweep(SWEEPS / f'{name}.yaml')
