@@ -3,8 +3,9 @@
 A robot is a folder ``robots/<name>/`` of the share directory (docs/robots.md, "Adding a
 robot"). Its URDF (``robot.urdf``, or ``robot.urdf.xacro`` expanded here with the PyPI
 ``xacro`` package) and ``hydrodynamics.yaml`` are read by ``uvms_model.description``; its
-``thrusters.yaml``, ``sensor.yaml`` and ``controller.yaml`` are ROS 2 parameter files whose
-values a node takes as its defaults (``robot_parameters``). Pure Python: no rclpy.
+``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and ``navigation.yaml`` are ROS 2
+parameter files whose values a node takes as its defaults (``robot_parameters``). Pure
+Python: no rclpy.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from uvms_description import DEFAULT_ROBOT, robots_directory
 URDF_FILES = ('robot.urdf', 'robot.urdf.xacro')
 """A robot's URDF: exactly one of these."""
 HYDRODYNAMICS_FILE = 'hydrodynamics.yaml'
-PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml')
+PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml', 'navigation.yaml')
 """The robot's ROS 2 parameter files, in the order their values are merged."""
 _NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _SECTION = re.compile(r'^(/\*\*|/\*\*/(?P<node>[A-Za-z_][A-Za-z0-9_]*))$')
@@ -41,7 +42,8 @@ class RobotFiles:
         directory: The folder.
         urdf: ``robot.urdf`` or ``robot.urdf.xacro``.
         hydrodynamics: ``hydrodynamics.yaml``.
-        parameter_files: ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``.
+        parameter_files: ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``,
+            ``navigation.yaml``.
     """
 
     name: str
@@ -177,7 +179,8 @@ def robot_parameters(
 ) -> dict[str, RobotParameter]:
     """The values a node takes as defaults from robot ``name``'s parameter files.
 
-    Every value of ``thrusters.yaml``, ``sensor.yaml`` and ``controller.yaml`` for ``node``
+    Every value of ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and
+    ``navigation.yaml`` for ``node``
     (flat dotted names). The URDF and hydrodynamics paths are not among them (a recording
     would carry this machine's paths): ``with_description_paths`` fills them in.
 

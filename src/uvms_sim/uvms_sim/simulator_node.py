@@ -32,6 +32,7 @@ from uvms_common.robot_parameters import (
     robot_model_values,
     with_robot_source,
 )
+from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
@@ -66,12 +67,20 @@ class SimulatorNode(Node):
         values = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
                                         s.description, s.min_value, s.max_value, s.choices)
                   for s in SIMULATOR_PARAMETERS}
+        navigation = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
+                                            s.description, s.min_value, s.max_value)
+                      for s in NAVIGATION_PARAMETER_SPECS}
         check_all_declared(self, files)
         try:
             params = UvmsParameters.from_flat_dict(robot_model_values(robot, self.robot_name))
         except ModelError as exc:
             raise SimParameterError(
                 with_robot_source(f'invalid robot parameter: {exc}', files)) from exc
+        try:
+            self._navigation_params = NavigationParameters.from_flat_dict(navigation)
+        except ModelError as exc:
+            raise SimParameterError(
+                with_robot_source(f'invalid navigation parameter: {exc}', files)) from exc
         self._settings = cfg = SimulatorSettings.from_values(values)
         # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
         self.get_logger().info('loading the model and compiled kernels')

@@ -33,13 +33,13 @@ def robot(tmp_path: Path) -> Path:
     return folder
 
 
-def test_paper_robot_is_found_by_name_with_its_five_files() -> None:
-    """robots/paper_uvms holds robot.urdf, hydrodynamics.yaml and the three parameter files."""
+def test_paper_robot_is_found_by_name_with_its_six_files() -> None:
+    """robots/paper_uvms holds robot.urdf, hydrodynamics.yaml and the four parameter files."""
     assert 'paper_uvms' in robot_names()
     files = robot_files('paper_uvms')
     assert files.urdf.name == 'robot.urdf'
     assert [p.name for p in files.parameter_files] == [
-        'thrusters.yaml', 'sensor.yaml', 'controller.yaml']
+        'thrusters.yaml', 'sensor.yaml', 'controller.yaml', 'navigation.yaml']
 
 
 def test_unknown_robot_lists_the_known_ones(robot: Path) -> None:
@@ -49,7 +49,7 @@ def test_unknown_robot_lists_the_known_ones(robot: Path) -> None:
 
 
 @pytest.mark.parametrize('missing', ['robot.urdf', 'hydrodynamics.yaml', 'thrusters.yaml',
-                                     'sensor.yaml', 'controller.yaml'])
+                                     'sensor.yaml', 'controller.yaml', 'navigation.yaml'])
 def test_missing_file_is_named(robot: Path, missing: str) -> None:
     """A folder without one of its files names the folder and the file."""
     (robot / missing).unlink()
@@ -125,7 +125,8 @@ def test_rank_deficient_thrusters_name_the_robot_file(robot: Path) -> None:
     """Thrusters that cannot roll (all in one line): the error names thrusters.yaml."""
     values = {name: item for name, item in robot_parameters('mine', 'simulator',
                                                              robot.parent).items()}
-    flat = {name: item.value for name, item in values.items()}
+    flat = {name: item.value for name, item in values.items()
+            if not name.startswith('navigation.')}
     flat['thrusters.positions_m'] = [float(v) for i in range(8) for v in (0.1 * i, 0.0, 0.0)]
     flat['thrusters.directions'] = [1.0, 0.0, 0.0] * 8
     with pytest.raises(ParameterError, match='rank') as error:
