@@ -23,6 +23,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
+            'estimator = uvms_navigation.entry_points:estimator',
         ],
     },
 )

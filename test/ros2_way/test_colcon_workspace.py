@@ -66,6 +66,7 @@ EXECUTABLES = (
     ('uvms_viz', 'foxglove_server'),
     ('uvms_cli', 'uvms'),
     ('uvms_tasks', 'mission'),
+    ('uvms_navigation', 'estimator'),
 )
 NAMESPACE = '/uvms'
 #: A domain of its own, so that no other DDS graph on this machine answers for ours.

@@ -280,6 +280,17 @@ class ErrorStateEkf:
         self.x_gm = self.x_gm + dx[9:]
         return float(y @ np.linalg.solve(s, y))
 
+    def extrapolated(self, t_ns: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Position, rot_ned_from_body and body velocity carried to ``t_ns``.
+
+        At constant body velocity and rate from the filter's time; the filter does not move.
+        """
+        dt = max(int(t_ns) - self.t_ns, 0) * 1e-9
+        if dt == 0.0:
+            return self.p_ned.copy(), self.rot.copy(), self.v_body.copy()
+        return (self.p_ned + self.rot @ self.v_body * dt, self.rot @ exp_so3(self.w_body * dt),
+                self.v_body.copy())
+
     def pose_covariance(self) -> FloatArray:
         """6x6 covariance of (x, y, z in map_ned; roll, pitch, yaw) (m^2, rad^2)."""
         j = np.eye(6)

@@ -38,6 +38,7 @@ from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError
+from uvms_sim.navigation_topics import NavigationTopics
 from uvms_sim.parameters import (
     SIMULATOR_PARAMETERS,
     SimulatorSettings,
@@ -112,6 +113,9 @@ class SimulatorNode(Node):
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
         self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
+        # imu, dvl, depth (position_fix) only when asked for: recordings stay as they were.
+        self._navigation = (NavigationTopics(self, self._navigation_params, params.sensor.seed)
+                            if self._navigation_params.switch.enabled else None)
         self._messages = conversions.StateMessages(self._plant.joint_names)
         self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
@@ -317,6 +321,8 @@ class SimulatorNode(Node):
         seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
         out.update(seen, ground_truth=ground_truth_due)
+        if self._navigation is not None:  # before /clock, on which the estimator publishes
+            self._navigation.publish(seen.t_ns, seen.q, seen.w)
         self._clock_pub.publish(out.clock)
         self._joint_pub.publish(out.joint_state)
         self._odom_pub.publish(out.odometry)
