@@ -50,7 +50,7 @@ ParameterValue: TypeAlias = (
 )
 
 #: Nodes of the graph whose parameters a scenario may override.
-NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder')
+NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder', 'estimator')
 
 _REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
 _OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'robot': 'str', 'mission': 'list of tasks'}

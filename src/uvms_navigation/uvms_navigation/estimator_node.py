@@ -78,6 +78,7 @@ class EstimatorNode(LifecycleNode):
         self._error: Exception | None = None
         self._depth: float | None = None
         self._started = False
+        self._early_clock_ns: int | None = None
         self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
         self._diagnostics.add('estimate', self._report)
         if starting and not autostart(self):
@@ -172,6 +173,8 @@ class EstimatorNode(LifecycleNode):
                 p0[2] = self._depth
             self.ekf.reset_from_ahrs(t_ns, p0, rpy)
             self._started = True
+            if self._early_clock_ns is not None:  # its /clock came first: answer it now
+                self._publish(self._early_clock_ns)
             return
         self.ekf.predict(t_ns, w_m, f_m)
         self.ekf.update_attitude(rpy)
@@ -193,10 +196,16 @@ class EstimatorNode(LifecycleNode):
             self.ekf.update_position(p, sigma)
 
     def _on_clock(self, msg: Clock) -> None:
-        ekf = self.ekf
-        if not self._active or ekf is None or not self._started:
-            return
         t_ns = conversions.stamp_ns(msg.clock)
+        if not self._started:
+            self._early_clock_ns = t_ns
+            return
+        self._publish(t_ns)
+
+    def _publish(self, t_ns: int) -> None:
+        ekf = self.ekf
+        if not self._active or ekf is None:
+            return
         p, rot, v = ekf.extrapolated(t_ns)
         self._odom_pub.publish(conversions.odometry_message(
             t_ns, p, rot, v, ekf.w_body, ekf.pose_covariance(), ekf.twist_covariance()))

@@ -1,0 +1,93 @@
+"""The estimator's errors against the truth in a recording: position, velocity, yaw (pure)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from uvms_recording.errors import RecordingError
+from uvms_recording.mcap_reader import open_recording
+from uvms_recording.typestore import uvms_typestore
+
+TRUTH, ESTIMATE = '/uvms/odometry', '/uvms/odometry/filtered'
+
+
+@dataclass(frozen=True)
+class EstimateErrors:
+    """Errors of /uvms/odometry/filtered against /uvms/odometry at the same stamps.
+
+    Attributes:
+        samples: Stamps present in both.
+        position_rms_m, position_max_m: Norm of the position error in map_ned (m).
+        velocity_rms_m_s, velocity_max_m_s: Norm of the linear velocity error in
+            base_link_frd (m/s).
+        yaw_rms_deg, yaw_max_deg: Yaw error (deg).
+    """
+
+    samples: int
+    position_rms_m: float
+    position_max_m: float
+    velocity_rms_m_s: float
+    velocity_max_m_s: float
+    yaw_rms_deg: float
+    yaw_max_deg: float
+
+
+def _yaw(q: object) -> float:
+    x, y, z, w = (float(getattr(q, k)) for k in 'xyzw')
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def _by_stamp(path: Path) -> dict[str, dict[int, tuple[np.ndarray, np.ndarray, float]]]:
+    typestore = uvms_typestore()
+    out: dict[str, dict[int, tuple[np.ndarray, np.ndarray, float]]] = {TRUTH: {}, ESTIMATE: {}}
+    for message in open_recording(path).messages([TRUTH, ESTIMATE]):
+        msg = typestore.deserialize_cdr(message.data, 'nav_msgs/msg/Odometry')
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        p, v = msg.pose.pose.position, msg.twist.twist.linear
+        out[message.topic][stamp] = (np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]),
+                                     _yaw(msg.pose.pose.orientation))
+    return out
+
+
+def estimate_errors(path: str | Path) -> EstimateErrors | None:
+    """The estimate's errors in a recording; None if it holds no estimate.
+
+    Raises:
+        RecordingError: The file cannot be read.
+    """
+    series = _by_stamp(Path(path))
+    stamps = sorted(set(series[TRUTH]) & set(series[ESTIMATE]))
+    if not stamps:
+        return None
+    truth = [series[TRUTH][t] for t in stamps]
+    est = [series[ESTIMATE][t] for t in stamps]
+    dp = np.array([np.linalg.norm(a[0] - b[0]) for a, b in zip(truth, est, strict=True)])
+    dv = np.array([np.linalg.norm(a[1] - b[1]) for a, b in zip(truth, est, strict=True)])
+    dyaw = np.degrees([abs(math.remainder(a[2] - b[2], 2 * math.pi))
+                       for a, b in zip(truth, est, strict=True)])
+    return EstimateErrors(len(stamps), _rms(dp), float(dp.max()), _rms(dv), float(dv.max()),
+                          _rms(dyaw), float(dyaw.max()))
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(values))))
+
+
+def format_estimate_errors(rows: list[tuple[str, EstimateErrors]]) -> str:
+    """A text table, one row per recording with an estimate."""
+    head = ('run', 'samples', 'pos RMS (mm)', 'pos max (mm)', 'vel RMS (mm/s)',
+            'vel max (mm/s)', 'yaw RMS (deg)', 'yaw max (deg)')
+    lines = [' | '.join(head)]
+    for name, e in rows:
+        lines.append(' | '.join((name, str(e.samples), f'{e.position_rms_m * 1e3:.1f}',
+                                 f'{e.position_max_m * 1e3:.1f}',
+                                 f'{e.velocity_rms_m_s * 1e3:.1f}',
+                                 f'{e.velocity_max_m_s * 1e3:.1f}', f'{e.yaw_rms_deg:.2f}',
+                                 f'{e.yaw_max_deg:.2f}')))
+    return '\n'.join(lines) + '\n'
+
+
+__all__ = ['EstimateErrors', 'RecordingError', 'estimate_errors', 'format_estimate_errors']
