@@ -21,6 +21,9 @@ class EstimateErrors:
     Attributes:
         samples: Stamps present in both.
         position_rms_m, position_max_m: Norm of the position error in map_ned (m).
+        horizontal_rms_m, horizontal_max_m: Its north-east part (m).
+        vertical_rms_m, vertical_max_m: Its down part (m): without a position fix, the depth
+            sensor's per-run bias.
         velocity_rms_m_s, velocity_max_m_s: Norm of the linear velocity error in
             base_link_frd (m/s).
         yaw_rms_deg, yaw_max_deg: Yaw error (deg).
@@ -29,6 +32,10 @@ class EstimateErrors:
     samples: int
     position_rms_m: float
     position_max_m: float
+    horizontal_rms_m: float
+    horizontal_max_m: float
+    vertical_rms_m: float
+    vertical_max_m: float
     velocity_rms_m_s: float
     velocity_max_m_s: float
     yaw_rms_deg: float
@@ -64,11 +71,15 @@ def estimate_errors(path: str | Path) -> EstimateErrors | None:
         return None
     truth = [series[TRUTH][t] for t in stamps]
     est = [series[ESTIMATE][t] for t in stamps]
-    dp = np.array([np.linalg.norm(a[0] - b[0]) for a, b in zip(truth, est, strict=True)])
+    delta = np.array([a[0] - b[0] for a, b in zip(truth, est, strict=True)])
+    dp = np.linalg.norm(delta, axis=1)
+    dh = np.linalg.norm(delta[:, :2], axis=1)
+    dz = np.abs(delta[:, 2])
     dv = np.array([np.linalg.norm(a[1] - b[1]) for a, b in zip(truth, est, strict=True)])
     dyaw = np.degrees([abs(math.remainder(a[2] - b[2], 2 * math.pi))
                        for a, b in zip(truth, est, strict=True)])
-    return EstimateErrors(len(stamps), _rms(dp), float(dp.max()), _rms(dv), float(dv.max()),
+    return EstimateErrors(len(stamps), _rms(dp), float(dp.max()), _rms(dh), float(dh.max()),
+                          _rms(dz), float(dz.max()), _rms(dv), float(dv.max()),
                           _rms(dyaw), float(dyaw.max()))
 
 
@@ -78,12 +89,15 @@ def _rms(values: np.ndarray) -> float:
 
 def format_estimate_errors(rows: list[tuple[str, EstimateErrors]]) -> str:
     """A text table, one row per recording with an estimate."""
-    head = ('run', 'samples', 'pos RMS (mm)', 'pos max (mm)', 'vel RMS (mm/s)',
-            'vel max (mm/s)', 'yaw RMS (deg)', 'yaw max (deg)')
+    head = ('run', 'samples', 'pos RMS (mm)', 'pos max (mm)', 'horiz RMS/max (mm)',
+            'down RMS/max (mm)', 'vel RMS (mm/s)', 'vel max (mm/s)', 'yaw RMS (deg)',
+            'yaw max (deg)')
     lines = [' | '.join(head)]
     for name, e in rows:
         lines.append(' | '.join((name, str(e.samples), f'{e.position_rms_m * 1e3:.1f}',
                                  f'{e.position_max_m * 1e3:.1f}',
+                                 f'{e.horizontal_rms_m * 1e3:.1f}/{e.horizontal_max_m * 1e3:.1f}',
+                                 f'{e.vertical_rms_m * 1e3:.1f}/{e.vertical_max_m * 1e3:.1f}',
                                  f'{e.velocity_rms_m_s * 1e3:.1f}',
                                  f'{e.velocity_max_m_s * 1e3:.1f}', f'{e.yaw_rms_deg:.2f}',
                                  f'{e.yaw_max_deg:.2f}')))
