@@ -366,7 +366,7 @@ def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Work
         'modules = {name: importlib.import_module(name).__file__ for name in (',
         "    'uvms_common', 'uvms_description', 'uvms_model', 'uvms_sim', 'uvms_control',",
         "    'uvms_bringup', 'uvms_recording', 'uvms_analysis', 'uvms_viz', 'uvms_sweep',",
-        "    'uvms_cli',",
+        "    'uvms_cli', 'uvms_navigation',",
         "    'uvms_msgs.msg')}",
         "prefixes = {name: get_package_prefix(name) for name in ('uvms_bringup', 'uvms_msgs',",
         "                                                        'rclpy')}",
