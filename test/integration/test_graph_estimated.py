@@ -101,6 +101,7 @@ def test_report_gives_the_estimate_errors(estimated: tuple[RunResult, Path],
     assert errors.samples == round(DURATION_S * 500) + 1
     assert 0.0 < errors.position_rms_m <= errors.position_max_m < 0.1
     assert 0.0 < errors.velocity_rms_m_s <= errors.velocity_max_m_s < 0.05
+    assert errors.true_e_contact_max_m is None  # no contact in the first second
     assert report.main([str(path)]) == 0
     out = capsys.readouterr().out
     assert 'case1_estimated' in out and 'estimate (odometry/filtered) against the truth' in out

@@ -27,6 +27,9 @@ class EstimateErrors:
         velocity_rms_m_s, velocity_max_m_s: Norm of the linear velocity error in
             base_link_frd (m/s).
         yaw_rms_deg, yaw_max_deg: Yaw error (deg).
+        true_e_contact_max_m: Largest |e_y|, |e_z| in contact of the true end effector,
+            X_d of controller/state against /uvms/ee_pose (m); the report's own e columns
+            are the controller's view (X from the estimate). None without contact.
     """
 
     samples: int
@@ -40,6 +43,7 @@ class EstimateErrors:
     velocity_max_m_s: float
     yaw_rms_deg: float
     yaw_max_deg: float
+    true_e_contact_max_m: tuple[float, float] | None = None
 
 
 def _yaw(q: object) -> float:
@@ -57,6 +61,24 @@ def _by_stamp(path: Path) -> dict[str, dict[int, tuple[np.ndarray, np.ndarray, f
         out[message.topic][stamp] = (np.array([p.x, p.y, p.z]), np.array([v.x, v.y, v.z]),
                                      _yaw(msg.pose.pose.orientation))
     return out
+
+
+def _true_errors_in_contact(path: Path) -> tuple[float, float] | None:
+    """Largest |e_y|, |e_z| of X_d against the true end effector while in contact (m)."""
+    typestore = uvms_typestore()
+    wanted = ('/uvms/controller/state', '/uvms/ee_pose', '/uvms/contact')
+    seen: dict[str, dict[int, object]] = {topic: {} for topic in wanted}
+    for message in open_recording(path).messages(wanted):
+        msg = typestore.deserialize_cdr(message.data, message.type_name)
+        seen[message.topic][msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec] = msg
+    state, ee, contact = (seen[t] for t in wanted)
+    rows = [(np.array([state[t].desired_position.y, state[t].desired_position.z])
+             - np.array([ee[t].pose.position.y, ee[t].pose.position.z]))
+            for t in sorted(set(state) & set(ee) & set(contact)) if contact[t].penetration > 0]
+    if not rows:
+        return None
+    worst = np.abs(np.array(rows)).max(axis=0)
+    return float(worst[0]), float(worst[1])
 
 
 def estimate_errors(path: str | Path) -> EstimateErrors | None:
@@ -80,7 +102,11 @@ def estimate_errors(path: str | Path) -> EstimateErrors | None:
                        for a, b in zip(truth, est, strict=True)])
     return EstimateErrors(len(stamps), _rms(dp), float(dp.max()), _rms(dh), float(dh.max()),
                           _rms(dz), float(dz.max()), _rms(dv), float(dv.max()),
-                          _rms(dyaw), float(dyaw.max()))
+                          _rms(dyaw), float(dyaw.max()), _true_errors_in_contact(Path(path)))
+
+
+def _pair_mm(pair: tuple[float, float] | None) -> str:
+    return 'n/a' if pair is None else f'{pair[0] * 1e3:.1f}/{pair[1] * 1e3:.1f}'
 
 
 def _rms(values: np.ndarray) -> float:
@@ -91,7 +117,7 @@ def format_estimate_errors(rows: list[tuple[str, EstimateErrors]]) -> str:
     """A text table, one row per recording with an estimate."""
     head = ('run', 'samples', 'pos RMS (mm)', 'pos max (mm)', 'horiz RMS/max (mm)',
             'down RMS/max (mm)', 'vel RMS (mm/s)', 'vel max (mm/s)', 'yaw RMS (deg)',
-            'yaw max (deg)')
+            'yaw max (deg)', 'true e_y/e_z contact max (mm)')
     lines = [' | '.join(head)]
     for name, e in rows:
         lines.append(' | '.join((name, str(e.samples), f'{e.position_rms_m * 1e3:.1f}',
@@ -100,7 +126,7 @@ def format_estimate_errors(rows: list[tuple[str, EstimateErrors]]) -> str:
                                  f'{e.vertical_rms_m * 1e3:.1f}/{e.vertical_max_m * 1e3:.1f}',
                                  f'{e.velocity_rms_m_s * 1e3:.1f}',
                                  f'{e.velocity_max_m_s * 1e3:.1f}', f'{e.yaw_rms_deg:.2f}',
-                                 f'{e.yaw_max_deg:.2f}')))
+                                 f'{e.yaw_max_deg:.2f}', _pair_mm(e.true_e_contact_max_m))))
     return '\n'.join(lines) + '\n'
 
 
