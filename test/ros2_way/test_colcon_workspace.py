@@ -49,7 +49,7 @@ REPO = Path(__file__).resolve().parents[2]
 #: The packages of src/, each built by colcon (interfaces/tf2_msgs carries a COLCON_IGNORE).
 PACKAGES = ('uvms_analysis', 'uvms_bringup', 'uvms_cli', 'uvms_common', 'uvms_control',
             'uvms_description', 'uvms_model', 'uvms_msgs', 'uvms_recording', 'uvms_sim',
-            'uvms_sweep', 'uvms_tasks', 'uvms_viz')
+            'uvms_navigation', 'uvms_sweep', 'uvms_tasks', 'uvms_viz')
 #: Longest time the build may take (s); the packages build in about 40 s on 2 cores.
 BUILD_TIMEOUT_S = 600.0
 #: colcon on this interpreter (as the venv's ``colcon`` script would): colcon runs setup.py
@@ -66,6 +66,7 @@ EXECUTABLES = (
     ('uvms_viz', 'foxglove_server'),
     ('uvms_cli', 'uvms'),
     ('uvms_tasks', 'mission'),
+    ('uvms_navigation', 'estimator'),
 )
 NAMESPACE = '/uvms'
 #: A domain of its own, so that no other DDS graph on this machine answers for ours.
@@ -365,7 +366,7 @@ def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Work
         'modules = {name: importlib.import_module(name).__file__ for name in (',
         "    'uvms_common', 'uvms_description', 'uvms_model', 'uvms_sim', 'uvms_control',",
         "    'uvms_bringup', 'uvms_recording', 'uvms_analysis', 'uvms_viz', 'uvms_sweep',",
-        "    'uvms_cli',",
+        "    'uvms_cli', 'uvms_navigation',",
         "    'uvms_msgs.msg')}",
         "prefixes = {name: get_package_prefix(name) for name in ('uvms_bringup', 'uvms_msgs',",
         "                                                        'rclpy')}",

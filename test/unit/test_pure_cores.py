@@ -8,8 +8,8 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / 'src'
 
 #: Modules that must stay free of ROS: the model, the controller and allocator cores, the
-#: simulator's plant, the whole analysis package, the MCAP writer and reader, and the marker
-#: geometry.
+#: simulator's plant, the whole analysis package, the MCAP writer and reader, the marker
+#: geometry, and the navigation filter and its health.
 PURE_MODULES = sorted(
     [
         *(SRC / 'uvms_model' / 'uvms_model').rglob('*.py'),
@@ -17,7 +17,8 @@ PURE_MODULES = sorted(
         *(
             path
             for path in (SRC / 'uvms_sim' / 'uvms_sim').rglob('*.py')
-            if not path.name.endswith('_node.py') and path.name != 'conversions.py'
+            if not path.name.endswith('_node.py')
+            and path.name not in ('conversions.py', 'navigation_topics.py')
         ),
         *(SRC / 'uvms_analysis' / 'uvms_analysis').rglob('*.py'),
         *(
@@ -25,6 +26,8 @@ PURE_MODULES = sorted(
             for name in ('errors.py', 'mcap_writer.py', 'mcap_reader.py')
         ),
         SRC / 'uvms_viz' / 'uvms_viz' / 'marker_geometry.py',
+        *(SRC / 'uvms_navigation' / 'uvms_navigation' / name
+          for name in ('eskf.py', 'health.py')),
     ]
 )
 

@@ -10,6 +10,7 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from uvms_analysis.estimate_errors import EstimateErrors, estimate_errors, format_estimate_errors
 from uvms_analysis.metrics import (
     IMPACT_WINDOW_S,
     SETTLING_BAND,
@@ -223,6 +224,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:
         return exc.code if isinstance(exc.code, int) else 2
     metrics: list[RunMetrics] = []
+    estimates: list[tuple[str, EstimateErrors]] = []
     failed = False
     for path in args.recordings:
         try:
@@ -234,8 +236,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         if run.problem is not None:
             print(f'uvms report: warning: {run.problem}', file=sys.stderr)
         metrics.append(compute_metrics(run, args.force_source))
+        errors = estimate_errors(path)
+        if errors is not None:
+            estimates.append((metrics[-1].name, errors))
     if metrics:
         sys.stdout.write(format_report(metrics, args.format))
+    if estimates:  # runs with the estimator (state_source: estimate): its errors vs the truth
+        sys.stdout.write('\nestimate (odometry/filtered) against the truth (odometry):\n')
+        sys.stdout.write(format_estimate_errors(estimates))
     return 1 if failed else 0
 
 

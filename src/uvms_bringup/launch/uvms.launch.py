@@ -36,6 +36,7 @@ from uvms_bringup.launch_helpers import (
     node_parameters,
     parameters_file_text,
     resolve_scenario_path,
+    uses_estimator,
     write_mission_file,
 )
 from uvms_bringup.scenario import load_scenario
@@ -68,7 +69,8 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
     actions = []
     run_values = {}
     mission = scenario is not None and bool(scenario.mission)
-    for spec in graph_nodes(record=bool(output_path), foxglove=foxglove, mission=mission):
+    for spec in graph_nodes(record=bool(output_path), foxglove=foxglove, mission=mission,
+                            estimator=uses_estimator(scenario)):
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
                                     foxglove_address, robot)
         if spec is MISSION:

@@ -67,7 +67,7 @@ def check_scenario_overrides(
             the message names the file, the key and the expected type.
         GraphError: A node cannot be built from its parameter files.
     """
-    specs = specs if specs is not None else graph_nodes(record=True)
+    specs = specs if specs is not None else graph_nodes(record=True, estimator=True)
     config = config if config is not None else config_dir()
     to_check = [spec for spec in specs if spec.name in scenario.overrides and spec is not RECORDER]
     if not to_check:
@@ -179,7 +179,7 @@ def declared_parameters(
     Raises:
         GraphError: A node cannot be built from its parameter files.
     """
-    specs = specs if specs is not None else graph_nodes(record=False)
+    specs = specs if specs is not None else graph_nodes(record=False, estimator=True)
     config = config if config is not None else config_dir()
     context = Context()
     rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)

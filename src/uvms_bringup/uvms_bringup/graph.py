@@ -36,6 +36,7 @@ from uvms_bringup.launch_helpers import (
     graph_nodes,
     node_parameters,
     parameters_file_text,
+    uses_estimator,
 )
 from uvms_bringup.node_factory import GraphError, make_node
 from uvms_bringup.scenario import ParameterValue, Scenario
@@ -142,7 +143,8 @@ def build_graph(
     config = config if config is not None else config_dir()
     if duration_s is None:
         duration_s = scenario.duration_s if scenario is not None else 0.0
-    specs = graph_nodes(record=output_path is not None, foxglove=foxglove is not None)
+    specs = graph_nodes(record=output_path is not None, foxglove=foxglove is not None,
+                        estimator=uses_estimator(scenario))
     if scenario is not None:
         scenario = check_scenario_overrides(scenario.with_changes(robot=robot), specs, config,
                                             namespace)

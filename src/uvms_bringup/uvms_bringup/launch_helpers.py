@@ -82,6 +82,19 @@ FOXGLOVE_SERVER = NodeSpec(
 RECORDER = NodeSpec(
     'recorder', 'uvms_recording', 'recorder', 'uvms_recording.recorder_node', 'RecorderNode', (),
 )
+#: The navigation filter (uvms_navigation), when a scenario asks for it (``uses_estimator``).
+ESTIMATOR = NodeSpec(
+    'estimator', 'uvms_navigation', 'estimator', 'uvms_navigation.estimator_node',
+    'EstimatorNode', (), takes_robot=True,
+)
+#: What the recorder records beside its defaults when the estimator runs.
+NAVIGATION_TOPICS = (
+    'imu:sensor_msgs/msg/Imu',
+    'dvl:geometry_msgs/msg/TwistWithCovarianceStamped',
+    'depth:geometry_msgs/msg/PoseWithCovarianceStamped',
+    'position_fix:geometry_msgs/msg/PoseWithCovarianceStamped',
+    'odometry/filtered:nav_msgs/msg/Odometry',
+)
 
 #: Sends a scenario's mission through the ContactTask action (``uvms_tasks``), then exits.
 #: Not on /clock: its goals carry their start times on the controller's clock, and a /clock
@@ -95,10 +108,23 @@ MISSION = NodeSpec(
 #: the recorder, last, when there is an output.
 CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, VISUALIZER)
 
-def graph_nodes(record: bool, foxglove: bool = False,
-                mission: bool = False) -> tuple[NodeSpec, ...]:
-    """The nodes of a run; the mission sender, a live view and the recorder (last) if asked."""
-    return (*CORE_NODES, *((MISSION,) if mission else ()),
+def uses_estimator(scenario: Scenario | None) -> bool:
+    """Whether a scenario runs the estimator.
+
+    It does with an ``estimator:`` section or a controller on ``state_source: estimate``
+    (whose simulator then needs ``navigation.enabled: true``).
+    """
+    if scenario is None:
+        return False
+    controller = scenario.overrides.get('controller', {})
+    return 'estimator' in scenario.overrides or controller.get('state_source') == 'estimate'
+
+
+def graph_nodes(record: bool, foxglove: bool = False, mission: bool = False,
+                estimator: bool = False) -> tuple[NodeSpec, ...]:
+    """The nodes of a run; estimator, mission sender, live view and recorder (last) if asked."""
+    return (SIMULATOR, *((ESTIMATOR,) if estimator else ()), *CORE_NODES[1:],
+            *((MISSION,) if mission else ()),
             *((FOXGLOVE_SERVER,) if foxglove else ()), *((RECORDER,) if record else ()))
 
 
@@ -170,6 +196,10 @@ def node_parameters(
         values['run.mode'] = mode
         # The goals the run sends, so that replay can re-run the controller on them too.
         values['run.mission'] = mission_file_text(scenario) if scenario is not None else ''
+        if uses_estimator(scenario) and 'topics' not in values:
+            from uvms_recording.recorder_node import DEFAULT_TOPICS  # rclpy: only when needed
+
+            values['topics'] = [*DEFAULT_TOPICS, *NAVIGATION_TOPICS]
     return values
 
 

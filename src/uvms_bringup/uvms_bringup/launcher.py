@@ -32,6 +32,7 @@ from uvms_bringup.launch_helpers import (
     graph_nodes,
     node_parameters,
     parameters_file_text,
+    uses_estimator,
     write_mission_file,
 )
 from uvms_bringup.processes import (
@@ -118,7 +119,7 @@ def plan_launch(
     plans: list[NodeProcessSpec] = []
     mission = scenario is not None and bool(scenario.mission)
     for spec in graph_nodes(record=output is not None, foxglove=foxglove is not None,
-                            mission=mission):
+                            mission=mission, estimator=uses_estimator(scenario)):
         if spec is MISSION:
             assert scenario is not None
             plans.append(_mission_process(scenario, namespace, parameters_dir, log_level,

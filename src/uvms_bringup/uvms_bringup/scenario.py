@@ -16,6 +16,7 @@ random seed, and overrides ROS parameters of the nodes of the graph::
     controller: {...}                 # mapping, optional: controller parameters
     thruster_allocator: {...}         # mapping, optional: thruster allocator parameters
     recorder: {...}                   # mapping, optional: recorder parameters
+    estimator: {...}                  # mapping, optional: estimator parameters (it then runs)
     mission:                          # list, optional: ContactTask goals, sent in order
       - half_circle: {radius_m: 0.1, duration_s: 16.0}   # (uvms_tasks.task_file)
         normal: [1.0, 0.0, 0.0]
@@ -50,7 +51,7 @@ ParameterValue: TypeAlias = (
 )
 
 #: Nodes of the graph whose parameters a scenario may override.
-NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder')
+NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder', 'estimator')
 
 _REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
 _OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'robot': 'str', 'mission': 'list of tasks'}

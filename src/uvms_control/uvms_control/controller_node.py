@@ -58,7 +58,7 @@ from uvms_control.core.parameter_specs import (
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )
-from uvms_control.core.parameters import ControllerParameters, validate_node_parameters
+from uvms_control.core.parameters import ControllerParameters, topic_for, validate_node_parameters
 from uvms_control.core.task_supervisor import TaskSupervisor
 from uvms_control.core.unified_controller import UnifiedForceController
 from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
@@ -191,7 +191,8 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         }
         for topic, (msg_type, read) in readers.items():
             self._entities.append((self.destroy_subscription, self.create_subscription(
-                msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos)))
+                msg_type, topic_for(topic, str(node['state_source'])),
+                lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos)))
         if not self._lockstep:
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.

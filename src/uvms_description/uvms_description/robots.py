@@ -3,9 +3,9 @@
 A robot is a folder ``robots/<name>/`` of the share directory (docs/robots.md, "Adding a
 robot"). Its URDF (``robot.urdf``, or ``robot.urdf.xacro`` expanded here with the PyPI
 ``xacro`` package) and ``hydrodynamics.yaml`` are read by ``uvms_model.description``; its
-``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and ``start.yaml`` (its default start:
-the simulator's ``initial.*``) are ROS 2 parameter files whose values a node takes as its
-defaults (``robot_parameters``). Pure Python: no rclpy.
+``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``, ``navigation.yaml`` and ``start.yaml``
+(its default start: the simulator's ``initial.*``) are ROS 2 parameter files whose values a
+node takes as its defaults (``robot_parameters``). Pure Python: no rclpy.
 """
 
 from __future__ import annotations
@@ -26,7 +26,8 @@ HYDRODYNAMICS_FILE = 'hydrodynamics.yaml'
 START_FILE = 'start.yaml'
 """The robot's default start: the simulator's ``initial.*`` where a scenario sets none."""
 START_PREFIX = 'initial.'
-PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml', START_FILE)
+PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml', 'navigation.yaml',
+                   START_FILE)
 """The robot's ROS 2 parameter files, in the order their values are merged."""
 _NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _SECTION = re.compile(r'^(/\*\*|/\*\*/(?P<node>[A-Za-z_][A-Za-z0-9_]*))$')
@@ -46,7 +47,7 @@ class RobotFiles:
         urdf: ``robot.urdf`` or ``robot.urdf.xacro``.
         hydrodynamics: ``hydrodynamics.yaml``.
         parameter_files: ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``,
-            ``start.yaml``.
+            ``navigation.yaml``, ``start.yaml``.
     """
 
     name: str
@@ -183,7 +184,7 @@ def robot_parameters(
     """The values a node takes as defaults from robot ``name``'s parameter files.
 
     Every value of ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and
-    ``start.yaml`` for ``node`` (flat dotted names). The URDF and hydrodynamics paths are not
+    ``navigation.yaml``, ``start.yaml`` for ``node`` (flat dotted names). The URDF and hydrodynamics paths are not
     among them (a recording would carry this machine's paths): ``with_description_paths``
     fills them in.
 

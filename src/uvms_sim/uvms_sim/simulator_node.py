@@ -33,11 +33,13 @@ from uvms_common.robot_parameters import (
     robot_start_values,
     with_robot_source,
 )
+from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError
+from uvms_sim.navigation_topics import NavigationTopics
 from uvms_sim.ocean_node import OceanCurrentInterface
 from uvms_sim.parameters import (
     SIMULATOR_PARAMETERS,
@@ -68,12 +70,20 @@ class SimulatorNode(Node):
         values = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
                                         s.description, s.min_value, s.max_value, s.choices)
                   for s in SIMULATOR_PARAMETERS}
+        navigation = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
+                                            s.description, s.min_value, s.max_value)
+                      for s in NAVIGATION_PARAMETER_SPECS}
         check_all_declared(self, files)
         try:
             params = UvmsParameters.from_flat_dict(robot_model_values(robot, self.robot_name))
         except ModelError as exc:
             raise SimParameterError(
                 with_robot_source(f'invalid robot parameter: {exc}', files)) from exc
+        try:
+            self._navigation_params = NavigationParameters.from_flat_dict(navigation)
+        except ModelError as exc:
+            raise SimParameterError(
+                with_robot_source(f'invalid navigation parameter: {exc}', files)) from exc
         self._settings = cfg = SimulatorSettings.from_values(values)
         # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
         self.get_logger().info('loading the model and compiled kernels')
@@ -108,6 +118,9 @@ class SimulatorNode(Node):
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
         self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
+        # imu, dvl, depth (position_fix) only when asked for: recordings stay as they were.
+        self._navigation = (NavigationTopics(self, self._navigation_params, params.sensor.seed)
+                            if self._navigation_params.switch.enabled else None)
         self._messages = conversions.StateMessages(self._plant.joint_names)
         self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
@@ -313,6 +326,8 @@ class SimulatorNode(Node):
         seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
         out.update(seen, ground_truth=ground_truth_due)
+        if self._navigation is not None:  # before /clock, on which the estimator publishes
+            self._navigation.publish(seen.t_ns, seen.q, seen.w)
         self._clock_pub.publish(out.clock)
         self._joint_pub.publish(out.joint_state)
         self._odom_pub.publish(out.odometry)

@@ -39,7 +39,7 @@ def test_paper_robot_is_found_by_name_with_its_six_files() -> None:
     files = robot_files('paper_uvms')
     assert files.urdf.name == 'robot.urdf'
     assert [p.name for p in files.parameter_files] == [
-        'thrusters.yaml', 'sensor.yaml', 'controller.yaml', 'start.yaml']
+        'thrusters.yaml', 'sensor.yaml', 'controller.yaml', 'navigation.yaml', 'start.yaml']
 
 
 def test_unknown_robot_lists_the_known_ones(robot: Path) -> None:
@@ -49,7 +49,8 @@ def test_unknown_robot_lists_the_known_ones(robot: Path) -> None:
 
 
 @pytest.mark.parametrize('missing', ['robot.urdf', 'hydrodynamics.yaml', 'thrusters.yaml',
-                                     'sensor.yaml', 'controller.yaml', 'start.yaml'])
+                                     'sensor.yaml', 'controller.yaml', 'navigation.yaml',
+                                     'start.yaml'])
 def test_missing_file_is_named(robot: Path, missing: str) -> None:
     """A folder without one of its files names the folder and the file."""
     (robot / missing).unlink()
@@ -126,7 +127,7 @@ def test_rank_deficient_thrusters_name_the_robot_file(robot: Path) -> None:
     values = {name: item for name, item in robot_parameters('mine', 'simulator',
                                                              robot.parent).items()}
     flat = {name: item.value for name, item in values.items()
-            if not name.startswith('initial.')}  # the simulator's start, not the model's
+            if not name.startswith(('initial.', 'navigation.'))}  # the simulator's own
     flat['thrusters.positions_m'] = [float(v) for i in range(8) for v in (0.1 * i, 0.0, 0.0)]
     flat['thrusters.directions'] = [1.0, 0.0, 0.0] * 8
     with pytest.raises(ParameterError, match='rank') as error:

@@ -20,6 +20,7 @@ class ParameterSpec(NamedTuple):
 
 
 TRIGGER_MODES = ('lockstep', 'timer')
+STATE_SOURCES = ('truth', 'estimate')
 SWITCH_MODES = ('fuzzy', 'impedance', 'hybrid')
 
 CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
@@ -31,6 +32,12 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         'latest inputs (real time).',
     ),
     ParameterSpec('control_rate_hz', 500.0, 'Control rate in timer mode (Hz).', 1.0, 10000.0),
+    ParameterSpec(
+        'state_source', 'truth',
+        "Where the vehicle state comes from: 'truth' reads odometry (the simulator's ground "
+        "truth, the paper's assumption); 'estimate' reads odometry/filtered (the estimator of "
+        'uvms_navigation on the navigation sensors). Joint states stay the encoders.',
+    ),
     ParameterSpec(
         'state_rate_hz', 0.0,
         'Rate of controller/state (Hz): the first step of each 1/rate window; 0 publishes it '

@@ -20,6 +20,7 @@ from uvms_control.core.fuzzy_sets import FuzzySwitchParameters, Trapezoid
 from uvms_control.core.parameter_specs import (
     ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
+    STATE_SOURCES,
     SWITCH_MODES,
     TRIGGER_MODES,
     ParameterSpec,
@@ -303,7 +304,19 @@ def validate_node_parameters(
     mode = merged.get('trigger_mode')
     if mode is not None and mode not in TRIGGER_MODES:
         raise ControlParameterError('trigger_mode', mode, f'one of {list(TRIGGER_MODES)}')
+    source = merged.get('state_source')
+    if source is not None and source not in STATE_SOURCES:
+        raise ControlParameterError('state_source', source, f'one of {list(STATE_SOURCES)}')
     return merged
+
+
+def topic_for(topic: str, state_source: str) -> str:
+    """The topic the controller reads an input from: odometry/filtered for an estimate.
+
+    >>> topic_for('odometry', 'estimate'), topic_for('odometry', 'truth')
+    ('odometry/filtered', 'odometry')
+    """
+    return 'odometry/filtered' if topic == 'odometry' and state_source == 'estimate' else topic
 
 
 PER_COORDINATE = '6 + n values: x, y, z, roll, pitch, yaw, then one per arm joint (n >= 3)'

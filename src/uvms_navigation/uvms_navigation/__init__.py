@@ -1,0 +1,1 @@
+"""Navigation: the estimator node and its pure error-state EKF core."""

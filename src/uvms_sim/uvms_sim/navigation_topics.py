@@ -1,0 +1,146 @@
+"""The simulator's navigation sensor topics: imu, dvl, depth, position_fix (when enabled).
+
+The one place where the readings of ``uvms_model.nav_sensors`` become messages, typed for
+now (the hot-path topics use the raw CDR codecs of uvms_common; these can switch here).
+Messages, as robot_localization consumes them:
+
+- ``imu``: sensor_msgs/Imu in ``base_link_frd`` (the IMU at the vehicle origin): angular
+  velocity (rad/s) and specific force (m/s^2, -9.81 along z at rest, as a NED/FRD IMU
+  reads), orientation of ``base_link_frd`` in ``map_ned`` from the AHRS; covariances from
+  the configured noise (the bias is not in them).
+- ``dvl``: geometry_msgs/TwistWithCovarianceStamped in ``dvl_link`` (its mounting:
+  ``navigation.dvl.position_m`` / ``orientation_rpy``), only readings with bottom lock, as
+  ArduSub's DVL extension drops invalid ones. Chosen over marine_acoustic_msgs/Dvl because
+  it has a wheel (common_interfaces) and robot_localization fuses it directly; the beams and
+  figure of merit of a Dvl message are not simulated.
+- ``depth``: geometry_msgs/PoseWithCovarianceStamped in ``map_ned`` with z the depth (m, down)
+  and only z's variance finite: robot_localization's usual depth input.
+- ``position_fix``: geometry_msgs/PoseWithCovarianceStamped in ``map_ned``, position only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+from uvms_model.kinematics import rot_ned_from_body
+from uvms_model.nav_sensor_parameters import NavigationParameters
+from uvms_model.nav_sensors import (
+    DepthReading,
+    DvlReading,
+    ImuReading,
+    NavigationSensors,
+    NavigationTruth,
+    PositionFixReading,
+    Reading,
+)
+
+from uvms_sim.conversions import quaternion_from_rpy, time_from_ns
+
+MAP_NED, BASE_LINK_FRD, DVL_LINK = 'map_ned', 'base_link_frd', 'dvl_link'
+UNUSED_VARIANCE = 1.0e9
+"""Variance of a pose component a message does not measure (robot_localization ignores it)."""
+
+
+def _stamp(t_ns: int) -> Time:
+    return time_from_ns(t_ns)
+
+
+def imu_message(reading: ImuReading, gyro_var: float, accel_var: float) -> Imu:
+    """sensor_msgs/Imu of one reading (base_link_frd; orientation in map_ned)."""
+    msg = Imu()
+    msg.header.stamp = _stamp(reading.t_ns)
+    msg.header.frame_id = BASE_LINK_FRD
+    x, y, z, w = quaternion_from_rpy(*(float(a) for a in reading.rpy))
+    msg.orientation.x, msg.orientation.y, msg.orientation.z, msg.orientation.w = x, y, z, w
+    msg.orientation_covariance = np.diag(reading.rpy_sigma ** 2).ravel().tolist()
+    av, la = msg.angular_velocity, msg.linear_acceleration
+    av.x, av.y, av.z = (float(v) for v in reading.w_body)
+    la.x, la.y, la.z = (float(v) for v in reading.f_body)
+    msg.angular_velocity_covariance = (np.eye(3) * gyro_var).ravel().tolist()
+    msg.linear_acceleration_covariance = (np.eye(3) * accel_var).ravel().tolist()
+    return msg
+
+
+def dvl_message(reading: DvlReading) -> TwistWithCovarianceStamped:
+    """geometry_msgs/TwistWithCovarianceStamped of a valid DVL reading (dvl_link)."""
+    msg = TwistWithCovarianceStamped()
+    msg.header.stamp = _stamp(reading.t_ns)
+    msg.header.frame_id = DVL_LINK
+    lin = msg.twist.twist.linear
+    lin.x, lin.y, lin.z = (float(v) for v in reading.v_dvl)
+    cov = np.diag([reading.sigma_m_s ** 2] * 3 + [UNUSED_VARIANCE] * 3)
+    msg.twist.covariance = cov.ravel().tolist()
+    return msg
+
+
+def _pose_message(t_ns: int, p_ned: np.ndarray, variances: list[float]
+                  ) -> PoseWithCovarianceStamped:
+    msg = PoseWithCovarianceStamped()
+    msg.header.stamp = _stamp(t_ns)
+    msg.header.frame_id = MAP_NED
+    pos = msg.pose.pose.position
+    pos.x, pos.y, pos.z = (float(v) for v in p_ned)
+    msg.pose.pose.orientation.w = 1.0
+    msg.pose.covariance = np.diag(variances + [UNUSED_VARIANCE] * 3).ravel().tolist()
+    return msg
+
+
+def depth_message(reading: DepthReading, bias_max_m: float) -> PoseWithCovarianceStamped:
+    """Depth as a pose with only z (m, down) measured; variance noise + uniform bias."""
+    variance = reading.sigma_m ** 2 + bias_max_m ** 2 / 3.0
+    return _pose_message(reading.t_ns, np.array([0.0, 0.0, reading.depth_m]),
+                         [UNUSED_VARIANCE, UNUSED_VARIANCE, variance])
+
+
+def position_fix_message(reading: PositionFixReading) -> PoseWithCovarianceStamped:
+    """A position fix as a pose in map_ned with the position's variances."""
+    return _pose_message(reading.t_ns, reading.p_ned, list(reading.sigma_m ** 2))
+
+
+class NavigationTopics:
+    """Samples the navigation sensors at each published state and publishes what is due.
+
+    The truth's linear acceleration is the backward difference of the NED velocity between
+    published states (one publish period late, 2 ms at 500 Hz).
+    """
+
+    def __init__(self, node: Node, params: NavigationParameters, seed: int) -> None:
+        self.params = params
+        self.sensors = NavigationSensors(params, seed)
+        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        self._imu = node.create_publisher(Imu, 'imu', qos)
+        self._dvl = node.create_publisher(TwistWithCovarianceStamped, 'dvl', qos)
+        self._depth = node.create_publisher(PoseWithCovarianceStamped, 'depth', qos)
+        self._fix = (node.create_publisher(PoseWithCovarianceStamped, 'position_fix', qos)
+                     if params.position_fix.enabled else None)
+        imu = params.imu
+        self._gyro_var = imu.gyro_noise_density ** 2 * imu.rate_hz
+        self._accel_var = imu.accel_noise_density ** 2 * imu.rate_hz
+        self._last: tuple[int, np.ndarray] | None = None
+
+    def publish(self, t_ns: int, q: np.ndarray, w: np.ndarray) -> None:
+        """Measure the vehicle state (q, w of the plant) at ``t_ns`` and publish what is due."""
+        rot = rot_ned_from_body(*q[3:6])
+        v_ned = rot @ w[0:3]
+        a_ned = np.zeros(3)
+        if self._last is not None and t_ns > self._last[0]:
+            a_ned = (v_ned - self._last[1]) / ((t_ns - self._last[0]) * 1e-9)
+        self._last = (t_ns, v_ned)
+        truth = NavigationTruth.of(q[0:3], q[3:6], w[0:3], w[3:6], a_ned)
+        for reading in self.sensors.sample(t_ns, truth):
+            self._send(reading)
+
+    def _send(self, reading: Reading) -> None:
+        if isinstance(reading, ImuReading):
+            self._imu.publish(imu_message(reading, self._gyro_var, self._accel_var))
+        elif isinstance(reading, DvlReading):
+            if reading.valid:
+                self._dvl.publish(dvl_message(reading))
+        elif isinstance(reading, DepthReading):
+            self._depth.publish(depth_message(reading, self.params.depth.bias_max_m))
+        elif self._fix is not None:
+            self._fix.publish(position_fix_message(reading))
