@@ -28,6 +28,7 @@ SCHEMAS = {
     '/uvms/contact': 'uvms_msgs/msg/ContactState',
     '/uvms/command/generalized_force': 'uvms_msgs/msg/GeneralizedForce',
     '/uvms/controller/state': 'uvms_msgs/msg/ControllerState',
+    '/uvms/controller/task_record': 'uvms_msgs/msg/ContactTaskRecord',
     '/uvms/command/actuators': 'uvms_msgs/msg/ActuatorCommand',
     '/uvms/thrusters/state': 'uvms_msgs/msg/ThrusterState',
     '/tf': 'tf2_msgs/msg/TFMessage',
