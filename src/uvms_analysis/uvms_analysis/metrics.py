@@ -9,7 +9,7 @@ so that pushing towards the desired force is positive.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -30,10 +30,14 @@ from uvms_control.core.force_figures import (  # noqa: F401 (re-exported: the me
 )
 
 from uvms_analysis.series import BoolArray, FloatArray, Run
+from uvms_analysis.tasks import TaskRecord
 
 #: Samples before this time are excluded from the free-motion tracking error (s): the start-up
 #: transient of the controller is not tracking performance.
 TRACKING_START_S = 1.0
+#: Tolerance of the match of a task record's stamps with the controller's samples (s): the
+#: record's start time is rebuilt from ns stamps, far finer than a control period.
+TASK_WINDOW_TOLERANCE_S = 1e-6
 #: Normal force above which the end effector counts as in contact when a recording has no
 #: ground-truth contact topic (N); well above the 0.1 N sensor noise of Case II.
 CONTACT_FORCE_THRESHOLD_N = 1.0
@@ -96,6 +100,8 @@ class RunMetrics:
         name: Run name.
         file: The recording it was computed from, as given (None without a file): runs of
             one scenario share a name, so the file tells them apart.
+        task: Goal id (32 hex digits) of the contact task these metrics are of; None: the
+            whole run (a recording without task records).
         force_source: Which force the force metrics use: 'contact' (simulator ground truth)
             or 'controller' (measured F_e); None without a force signal.
         desired_force: Force set-point F_d (N): median of F_d,x while in contact.
@@ -118,6 +124,7 @@ class RunMetrics:
 
     name: str
     file: str | None = None
+    task: str | None = None
     force_source: str | None = None
     desired_force: float | None = None
     first_contact_time: float | None = None
@@ -208,6 +215,67 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
     if force is not None:
         values['force_source'] = force.source
         values.update(_force_metrics(force, None if f_d is None else abs(f_d)))
+    values.update(_motion_metrics(run))
+    return RunMetrics(**values)
+
+
+def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto') -> RunMetrics:
+    """The metrics of one contact task of a run: its samples from first to last step.
+
+    F_d is the goal's force_n. With ``force_source`` 'auto' or 'controller' the force figures
+    come from the samples the task's result was computed from (the controller's F_e along the
+    task's normal, contact at the controller's threshold) through the same ``force_figures``,
+    so they equal the result's; with 'contact' from the ground truth along the normal.
+    Position and vehicle metrics are over the task's samples too.
+    """
+    part = run_window(run, task.t_start - TASK_WINDOW_TOLERANCE_S,
+                      task.t_end + TASK_WINDOW_TOLERANCE_S)
+    values: dict[str, Any] = {'name': run.name, 'task': task.goal_id,
+                              'desired_force': task.force_n}
+    if run.path is not None:
+        values['file'] = str(run.path)
+    force = task_normal_force(part, task, force_source)
+    if force is not None:
+        values['force_source'] = force.source
+        values.update(_force_metrics(force, task.force_n if task.force_n > 0.0 else None))
+    values.update(_motion_metrics(part))
+    return RunMetrics(**values)
+
+
+def task_normal_force(run: Run, task: TaskRecord,
+                      source: ForceSource = 'auto') -> NormalForce | None:
+    """The normal force of a task: as its result saw it ('auto', 'controller'), or ground truth.
+
+    The controller's force is ``normal @ F_e`` per sample, the product the task supervisor
+    takes at each step, in contact at or above the task's threshold.
+    """
+    if source == 'contact':
+        if run.contact is None or run.contact.t.size == 0:
+            return None
+        c = run.contact
+        return NormalForce('contact', c.t, c.force @ task.normal, c.in_contact)
+    if run.controller is None or run.controller.t.size == 0:
+        return None
+    ctrl = run.controller
+    force = np.array([float(task.normal @ f_e) for f_e in ctrl.F_e])
+    return NormalForce('controller', ctrl.t, force, force >= task.contact_threshold_n)
+
+
+def run_window(run: Run, t_from: float, t_to: float) -> Run:
+    """The run cut to the samples with ``t_from <= t <= t_to`` (every series)."""
+    cut: dict[str, Any] = {}
+    for name in ('controller', 'contact', 'odometry', 'ee_pose', 'thrusters'):
+        series = getattr(run, name)
+        if series is not None:
+            keep = (series.t >= t_from) & (series.t <= t_to)
+            cut[name] = replace(series, **{f.name: getattr(series, f.name)[keep]
+                                           for f in fields(series)})
+    return replace(run, **cut)
+
+
+def _motion_metrics(run: Run) -> dict[str, Any]:
+    """Position errors of the end effector and the vehicle's excursion."""
+    values: dict[str, Any] = {}
     if run.controller is not None and run.controller.t.size:
         values.update(_position_metrics(run))
     if run.odometry is not None and run.odometry.t.size:
@@ -215,7 +283,7 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
         values['vehicle_rotation'] = float(
             np.max(rotation_angle_from(run.odometry.quaternion[0], run.odometry.quaternion))
         )
-    return RunMetrics(**values)
+    return values
 
 
 def _force_metrics(force: NormalForce, f_d: float | None) -> dict[str, Any]:
