@@ -58,7 +58,7 @@ class ContactTaskServer:
         self._now_s = now_s
         self._handles: dict[bytes, ServerGoalHandle] = {}
         self._results: dict[bytes, ContactTask.Result] = {}
-        self._goals: dict[bytes, ContactTaskGoal] = {}
+        self._goals: dict[bytes, tuple[ContactTaskGoal, float]] = {}
         # One record per task that ran, so that a recording tells its tasks apart.
         self._records = node.create_publisher(ContactTaskRecord, 'controller/task_record', 10)
         self._last_feedback_s = -float('inf')
@@ -93,7 +93,7 @@ class ContactTaskServer:
             self._finish(key, TaskResult(TaskCode.INVALID_GOAL, str(error), 0.0, 0.0,
                                          float('nan'), float('nan')))
             return
-        self._goals[key] = goal
+        self._goals[key] = (goal, supervisor.controller.task.contact_threshold_n)
         self.finish(supervisor.submit(key, goal, self._now_s()))
         if key in self._handles:
             self._node.get_logger().info(
@@ -130,13 +130,15 @@ class ContactTaskServer:
 
     def _finish(self, key: bytes, result: TaskResult) -> None:
         handle = self._handles.pop(key, None)
-        goal = self._goals.pop(key, None)
+        accepted = self._goals.pop(key, None)
         if handle is None:
             return  # ended already (its result is on its way)
-        supervisor = self._supervisor()
-        if goal is not None and supervisor is not None:
-            record = contact_task_record(key, goal, result,
-                                         supervisor.controller.task.contact_threshold_n)
+        if accepted is not None:
+            # The threshold at the end (a runtime parameter), else at acceptance (deactivated).
+            supervisor = self._supervisor()
+            threshold = (accepted[1] if supervisor is None
+                         else supervisor.controller.task.contact_threshold_n)
+            record = contact_task_record(key, accepted[0], result, threshold)
             if record is not None:
                 self._records.publish(record)
         self._results[key] = contact_task_result(result)
