@@ -20,6 +20,7 @@ from uvms_control.core.force_figures import force_figures
 
 FloatArray = npt.NDArray[np.float64]
 
+
 class TaskCode(enum.IntEnum):
     """How a task ended (values of ContactTask.Result.error_code)."""
 
@@ -187,8 +188,9 @@ class TaskResult:
 class TaskFigures:
     """Samples of one task (t, force along the normal, contact) and their figures at the end.
 
-    Each control step adds one sample to preallocated arrays (doubled when full: a task of
-    ten minutes at 500 Hz holds 300 000 samples, 5 MB), no allocation per step. ``result``
+    Each control step adds one sample to preallocated arrays, no allocation per step; they
+    double when full (at 20, 40, 80 s ... of a 500 Hz task: ten minutes hold 300 000 samples,
+    about 5 MB). ``result``
     computes contact time, peak, settling time and RMS error with ``force_figures``, the
     function `uvms report` uses, against F_d = force_n: settling runs from first contact until
     the force stays within 5 % of force_n (during the ramp too), the RMS error from there to
