@@ -55,7 +55,8 @@ def normal_force(task: SyntheticTask, t: float, rng: np.random.Generator) -> flo
         return 0.0  # the end effector bounces off once
     if s < 0.05:
         return 1.2 * task.force_n * s / 0.05
-    force = task.force_n * (1.0 + 0.2 * np.exp(-(s - 0.05) / 0.1)) + rng.normal(0.0, 0.005 * task.force_n)
+    noise = rng.normal(0.0, 0.005 * task.force_n)
+    force = task.force_n * (1.0 + 0.2 * np.exp(-(s - 0.05) / 0.1)) + noise
     if t >= task.t_release:
         force *= 1.0 - (t - task.t_release) / 0.5
     return float(force)
