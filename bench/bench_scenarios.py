@@ -13,8 +13,8 @@ asserts nothing.
 With ``--out DIR`` the recordings are kept; ``--plot`` then writes the figures of each
 (``uvms plot``, into DIR/NAME/), ``--docs-figures DIR`` copies the ones docs/results.md shows
 there (palette PNGs, a third of the size), and ``--report`` prints the metrics table
-(``uvms report --format markdown``), all after the timing. This regenerates docs/results.md's
-numbers and figures in one command::
+(``uvms report --format markdown --force-source contact``: on the ground truth), all after
+the timing. This regenerates docs/results.md's numbers and figures in one command::
 
     .venv/bin/python bench/bench_scenarios.py --out out --plot --docs-figures docs/figures \
         --report
@@ -241,8 +241,8 @@ def main() -> None:
             copy_docs_figures(out, Path(args.docs_figures))
         if args.report and recordings:
             sys.stdout.flush()
-            subprocess.run(uvms('report', *recordings, '--format', 'markdown'), check=False,
-                           env=child_env())
+            subprocess.run(uvms('report', *recordings, '--format', 'markdown',
+                                '--force-source', 'contact'), check=False, env=child_env())
 
 
 if __name__ == '__main__':

@@ -8,6 +8,8 @@ transitions, and the topics a user would watch.
 
 from __future__ import annotations
 
+import csv
+import io
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -25,6 +27,7 @@ from uvms_bringup.graph import Graph, build_graph, run_graph
 from uvms_bringup.scenario import load_scenario
 from uvms_tasks.client import ContactTaskClient
 
+from uvms_analysis import report
 from uvms_msgs.action import ContactTask
 from uvms_msgs.msg import ActuatorCommand, ContactState, ControllerState, GeneralizedForce
 
@@ -106,11 +109,16 @@ def generalized_force(msg: GeneralizedForce) -> np.ndarray:
 
 
 def run(duration_s: float, script: list[tuple[float, Action]], stiffness: float = 1.0e4,
-        extra: dict[str, dict[str, Any]] | None = None) -> Probe:
-    """Run idle_wall in lockstep for duration_s, acting at the scripted simulated times."""
+        extra: dict[str, dict[str, Any]] | None = None,
+        output_path: Path | None = None) -> Probe:
+    """Run idle_wall in lockstep for duration_s, acting at the scripted simulated times.
+
+    With ``output_path`` the recorder records the graph there.
+    """
     scenario = load_scenario(SCENARIOS / 'idle_wall.yaml').with_changes(duration_s=duration_s)
     overrides = {'simulator': {'contact.stiffness_n_m': stiffness}, **(extra or {})}
-    graph = build_graph(scenario, 'lockstep', extra_overrides=overrides)
+    graph = build_graph(scenario, 'lockstep', extra_overrides=overrides,
+                        output_path=output_path)
     node = Node('probe', namespace='/uvms', context=graph.context,
                 parameter_overrides=[Parameter('use_sim_time', value=True)])
     probe = Probe(node, ContactTaskClient(node), graph)
@@ -320,3 +328,37 @@ def test_streamed_target_moves_the_hold_point_at_its_speed_limit() -> None:
     assert 0.01 < moved <= 0.02 + 1e-6  # 0.2 s at the 0.1 m/s limit
     assert x_d[0.7][0] == pytest.approx(X0[0] + 0.05, abs=1e-6)  # reached, then held
     assert x_d[1.1][0] == pytest.approx(X0[0] + 0.05, abs=1e-6)  # base_link target refused
+
+
+@pytest.fixture(scope='module')
+def two_presses(tmp_path_factory: pytest.TempPathFactory) -> tuple[Probe, Path]:
+    """Two tasks in a row, recorded: 100 N, then 60 N once the first has ended."""
+    path = tmp_path_factory.mktemp('two_presses') / 'two_presses.mcap'
+
+    def second(probe: Probe) -> None:
+        assert 'first' in probe.results, 'the first press has not ended yet'
+        probe.send('second', wall_goal(force_n=60.0, press_s=2.0, start_s=0.0))
+
+    probe = run(10.5, [(0.05, lambda p: p.send('first', wall_goal())), (5.6, second)],
+                output_path=path)
+    return probe, path
+
+
+def test_recording_of_two_tasks_reports_each_tasks_result_figures(
+        two_presses: tuple[Probe, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    """`uvms report`: one row per task, its goal id and F_d, the figures of its result."""
+    probe, path = two_presses
+    assert report.main([str(path), '--format', 'csv']) == 0
+    rows = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    assert len(rows) == 2
+    for row, name, force_n in zip(rows, ('first', 'second'), (100.0, 60.0), strict=True):
+        _, result = probe.results[name]
+        assert result.error_code == Result.SUCCEEDED, result.error_string
+        assert row['task'] == bytes(probe.handles[name].goal_id.uuid).hex()
+        assert float(row['desired_force_N']) == force_n
+        assert row['force_source'] == 'controller'
+        assert float(row['contact_duration_s']) > 1.0
+        assert row['contact_duration_s'] == f'{result.contact_time_s:.6g}'
+        assert row['peak_force_N'] == f'{result.peak_force_n:.6g}'
+        assert row['settling_time_s'] == f'{result.settling_time_s:.6g}'
+        assert row['force_rms_error_N'] == f'{result.rms_force_error_n:.6g}'

@@ -1,30 +1,43 @@
 """The paper's performance metrics of a run: pure functions on numpy arrays, and RunMetrics.
 
-The metric functions are pure: numpy arrays in, numbers out. The contact force along the wall
+The metric functions are pure: numpy arrays in, numbers out. The force figures (contact time,
+peak, settling, RMS error) come from ``uvms_control.core.force_figures.force_figures``, the
+function the ContactTask result uses too (re-exported here). The contact force along the wall
 normal is the x component of ``F_e`` in ``map_ned`` (the wall is a plane normal to x), signed
 so that pushing towards the desired force is positive.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
+from uvms_control.core.force_figures import (  # noqa: F401 (re-exported: the metric functions)
+    IMPACT_WINDOW_S,
+    SETTLING_BAND,
+    SETTLING_MIN_HOLD_S,
+    contact_duration,
+    contact_intervals,
+    first_contact_time,
+    force_figures,
+    last_time_in_band,
+    overshoot_percent,
+    peak,
+    rms,
+    settling_time,
+)
 
 from uvms_analysis.series import BoolArray, FloatArray, Run
+from uvms_analysis.tasks import TaskRecord
 
-#: Band around F_d within which the force counts as settled (fraction of |F_d|).
-SETTLING_BAND = 0.05
-#: Shortest stay inside the band that counts as settled (s); shorter stays are crossings.
-SETTLING_MIN_HOLD_S = 0.2
-#: Window after first contact in which the impact peak is taken (s).
-IMPACT_WINDOW_S = 0.5
 #: Samples before this time are excluded from the free-motion tracking error (s): the start-up
 #: transient of the controller is not tracking performance.
 TRACKING_START_S = 1.0
+#: Tolerance of the match of a task record's stamps with the controller's samples (s): the
+#: record's start time is rebuilt from ns stamps, far finer than a control period.
+TASK_WINDOW_TOLERANCE_S = 1e-6
 #: Normal force above which the end effector counts as in contact when a recording has no
 #: ground-truth contact topic (N); well above the 0.1 N sensor noise of Case II.
 CONTACT_FORCE_THRESHOLD_N = 1.0
@@ -33,108 +46,6 @@ CONTACT_FORCE_THRESHOLD_N = 1.0
 # --------------------------------------------------------------------------------------------
 # Pure metrics on arrays
 # --------------------------------------------------------------------------------------------
-
-
-def contact_intervals(in_contact: BoolArray) -> list[tuple[int, int]]:
-    """Index ranges ``[start, stop)`` of the runs of consecutive in-contact samples.
-
-    Example: ``contact_intervals(np.array([0, 1, 1, 0, 1], bool)) == [(1, 3), (4, 5)]``.
-    """
-    flags = np.concatenate(([False], np.asarray(in_contact, dtype=bool), [False]))
-    edges = np.flatnonzero(np.diff(flags.astype(np.int8)))
-    return [(int(start), int(stop)) for start, stop in zip(edges[::2], edges[1::2], strict=True)]
-
-
-def first_contact_time(t: FloatArray, in_contact: BoolArray) -> float | None:
-    """Time of the first in-contact sample (s), None if the run never touches."""
-    hits = np.flatnonzero(in_contact)
-    return float(t[hits[0]]) if hits.size else None
-
-
-def contact_duration(t: FloatArray, in_contact: BoolArray) -> float:
-    """Total time in contact (s).
-
-    Each interval lasts from its first in-contact sample to the first sample after it that is
-    out of contact (or to the last sample if the run ends in contact).
-    """
-    total = 0.0
-    for start, stop in contact_intervals(in_contact):
-        end = stop if stop < len(t) else len(t) - 1
-        total += float(t[end] - t[start])
-    return total
-
-
-def peak(
-    t: FloatArray, values: FloatArray, t_from: float = -math.inf, t_to: float = math.inf
-) -> tuple[float, float] | None:
-    """Largest value in the window ``t_from <= t <= t_to`` and its time: ``(t_peak, value)``.
-
-    Returns None if no sample lies in the window.
-    """
-    mask = (t >= t_from) & (t <= t_to)
-    if not mask.any():
-        return None
-    index = int(np.flatnonzero(mask)[np.argmax(values[mask])])
-    return float(t[index]), float(values[index])
-
-
-def overshoot_percent(peak_value: float, reference: float) -> float:
-    """Percent overshoot of a peak over a set-point: ``max(0, 100 (peak - ref) / |ref|)``."""
-    if reference == 0.0:
-        raise ValueError('overshoot is undefined for a zero reference')
-    return max(0.0, 100.0 * (peak_value - reference) / abs(reference))
-
-
-def settling_time(
-    t: FloatArray,
-    values: FloatArray,
-    reference: float,
-    t_start: float,
-    t_end: float,
-    band: float = SETTLING_BAND,
-    min_hold_s: float = SETTLING_MIN_HOLD_S,
-) -> float | None:
-    """Time from ``t_start`` until ``values`` stay within ``±band·|reference|`` up to ``t_end``.
-
-    The settling instant is the earliest sample in ``[t_start, t_end]`` from which every
-    sample up to ``t_end`` is inside the band. Returns None (not settled) if the sample at
-    ``t_end`` is outside the band or the final stay is shorter than ``min_hold_s``.
-    """
-    window = np.flatnonzero((t >= t_start) & (t <= t_end))
-    if window.size == 0:
-        return None
-    inside = np.abs(values[window] - reference) <= band * abs(reference)
-    if not inside[-1]:
-        return None
-    outside = np.flatnonzero(~inside)
-    first_settled = window[outside[-1] + 1] if outside.size else window[0]
-    if t[window[-1]] - t[first_settled] < min_hold_s:
-        return None
-    return float(t[first_settled] - t_start)
-
-
-def last_time_in_band(
-    t: FloatArray,
-    values: FloatArray,
-    reference: float,
-    t_start: float,
-    t_end: float,
-    band: float = SETTLING_BAND,
-) -> float | None:
-    """Last time in ``[t_start, t_end]`` at which ``values`` lie within ``±band·|reference|``.
-
-    This ends the constrained phase: after it the end effector releases the wall and the
-    force leaves the band for good. None if the force is never in the band.
-    """
-    mask = (t >= t_start) & (t <= t_end) & (np.abs(values - reference) <= band * abs(reference))
-    hits = np.flatnonzero(mask)
-    return float(t[hits[-1]]) if hits.size else None
-
-
-def rms(values: FloatArray) -> float:
-    """Root mean square of the samples (NaN for no samples)."""
-    values = np.asarray(values, dtype=np.float64)
-    return float(np.sqrt(np.mean(values**2))) if values.size else math.nan
 
 
 def hold(t_query: FloatArray, t: FloatArray, values: npt.NDArray[Any]) -> npt.NDArray[Any]:
@@ -189,6 +100,8 @@ class RunMetrics:
         name: Run name.
         file: The recording it was computed from, as given (None without a file): runs of
             one scenario share a name, so the file tells them apart.
+        task: Goal id (32 hex digits) of the contact task these metrics are of; None: the
+            whole run (a recording without task records).
         force_source: Which force the force metrics use: 'contact' (simulator ground truth)
             or 'controller' (measured F_e); None without a force signal.
         desired_force: Force set-point F_d (N): median of F_d,x while in contact.
@@ -215,6 +128,7 @@ class RunMetrics:
 
     name: str
     file: str | None = None
+    task: str | None = None
     force_source: str | None = None
     desired_force: float | None = None
     first_contact_time: float | None = None
@@ -308,6 +222,67 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
     if force is not None:
         values['force_source'] = force.source
         values.update(_force_metrics(force, None if f_d is None else abs(f_d)))
+    values.update(_motion_metrics(run))
+    return RunMetrics(**values)
+
+
+def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto') -> RunMetrics:
+    """The metrics of one contact task of a run: its samples from first to last step.
+
+    F_d is the goal's force_n. With ``force_source`` 'auto' or 'controller' the force figures
+    come from the samples the task's result was computed from (the controller's F_e along the
+    task's normal, contact at the controller's threshold) through the same ``force_figures``,
+    so they equal the result's; with 'contact' from the ground truth along the normal.
+    Position and vehicle metrics are over the task's samples too.
+    """
+    part = run_window(run, task.t_start - TASK_WINDOW_TOLERANCE_S,
+                      task.t_end + TASK_WINDOW_TOLERANCE_S)
+    values: dict[str, Any] = {'name': run.name, 'task': task.goal_id,
+                              'desired_force': task.force_n}
+    if run.path is not None:
+        values['file'] = str(run.path)
+    force = task_normal_force(part, task, force_source)
+    if force is not None:
+        values['force_source'] = force.source
+        values.update(_force_metrics(force, task.force_n if task.force_n > 0.0 else None))
+    values.update(_motion_metrics(part))
+    return RunMetrics(**values)
+
+
+def task_normal_force(run: Run, task: TaskRecord,
+                      source: ForceSource = 'auto') -> NormalForce | None:
+    """The normal force of a task: as its result saw it ('auto', 'controller'), or ground truth.
+
+    The controller's force is ``normal @ F_e`` per sample, the product the task supervisor
+    takes at each step, in contact at or above the task's threshold.
+    """
+    if source == 'contact':
+        if run.contact is None or run.contact.t.size == 0:
+            return None
+        c = run.contact
+        return NormalForce('contact', c.t, c.force @ task.normal, c.in_contact)
+    if run.controller is None or run.controller.t.size == 0:
+        return None
+    ctrl = run.controller
+    force = np.array([float(task.normal @ f_e) for f_e in ctrl.F_e])
+    return NormalForce('controller', ctrl.t, force, force >= task.contact_threshold_n)
+
+
+def run_window(run: Run, t_from: float, t_to: float) -> Run:
+    """The run cut to the samples with ``t_from <= t <= t_to`` (every series)."""
+    cut: dict[str, Any] = {}
+    for name in ('controller', 'contact', 'odometry', 'ee_pose', 'thrusters', 'current'):
+        series = getattr(run, name)
+        if series is not None:
+            keep = (series.t >= t_from) & (series.t <= t_to)
+            cut[name] = replace(series, **{f.name: getattr(series, f.name)[keep]
+                                           for f in fields(series)})
+    return replace(run, **cut)
+
+
+def _motion_metrics(run: Run) -> dict[str, Any]:
+    """Position errors of the end effector and the vehicle's excursion."""
+    values: dict[str, Any] = {}
     if run.controller is not None and run.controller.t.size:
         values.update(_position_metrics(run))
     if run.odometry is not None and run.odometry.t.size:
@@ -321,40 +296,12 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
         speed = np.linalg.norm(run.current.velocity, axis=1)
         values['current_speed'] = float(np.mean(speed))
         values['current_speed_max'] = float(np.max(speed))
-    return RunMetrics(**values)
+    return values
 
 
 def _force_metrics(force: NormalForce, f_d: float | None) -> dict[str, Any]:
-    """Contact timing and force-response metrics of a normal force signal."""
-    t, f = force.t, force.force
-    intervals = contact_intervals(force.in_contact)
-    values: dict[str, Any] = {'contact_count': len(intervals)}
-    t_contact = first_contact_time(t, force.in_contact)
-    if t_contact is None:
-        return values
-    values['first_contact_time'] = t_contact
-    values['contact_duration'] = contact_duration(t, force.in_contact)
-    overall = peak(t, f)
-    impact = peak(t, f, t_contact, t_contact + IMPACT_WINDOW_S)
-    values['peak_force'] = None if overall is None else overall[1]
-    values['impact_peak_force'] = None if impact is None else impact[1]
-    if f_d is None or f_d == 0.0:
-        return values
-    if overall is not None:
-        values['overshoot'] = overshoot_percent(overall[1], f_d)
-    # The constrained phase runs from first contact to the end of the last contact interval,
-    # minus the release, where the force falls out of the band for good.
-    last_stop = intervals[-1][1]
-    t_contact_end = float(t[min(last_stop, len(t) - 1)])
-    t_end = last_time_in_band(t, f, f_d, t_contact, t_contact_end)
-    if t_end is None:
-        return values
-    t_settle = settling_time(t, f, f_d, t_contact, t_end)
-    values['settling_time'] = t_settle
-    if t_settle is not None:
-        settled = (t >= t_contact + t_settle) & (t <= t_end)
-        values['force_rms_error'] = rms(f[settled] - f_d)
-    return values
+    """Contact timing and force-response metrics of a normal force signal (``force_figures``)."""
+    return asdict(force_figures(force.t, force.force, force.in_contact, f_d))
 
 
 def _position_metrics(run: Run) -> dict[str, Any]:

@@ -17,6 +17,7 @@ from uvms_analysis.metrics import (
     TRACKING_START_S,
     RunMetrics,
     compute_metrics,
+    task_metrics,
 )
 from uvms_analysis.series import AnalysisError, load_run
 
@@ -34,6 +35,8 @@ class Column:
         key: Machine name for CSV, with the unit as suffix.
         value: Extracts the value (in the shown unit) from the metrics; None is n/a.
         digits: Decimals in text and markdown tables.
+        short: Characters of a text value shown in text and markdown tables (0: all; CSV
+            always has all).
     """
 
     label: str
@@ -41,6 +44,7 @@ class Column:
     key: str
     value: Callable[[RunMetrics], float | int | str | None]
     digits: int = 1
+    short: int = 0
 
 
 def _scaled(name: str, factor: float) -> Callable[[RunMetrics], float | None]:
@@ -61,6 +65,7 @@ def _attr(name: str) -> Callable[[RunMetrics], float | int | str | None]:
 COLUMNS = (
     Column('run', '', 'run', _attr('name')),
     Column('file', '', 'file', _attr('file')),
+    Column('task', '', 'task', _attr('task'), short=8),
     Column('F_d', 'N', 'desired_force_N', _attr('desired_force')),
     Column('first\ncontact', 's', 'first_contact_s', _attr('first_contact_time'), 3),
     Column('contacts', '', 'contact_count', _attr('contact_count'), 0),
@@ -99,14 +104,17 @@ COLUMNS = (
     Column('force\nfrom', '', 'force_source', _attr('force_source')),
 )
 #: Columns that name a run rather than measure it (left-aligned; no sweep metric).
-LABEL_KEYS = ('run', 'file', 'force_source')
-_LEFT_ALIGNED = ('run', 'file')
+LABEL_KEYS = ('run', 'file', 'task', 'force_source')
+_LEFT_ALIGNED = ('run', 'file', 'task')
 
 LEGEND = (
     'run: scenario of the recording (else its file name); file: the recording as given.',
-    'F: contact force along the wall normal (map_ned x); force from: contact = simulator ground',
-    "   truth (/uvms/contact), controller = the controller's measured F_e.",
-    'F_d: median force set-point while in contact. overshoot: (peak F - F_d) / F_d, 0 if below.',
+    'task: goal id of a contact task (first 8 hex digits; all 32 in CSV): one row per task,',
+    "   from its first to its last control step, F_d its force_n; force metrics as its result's.",
+    "F: contact force along the wall normal (map_ned x; a task's normal); force from: contact =",
+    "   simulator ground truth (/uvms/contact), controller = the controller's measured F_e.",
+    'F_d: a run without tasks: median force set-point while in contact. overshoot: (peak F - F_d)',
+    '   / F_d, 0 if below.',
     f'impact peak F: largest F within {IMPACT_WINDOW_S:g} s of first contact.',
     f'settling time: from first contact until F stays within {SETTLING_BAND:.0%} of F_d.',
     'RMS F error: of F - F_d from settling to the release of the wall. contacts: intervals.',
@@ -125,7 +133,7 @@ def _cell(column: Column, metrics: RunMetrics, digits: int | None) -> str:
     if value is None:
         return NOT_APPLICABLE
     if isinstance(value, str):
-        return value
+        return value[: column.short] if column.short and digits is not None else value
     if isinstance(value, int) and not isinstance(value, bool):
         return str(value)
     if digits is None:
@@ -196,8 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
     """Argument parser of `uvms report`."""
     parser = argparse.ArgumentParser(
         prog='uvms report',
-        description='Print the performance metrics of UVMS recordings (MCAP), one row per '
-        'recording: run (the scenario name) and file (the recording) identify it.',
+        description='Print the performance metrics of UVMS recordings (MCAP): one row per '
+        'contact task of a recording (its goal id in column task), or one row per recording '
+        'without tasks; run (the scenario name) and file (the recording) identify it.',
     )
     parser.add_argument('recordings', nargs='+', metavar='F.mcap', help='recordings to analyse')
     parser.add_argument(
@@ -208,7 +217,9 @@ def build_parser() -> argparse.ArgumentParser:
         choices=('auto', 'contact', 'controller'),
         default='auto',
         help='force for the force metrics: simulator ground truth (contact), the '
-        "controller's measured F_e (controller), or ground truth when recorded (auto)",
+        "controller's measured F_e (controller), or auto: for a task the force its result "
+        "used (the controller's, so the row equals the result), for a run without tasks "
+        'ground truth when recorded',
     )
     return parser
 
@@ -235,7 +246,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             continue
         if run.problem is not None:
             print(f'uvms report: warning: {run.problem}', file=sys.stderr)
-        metrics.append(compute_metrics(run, args.force_source))
+        metrics.extend([task_metrics(run, task, args.force_source) for task in run.tasks]
+                       or [compute_metrics(run, args.force_source)])
         errors = estimate_errors(path)
         if errors is not None:
             estimates.append((metrics[-1].name, errors))

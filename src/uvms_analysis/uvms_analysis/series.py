@@ -20,6 +20,8 @@ from uvms_recording.mcap_reader import RecordedMessage, open_recording
 from uvms_recording.mcap_writer import RUN_METADATA_NAME
 from uvms_recording.typestore import uvms_typestore
 
+from uvms_analysis.tasks import TOPIC_TASK_RECORD, TaskRecord, task_records
+
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
@@ -41,6 +43,7 @@ ANALYSIS_TOPICS = (
     TOPIC_EE_POSE,
     TOPIC_THRUSTERS,
     TOPIC_OCEAN_CURRENT,
+    TOPIC_TASK_RECORD,
 )
 
 
@@ -189,6 +192,7 @@ class Run:
         ee_pose: /uvms/ee_pose.
         thrusters: /uvms/thrusters/state.
         current: /uvms/ocean/current (None in still water: nothing is published).
+        tasks: /uvms/controller/task_record: the contact tasks that ran, in order of their end.
         metadata: The recording's metadata records, by record name.
         time_origin_ns: Stamp (or log time) of t = 0 (ns).
         problem: What was lost if the recording was cut short, else None.
@@ -202,6 +206,7 @@ class Run:
     ee_pose: PoseSeries | None = None
     thrusters: ThrusterSeries | None = None
     current: CurrentSeries | None = None
+    tasks: tuple[TaskRecord, ...] = ()
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     time_origin_ns: int = 0
     problem: str | None = None
@@ -339,6 +344,7 @@ _SERIES_BUILDERS = {
     TOPIC_EE_POSE: ('ee_pose', pose_series),
     TOPIC_THRUSTERS: ('thrusters', thruster_series),
     TOPIC_OCEAN_CURRENT: ('current', current_series),
+    TOPIC_TASK_RECORD: ('tasks', task_records),
 }
 
 

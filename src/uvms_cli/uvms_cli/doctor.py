@@ -56,6 +56,7 @@ USED_MESSAGE_TYPES = (
     'rcl_interfaces/msg/Parameter',
     'uvms_msgs/msg/ActuatorCommand',
     'uvms_msgs/msg/ContactState',
+    'uvms_msgs/msg/ContactTaskRecord',
     'uvms_msgs/msg/ControllerState',
     'uvms_msgs/msg/GeneralizedForce',
     'uvms_msgs/msg/ThrusterState',

@@ -13,6 +13,7 @@ from uvms_control.core.contact_task import ContactTaskGoal, TaskGoalError, TaskR
 from uvms_control.core.task_supervisor import TaskProgress
 from uvms_control.core.unified_controller import ControllerResult
 from uvms_msgs.action import ContactTask
+from uvms_msgs.msg import ContactTaskRecord
 
 #: The frame of every task quantity (earth-fixed NED); an empty frame_id means it too.
 TASK_FRAMES = ('map_ned', '')
@@ -55,6 +56,30 @@ def contact_task_result(result: TaskResult) -> ContactTask.Result:
         rms_force_error_n=float(result.rms_force_error_n),
         settling_time_s=float(result.settling_time_s),
     )
+
+
+def unit_normal(goal: ContactTaskGoal) -> np.ndarray:
+    """The goal's normal as a unit vector, as the task supervisor normalizes it."""
+    normal = np.asarray(goal.normal, dtype=np.float64)
+    return normal / float(np.linalg.norm(normal))
+
+
+def contact_task_record(goal_id: bytes, goal: ContactTaskGoal, result: TaskResult,
+                        contact_threshold_n: float) -> ContactTaskRecord | None:
+    """The record of a task that ended (controller/task_record); None if it ran no step."""
+    if not (math.isfinite(result.start_s) and math.isfinite(result.end_s)):
+        return None
+    msg = ContactTaskRecord()
+    msg.header.frame_id = 'map_ned'
+    end_ns, start_ns = round(result.end_s * 1e9), round(result.start_s * 1e9)
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(end_ns, 1_000_000_000)
+    msg.start.sec, msg.start.nanosec = divmod(start_ns, 1_000_000_000)
+    msg.goal_id = list(goal_id)
+    msg.force_n = float(goal.force_n)
+    msg.normal.x, msg.normal.y, msg.normal.z = unit_normal(goal).tolist()
+    msg.contact_threshold_n = float(contact_threshold_n)
+    msg.error_code = int(result.code)
+    return msg
 
 
 def contact_task_feedback(progress: TaskProgress, step: ControllerResult) -> ContactTask.Feedback:

@@ -5,7 +5,9 @@ accepts every well-formed request, hands the goal to the supervisor (which refus
 invalid one with INVALID_GOAL and the field named, or lets it preempt the running task),
 and answers when the control loop says the task ended. The control loop drives everything:
 rclpy's coroutine execute callback would poll the executor while a task runs, so the goal
-stays ACCEPTED while it runs and ``execute`` is called only to deliver its result.
+stays ACCEPTED while it runs and ``execute`` is called only to deliver its result. Each
+task that ran a step is also published once on ``controller/task_record`` (goal id, F_d,
+normal, contact threshold, first and last step), which `uvms report` reads from a recording.
 """
 
 from __future__ import annotations
@@ -18,14 +20,16 @@ from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 
-from uvms_control.core.contact_task import TaskCode, TaskGoalError, TaskResult
+from uvms_control.core.contact_task import ContactTaskGoal, TaskCode, TaskGoalError, TaskResult
 from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
 from uvms_control.task_conversions import (
     contact_task_feedback,
     contact_task_goal,
+    contact_task_record,
     contact_task_result,
 )
 from uvms_msgs.action import ContactTask
+from uvms_msgs.msg import ContactTaskRecord
 
 #: Feedback period on the controller's clock (s): 20 Hz, above the 10 Hz the contract asks.
 FEEDBACK_PERIOD_S = 0.05
@@ -57,6 +61,9 @@ class ContactTaskServer:
         self._now_s = now_s
         self._handles: dict[bytes, ServerGoalHandle] = {}
         self._results: dict[bytes, ContactTask.Result] = {}
+        self._goals: dict[bytes, tuple[ContactTaskGoal, float]] = {}
+        # One record per task that ran, so that a recording tells its tasks apart.
+        self._records = node.create_publisher(ContactTaskRecord, 'controller/task_record', 10)
         self._last_feedback_s = -float('inf')
         self.goals_received = 0
         self.last_outcome = 'none'
@@ -103,6 +110,7 @@ class ContactTaskServer:
             self._finish(key, TaskResult(TaskCode.INVALID_GOAL, str(error), 0.0, 0.0,
                                          float('nan'), float('nan')))
             return
+        self._goals[key] = (goal, supervisor.controller.task.contact_threshold_n)
         self.finish(supervisor.submit(key, goal, self._now_s()))
         if key in self._handles:
             self._node.get_logger().info(
@@ -143,8 +151,17 @@ class ContactTaskServer:
 
     def _finish(self, key: bytes, result: TaskResult) -> None:
         handle = self._handles.pop(key, None)
+        accepted = self._goals.pop(key, None)
         if handle is None:
             return  # ended already (its result is on its way)
+        if accepted is not None:
+            # The threshold at the end (a runtime parameter), else at acceptance (deactivated).
+            supervisor = self._supervisor()
+            threshold = (accepted[1] if supervisor is None
+                         else supervisor.controller.task.contact_threshold_n)
+            record = contact_task_record(key, accepted[0], result, threshold)
+            if record is not None:
+                self._records.publish(record)
         self._results[key] = contact_task_result(result)
         self.last_outcome = f'{result.code.name}: {result.message}'
         text = f'contact task ended {result.code.name}: {result.message}'

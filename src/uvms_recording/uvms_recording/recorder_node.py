@@ -42,6 +42,7 @@ DEFAULT_TOPICS = (
     'contact:uvms_msgs/msg/ContactState',
     'command/generalized_force:uvms_msgs/msg/GeneralizedForce',
     'controller/state:uvms_msgs/msg/ControllerState',
+    'controller/task_record:uvms_msgs/msg/ContactTaskRecord',
     'command/actuators:uvms_msgs/msg/ActuatorCommand',
     'thrusters/state:uvms_msgs/msg/ThrusterState',
     '/tf:tf2_msgs/msg/TFMessage',

@@ -71,7 +71,8 @@ def test_text_report_shows_units_and_a_row_per_run(
     lines = out.splitlines()
     assert any('[N]' in line and '[mm]' in line and '[deg]' in line for line in lines)
     row = next(line for line in lines if line.startswith('case1_synthetic'))
-    assert row.split()[1:5] == [str(contact_recording), '150.0', '2.000', '1']
+    # task n/a: a recording without task records is one row for the whole run
+    assert row.split()[1:6] == [str(contact_recording), 'n/a', '150.0', '2.000', '1']
 
 
 def test_markdown_report_is_a_table_with_aligned_columns(
@@ -82,7 +83,7 @@ def test_markdown_report_is_a_table_with_aligned_columns(
     table = [line for line in out.splitlines() if line.startswith('|')]
     assert len(table) == 3
     assert len({line.count(' | ') for line in table}) == 1
-    assert table[2].startswith(f'| case1_synthetic | {contact_recording} | 150.0 |')
+    assert table[2].startswith(f'| case1_synthetic | {contact_recording} | n/a | 150.0 |')
 
 
 @pytest.mark.parametrize('fmt', ['text', 'markdown', 'csv'])

@@ -123,15 +123,20 @@ def test_figures_of_a_press_have_their_known_values() -> None:
 def test_overshoot_before_settling_is_not_in_the_rms_error() -> None:
     """The RMS error counts from settling: 20 N of overshoot before it leave it at 2 N."""
     figures = run_figures(100.0, press)
-    assert figures.settled_s == pytest.approx(2.5)
+    result = figures.result(TaskCode.SUCCEEDED, '')
     assert figures.first_contact_s == pytest.approx(1.0)
-    assert figures.result(TaskCode.SUCCEEDED, '').rms_force_error_n == pytest.approx(2.0)
+    assert figures.first_contact_s + result.settling_time_s == pytest.approx(2.5)
+    assert result.rms_force_error_n == pytest.approx(2.0)
 
 
 def test_force_that_never_settles_has_no_settling_time_or_rms() -> None:
-    """A force that stays 10 % off F_d never settles: settling time and RMS error are NaN."""
+    """A force that stays 10 % off F_d never settles: settling time and RMS error are NaN.
+
+    In contact from the first to the last sample: 4.99 s (contact time runs from sample to
+    sample, as in `uvms report`).
+    """
     result = run_figures(100.0, lambda k: (110.0, k >= 100)).result(TaskCode.CANCELED, '')
-    assert result.contact_time_s == pytest.approx(5.0)
+    assert result.contact_time_s == pytest.approx(4.99)
     assert math.isnan(result.settling_time_s)
     assert math.isnan(result.rms_force_error_n)
 
@@ -143,3 +148,37 @@ def test_motion_only_task_counts_contact_but_no_force_error() -> None:
     assert result.peak_force_n == 120.0
     assert math.isnan(result.settling_time_s)
     assert math.isnan(result.rms_force_error_n)
+
+
+def test_force_settled_during_the_ramp_has_a_settling_time_shorter_than_the_ramp() -> None:
+    """Settling is from first contact until the force stays within 5 % of force_n, ramp or not.
+
+    The force is within 1 N of 100 N from 0.1 s after first contact while F_d still ramps
+    (1 s): settled 0.1 s after contact, not bounded below by force_ramp_s.
+    """
+    ramp_s = 1.0
+
+    def quick(k: int) -> tuple[float, bool]:
+        t = k * DT
+        if t < 1.0:
+            return 0.0, False
+        if t < 1.1 - 1e-9:
+            return 50.0, False
+        return (100.5 if k % 2 else 99.5), t >= 1.0 + ramp_s
+
+    result = run_figures(100.0, quick).result(TaskCode.SUCCEEDED, '')
+    assert result.settling_time_s == pytest.approx(0.1)
+    assert result.settling_time_s < ramp_s
+    assert result.rms_force_error_n == pytest.approx(0.5)
+
+
+def test_figures_hold_every_step_of_a_long_task() -> None:
+    """Samples beyond the first capacity are kept: a task longer than 20 s at 500 Hz."""
+    figures = TaskFigures(100.0)
+    steps = 3 * TaskFigures.INITIAL_CAPACITY
+    for k in range(steps):
+        figures.update(k * 0.002, 0.002, 100.0 if k >= 10 else 0.0, k >= 10, k >= 10)
+    result = figures.result(TaskCode.SUCCEEDED, '')
+    assert result.contact_time_s == pytest.approx((steps - 1 - 10) * 0.002)
+    assert (result.start_s, result.end_s) == (0.0, pytest.approx((steps - 1) * 0.002))
+    assert result.settling_time_s == 0.0

@@ -10,6 +10,7 @@ import pytest
 MODULES = [
     'uvms_control.core.allocation',
     'uvms_control.core.filters',
+    'uvms_control.core.force_figures',
     'uvms_control.core.fuzzy_sets',
     'uvms_control.core.fuzzy_switch',
     'uvms_control.core.hybrid',

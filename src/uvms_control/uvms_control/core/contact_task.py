@@ -4,7 +4,7 @@ A contact task moves the end effector along a timed path in map_ned and, whereve
 a surface, lets the fuzzy switch hand over from impedance to force control (paper sec. 4.3)
 and presses with F_d along the normal (sec. 5.2). This module holds what does not depend on
 ROS: the goal as plain arrays, its validation (every refusal names the field and value), the
-safety limits, and the running figures of the result (contact time, peak, RMS error).
+safety limits, and the samples the result's figures are computed from (``force_figures``).
 """
 
 from __future__ import annotations
@@ -16,12 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from uvms_control.core.force_figures import force_figures
 from uvms_control.core.task_path import TaskPath
 
 FloatArray = npt.NDArray[np.float64]
 
-#: A force within this share of F_d counts as settled (the result's RMS error starts there).
-SETTLED_BAND = 0.05
 
 #: Peak of ds/dσ of the quintic rest-to-rest time scaling 10σ³ - 15σ⁴ + 6σ⁵ (at σ = 1/2).
 QUINTIC_PEAK_SPEED = 1.875
@@ -250,7 +249,12 @@ def _check_interpolated_path(goal: ContactTaskGoal, X: FloatArray, start: npt.Ar
 
 @dataclass(frozen=True)
 class TaskResult:
-    """How a task ended and its figures (the ContactTask result)."""
+    """How a task ended and its figures (the ContactTask result).
+
+    ``start_s`` and ``end_s`` are the times of the first and last control step the figures
+    were computed from (NaN for a task that never ran a step): a recording's task record
+    carries them, so that `uvms report` computes the same figures from the same samples.
+    """
 
     code: TaskCode
     message: str
@@ -258,55 +262,77 @@ class TaskResult:
     peak_force_n: float
     rms_force_error_n: float
     settling_time_s: float
+    start_s: float = math.nan
+    end_s: float = math.nan
 
 
 class TaskFigures:
-    """Running figures of one task: contact time, peak force, settling and RMS error.
+    """Samples of one task (t, force along the normal, contact) and their figures at the end.
 
-    The RMS force error counts from settling (the force first within ``SETTLED_BAND`` of
-    F_d after the ramp has reached it) to release, as the paper's steady-state tracking.
+    Each control step adds one sample to preallocated arrays, no allocation per step; they
+    double when full (at 20, 40, 80 s ... of a 500 Hz task: ten minutes hold 300 000 samples,
+    about 5 MB). ``result``
+    computes contact time, peak, settling time and RMS error with ``force_figures``, the
+    function `uvms report` uses, against F_d = force_n: settling runs from first contact until
+    the force stays within 5 % of force_n (during the ramp too), the RMS error from there to
+    the release (docs/figures.md#metrics).
     """
+
+    #: Samples held before the first growth: 20 s at 500 Hz.
+    INITIAL_CAPACITY = 10_000
 
     def __init__(self, force_n: float) -> None:
         self.force_n = force_n
-        self.contact_time_s = 0.0
-        self.peak_force_n = 0.0
         self.first_contact_s: float | None = None
-        self.settled_s: float | None = None
-        self._squared_error = 0.0
-        self._settled_time = 0.0
+        self._t = np.empty(self.INITIAL_CAPACITY)
+        self._force = np.empty(self.INITIAL_CAPACITY)
+        self._contact = np.empty(self.INITIAL_CAPACITY, dtype=bool)
+        self._count = 0
 
     def update(self, t: float, dt: float, f_normal: float, in_contact: bool,
                at_setpoint: bool) -> None:
-        """Add one control period of length dt (s) ending at t (s).
+        """Add the sample of one control step at t (s).
 
         Args:
             t: time (s).
-            dt: period (s).
+            dt: period (s); unused: durations come from the sample times.
             f_normal: measured force along the normal (N).
             in_contact: force at or above the contact threshold.
-            at_setpoint: F_d has reached force_n and is not being released.
+            at_setpoint: F_d has reached force_n; unused: settling is measured against
+                force_n from first contact, ramp or not.
         """
-        self.peak_force_n = max(self.peak_force_n, f_normal)
-        if in_contact:
-            self.contact_time_s += dt
-            if self.first_contact_s is None:
-                self.first_contact_s = t
-        if self.force_n <= 0.0 or not at_setpoint:
-            return
-        error = f_normal - self.force_n
-        if self.settled_s is None and abs(error) <= SETTLED_BAND * self.force_n:
-            self.settled_s = t
-        if self.settled_s is not None:
-            self._squared_error += error * error * dt
-            self._settled_time += dt
+        del dt, at_setpoint
+        k = self._count
+        if k == self._t.size:
+            self._grow()
+        self._t[k] = t
+        self._force[k] = f_normal
+        self._contact[k] = in_contact
+        self._count = k + 1
+        if in_contact and self.first_contact_s is None:
+            self.first_contact_s = t
+
+    def _grow(self) -> None:
+        size = 2 * self._t.size
+        self._t = np.resize(self._t, size)
+        self._force = np.resize(self._force, size)
+        self._contact = np.resize(self._contact, size)
 
     def result(self, code: TaskCode, message: str) -> TaskResult:
-        """The result with these figures."""
-        rms = (math.sqrt(self._squared_error / self._settled_time)
-               if self._settled_time > 0.0 else math.nan)
-        settling = (self.settled_s - self.first_contact_s
-                    if self.settled_s is not None and self.first_contact_s is not None
-                    else math.nan)
-        return TaskResult(code, message, self.contact_time_s, self.peak_force_n, rms,
-                          settling)
+        """The result with the figures of the samples so far."""
+        k = self._count
+        figures = force_figures(self._t[:k], self._force[:k], self._contact[:k],
+                                self.force_n if self.force_n > 0.0 else None)
+        return TaskResult(
+            code, message,
+            contact_time_s=figures.contact_duration or 0.0,
+            peak_force_n=0.0 if figures.peak_force is None else figures.peak_force,
+            rms_force_error_n=_nan_if_none(figures.force_rms_error),
+            settling_time_s=_nan_if_none(figures.settling_time),
+            start_s=float(self._t[0]) if k else math.nan,
+            end_s=float(self._t[k - 1]) if k else math.nan,
+        )
+
+
+def _nan_if_none(value: float | None) -> float:
+    return math.nan if value is None else value
