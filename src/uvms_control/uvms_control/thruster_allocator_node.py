@@ -28,6 +28,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
+from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
@@ -49,6 +50,7 @@ from uvms_control.core.parameters import (
     validate_node_parameters,
 )
 from uvms_control.ros_parameters import declare_parameters
+from uvms_control.unconfigured import ZeroAnswer, zero_actuator_command
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 
@@ -85,6 +87,9 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._meters = {name: RateMeter() for name in ('published', 'saturated', 'rejected')}
         self._diagnostics = DiagnosticsPublisher(self)
         self._diagnostics.add('allocation', self._report)
+        self._unconfigured: ZeroAnswer | None = None
+        if not starting:
+            self._answer_unconfigured()
         if starting and not autostart(self):
             error = self._transition_error or RuntimeError('autostart failed (see the log)')
             self.destroy_node()
@@ -95,10 +100,12 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Validate the parameters, build the core, create publishers, subscription, timer."""
+        self._drop_unconfigured()
         try:
             self._configure()
         except Exception as error:  # rclpy would turn it into ERROR silently
             self._release()
+            self._answer_unconfigured()
             return self._failed('configure', error)
         return SUCCESS
 
@@ -123,6 +130,7 @@ class ThrusterAllocatorNode(LifecycleNode):
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Drop the core, the publishers, the subscription and the timer."""
         self._release()
+        self._answer_unconfigured()
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -210,7 +218,8 @@ class ThrusterAllocatorNode(LifecycleNode):
             (self.destroy_publisher, self._actuator_pub),
             (self.destroy_publisher, self._state_pub),
             (self.destroy_subscription, self.create_subscription(
-                GeneralizedForce, 'command/generalized_force', self._on_command, qos))]
+                GeneralizedForce, 'command/generalized_force', self._on_command,
+                input_qos(self._lockstep)))]
         if not self._lockstep:
             # On the steady clock, as the controller's: /clock bursts must not drop periods.
             self._entities.append((self.destroy_timer, self.create_timer(
@@ -239,7 +248,27 @@ class ThrusterAllocatorNode(LifecycleNode):
             self.get_logger().error(f'{transition} failed: {reason}')
         return FAILURE
 
+    def _answer_unconfigured(self) -> None:
+        """Lockstep, unconfigured: answer each command with zeros (uvms_control.unconfigured)."""
+        if self._values.get('trigger_mode') != 'lockstep' or self._unconfigured is not None:
+            return
+        try:
+            count = ThrusterLayout.from_parameters(
+                UvmsParameters.from_flat_dict(self._robot).thrusters).count
+        except ModelError as error:
+            self.get_logger().error(f'unconfigured: cannot answer lockstep commands: {error}')
+            return
+        self._unconfigured = ZeroAnswer(self, GeneralizedForce, 'command/generalized_force',
+                                        ActuatorCommand, 'command/actuators',
+                                        zero_actuator_command(count))
+
+    def _drop_unconfigured(self) -> None:
+        if self._unconfigured is not None:
+            self._unconfigured.destroy()
+            self._unconfigured = None
+
     def _safe_stop(self, state: LifecycleState, then: Any) -> TransitionCallbackReturn:
+        self._drop_unconfigured()
         try:
             if self._active:
                 self._publish_zero(self.get_clock().now().nanoseconds)
