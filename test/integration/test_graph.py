@@ -182,24 +182,33 @@ def test_realtime_graph_holds_and_names_a_controller_left_unconfigured(
     assert 't = 0.000 s' in str(error.value)
 
 
-def test_lockstep_graph_runs_with_the_allocator_left_unconfigured(tmp_path: Path) -> None:
-    """``thruster_allocator: {autostart: false}``: zeros answer every state, the run ends.
+@pytest.mark.parametrize(('node', 'topic'), [
+    ('thruster_allocator', '/uvms/command/actuators'),
+    ('controller', '/uvms/command/generalized_force'),
+])
+def test_lockstep_graph_runs_with_a_node_left_unconfigured(tmp_path: Path, node: str,
+                                                           topic: str) -> None:
+    """``NODE: {autostart: false}``: its zeros answer every state, the run ends on time.
 
-    Before issue 29 ``uvms run`` waited forever at t = 0.
+    Before issue 29 ``uvms run`` waited forever at t = 0 (the node answered nothing).
     """
     path = tmp_path / 'unconfigured.mcap'
     run = scenario('case1_ke1e4').with_changes(duration_s=0.1)
-    overrides = {**run.overrides, 'thruster_allocator': {'autostart': False}}
+    overrides = {**run.overrides, node: {'autostart': False}}
     result = run_graph(build_graph(dataclasses.replace(run, overrides=overrides), 'lockstep',
                                    output_path=path))
     assert result.sim_time_s == pytest.approx(0.1)
     assert result.lockstep_timeouts == 0
     with AnyReader([path]) as reader:
-        connections = [c for c in reader.connections if c.topic == '/uvms/command/actuators']
+        connections = [c for c in reader.connections if c.topic == topic]
         commands = [reader.deserialize(raw, c.msgtype)
                     for c, _, raw in reader.messages(connections=connections)]
     assert len(commands) == 51
-    assert not any(any(c.thrust) or any(c.joint_torques) for c in commands)
+    for command in commands:
+        values = (list(command.thrust) if hasattr(command, 'thrust') else [
+            command.vehicle_wrench.force.x, command.vehicle_wrench.force.z,
+            command.vehicle_wrench.torque.y])
+        assert not any(values) and not any(command.joint_torques)
 
 
 def test_realtime_graph_runs_on_wall_clock_timers(tmp_path: Path) -> None:

@@ -37,12 +37,7 @@ from sensor_msgs.msg import JointState
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.diagnostics import robot_name as urdf_robot_name
 from uvms_common.exchange_qos import input_qos
-from uvms_common.lifecycle import (
-    autostart,
-    declare_autostart,
-    guard_change_state,
-    state_label,
-)
+from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
@@ -62,7 +57,7 @@ from uvms_control.core.unified_controller import UnifiedForceController
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
-from uvms_control.unconfigured import ZeroAnswer, zero_generalized_force
+from uvms_control.unconfigured import answer_while_unconfigured, controller_zero_answer
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 
@@ -121,9 +116,8 @@ class ControllerNode(LifecycleNode):
         self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
         self._diagnostics.add('control', self._report_control)
         self._diagnostics.add('task', self._report_task)
-        self._unconfigured: ZeroAnswer | None = None
-        if not starting:
-            self._answer_unconfigured()
+        answer_while_unconfigured(self, self._node_values['trigger_mode'] == 'lockstep',
+                                  not starting, lambda: controller_zero_answer(self))
         if starting and not autostart(self):
             error = self._error or ControlParameterError('autostart', True, 'a node that can '
                                                          'configure and activate')
@@ -134,7 +128,6 @@ class ControllerNode(LifecycleNode):
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Validate the parameters, build model, controller, task supervisor and topics."""
-        self._drop_unconfigured()
         try:
             node = validate_node_parameters(CONTROLLER_NODE_PARAMETER_SPECS, self._node_values)
             gains = ControllerParameters.from_flat_dict(self._gains)
@@ -151,7 +144,6 @@ class ControllerNode(LifecycleNode):
             self._configure_topics(node, model.joint_names)
         except Exception as error:  # rclpy would turn it into ERROR silently
             self._release()
-            self._answer_unconfigured()
             return self._failed('configure', error)
         self.get_logger().info(
             f'unified force controller, {node["trigger_mode"]} trigger, null space '
@@ -180,6 +172,7 @@ class ControllerNode(LifecycleNode):
             'never_fresh': 'no fresh inputs since start-up: publishing zero generalized force',
             'resumed': 'fresh inputs: control resumed'})
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        inputs = input_qos(self._lockstep)  # deep in lockstep: foreign inputs cannot evict ours
         self._command_pub = self.create_publisher(GeneralizedForce, 'command/generalized_force',
                                                   qos)
         self._state_pub = self.create_publisher(ControllerState, 'controller/state', qos)
@@ -194,8 +187,7 @@ class ControllerNode(LifecycleNode):
         }
         for topic, (msg_type, read) in readers.items():
             self._entities.append((self.destroy_subscription, self.create_subscription(
-                msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg),
-                input_qos(self._lockstep))))
+                msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg), inputs)))
         if not self._lockstep:
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.
@@ -222,7 +214,6 @@ class ControllerNode(LifecycleNode):
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Drop the controller, its publishers, subscriptions and timer."""
         self._release()
-        self._answer_unconfigured()
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -230,7 +221,6 @@ class ControllerNode(LifecycleNode):
         if self._active:
             self._zero(self.get_clock().now().nanoseconds, None)
         self.tasks.finish_all(TaskCode.INACTIVE, 'the controller shut down')
-        self._drop_unconfigured()
         self._release()
         return super().on_shutdown(state)
 
@@ -241,17 +231,6 @@ class ControllerNode(LifecycleNode):
         self._diagnostics.destroy()
         self.tasks.destroy()
         super().destroy_node()
-
-    def _answer_unconfigured(self) -> None:
-        """Lockstep, unconfigured: answer each state with zeros (uvms_control.unconfigured)."""
-        if self._node_values.get('trigger_mode') == 'lockstep' and self._unconfigured is None:
-            self._unconfigured = ZeroAnswer(self, JointState, 'joint_states', GeneralizedForce,
-                                            'command/generalized_force', zero_generalized_force)
-
-    def _drop_unconfigured(self) -> None:
-        if self._unconfigured is not None:
-            self._unconfigured.destroy()
-            self._unconfigured = None
 
     def _release(self) -> None:
         self._active = False

@@ -50,7 +50,7 @@ from uvms_control.core.parameters import (
     validate_node_parameters,
 )
 from uvms_control.ros_parameters import declare_parameters
-from uvms_control.unconfigured import ZeroAnswer, zero_actuator_command
+from uvms_control.unconfigured import allocator_zero_answer, answer_while_unconfigured
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 
@@ -87,9 +87,8 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._meters = {name: RateMeter() for name in ('published', 'saturated', 'rejected')}
         self._diagnostics = DiagnosticsPublisher(self)
         self._diagnostics.add('allocation', self._report)
-        self._unconfigured: ZeroAnswer | None = None
-        if not starting:
-            self._answer_unconfigured()
+        answer_while_unconfigured(self, self._values['trigger_mode'] == 'lockstep', not starting,
+                                  lambda: allocator_zero_answer(self, self._robot))
         if starting and not autostart(self):
             error = self._transition_error or RuntimeError('autostart failed (see the log)')
             self.destroy_node()
@@ -100,12 +99,10 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Validate the parameters, build the core, create publishers, subscription, timer."""
-        self._drop_unconfigured()
         try:
             self._configure()
         except Exception as error:  # rclpy would turn it into ERROR silently
             self._release()
-            self._answer_unconfigured()
             return self._failed('configure', error)
         return SUCCESS
 
@@ -130,7 +127,6 @@ class ThrusterAllocatorNode(LifecycleNode):
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Drop the core, the publishers, the subscription and the timer."""
         self._release()
-        self._answer_unconfigured()
         return super().on_cleanup(state)
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -248,27 +244,7 @@ class ThrusterAllocatorNode(LifecycleNode):
             self.get_logger().error(f'{transition} failed: {reason}')
         return FAILURE
 
-    def _answer_unconfigured(self) -> None:
-        """Lockstep, unconfigured: answer each command with zeros (uvms_control.unconfigured)."""
-        if self._values.get('trigger_mode') != 'lockstep' or self._unconfigured is not None:
-            return
-        try:
-            count = ThrusterLayout.from_parameters(
-                UvmsParameters.from_flat_dict(self._robot).thrusters).count
-        except ModelError as error:
-            self.get_logger().error(f'unconfigured: cannot answer lockstep commands: {error}')
-            return
-        self._unconfigured = ZeroAnswer(self, GeneralizedForce, 'command/generalized_force',
-                                        ActuatorCommand, 'command/actuators',
-                                        zero_actuator_command(count))
-
-    def _drop_unconfigured(self) -> None:
-        if self._unconfigured is not None:
-            self._unconfigured.destroy()
-            self._unconfigured = None
-
     def _safe_stop(self, state: LifecycleState, then: Any) -> TransitionCallbackReturn:
-        self._drop_unconfigured()
         try:
             if self._active:
                 self._publish_zero(self.get_clock().now().nanoseconds)
