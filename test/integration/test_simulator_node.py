@@ -423,3 +423,20 @@ def test_realtime_start_up_timeout_names_the_inactive_node(harness: Harness) -> 
     harness.start(mode='realtime', startup__nodes=['controller'], startup__timeout_s=1.0)
     with pytest.raises(StartupError, match=r'controller is .*\(not active\)'):
         harness.spin_for(15.0)
+
+
+def test_a_simulator_process_that_could_not_run_does_not_time_out(harness: Harness) -> None:
+    """The executor blocked 2 s (a starved process) while the answer comes: no timeout.
+
+    Issue 29: under load the lockstep timeout (wall clock) fired while the answer was queued
+    behind other work of the same process, and the run stepped on an old command.
+    """
+    def answer_late(t_ns: int) -> bool:
+        if t_ns == 2_000_000:
+            time.sleep(2.0)  # blocks the one executor thread, the simulator's timer included
+        return True
+
+    harness.responder.answer = answer_late
+    sim = harness.start(lockstep_timeout_s=1.0, duration_s=0.01)
+    harness.spin_until(lambda: sim.finished, timeout_s=20.0)
+    assert sim.timeouts == 0

@@ -92,7 +92,8 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         'lockstep_timeout_s', 1.0,
         'Lockstep: wall-clock time to wait for the actuator command of the published state '
-        'before stepping with the last command anyway (s).',
+        "before stepping with the last command anyway, counted while the simulator's process "
+        'runs its timer on time (a loaded machine delays, it does not time out) (s).',
         0.001, 3600.0,
     ),
     ParameterSpec(

@@ -38,6 +38,7 @@ from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError, StartupError
+from uvms_sim.lockstep_wait import AttentiveWait
 from uvms_sim.parameters import (
     SIMULATOR_PARAMETERS,
     SimulatorSettings,
@@ -127,6 +128,7 @@ class SimulatorNode(Node):
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
+            self._wait = AttentiveWait(round(period * 1e9))
             self.create_timer(period, self._on_lockstep_timer)
         else:
             self.create_timer(cfg.physics_dt_s, self._on_realtime_tick)
@@ -205,7 +207,8 @@ class SimulatorNode(Node):
         self._startup_closed()
         if self._awaiting_since is None:
             return
-        waited_s = (self.get_clock().now() - self._awaiting_since).nanoseconds * 1e-9
+        # Counted only while this process ran its timer on time (uvms_sim.lockstep_wait).
+        waited_s = self._wait.check(self.get_clock().now().nanoseconds) * 1e-9
         if waited_s < self._settings.lockstep_timeout_s:
             return
         if self._command is None:
@@ -217,7 +220,8 @@ class SimulatorNode(Node):
         self.timeouts += 1
         self.get_logger().warning(
             f'no actuator command stamped t = {self._plant.t_ns * 1e-9:.3f} s after '
-            f'{waited_s:.2f} s: stepping with the last command', throttle_duration_sec=5.0)
+            f'{self._wait.wall_ns * 1e-9:.2f} s: stepping with the last command',
+            throttle_duration_sec=5.0)
         self._answered()
 
     def _on_realtime_tick(self) -> None:
@@ -396,6 +400,7 @@ class SimulatorNode(Node):
         self._published += 1
         if self._settings.mode == 'lockstep':
             self._awaiting_since = self.get_clock().now()
+            self._wait.start(self._awaiting_since.nanoseconds)
         elif self._at_end():
             self._finished = True
 
