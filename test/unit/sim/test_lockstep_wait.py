@@ -18,12 +18,13 @@ def test_a_process_on_time_counts_wall_time_as_it_passes() -> None:
     assert wait.wall_ns == 1_000 * MS
 
 
-def test_a_starved_process_counts_at_most_two_periods_per_check() -> None:
-    """A check 5 s late (the process did not run) adds 500 ms, not 5 s."""
+def test_a_starved_process_counts_nothing_for_a_late_check() -> None:
+    """A check 5 s late (the process did not run) adds nothing; an on-time one its interval."""
     wait = AttentiveWait(250 * MS)
     wait.start(0)
-    assert wait.check(5_000 * MS) == 500 * MS
+    assert wait.check(5_000 * MS) == 0
     assert wait.wall_ns == 5_000 * MS
+    assert wait.check(5_300 * MS) == 300 * MS
 
 
 def test_checks_run_back_to_back_from_a_queue_count_nothing_more() -> None:
@@ -31,7 +32,7 @@ def test_checks_run_back_to_back_from_a_queue_count_nothing_more() -> None:
     wait = AttentiveWait(250 * MS)
     wait.start(0)
     wait.check(3_000 * MS)
-    assert [wait.check(3_000 * MS + k) for k in range(1, 4)] == [500 * MS + k for k in (1, 2, 3)]
+    assert [wait.check(3_000 * MS + k) for k in range(1, 4)] == [1, 2, 3]
 
 
 def test_a_new_publication_restarts_the_wait() -> None:
