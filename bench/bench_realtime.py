@@ -55,6 +55,7 @@ for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_b
 from uvms_bringup.launch_helpers import (  # noqa: E402
     CONTROLLER,
     DEFAULT_NAMESPACE,
+    MISSION,
     SIMULATOR,
     THRUSTER_ALLOCATOR,
     file_parameters,
@@ -224,7 +225,8 @@ def observe(launcher: Launcher, topics: dict[str, type], warmup_s: float, second
             if time.monotonic() > deadline:
                 raise SystemExit(f'bench: {what} not within {timeout_s} s')
             for process in launcher.processes:
-                if process.poll() is not None:
+                # The mission ends by itself when its goals are done (or aborted).
+                if process.name != MISSION.name and process.poll() is not None:
                     raise SystemExit(f'bench: {process.name} ended with {process.status}')
             executor.spin_once(timeout_sec=0.05)
 
