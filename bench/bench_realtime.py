@@ -20,11 +20,16 @@ simulated time fell behind the wall clock. The simulator publishes no message pe
 step, so its "step" row is derived, and labelled so: the publication period divided by the
 steps per publication (from the parameters, and checked against the /clock stamps, whose
 increments are printed as the measured steps per publication). It prints figures and asserts
-nothing.
+nothing. Without a scenario it runs both shipped robots one after the other (the paper's
+``case1_ke1e4`` and ``bluerov2_alpha5_contact``), and ends with one line per robot against
+the targets of issue 29: every stream under 1 % missed periods against simulated time,
+controller and allocator each under 20 % of a core, the whole graph (every node process:
+the recorder, visualizer and mission too) under one core. The load average of the machine
+is printed before and after: figures taken while others run are not a quiet machine's.
 
 Usage::
 
-    .venv/bin/python bench/bench_realtime.py [SCENARIO] [--seconds S] [--only-simulator]
+    .venv/bin/python bench/bench_realtime.py [SCENARIO ...] [--seconds S] [--only-simulator]
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_b
 from uvms_bringup.launch_helpers import (  # noqa: E402
     CONTROLLER,
     DEFAULT_NAMESPACE,
+    MISSION,
     SIMULATOR,
     THRUSTER_ALLOCATOR,
     file_parameters,
@@ -60,6 +66,9 @@ from uvms_bringup.processes import Launcher, NodeProcess, NodeProcessSpec  # noq
 from uvms_bringup.scenario import load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_sim.parameters import SIMULATOR_PARAMETERS  # noqa: E402
+
+#: One scenario per shipped robot: the paper's UVMS and the BlueROV2 Heavy with an Alpha 5.
+DEFAULT_SCENARIOS = ('case1_ke1e4', 'bluerov2_alpha5_contact')
 
 
 @dataclass(frozen=True)
@@ -216,7 +225,8 @@ def observe(launcher: Launcher, topics: dict[str, type], warmup_s: float, second
             if time.monotonic() > deadline:
                 raise SystemExit(f'bench: {what} not within {timeout_s} s')
             for process in launcher.processes:
-                if process.poll() is not None:
+                # The mission ends by itself when its goals are done (or aborted).
+                if process.name != MISSION.name and process.poll() is not None:
                     raise SystemExit(f'bench: {process.name} ended with {process.status}')
             executor.spin_once(timeout_sec=0.05)
 
@@ -241,11 +251,15 @@ def observe(launcher: Launcher, topics: dict[str, type], warmup_s: float, second
 def main() -> None:
     """Run the benchmark and print its figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('scenario', nargs='?', default='case1_ke1e4')
+    parser.add_argument('scenarios', nargs='*', default=list(DEFAULT_SCENARIOS),
+                        help='scenarios to run in turn (default: one per shipped robot)')
     parser.add_argument('--seconds', type=float, default=20.0,
                         help='wall-clock seconds measured, after the warm-up')
     parser.add_argument('--warmup', type=float, default=2.0,
                         help='wall-clock seconds skipped once every topic has a message')
+    parser.add_argument('--no-record', action='store_true',
+                        help='launch without the recorder (by default it records, in its own '
+                             'process, into a temporary file, as uvms launch --output does)')
     parser.add_argument('--only-simulator', action='store_true',
                         help='start the simulator alone (what it can do without the others)')
     parser.add_argument('--executor', choices=('events', 'single'), default=None,
@@ -253,13 +267,25 @@ def main() -> None:
     parser.add_argument('--integrator', choices=('rk4', 'semi_implicit_euler'), default=None,
                         help="simulator's integration.method (default: config/robot.yaml)")
     args = parser.parse_args()
+    summaries = [run_one(args, name) for name in args.scenarios]
+    print(f'load average after: {" ".join(f"{v:.2f}" for v in os.getloadavg())} '
+          f'({os.cpu_count()} CPUs)')
+    print('against the targets (sim-time missed < 1 % per stream, controller and allocator '
+          '< 20 % of a core each, whole graph < 100 %):')
+    for line in summaries:
+        print(f'  {line}')
 
+
+def run_one(args: argparse.Namespace, scenario_name: str) -> str:
+    """Launch one scenario, observe it, print its tables; return its summary line."""
+    print(f'load average before {scenario_name}: '
+          f'{" ".join(f"{v:.2f}" for v in os.getloadavg())} ({os.cpu_count()} CPUs)')
     ros_environment_defaults()
     domain_id = int(os.environ.get('ROS_DOMAIN_ID') or random.randint(1, 100))
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
     if args.executor:
         env['UVMS_EXECUTOR'] = args.executor
-    scenario = load_scenario(resolve_scenario_path(args.scenario))
+    scenario = load_scenario(resolve_scenario_path(scenario_name))
     extra = {'simulator': {'integration.method': args.integrator}} if args.integrator else None
 
     from rosgraph_msgs.msg import Clock
@@ -270,8 +296,9 @@ def main() -> None:
                                 '/uvms/command/generalized_force': GeneralizedForce,
                                 '/uvms/command/actuators': ActuatorCommand}
     with tempfile.TemporaryDirectory(prefix='uvms_bench_') as parameters_dir:
+        output = None if args.no_record else Path(parameters_dir) / 'bench.mcap'
         plans = plan_launch(scenario, 'realtime', Path(parameters_dir), log_level='warn',
-                            extra_overrides=extra)
+                            extra_overrides=extra, output_path=output)
         periods = graph_periods(plans)
         streams = [s for s in streams_of(periods)
                    if not args.only_simulator or s.node == SIMULATOR.name]
@@ -286,15 +313,15 @@ def main() -> None:
                                                       args.seconds, domain_id)
         finally:
             launcher.stop()
-    report(args, scenario.name, periods, streams, classes, arrivals, start_ns, end_ns, cpu,
-           launcher.processes)
+    return report(args, scenario.name, periods, streams, classes, arrivals, start_ns, end_ns,
+                  cpu, launcher.processes)
 
 
 def report(args: argparse.Namespace, scenario: str, periods: GraphPeriods,
            streams: Sequence[Stream], classes: dict[str, type],
            arrivals: dict[str, list[tuple[int, bytes]]], start_ns: int, end_ns: int,
-           cpu: dict[str, float], processes: Sequence[NodeProcess]) -> None:
-    """Print the table of periods and the lag of simulated time."""
+           cpu: dict[str, float], processes: Sequence[NodeProcess]) -> str:
+    """Print the table of periods, CPU per node and the lag; return the summary line."""
     from rclpy.serialization import deserialize_message
 
     window = {topic: [(t, deserialize_message(data, classes[topic]))
@@ -313,8 +340,15 @@ def report(args: argparse.Namespace, scenario: str, periods: GraphPeriods,
           'against the wall clock and, for /clock-driven nodes, against simulated time')
     print(f'  {"stream":<18s} {"topic":<32s} {"nominal":>7s} {"mean":>8s} {"p99":>8s} '
           f'{"max":>8s} {"missed":>7s} {"sim":>7s} {"cpu":>6s}')
+    missed: dict[str, float] = {}
     for stream in streams:
         print(row(stream, window[stream.topic], window_ns, cpu.get(stream.node, float('nan'))))
+        share = missed_sim_share(stream, window[stream.topic])
+        if share is not None:
+            missed[stream.label] = share
+    print('CPU per node process over the window (% of one core): ' + ', '.join(
+        f'{name} {value:.0f}' for name, value in cpu.items())
+        + f'; whole graph {sum(cpu.values()):.0f}')
     clock = window['/clock']
     if len(clock) >= 2:
         increments = np.diff(sorted({stamp_ns(msg) for _, msg in clock}))
@@ -335,6 +369,24 @@ def report(args: argparse.Namespace, scenario: str, periods: GraphPeriods,
     for process in processes:
         if process.status not in (0, 130, None):
             print(f'note: {process.name} ended with status {process.status}')
+    by_node = {p.name: cpu[p.name] for p in processes if p.name in cpu}
+    worst = max(missed.items(), key=lambda item: item[1], default=('-', float('nan')))
+    control = {name: by_node.get(name, float('nan'))
+               for name in (CONTROLLER.name, THRUSTER_ALLOCATOR.name)}
+    total = sum(by_node.values())
+    ok = (worst[1] < 1.0 and all(v < 20.0 for v in control.values()) and total < 100.0)
+    return (f'{scenario}: worst sim-time missed {worst[1]:.1f} % ({worst[0]}); controller '
+            f'{control[CONTROLLER.name]:.0f} %, allocator {control[THRUSTER_ALLOCATOR.name]:.0f} '
+            f'%, whole graph {total:.0f} % of a core: {"met" if ok else "NOT met"}')
+
+
+def missed_sim_share(stream: Stream, samples: Sequence[tuple[int, Any]]) -> float | None:
+    """Missed periods against simulated time (%), for a /clock-driven stream."""
+    if not stream.sim_driven or len(samples) < 3:
+        return None
+    stamps = sorted({stamp_ns(msg) for _, msg in samples})
+    slots = (stamps[-1] - stamps[0]) / stream.period_ns
+    return max(0.0, 1.0 - (len(stamps) - 1) / slots) * 100.0 if slots > 0 else None
 
 
 if __name__ == '__main__':

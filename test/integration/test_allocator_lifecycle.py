@@ -212,16 +212,39 @@ def test_an_inactive_timer_allocator_publishes_zeros_at_its_rate(graph: Graph) -
 
 
 def test_autostart_false_leaves_the_allocator_unconfigured(graph: Graph) -> None:
-    """Unconfigured: parameters declared, nothing subscribed or published."""
+    """Unconfigured: parameters declared, nothing built; lockstep commands get zeros.
+
+    Before issue 29 an unconfigured allocator subscribed nothing and answered nothing, so a
+    scenario with ``thruster_allocator: {autostart: false}`` kept ``uvms run`` at t = 0.
+    """
     allocator = graph.allocator(autostart=False)
     assert graph.get_state() == 'unconfigured'
     assert allocator.core is None
     assert allocator.has_parameter('rate_hz') and allocator.has_parameter('autostart')
     assert allocator.get_parameter('autostart').value is False
-    assert allocator.count_subscribers('/uvms/command/actuators') == 1  # the probe only
+    stamps = [k * PERIOD_NS for k in range(5)]
+    for t_ns in stamps:
+        assert is_zero(graph.exchange(t_ns))
+    assert [stamp_ns(a) for a in graph.actuators] == stamps
+    assert all(list(a.joint_names) == list(JOINTS) for a in graph.actuators)
+
+
+def test_an_unconfigured_timer_allocator_publishes_nothing(graph: Graph) -> None:
+    """Timer mode (real time) unconfigured: no command (the simulator holds until active)."""
+    graph.allocator(autostart=False, trigger_mode='timer', use_sim_time=False)
     graph.send(0)
     graph.spin_for(0.2)
     assert graph.actuators == []
+
+
+def test_configure_ends_the_unconfigured_answers(graph: Graph) -> None:
+    """Configured (inactive), the node answers once per command, through its own publisher."""
+    allocator = graph.allocator(autostart=False)
+    assert allocator.trigger_configure() == SUCCESS
+    assert allocator.count_publishers('/uvms/command/actuators') == 1
+    assert is_zero(graph.exchange(0))
+    graph.spin_for(0.1)
+    assert len(graph.actuators) == 1
 
 
 def test_the_lifecycle_services_drive_a_full_cycle(graph: Graph) -> None:

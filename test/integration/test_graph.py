@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections import defaultdict
 from pathlib import Path
 
@@ -170,6 +171,52 @@ def test_cli_run_records_the_scenario(tmp_path: Path, capsys: pytest.CaptureFixt
     assert len(payloads(output)['/uvms/joint_states']) == 51
     summary = [line for line in err.splitlines() if line.startswith('uvms run: simulated')]
     assert len(summary) == 1 and summary[0].endswith(f'; recorded {output}'), err
+
+
+def test_realtime_graph_holds_and_names_a_controller_left_unconfigured(
+    tmp_path: Path,
+) -> None:
+    """Real time, ``controller: {autostart: false}``: no physics, then an error naming it.
+
+    Before issue 29 the simulator integrated from its first tick with zero commands.
+    """
+    run = scenario('free_motion')
+    overrides = {**run.overrides, 'controller': {'autostart': False},
+                 'simulator': {**run.overrides.get('simulator', {}), 'startup.timeout_s': 2.0}}
+    graph = build_graph(dataclasses.replace(run, overrides=overrides), 'realtime',
+                        duration_s=0.3)
+    with pytest.raises(GraphError, match='controller is unconfigured') as error:
+        run_graph(graph)
+    assert 't = 0.000 s' in str(error.value)
+
+
+@pytest.mark.parametrize(('node', 'topic'), [
+    ('thruster_allocator', '/uvms/command/actuators'),
+    ('controller', '/uvms/command/generalized_force'),
+])
+def test_lockstep_graph_runs_with_a_node_left_unconfigured(tmp_path: Path, node: str,
+                                                           topic: str) -> None:
+    """``NODE: {autostart: false}``: its zeros answer every state, the run ends on time.
+
+    Before issue 29 ``uvms run`` waited forever at t = 0 (the node answered nothing).
+    """
+    path = tmp_path / 'unconfigured.mcap'
+    run = scenario('case1_ke1e4').with_changes(duration_s=0.1)
+    overrides = {**run.overrides, node: {'autostart': False}}
+    result = run_graph(build_graph(dataclasses.replace(run, overrides=overrides), 'lockstep',
+                                   output_path=path))
+    assert result.sim_time_s == pytest.approx(0.1)
+    assert result.lockstep_timeouts == 0
+    with AnyReader([path]) as reader:
+        connections = [c for c in reader.connections if c.topic == topic]
+        commands = [reader.deserialize(raw, c.msgtype)
+                    for c, _, raw in reader.messages(connections=connections)]
+    assert len(commands) == 51
+    for command in commands:
+        values = (list(command.thrust) if hasattr(command, 'thrust') else [
+            command.vehicle_wrench.force.x, command.vehicle_wrench.force.z,
+            command.vehicle_wrench.torque.y])
+        assert not any(values) and not any(command.joint_torques)
 
 
 def test_realtime_graph_runs_on_wall_clock_timers(tmp_path: Path) -> None:

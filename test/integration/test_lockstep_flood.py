@@ -147,3 +147,77 @@ def test_commands_of_the_graph_are_the_same_with_and_without_a_flood(tmp_path: P
     flooded = commands(tmp_path / 'flooded.mcap', 60.0)
     assert len(quiet) >= 150
     assert flooded == quiet
+
+
+def test_controller_answers_its_stamp_behind_a_burst_of_foreign_inputs() -> None:
+    """A lockstep controller that falls behind still takes the exchange's inputs and answers.
+
+    Issue 29: under load the flood test saw one lockstep timeout: the controller's executor
+    fell behind, and a reader history of 10 let 100 Hz of foreign inputs push the graph's own
+    joint state out (no command at t = 0.348 s). Here 50 foreign inputs per topic arrive
+    after the genuine ones before the controller runs at all.
+    """
+    import rclpy
+    from geometry_msgs.msg import WrenchStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.context import Context
+    from rclpy.parameter import Parameter
+    from sensor_msgs.msg import JointState
+    from uvms_common.node_main import make_executor
+    from uvms_control.controller_node import ControllerNode
+
+    from uvms_msgs.msg import GeneralizedForce
+
+    config = Path(__file__).resolve().parents[2] / 'config'
+    context = Context()
+    rclpy.init(args=[], context=context)
+    feeder = rclpy.create_node('feeder', namespace='uvms', context=context)
+    controller = ControllerNode(
+        namespace='uvms', context=context,
+        cli_args=['--ros-args', '--params-file', str(config / 'robot.yaml'),
+                  '--params-file', str(config / 'controller.yaml')],
+        parameter_overrides=[Parameter('trigger_mode', value='lockstep')])
+    executor = make_executor('events', context)
+    try:
+        answers: list[GeneralizedForce] = []
+        feeder.create_subscription(GeneralizedForce, 'command/generalized_force',
+                                   answers.append, 100)
+        joints = feeder.create_publisher(JointState, 'joint_states', 100)
+        odometry = feeder.create_publisher(Odometry, 'odometry', 100)
+        wrench = feeder.create_publisher(WrenchStamped, 'wrench', 100)
+        deadline = time.monotonic() + 10.0
+        while any(controller.count_publishers(f'/uvms/{t}') < 1
+                  for t in ('joint_states', 'odometry', 'wrench')):
+            assert time.monotonic() < deadline, 'the controller did not match the feeder'
+            time.sleep(0.05)
+        time.sleep(0.5)  # the feeder's readers match the controller's publisher too
+        odom = Odometry()
+        odom.header.frame_id, odom.child_frame_id = 'map_ned', 'base_link_frd'
+        odom.pose.pose.orientation.w = 1.0
+        odometry.publish(odom)
+        joints.publish(JointState(name=['joint_1', 'joint_2', 'joint_3'],
+                                  position=[0.0, 0.4, -0.8], velocity=[0.0] * 3))
+        genuine = WrenchStamped()
+        genuine.header.frame_id = 'ft_sensor_link'
+        wrench.publish(genuine)
+        for k in range(50):  # foreign stamps, rejected content: nothing the exchange asked for
+            bad = WrenchStamped()
+            bad.header.stamp.nanosec = 500_000 + k * 1_000_000
+            bad.wrench.force.x = math.nan
+            wrench.publish(bad)
+            one = JointState(name=['joint_1'], position=[0.0], velocity=[0.0])
+            one.header.stamp.nanosec = 500_000 + k * 1_000_000
+            joints.publish(one)
+        time.sleep(0.5)  # delivered to the controller's reader histories, not yet taken
+        executor.add_node(controller)
+        executor.add_node(feeder)
+        deadline = time.monotonic() + 10.0
+        while not any(a.header.stamp.sec == 0 and a.header.stamp.nanosec == 0
+                      for a in answers):
+            assert time.monotonic() < deadline, 'no generalized force answered stamp 0'
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        executor.shutdown()
+        controller.destroy_node()
+        feeder.destroy_node()
+        rclpy.try_shutdown(context=context)

@@ -489,6 +489,28 @@ def test_a_failing_node_is_named_and_the_others_are_stopped(tmp_path: Path) -> N
     assert not any(alive(pid) for pid in _launch_pids(err))
 
 
+def test_a_launch_whose_loop_never_closes_ends_naming_the_silent_node(tmp_path: Path) -> None:
+    """Real time, the allocator left unconfigured: no physics, then an error naming it.
+
+    Before issue 29 the simulator integrated from its first tick with nobody answering.
+    """
+    scenario = tmp_path / 'no_allocator.yaml'
+    scenario.write_text(yaml.safe_dump({
+        'name': 'no_allocator', 'description': 'allocator left unconfigured',
+        'duration_s': 5.0, 'thruster_allocator': {'autostart': False},
+        'simulator': {'startup': {'timeout_s': 3.0}},
+    }))
+    process = start([str(BIN / 'uvms'), 'launch', str(scenario)])
+    err = finish(process, 60.0)
+    assert process.returncode == 1, err
+    errors = [line for line in err.splitlines() if line.startswith('uvms launch: error:')]
+    assert errors == ["uvms launch: error: node 'simulator' (simulator-1) exited: "
+                      'status 1; stopped the other nodes'], err
+    assert 'thruster_allocator is unconfigured (not active)' in err
+    assert 'control loop closed' not in err
+    assert not any(alive(pid) for pid in _launch_pids(err))
+
+
 def test_a_scenario_key_no_node_declares_stops_the_launch_before_any_node(
     tmp_path: Path,
 ) -> None:
@@ -617,7 +639,8 @@ def test_actuator_command_from_another_process_moves_the_vehicle(
     """Downward thrust published by a separate process makes the vehicle sink (z_ned grows)."""
     observer = observer_factory({'/uvms/odometry': Odometry})
     params = parameters_file(tmp_path / 'sim.yaml', '/uvms/simulator',
-                             {'mode': 'realtime', 'wall_enabled': False})
+                             {'mode': 'realtime', 'wall_enabled': False,
+                              'startup.hold': False})
     simulator = start(node_command('simulator', 'simulator', '/uvms', ['robot.yaml'], params))
     commander = None
     try:

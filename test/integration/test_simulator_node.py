@@ -21,10 +21,10 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
-from uvms_sim.errors import SimParameterError, SimulationError
+from uvms_sim.errors import SimParameterError, SimulationError, StartupError
 from uvms_sim.simulator_node import SimulatorNode
 
-from uvms_msgs.msg import ActuatorCommand, ContactState
+from uvms_msgs.msg import ActuatorCommand, ContactState, GeneralizedForce
 
 N_THRUSTERS = 8
 
@@ -317,7 +317,7 @@ def test_diverging_simulation_stops_with_its_cause(harness: Harness) -> None:
 def test_realtime_mode_steps_on_the_wall_clock(harness: Harness) -> None:
     """In real time the simulator steps on its own timer and publishes every 2 ms."""
     harness.responder.answer = lambda _: False
-    sim = harness.start(mode='realtime', duration_s=0.05)
+    sim = harness.start(mode='realtime', duration_s=0.05, startup__hold=False)
     start = time.monotonic()
     harness.spin_until(lambda: sim.finished and len(harness.responder.states) >= 26)
     assert time.monotonic() - start >= 0.05
@@ -383,3 +383,86 @@ def test_out_of_reach_start_names_robot_residual_and_default(harness: Harness) -
     assert message.startswith("robot 'bluerov2_alpha5': parameter 'initial.ee_position'")
     assert 'residual 1.4' in message
     assert 'initial.ee_position = [0.37, 0.0, -0.07]' in message
+
+
+def relay_generalized_force(harness: Harness) -> list[int]:
+    """Make the responder also answer each state with a generalized force (a controller)."""
+    node = harness.responder.node
+    publisher = node.create_publisher(GeneralizedForce, 'command/generalized_force', 10)
+    relayed: list[int] = []
+
+    def relay(msg: JointState) -> None:
+        command = GeneralizedForce(joint_names=list(msg.name), joint_torques=[0.0] * 3)
+        command.header.stamp = msg.header.stamp
+        publisher.publish(command)
+        relayed.append(stamp_ns(msg))
+
+    node.create_subscription(JointState, 'joint_states', relay, 10)
+    return relayed
+
+
+def test_lockstep_start_up_timeout_names_the_controller(harness: Harness) -> None:
+    """Nothing answers the initial state: after startup.timeout_s an error names the controller.
+
+    Before issue 29 the simulator re-offered the initial state forever.
+    """
+    harness.responder.answer = lambda _: False
+    sim = harness.start(startup__timeout_s=1.0, lockstep_timeout_s=0.2)
+    with pytest.raises(StartupError, match='the controller did not answer'):
+        harness.spin_for(15.0)
+    assert sim.sim_time_ns == 0
+
+
+def test_lockstep_start_up_timeout_names_the_allocator(harness: Harness) -> None:
+    """The controller answers but no actuator command comes: the error names the allocator."""
+    harness.responder.answer = lambda _: False
+    relayed = relay_generalized_force(harness)
+    harness.start(startup__timeout_s=1.0, lockstep_timeout_s=0.2)
+    with pytest.raises(StartupError, match='the thruster_allocator did not answer'):
+        harness.spin_for(15.0)
+    assert relayed and set(relayed) == {0}
+
+
+def test_realtime_simulator_holds_the_initial_state_until_the_loop_closes(
+    harness: Harness,
+) -> None:
+    """Real time: while no managed node is active, time stands still at t_0, re-offered.
+
+    Before issue 29 physics integrated from the first tick with zero commands.
+    """
+    harness.responder.answer = lambda _: False
+    relay_generalized_force(harness)
+    clocks = collect(harness, Clock, '/clock')
+    sim = harness.start(mode='realtime', startup__nodes=['controller'], startup__timeout_s=0.0)
+    harness.spin_for(1.0)
+    harness.responder.send(0)
+    harness.spin_for(0.5)
+    assert sim.sim_time_ns == 0
+    assert len(harness.responder.states) >= 5  # the held state, re-offered
+    assert {stamp_ns(m) for m in harness.responder.states} == {0}
+    assert clocks and {c.clock.sec * 10**9 + c.clock.nanosec for c in clocks} == {0}
+
+
+def test_realtime_start_up_timeout_names_the_inactive_node(harness: Harness) -> None:
+    """Real time: a managed node that never reports active is named when the start-up ends."""
+    harness.responder.answer = lambda _: False
+    harness.start(mode='realtime', startup__nodes=['controller'], startup__timeout_s=1.0)
+    with pytest.raises(StartupError, match=r'controller is .*\(not active\)'):
+        harness.spin_for(15.0)
+
+
+def test_a_simulator_process_that_could_not_run_does_not_time_out(harness: Harness) -> None:
+    """The executor blocked 2 s (a starved process) while the answer comes: no timeout.
+
+    Issue 29: under load the lockstep timeout (wall clock) fired while the answer was queued
+    behind other work of the same process, and the run stepped on an old command.
+    """
+    def answer_late(t_ns: int) -> bool:
+        if t_ns == 2_000_000:
+            time.sleep(2.0)  # blocks the one executor thread, the simulator's timer included
+        return True
+
+    harness.responder.answer = answer_late
+    sim = harness.start(lockstep_timeout_s=1.0, duration_s=0.01)
+    harness.spin_until(lambda: sim.finished, timeout_s=20.0)
+    assert sim.timeouts == 0

@@ -38,12 +38,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.diagnostics import robot_name as urdf_robot_name
-from uvms_common.lifecycle import (
-    autostart,
-    declare_autostart,
-    guard_change_state,
-    state_label,
-)
+from uvms_common.exchange_qos import input_qos
+from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
@@ -65,6 +61,7 @@ from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
+from uvms_control.unconfigured import answer_while_unconfigured, controller_zero_answer
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 
@@ -121,6 +118,8 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
         self._diagnostics.add('control', self._report_control)
         self._diagnostics.add('task', self._report_task)
+        answer_while_unconfigured(self, self._node_values['trigger_mode'] == 'lockstep',
+                                  not starting, lambda: controller_zero_answer(self))
         if starting and not autostart(self):
             error = self._error or ControlParameterError('autostart', True, 'a node that can '
                                                          'configure and activate')
@@ -177,6 +176,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
             'never_fresh': 'no fresh inputs since start-up: publishing zero generalized force',
             'resumed': 'fresh inputs: control resumed'})
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        inputs = input_qos(self._lockstep)  # deep in lockstep: foreign inputs cannot evict ours
         self._command_pub = self.create_publisher(GeneralizedForce, 'command/generalized_force',
                                                   qos)
         self._state_pub = self.create_publisher(ControllerState, 'controller/state', qos)
@@ -192,7 +192,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         for topic, (msg_type, read) in readers.items():
             self._entities.append((self.destroy_subscription, self.create_subscription(
                 msg_type, topic_for(topic, str(node['state_source'])),
-                lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos)))
+                lambda msg, t=topic, r=read: self._on_input(t, r, msg), inputs)))
         if not self._lockstep:
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.

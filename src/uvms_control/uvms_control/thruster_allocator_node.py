@@ -28,6 +28,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
+from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
@@ -49,6 +50,7 @@ from uvms_control.core.parameters import (
     validate_node_parameters,
 )
 from uvms_control.ros_parameters import declare_parameters
+from uvms_control.unconfigured import allocator_zero_answer, answer_while_unconfigured
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 
@@ -85,6 +87,8 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._meters = {name: RateMeter() for name in ('published', 'saturated', 'rejected')}
         self._diagnostics = DiagnosticsPublisher(self)
         self._diagnostics.add('allocation', self._report)
+        answer_while_unconfigured(self, self._values['trigger_mode'] == 'lockstep', not starting,
+                                  lambda: allocator_zero_answer(self, self._robot))
         if starting and not autostart(self):
             error = self._transition_error or RuntimeError('autostart failed (see the log)')
             self.destroy_node()
@@ -210,7 +214,8 @@ class ThrusterAllocatorNode(LifecycleNode):
             (self.destroy_publisher, self._actuator_pub),
             (self.destroy_publisher, self._state_pub),
             (self.destroy_subscription, self.create_subscription(
-                GeneralizedForce, 'command/generalized_force', self._on_command, qos))]
+                GeneralizedForce, 'command/generalized_force', self._on_command,
+                input_qos(self._lockstep)))]
         if not self._lockstep:
             # On the steady clock, as the controller's: /clock bursts must not drop periods.
             self._entities.append((self.destroy_timer, self.create_timer(

@@ -17,3 +17,7 @@ class CommandError(ValueError):
 
 class SimParameterError(ValueError):
     """A simulator parameter is invalid; the message names the parameter, value and range."""
+
+
+class StartupError(SimulationError):
+    """The control loop did not close within ``startup.timeout_s``; names the silent node."""

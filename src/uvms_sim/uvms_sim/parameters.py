@@ -18,8 +18,9 @@ from typing import Any
 import numpy as np
 
 from uvms_sim.errors import SimParameterError
+from uvms_sim.startup import StartupSettings
 
-Value = bool | int | float | str | list[float]
+Value = bool | int | float | str | list[float] | list[str]
 
 MODES = ('lockstep', 'realtime')
 INITIAL_ARM_SOURCES = ('joint_positions', 'ee_position')
@@ -91,8 +92,27 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         'lockstep_timeout_s', 1.0,
         'Lockstep: wall-clock time to wait for the actuator command of the published state '
-        'before stepping with the last command anyway (s).',
+        "before stepping with the last command anyway, counted while the simulator's process "
+        'runs its timer on time (a loaded machine delays, it does not time out) (s).',
         0.001, 3600.0,
+    ),
+    ParameterSpec(
+        'startup.hold', True,
+        'Real time: hold the initial state (simulated time stands still) until the control '
+        'loop is closed (startup.nodes active, a generalized force and then an actuator '
+        'command arrived); false steps from the first tick (a simulator driven by hand).',
+    ),
+    ParameterSpec(
+        'startup.timeout_s', 60.0,
+        'Wall time for the control loop to close after the initial state is first published '
+        '(lockstep: its actuator command; real time: see startup.hold); then the simulator '
+        'stops with an error naming the node that did not answer (s); 0 waits forever.',
+        0.0, 86400.0,
+    ),
+    ParameterSpec(
+        'startup.nodes', ['controller', 'thruster_allocator'],
+        'Real time: managed nodes (names relative to the namespace) that must report the '
+        'lifecycle state active (<node>/get_state) before physics starts.',
     ),
     ParameterSpec(
         'watchdog_timeout_s', 0.1,
@@ -164,6 +184,7 @@ class SimulatorSettings:
     arm_from_ee_position: bool
     joint_positions: np.ndarray
     ee_position: np.ndarray
+    startup: StartupSettings
 
     @property
     def physics_dt_s(self) -> float:
@@ -223,6 +244,9 @@ class SimulatorSettings:
             arm_from_ee_position=checked['initial.arm'] == 'ee_position',
             joint_positions=np.array(checked['initial.joint_positions'], dtype=float),
             ee_position=np.array(checked['initial.ee_position'], dtype=float),
+            startup=StartupSettings(bool(checked['startup.hold']),
+                                    round(float(checked['startup.timeout_s']) * 1e9),
+                                    tuple(checked['startup.nodes'])),
         )
 
 
@@ -244,6 +268,11 @@ def validate_value(spec: ParameterSpec, value: Any) -> Value:
         if not isinstance(value, str) or (spec.choices and value not in spec.choices):
             raise SimParameterError(_message(spec, value, 'invalid value'))
         return value
+    if isinstance(default, list) and all(isinstance(v, str) for v in default):
+        if isinstance(value, str | bytes) or not isinstance(value, Sequence) or not all(
+                isinstance(v, str) and v for v in value):
+            raise SimParameterError(_message(spec, value, 'expected an array of names'))
+        return list(value)
     if isinstance(default, list):
         if isinstance(value, str | bytes) or not isinstance(value, Sequence | np.ndarray):
             raise SimParameterError(_message(spec, value, 'expected an array of numbers'))

@@ -23,6 +23,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
+from uvms_common.exchange_qos import input_qos
 from uvms_common.node_main import run_node
 from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
 from uvms_common.robot_parameters import (
@@ -38,7 +39,8 @@ from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, Navigat
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions
-from uvms_sim.errors import CommandError, SimParameterError, SimulationError
+from uvms_sim.errors import CommandError, SimParameterError, SimulationError, StartupError
+from uvms_sim.lockstep_wait import AttentiveWait
 from uvms_sim.navigation_topics import NavigationTopics
 from uvms_sim.ocean_node import OceanCurrentInterface
 from uvms_sim.parameters import (
@@ -47,11 +49,14 @@ from uvms_sim.parameters import (
     default_joint_positions,
 )
 from uvms_sim.plant import Plant, initial_coordinates
+from uvms_sim.startup_watch import StartupWatch
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
 #: Real-time factor below which a real-time simulation reports that it falls behind.
 _BEHIND_REAL_TIME_FACTOR = 0.9
+#: Real time, start-up: wall time between re-publications of the held initial state (s).
+_HOLD_REPUBLISH_S = 0.1
 
 
 class SimulatorNode(Node):
@@ -117,7 +122,8 @@ class SimulatorNode(Node):
             depth=1, reliability=ReliabilityPolicy.RELIABLE,
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
-        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
+        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command,
+                                 input_qos(cfg.mode == 'lockstep'))
         # imu, dvl, depth (position_fix) only when asked for: recordings stay as they were.
         self._navigation = (NavigationTopics(self, self._navigation_params, params.sensor.seed)
                             if self._navigation_params.switch.enabled else None)
@@ -134,9 +140,13 @@ class SimulatorNode(Node):
         # Real time: ticks that end behind the wall clock, counted after the start-up grace
         # (the first ticks wait for the other nodes and the kernels, which is no fault).
         self._behind = MissCounter(round(cfg.physics_dt_s * 1e9))
+        # Until the loop is closed (docs/running.md, start-up): None once it is, or unwatched.
+        self._startup: StartupWatch | None = None
+        self._held_published_ns = 0
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
+            self._wait = AttentiveWait(round(period * 1e9))
             self.create_timer(period, self._on_lockstep_timer)
         else:
             self.create_timer(cfg.physics_dt_s, self._on_realtime_tick)
@@ -189,6 +199,8 @@ class SimulatorNode(Node):
             return
         if self._settings.mode != 'lockstep':
             self._command = command
+            if self._startup is not None:
+                self._startup.core.actuator_command()
             return
         if self._awaiting_since is None or command[0] != self._plant.t_ns:
             # Not the answer the exchange waits for (an old or foreign stamp): kept out of
@@ -198,21 +210,27 @@ class SimulatorNode(Node):
                 f'{self._plant.t_ns * 1e-9:.6f} s')
             return
         self._command = command
+        if self._startup is not None:
+            self._startup.core.actuator_command()  # closed; dropped at the next timer turn
         self._answered()
 
     def _on_kick(self) -> None:
         """Lockstep start: publish the initial state once the executor runs."""
         self._kick.cancel()
         self._publish_state()
+        self._watch_startup()
 
     def _on_lockstep_timer(self) -> None:
         """Lockstep timeout: re-offer the state before any command, else step on the last."""
+        self._startup_closed()
         if self._awaiting_since is None:
             return
-        waited_s = (self.get_clock().now() - self._awaiting_since).nanoseconds * 1e-9
+        # Counted only while this process ran its timer on time (uvms_sim.lockstep_wait).
+        waited_s = self._wait.check(self.get_clock().now().nanoseconds) * 1e-9
         if waited_s < self._settings.lockstep_timeout_s:
             return
         if self._command is None:
+            self._check_startup_time()
             self.get_logger().info('waiting for the first actuator command',
                                    throttle_duration_sec=5.0)
             self._publish_state()
@@ -220,7 +238,8 @@ class SimulatorNode(Node):
         self.timeouts += 1
         self.get_logger().warning(
             f'no actuator command stamped t = {self._plant.t_ns * 1e-9:.3f} s after '
-            f'{waited_s:.2f} s: stepping with the last command', throttle_duration_sec=5.0)
+            f'{self._wait.wall_ns * 1e-9:.2f} s: stepping with the last command',
+            throttle_duration_sec=5.0)
         self._answered()
 
     def _on_realtime_tick(self) -> None:
@@ -233,6 +252,8 @@ class SimulatorNode(Node):
         if self._finished:
             return
         now = self.get_clock().now()
+        if self._realtime_start is None and not self._loop_closed(now.nanoseconds):
+            return
         if self._realtime_start is None:
             self._realtime_start = now
         due_ns = (now - self._realtime_start).nanoseconds
@@ -255,6 +276,62 @@ class SimulatorNode(Node):
             self.get_logger().info(
                 f'the simulation runs {behind_s * 1e3:.1f} ms behind real time (start-up)',
                 once=True)
+
+    def _watch_startup(self) -> None:
+        """Start watching for the loop to close, with a log line (after the first state)."""
+        cfg = self._settings
+        realtime = cfg.mode != 'lockstep'
+        if realtime and not cfg.startup.hold:
+            return
+        now_ns = self.get_clock().now().nanoseconds
+        self._startup = StartupWatch(self, cfg.startup, realtime, now_ns)
+        self._startup.held_stamp_ns = self._plant.t_ns
+        timeout = cfg.startup.timeout_ns * 1e-9
+        self.get_logger().info(
+            f'holding the initial state at t = {self._plant.t_ns * 1e-9:.3f} s (time stands '
+            f'still) until the control loop is closed: waiting for '
+            f'{self._startup.core.waiting_for()} '
+            f'({f"startup.timeout_s {timeout:g} s" if timeout else "no start-up timeout"})')
+
+    def _check_startup_time(self) -> None:
+        """Stop with an error naming the node that did not answer, once the timeout passed."""
+        watch = self._startup
+        now_ns = self.get_clock().now().nanoseconds
+        if watch is not None and watch.core.expired(now_ns):
+            msg = watch.failure(now_ns)
+            self.get_logger().fatal(msg)
+            raise StartupError(msg)
+
+    def _startup_closed(self) -> None:
+        """The loop is closed: log it and drop the start-up subscription and clients."""
+        watch = self._startup
+        if watch is None or not watch.core.closed:
+            return
+        self._startup = None
+        watch.destroy()
+        waited = (self.get_clock().now().nanoseconds - watch.core.start_ns) * 1e-9
+        self.get_logger().info(f'control loop closed after {waited:.2f} s: physics runs')
+
+    def _loop_closed(self, now_ns: int) -> bool:
+        """Real time: hold (re-publish) the initial state until the loop is closed."""
+        if self._published == 0:
+            if not self._settings.startup.hold:
+                return True
+            self._publish_state()
+            self._held_published_ns = now_ns
+            self._watch_startup()
+        watch = self._startup
+        if watch is None:
+            return True
+        if watch.core.closed:
+            self._startup_closed()
+            return True
+        self._check_startup_time()
+        if now_ns - self._held_published_ns >= _HOLD_REPUBLISH_S * 1e9:
+            self._publish_state()
+            self._held_published_ns = now_ns
+        watch.poll(now_ns)
+        return False
 
     def _answered(self) -> None:
         """Lockstep: the published state is answered; integrate to the next one, or finish."""
@@ -310,6 +387,9 @@ class SimulatorNode(Node):
                   'behind_real_time_share': self._behind.share}
         if self._finished:
             return Report(OK, f'finished at t = {t_ns * 1e-9:.3f} s', values)
+        if self._startup is not None:
+            return Report(WARN, 'holding the initial state: waiting for '
+                          f'{self._startup.core.waiting_for()}', values)
         if mode == 'lockstep' and self._command is None:
             return Report(WARN, 'waiting for the first actuator command', values)
         if mode == 'lockstep' and new_timeouts:
@@ -341,6 +421,7 @@ class SimulatorNode(Node):
         self._published += 1
         if self._settings.mode == 'lockstep':
             self._awaiting_since = self.get_clock().now()
+            self._wait.start(self._awaiting_since.nanoseconds)
         elif self._at_end():
             self._finished = True
 

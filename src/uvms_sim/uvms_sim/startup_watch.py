@@ -1,0 +1,97 @@
+"""The simulator's view of the control loop at start-up: lifecycle states and first answers.
+
+Adapter of `uvms_sim.startup.LoopStartup`: a raw subscription to the controller's
+``command/generalized_force`` (only its header stamp is read), and in real time a
+``<node>/get_state`` client per managed node of ``startup.nodes``, asked every
+``POLL_PERIOD_S``. Everything is destroyed once the loop is closed, so the running loop
+carries no extra subscription.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+from lifecycle_msgs.srv import GetState
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+
+from uvms_msgs.msg import GeneralizedForce
+from uvms_sim.startup import ACTUATOR_TOPIC, COMMAND_TOPIC, LoopStartup, StartupSettings
+
+#: Wall time between two ``get_state`` requests to a node that is not active yet (s).
+POLL_PERIOD_S = 0.2
+#: Wall time after which an unanswered ``get_state`` request is given up and sent again (s).
+_REQUEST_TIMEOUT_S = 2.0
+
+
+def header_stamp_ns(data: bytes) -> int | None:
+    """The ``std_msgs/Header`` stamp (ns) at the start of a serialized CDR message."""
+    if len(data) < 12:
+        return None
+    order = '<' if data[1] == 1 else '>'  # encapsulation 00 01: CDR little endian
+    sec, nanosec = struct.unpack_from(order + 'iI', data, 4)
+    return sec * 1_000_000_000 + nanosec
+
+
+class StartupWatch:
+    """Watches controller and allocator answer the held initial state, until the loop closes."""
+
+    def __init__(self, node: Node, settings: StartupSettings, realtime: bool,
+                 start_ns: int) -> None:
+        """Subscribe and create the lifecycle clients of ``node`` (the simulator)."""
+        self._node = node
+        self.core = LoopStartup(settings, realtime, start_ns)
+        self.held_stamp_ns = 0
+        self._subscription: Any = node.create_subscription(
+            GeneralizedForce, COMMAND_TOPIC, self._on_command,
+            QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE), raw=True)
+        self._clients = ({name: node.create_client(GetState, f'{name}/get_state')
+                          for name in settings.nodes} if realtime else {})
+        self._pending: dict[str, Future] = {}
+        self._asked_ns: dict[str, int] = {}
+
+    def _on_command(self, data: bytes) -> None:
+        stamp = header_stamp_ns(data)
+        self.core.generalized_force(self.core.realtime or stamp == self.held_stamp_ns)
+
+    def poll(self, now_ns: int) -> None:
+        """Ask each managed node that is not known active for its state (at most 5 Hz)."""
+        for name, client in self._clients.items():
+            waited_ns = now_ns - self._asked_ns.get(name, -10**18)
+            if waited_ns < POLL_PERIOD_S * 1e9 or (
+                    name in self._pending and waited_ns < _REQUEST_TIMEOUT_S * 1e9):
+                continue
+            self._pending.pop(name, None)  # unanswered: a service seen but gone, ask again
+            self._asked_ns[name] = now_ns
+            if not client.service_is_ready():
+                self.core.node_state(name, None)
+                continue
+            future = client.call_async(GetState.Request())
+            self._pending[name] = future
+            future.add_done_callback(lambda f, n=name: self._on_state(n, f))
+
+    def _on_state(self, name: str, future: Future) -> None:
+        if self._pending.get(name) is not future:
+            return  # given up on, or the watch is done
+        self._pending.pop(name)
+        response = future.result()
+        if response is not None:
+            self.core.node_state(name, str(response.current_state.label))
+
+    def failure(self, now_ns: int) -> str:
+        """The start-up error naming the node that did not answer (the ROS graph asked)."""
+        publishers = {topic: [info.node_name for info in self._node.get_publishers_info_by_topic(
+            self._node.resolve_topic_name(topic))] for topic in (COMMAND_TOPIC, ACTUATOR_TOPIC)}
+        return self.core.failure(now_ns, publishers)
+
+    def destroy(self) -> None:
+        """Drop the subscription and the clients: the loop is closed."""
+        if self._subscription is not None:
+            self._node.destroy_subscription(self._subscription)
+            self._subscription = None
+        for client in self._clients.values():
+            self._node.destroy_client(client)
+        self._clients = {}
+        self._pending = {}
