@@ -339,7 +339,8 @@ def two_presses(tmp_path_factory: pytest.TempPathFactory) -> tuple[Probe, Path]:
         assert 'first' in probe.results, 'the first press has not ended yet'
         probe.send('second', wall_goal(force_n=60.0, press_s=2.0, start_s=0.0))
 
-    probe = run(10.5, [(0.05, lambda p: p.send('first', wall_goal())), (5.6, second)],
+    # The first ends once its force is released and the contact let go (about 6 s).
+    probe = run(12.5, [(0.05, lambda p: p.send('first', wall_goal())), (7.0, second)],
                 output_path=path)
     return probe, path
 

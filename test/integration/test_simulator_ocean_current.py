@@ -56,7 +56,7 @@ def test_set_parameters_at_run_time_changes_the_published_current(harness: Harne
     """
     current = collect(harness, TwistStamped, 'ocean/current')
     harness.responder.answer = lambda _: False
-    sim = harness.start(mode='realtime', ocean__current__mean_speed_m_s=0.1)
+    sim = harness.start(mode='realtime', startup__hold=False, ocean__current__mean_speed_m_s=0.1)
     harness.spin_until(lambda: len(current) > 0)
     assert _linear(current[-1]) == (0.1, 0.0, 0.0)
     results = _set(harness, mean_speed_m_s=0.35, direction_rad=1.5707963267948966)
@@ -73,7 +73,7 @@ def test_out_of_range_current_is_refused_and_the_current_kept(harness: Harness) 
     """A negative speed, or a mean above max_speed_m_s (2 m/s), is refused with a reason."""
     current = collect(harness, TwistStamped, 'ocean/current')
     harness.responder.answer = lambda _: False
-    sim = harness.start(mode='realtime', ocean__current__mean_speed_m_s=0.1)
+    sim = harness.start(mode='realtime', startup__hold=False, ocean__current__mean_speed_m_s=0.1)
     harness.spin_until(lambda: len(current) > 0)
     for speed in (-0.2, 2.5):
         (result,) = _set(harness, mean_speed_m_s=speed)
