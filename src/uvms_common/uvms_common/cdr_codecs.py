@@ -205,17 +205,24 @@ class MessageCodec:
         """A new payload to fill (the template's bytes: fixed strings and counts in place)."""
         return bytearray(self.template)
 
-    def struct(self, paths: Sequence[str]) -> tuple[int, struct.Struct]:
-        """Offset and `struct.Struct` reading or writing the given fields in one call.
+    def struct(self, paths: Sequence[str], write: bool = False) -> tuple[int, struct.Struct]:
+        """Offset and `struct.Struct` reading (or writing) the given fields in one call.
 
-        The fields must be in payload order; the gaps between them (padding, fixed counts)
-        are skipped. Example: ``codec.struct(['weight', 'phase', 'contact_force'])``.
+        The fields must be in payload order; a read skips the gaps between them. A write
+        fills the gaps with zeros, so with ``write`` a gap may hold padding only, not a fixed
+        count or string. Example: ``codec.struct(['weight', 'phase', 'contact_force'])``.
+
+        Raises:
+            CodecError: Fields out of order, or (``write``) a gap over fixed bytes.
         """
         leaves = [self.leaves[path] for path in paths]
         fmt, end = '<', leaves[0].offset
         for leaf in leaves:
             if leaf.offset < end:
                 raise CodecError(f'{leaf.path!r} overlaps or precedes the field before it')
+            if write and any(start < leaf.offset and stop > end
+                             for start, stop in self._constant):
+                raise CodecError(f'fixed bytes before {leaf.path!r}: write it on its own')
             fmt += f'{leaf.offset - end}x' if leaf.offset > end else ''
             fmt += f'{leaf.count}{leaf.code}'
             end = leaf.offset + leaf.size
@@ -223,7 +230,7 @@ class MessageCodec:
 
     def pack(self, path: str, out: bytearray, values: Sequence[float]) -> None:
         """Write one field (or group) of ``out`` from plain numbers (slow path: tests, set-up)."""
-        offset, fields = self.struct([path])
+        offset, fields = self.struct([path], write=True)
         fields.pack_into(out, offset, *values)
 
     def check(self, data: bytes) -> str | None:
@@ -272,6 +279,28 @@ def read_stamp_ns(data: bytes) -> int:
     """The first field's stamp (``header.stamp``) in ns; the payload must be checked first."""
     sec, nanosec = _STAMP.unpack_from(data, ENCAPSULATION_SIZE)
     return int(sec * 1_000_000_000 + nanosec)
+
+
+class PayloadWriter:
+    """One topic's preallocated payload and the structs that write its numbers.
+
+    Args:
+        codec: The topic's layout.
+        groups: Runs of fields written by one ``struct.pack_into`` each (padding between
+            the fields of a run only), e.g. ``['pose.pose'], ['twist.twist']``.
+    """
+
+    def __init__(self, codec: MessageCodec, *groups: Sequence[str]) -> None:
+        self.buffer = codec.message()
+        self.structs = [codec.struct(paths, write=True) for paths in groups]
+
+    def fill(self, t_ns: int, *values: Sequence[float]) -> bytes:
+        """The payload stamped t_ns with the numbers of each group, as bytes to publish."""
+        buffer = self.buffer
+        write_stamp(buffer, t_ns)
+        for (offset, fields), numbers in zip(self.structs, values, strict=True):
+            fields.pack_into(buffer, offset, *numbers)
+        return bytes(buffer)
 
 
 class Decoded(NamedTuple):

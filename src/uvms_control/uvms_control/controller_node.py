@@ -34,6 +34,7 @@ from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackRet
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.diagnostics import robot_name as urdf_robot_name
 from uvms_common.lifecycle import (
@@ -47,7 +48,7 @@ from uvms_common.rate_gate import RateGate
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
 from uvms_common import robot_parameters as robots
-from uvms_control import conversions, task_conversions
+from uvms_control import raw_conversions, task_conversions
 from uvms_control.core.contact_task import SafetyLimits, TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
 from uvms_control.core.parameter_specs import (
@@ -103,14 +104,12 @@ class ControllerNode(LifecycleNode):
         self._joint_names: list[str] = []
         self._inputs: dict[str, Input | None] = dict.fromkeys(TOPICS)
         self._pending = PendingStamps(TOPICS)
-        self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0}
+        self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0, 'malformed': 0}
         self._rate = RateMeter()
         self._breach: str | None = None
         self._stale = False
         self._staleness = StalenessMonitor()
         self._misses: MissCounter | None = None
-        self._command_msg: GeneralizedForce | None = None
-        self._state_msg: ControllerState | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.tasks = ContactTaskServer(self, lambda: self.supervisor if self._active else None,
                                        lambda: self.get_clock().now().nanoseconds * 1e-9)
@@ -179,15 +178,18 @@ class ControllerNode(LifecycleNode):
         self._state_gate = RateGate(float(node['state_rate_hz']))
         self._entities = [(self.destroy_publisher, self._command_pub),
                           (self.destroy_publisher, self._state_pub)]
+        # Raw CDR through the robot's fixed layouts (uvms_control.raw_conversions).
+        self._command_writer = raw_conversions.GeneralizedForceWriter(joint_names)
+        self._state_writer = raw_conversions.ControllerStateWriter()
         readers = {
-            'joint_states': (JointState,
-                             lambda m: conversions.joint_state_arrays(m, self._joint_names)),
-            'odometry': (Odometry, conversions.odometry_arrays),
-            'wrench': (WrenchStamped, conversions.wrench_force),
+            'joint_states': (JointState, raw_conversions.joint_state_reader(joint_names)),
+            'odometry': (Odometry, raw_conversions.odometry_reader()),
+            'wrench': (WrenchStamped, raw_conversions.wrench_reader()),
         }
         for topic, (msg_type, read) in readers.items():
             self._entities.append((self.destroy_subscription, self.create_subscription(
-                msg_type, topic, lambda msg, t=topic, r=read: self._on_input(t, r, msg), qos)))
+                msg_type, topic, lambda data, t=topic, r=read: self._on_input(t, r, data), qos,
+                raw=True)))
         if not self._lockstep:
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.
@@ -248,11 +250,19 @@ class ControllerNode(LifecycleNode):
 
     # ------------------------------------------------------------------------ inputs
 
-    def _on_input(self, topic: str, read: Any, msg: Any) -> None:
+    def _on_input(self, topic: str, reader: raw_conversions.Reader, data: bytes) -> None:
         """Convert and keep one input; in lockstep, compute once a stamp is complete."""
-        stamp = conversions.stamp_ns(msg.header.stamp)
         try:
-            value = read(msg)
+            decoded = reader.decode(data)
+        except MalformedPayloadError as error:
+            self._counts['rejected'] += 1
+            self._counts['malformed'] += 1
+            self.get_logger().error(f'malformed input payloads (counted on /diagnostics), '
+                                    f'first on {topic}: {error}', once=True)
+            return
+        stamp = decoded.stamp_ns
+        try:
+            value = reader.value(decoded)
         except ControlInputError as error:
             self._counts['rejected'] += 1
             self.get_logger().error(f'rejected {topic}: {error}', throttle_duration_sec=1.0)
@@ -348,9 +358,7 @@ class ControllerNode(LifecycleNode):
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
         if self._state_gate.due(t_ns):
-            self._state_msg = conversions.controller_state_message(t_ns, result,
-                                                                   self._state_msg)
-            self._state_pub.publish(self._state_msg)
+            self._state_pub.publish(self._state_writer.payload(t_ns, result))
         self.tasks.finish(events)
         self.tasks.publish_feedback(self.supervisor, t)
         breach = self.supervisor.breach
@@ -368,9 +376,7 @@ class ControllerNode(LifecycleNode):
             self._publish_command(t_ns, self._last_tau_b)
 
     def _publish_command(self, t_ns: int, tau_b: np.ndarray) -> None:
-        self._command_msg = conversions.generalized_force_message(
-            t_ns, tau_b, self._joint_names, self._command_msg)
-        self._command_pub.publish(self._command_msg)
+        self._command_pub.publish(self._command_writer.payload(t_ns, tau_b))
 
     # ------------------------------------------------------------------------ parameters
 
@@ -419,6 +425,7 @@ class ControllerNode(LifecycleNode):
             message = f'{state}: waiting for fresh inputs (start-up)'
         return Report(level, message, {'lifecycle_state': state, 'rate_hz': rate,
                                        'rejected_inputs': self._counts['rejected'],
+                                       'malformed_inputs': self._counts['malformed'],
                                        'zero_commands': self._counts['zeroed'],
                                        'missed_periods': misses.missed if misses else None,
                                        'missed_share': misses.share if misses else None,

@@ -22,6 +22,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.node_main import run_node
 from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
@@ -35,7 +36,7 @@ from uvms_common.robot_parameters import (
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
-from uvms_sim import conversions
+from uvms_sim import conversions, raw_conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError
 from uvms_sim.parameters import (
     SIMULATOR_PARAMETERS,
@@ -102,8 +103,12 @@ class SimulatorNode(Node):
             depth=1, reliability=ReliabilityPolicy.RELIABLE,
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
-        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable)
-        self._messages = conversions.StateMessages(self._plant.joint_names)
+        # The hot topics go as raw CDR through fixed layouts (uvms_common.cdr_codecs).
+        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command, reliable,
+                                 raw=True)
+        self._commands = raw_conversions.ActuatorCommandReader(self._plant.n_thrusters,
+                                                               self._plant.joint_names)
+        self._messages = raw_conversions.RawStateMessages(self._plant.joint_names)
         self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
         self._command: tuple[int, Any, Any] | None = None
@@ -160,11 +165,14 @@ class SimulatorNode(Node):
         except ParameterException as exc:
             raise SimParameterError(f'invalid parameter {name!r}: {exc}') from exc
 
-    def _on_command(self, msg: ActuatorCommand) -> None:
+    def _on_command(self, data: bytes) -> None:
         """Keep a valid command; in lockstep only the one for the current state, then step."""
         try:
-            command = conversions.actuator_command_arrays(
-                msg, self._plant.n_thrusters, self._plant.joint_names)
+            command = self._commands.read(data)
+        except MalformedPayloadError as exc:
+            self.get_logger().error(f'malformed actuator command payloads (counted on '
+                                    f'/diagnostics), first: {exc}', once=True)
+            return
         except CommandError as exc:
             self.get_logger().error(f'rejected actuator command: {exc}',
                                     throttle_duration_sec=1.0)
@@ -289,6 +297,7 @@ class SimulatorNode(Node):
         values = {'mode': mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
                   'real_time_factor': factor, 'lockstep_timeouts': self.timeouts,
                   'steps_behind_real_time': self._behind.missed,
+                  'malformed_commands': self._commands.decoder.malformed,
                   'behind_real_time_share': self._behind.share}
         if self._finished:
             return Report(OK, f'finished at t = {t_ns * 1e-9:.3f} s', values)
