@@ -1,6 +1,7 @@
 """Lockstep speed of the whole graph with recording on genuine rclpy, and where the time goes.
 
-Runs a scenario (default: case1_ke1e4, its 20 s; 1 kHz simulator, 500 Hz control) through
+Runs scenarios (default: case1_ke1e4 on paper_uvms and bluerov2_alpha5_contact on
+bluerov2_alpha5, their 20 s; 1 kHz simulator, 500 Hz control), each through
 the in-process graph (``uvms_bringup.graph``, as ``uvms run`` does) in lockstep with the
 recorder on, on the EventsExecutor and/or the SingleThreadedExecutor in this one process,
 and prints for each the real-time factor (simulated s per wall s). Those headline runs are
@@ -37,8 +38,12 @@ environment's, else a random one of 101-149.
 
 Usage::
 
-    .venv/bin/python bench/bench_graph.py [SCENARIO] [--duration S] [--executor KIND]
+    .venv/bin/python bench/bench_graph.py [SCENARIO ...] [--duration S] [--executor KIND]
         [--output F.mcap] [--integrator METHOD] [--no-breakdown]
+
+With several scenarios (the default: one per shipped robot) a last table puts their
+graph / plain-loop ratios and real-time factors side by side. The middleware floor is the
+raw one (hot topics as CDR bytes, as the nodes publish them since issue 29).
 """
 
 from __future__ import annotations
@@ -451,7 +456,9 @@ def print_breakdown(run: GraphRun, uninstrumented: GraphRun | None) -> None:
 def main() -> None:
     """Run the benchmark and print its figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('scenario', nargs='?', default='case1_ke1e4')
+    parser.add_argument('scenario', nargs='*',
+                        default=['case1_ke1e4', 'bluerov2_alpha5_contact'],
+                        help='scenario names or files (default: one per shipped robot)')
     parser.add_argument('--duration', type=float, default=None, help='simulated s')
     parser.add_argument('--executor', choices=(*EXECUTORS, 'both'), default='both',
                         help='executor of the graph (default both, one after the other)')
@@ -469,7 +476,20 @@ def main() -> None:
     ros_environment_defaults()
     if not os.environ.get('ROS_DOMAIN_ID'):
         os.environ['ROS_DOMAIN_ID'] = str(random.SystemRandom().randint(*DOMAINS))
-    scenario = load_scenario(resolve_scenario_path(args.scenario))
+    rows = [bench_scenario(name, args) for name in args.scenario]
+    if len(rows) > 1:
+        print('\n== robots side by side (figures of this one run; machine load: see above) ==')
+        print(f'  {"scenario":<26}{"robot":<18}{"executor":<10}{"RTF":>8}{"/ plain":>9}')
+        for row in rows:
+            for scenario_name, robot, executor, factor, ratio in row:
+                print(f'  {scenario_name:<26}{robot:<18}{executor:<10}{factor:>7.2f}x'
+                      f'{ratio:>9.2f}')
+
+
+def bench_scenario(name: str, args: argparse.Namespace) -> list[tuple[str, str, str, float,
+                                                                        float]]:
+    """Bench one scenario; (scenario, robot, executor, real-time factor, / plain) per run."""
+    scenario = load_scenario(resolve_scenario_path(name))
     if args.duration is not None:
         scenario = scenario.with_changes(duration_s=args.duration)
     extra: dict[str, dict[str, ParameterValue]] = {
@@ -490,6 +510,7 @@ def main() -> None:
     settings = cores.settings
     integrator = cores.values[SIMULATOR.name]['integration.method']
     load = ', '.join(f'{x:.2f}' for x in os.getloadavg())
+    print(f'\n######## {scenario.name} (robot {scenario.robot or "paper_uvms"}) ########')
     print(f'scenario            {scenario.name}: {settings.duration_ns * 1e-9:g} s simulated, '
           f'lockstep, recording on, integrator {integrator}')
     print(f'rates               simulator {1e9 / settings.physics_dt_ns:g} Hz, control '
@@ -511,8 +532,8 @@ def main() -> None:
                                instrumented=True)
     plain = run_plain_loop(cores)
     periods = plain.control_steps
-    run_floor(min(periods, FLOOR_WARMUP_PERIODS), 'events', recorder=True)  # warm-up
-    floor_s, _ = run_floor(periods, 'events', recorder=True)
+    run_floor(min(periods, FLOOR_WARMUP_PERIODS), 'events', recorder=True, raw=True)  # warm-up
+    floor_s, _ = run_floor(periods, 'events', recorder=True, raw=True)
     print(f'plain loop          {plain.wall_s:.2f} s wall for {plain.sim_time_s:.2f} s '
           f'simulated ({plain.control_steps} control steps, '
           f'{1e6 * plain.wall_s / plain.control_steps:.0f} us each), real-time factor '
@@ -520,7 +541,8 @@ def main() -> None:
     print('                    ' + ', '.join(f'{name} core {seconds:.2f} s'
                                               for name, seconds in plain.core_s.items()))
     print(f'middleware floor    {floor_s:.2f} s wall for the same {periods} control periods '
-          f'through stand-in nodes that do no work (events executor, raw recorder sink; '
+          f'through stand-in nodes that do no work (events executor, hot topics raw, raw '
+          f'recorder sink; '
           f'after a warm-up run of {min(periods, FLOOR_WARMUP_PERIODS)}): '
           f'{1e6 * floor_s / periods:.0f} us per period')
     print(f'                    least possible graph / plain loop: '
@@ -546,6 +568,9 @@ def main() -> None:
         events, single = runs
         print(f'  events / single real-time factor: '
               f'{events.result.real_time_factor / single.result.real_time_factor:.2f}')
+    robot = scenario.robot or 'paper_uvms'
+    return [(scenario.name, robot, run.executor, run.result.real_time_factor,
+             run.result.wall_time_s / plain.wall_s) for run in runs]
 
 
 if __name__ == '__main__':
