@@ -25,15 +25,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import PointStamped, WrenchStamped
-from nav_msgs.msg import Odometry
+from geometry_msgs.msg import PointStamped
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import JointState
 from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.diagnostics import robot_name as urdf_robot_name
@@ -178,15 +176,9 @@ class ControllerNode(LifecycleNode):
         self._state_gate = RateGate(float(node['state_rate_hz']))
         self._entities = [(self.destroy_publisher, self._command_pub),
                           (self.destroy_publisher, self._state_pub)]
-        # Raw CDR through the robot's fixed layouts (uvms_control.raw_conversions).
         self._command_writer = raw_conversions.GeneralizedForceWriter(joint_names)
         self._state_writer = raw_conversions.ControllerStateWriter()
-        readers = {
-            'joint_states': (JointState, raw_conversions.joint_state_reader(joint_names)),
-            'odometry': (Odometry, raw_conversions.odometry_reader()),
-            'wrench': (WrenchStamped, raw_conversions.wrench_reader()),
-        }
-        for topic, (msg_type, read) in readers.items():
+        for topic, (msg_type, read) in raw_conversions.controller_readers(joint_names).items():
             self._entities.append((self.destroy_subscription, self.create_subscription(
                 msg_type, topic, lambda data, t=topic, r=read: self._on_input(t, r, data), qos,
                 raw=True)))

@@ -16,6 +16,9 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from geometry_msgs.msg import WrenchStamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import JointState
 from uvms_common.cdr_codecs import Decoded, MessageCodec, PayloadWriter, RawDecoder
 from uvms_common.hot_messages import (
     THRUSTER_ARRAYS,
@@ -109,6 +112,13 @@ def wrench_reader() -> Reader:
     at, force = codec.struct(['wrench.force'])
     return Reader(codec, lambda data: _finite('wrench.force', force.unpack_from(data, at)),
                   conversions.wrench_force)
+
+
+def controller_readers(joint_names: Sequence[str]) -> dict[str, tuple[type, Reader]]:
+    """The controller's input topics: their message types and readers, in TOPICS order."""
+    return {'joint_states': (JointState, joint_state_reader(joint_names)),
+            'odometry': (Odometry, odometry_reader()),
+            'wrench': (WrenchStamped, wrench_reader())}
 
 
 def generalized_force_reader(joint_names: Sequence[str]) -> Reader:
