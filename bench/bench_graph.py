@@ -79,6 +79,7 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
     resolve_scenario_path,
 )
 from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
+from uvms_common.robot_parameters import robot_model_values  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.controller_node import safety_limits  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
@@ -96,7 +97,11 @@ from uvms_control.core.unified_controller import UnifiedForceController  # noqa:
 from uvms_control.task_conversions import contact_task_goal  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402
-from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings  # noqa: E402
+from uvms_sim.parameters import (  # noqa: E402
+    SIMULATOR_PARAMETERS,
+    SimulatorSettings,
+    default_joint_positions,
+)
 from uvms_sim.plant import Plant, initial_coordinates  # noqa: E402
 from uvms_tasks.goals import goal_from_task  # noqa: E402
 from uvms_tasks.task_file import TaskSpec  # noqa: E402
@@ -267,11 +272,19 @@ def build_cores(values: Mapping[str, Mapping[str, Any]],
     Mirrors ``SimulatorNode``, ``ControllerNode`` and ``ThrusterAllocatorNode`` ``__init__``;
     the controller runs inside the node's task supervisor, which the loop hands the mission.
     """
+    def model_values(node: Mapping[str, Any]) -> dict[str, Any]:
+        # As the nodes do: the robot's URDF and hydrodynamics paths from robot_name.
+        return robot_model_values({s.name: node[s.name] for s in PARAMETER_SPECS},
+                                  str(node['robot_name']))
+
     sim = values[SIMULATOR.name]
-    params = UvmsParameters.from_flat_dict({s.name: sim[s.name] for s in PARAMETER_SPECS})
+    params = UvmsParameters.from_flat_dict(model_values(sim))
     settings = SimulatorSettings.from_values({s.name: sim[s.name] for s in SIMULATOR_PARAMETERS})
-    probe = Plant(params, [0.0] * 9, settings.physics_dt_ns)
-    q0 = initial_coordinates(probe.model, settings.vehicle_pose, settings.joint_positions,
+    n_joints = len(load_description(params.description.urdf_path,
+                                    params.description.hydrodynamics_path).joint_names)
+    probe = Plant(params, [0.0] * (6 + n_joints), settings.physics_dt_ns)
+    q0 = initial_coordinates(probe.model, settings.vehicle_pose,
+                             default_joint_positions(settings.joint_positions, n_joints),
                              settings.ee_position if settings.arm_from_ee_position else None)
     plant = Plant(params, q0, settings.physics_dt_ns, settings.wall_enabled,
                   settings.wall_motion_start_force_n)
@@ -279,14 +292,13 @@ def build_cores(values: Mapping[str, Mapping[str, Any]],
     ctl = values[CONTROLLER.name]
     gains = ControllerParameters.from_flat_dict(
         {s.name: ctl[s.name] for s in CONTROLLER_PARAMETER_SPECS})
-    model = UvmsModel(UvmsParameters.from_flat_dict({s.name: ctl[s.name]
-                                                     for s in PARAMETER_SPECS}))
+    model = UvmsModel(UvmsParameters.from_flat_dict(model_values(ctl)))
     controller = UnifiedForceController(gains, model)
     supervisor = TaskSupervisor(controller, safety_limits(
         {s.name: ctl[s.name] for s in SAFETY_PARAMETER_SPECS}))
 
     alloc = values[THRUSTER_ALLOCATOR.name]
-    uvms = UvmsParameters.from_flat_dict({s.name: alloc[s.name] for s in PARAMETER_SPECS})
+    uvms = UvmsParameters.from_flat_dict(model_values(alloc))
     layout = ThrusterLayout.from_parameters(uvms.thrusters)
     joint_names = load_description(uvms.description.urdf_path,
                                    uvms.description.hydrodynamics_path).joint_names
