@@ -1,6 +1,7 @@
 """Lockstep speed of the whole graph with recording on genuine rclpy, and where the time goes.
 
-Runs a scenario (default: case1_ke1e4, its 20 s; 1 kHz simulator, 500 Hz control) through
+Runs scenarios (default: case1_ke1e4 on paper_uvms and bluerov2_alpha5_contact on
+bluerov2_alpha5, their 20 s; 1 kHz simulator, 500 Hz control), each through
 the in-process graph (``uvms_bringup.graph``, as ``uvms run`` does) in lockstep with the
 recorder on, on the EventsExecutor and/or the SingleThreadedExecutor in this one process,
 and prints for each the real-time factor (simulated s per wall s). Those headline runs are
@@ -37,8 +38,12 @@ environment's, else a random one of 101-149.
 
 Usage::
 
-    .venv/bin/python bench/bench_graph.py [SCENARIO] [--duration S] [--executor KIND]
+    .venv/bin/python bench/bench_graph.py [SCENARIO ...] [--duration S] [--executor KIND]
         [--output F.mcap] [--integrator METHOD] [--no-breakdown]
+
+With several scenarios (the default: one per shipped robot) a last table puts their
+graph / plain-loop ratios and real-time factors side by side. The middleware floor is the
+raw one (hot topics as CDR bytes, as the nodes publish them since issue 29).
 """
 
 from __future__ import annotations
@@ -74,6 +79,7 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
     resolve_scenario_path,
 )
 from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
+from uvms_common.robot_parameters import robot_model_values  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.controller_node import safety_limits  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
@@ -91,7 +97,11 @@ from uvms_control.core.unified_controller import UnifiedForceController  # noqa:
 from uvms_control.task_conversions import contact_task_goal  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402
-from uvms_sim.parameters import SIMULATOR_PARAMETERS, SimulatorSettings  # noqa: E402
+from uvms_sim.parameters import (  # noqa: E402
+    SIMULATOR_PARAMETERS,
+    SimulatorSettings,
+    default_joint_positions,
+)
 from uvms_sim.plant import Plant, initial_coordinates  # noqa: E402
 from uvms_tasks.goals import goal_from_task  # noqa: E402
 from uvms_tasks.task_file import TaskSpec  # noqa: E402
@@ -262,11 +272,19 @@ def build_cores(values: Mapping[str, Mapping[str, Any]],
     Mirrors ``SimulatorNode``, ``ControllerNode`` and ``ThrusterAllocatorNode`` ``__init__``;
     the controller runs inside the node's task supervisor, which the loop hands the mission.
     """
+    def model_values(node: Mapping[str, Any]) -> dict[str, Any]:
+        # As the nodes do: the robot's URDF and hydrodynamics paths from robot_name.
+        return robot_model_values({s.name: node[s.name] for s in PARAMETER_SPECS},
+                                  str(node['robot_name']))
+
     sim = values[SIMULATOR.name]
-    params = UvmsParameters.from_flat_dict({s.name: sim[s.name] for s in PARAMETER_SPECS})
+    params = UvmsParameters.from_flat_dict(model_values(sim))
     settings = SimulatorSettings.from_values({s.name: sim[s.name] for s in SIMULATOR_PARAMETERS})
-    probe = Plant(params, [0.0] * 9, settings.physics_dt_ns)
-    q0 = initial_coordinates(probe.model, settings.vehicle_pose, settings.joint_positions,
+    n_joints = len(load_description(params.description.urdf_path,
+                                    params.description.hydrodynamics_path).joint_names)
+    probe = Plant(params, [0.0] * (6 + n_joints), settings.physics_dt_ns)
+    q0 = initial_coordinates(probe.model, settings.vehicle_pose,
+                             default_joint_positions(settings.joint_positions, n_joints),
                              settings.ee_position if settings.arm_from_ee_position else None)
     plant = Plant(params, q0, settings.physics_dt_ns, settings.wall_enabled,
                   settings.wall_motion_start_force_n)
@@ -274,14 +292,13 @@ def build_cores(values: Mapping[str, Mapping[str, Any]],
     ctl = values[CONTROLLER.name]
     gains = ControllerParameters.from_flat_dict(
         {s.name: ctl[s.name] for s in CONTROLLER_PARAMETER_SPECS})
-    model = UvmsModel(UvmsParameters.from_flat_dict({s.name: ctl[s.name]
-                                                     for s in PARAMETER_SPECS}))
+    model = UvmsModel(UvmsParameters.from_flat_dict(model_values(ctl)))
     controller = UnifiedForceController(gains, model)
     supervisor = TaskSupervisor(controller, safety_limits(
         {s.name: ctl[s.name] for s in SAFETY_PARAMETER_SPECS}))
 
     alloc = values[THRUSTER_ALLOCATOR.name]
-    uvms = UvmsParameters.from_flat_dict({s.name: alloc[s.name] for s in PARAMETER_SPECS})
+    uvms = UvmsParameters.from_flat_dict(model_values(alloc))
     layout = ThrusterLayout.from_parameters(uvms.thrusters)
     joint_names = load_description(uvms.description.urdf_path,
                                    uvms.description.hydrodynamics_path).joint_names
@@ -451,7 +468,9 @@ def print_breakdown(run: GraphRun, uninstrumented: GraphRun | None) -> None:
 def main() -> None:
     """Run the benchmark and print its figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('scenario', nargs='?', default='case1_ke1e4')
+    parser.add_argument('scenario', nargs='*',
+                        default=['case1_ke1e4', 'bluerov2_alpha5_contact'],
+                        help='scenario names or files (default: one per shipped robot)')
     parser.add_argument('--duration', type=float, default=None, help='simulated s')
     parser.add_argument('--executor', choices=(*EXECUTORS, 'both'), default='both',
                         help='executor of the graph (default both, one after the other)')
@@ -469,7 +488,20 @@ def main() -> None:
     ros_environment_defaults()
     if not os.environ.get('ROS_DOMAIN_ID'):
         os.environ['ROS_DOMAIN_ID'] = str(random.SystemRandom().randint(*DOMAINS))
-    scenario = load_scenario(resolve_scenario_path(args.scenario))
+    rows = [bench_scenario(name, args) for name in args.scenario]
+    if len(rows) > 1:
+        print('\n== robots side by side (figures of this one run; machine load: see above) ==')
+        print(f'  {"scenario":<26}{"robot":<18}{"executor":<10}{"RTF":>8}{"/ plain":>9}')
+        for row in rows:
+            for scenario_name, robot, executor, factor, ratio in row:
+                print(f'  {scenario_name:<26}{robot:<18}{executor:<10}{factor:>7.2f}x'
+                      f'{ratio:>9.2f}')
+
+
+def bench_scenario(name: str, args: argparse.Namespace) -> list[tuple[str, str, str, float,
+                                                                        float]]:
+    """Bench one scenario; (scenario, robot, executor, real-time factor, / plain) per run."""
+    scenario = load_scenario(resolve_scenario_path(name))
     if args.duration is not None:
         scenario = scenario.with_changes(duration_s=args.duration)
     extra: dict[str, dict[str, ParameterValue]] = {
@@ -490,6 +522,7 @@ def main() -> None:
     settings = cores.settings
     integrator = cores.values[SIMULATOR.name]['integration.method']
     load = ', '.join(f'{x:.2f}' for x in os.getloadavg())
+    print(f'\n######## {scenario.name} (robot {scenario.robot or "paper_uvms"}) ########')
     print(f'scenario            {scenario.name}: {settings.duration_ns * 1e-9:g} s simulated, '
           f'lockstep, recording on, integrator {integrator}')
     print(f'rates               simulator {1e9 / settings.physics_dt_ns:g} Hz, control '
@@ -511,8 +544,8 @@ def main() -> None:
                                instrumented=True)
     plain = run_plain_loop(cores)
     periods = plain.control_steps
-    run_floor(min(periods, FLOOR_WARMUP_PERIODS), 'events', recorder=True)  # warm-up
-    floor_s, _ = run_floor(periods, 'events', recorder=True)
+    run_floor(min(periods, FLOOR_WARMUP_PERIODS), 'events', recorder=True, raw=True)  # warm-up
+    floor_s, _ = run_floor(periods, 'events', recorder=True, raw=True)
     print(f'plain loop          {plain.wall_s:.2f} s wall for {plain.sim_time_s:.2f} s '
           f'simulated ({plain.control_steps} control steps, '
           f'{1e6 * plain.wall_s / plain.control_steps:.0f} us each), real-time factor '
@@ -520,7 +553,8 @@ def main() -> None:
     print('                    ' + ', '.join(f'{name} core {seconds:.2f} s'
                                               for name, seconds in plain.core_s.items()))
     print(f'middleware floor    {floor_s:.2f} s wall for the same {periods} control periods '
-          f'through stand-in nodes that do no work (events executor, raw recorder sink; '
+          f'through stand-in nodes that do no work (events executor, hot topics raw, raw '
+          f'recorder sink; '
           f'after a warm-up run of {min(periods, FLOOR_WARMUP_PERIODS)}): '
           f'{1e6 * floor_s / periods:.0f} us per period')
     print(f'                    least possible graph / plain loop: '
@@ -546,6 +580,9 @@ def main() -> None:
         events, single = runs
         print(f'  events / single real-time factor: '
               f'{events.result.real_time_factor / single.result.real_time_factor:.2f}')
+    robot = scenario.robot or 'paper_uvms'
+    return [(scenario.name, robot, run.executor, run.result.real_time_factor,
+             run.result.wall_time_s / plain.wall_s) for run in runs]
 
 
 if __name__ == '__main__':

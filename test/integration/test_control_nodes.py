@@ -18,6 +18,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
@@ -514,3 +515,27 @@ def test_wrong_parameter_type_stops_the_allocator(harness: Harness) -> None:
     """An integer where a double is declared is a start-up error naming the parameter."""
     with pytest.raises(ControlParameterError, match=r'thruster\.propeller_diameter_m'):
         harness.add(ThrusterAllocatorNode, **{'thruster.propeller_diameter_m': 1})
+
+
+def test_malformed_payloads_are_counted_logged_once_and_survived(
+    harness: Harness, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """Raw garbage on the inputs (cut short, wrong encapsulation, noise) never stops a node."""
+    controller = harness.add(ControllerNode)
+    allocator = harness.add(ThrusterAllocatorNode)
+    probe = harness.probe
+    good = serialize_message(WrenchStamped(header=header(0, 'ft_sensor_link')))
+    garbage = [good[:-9], b'\x7f\x7f' + good[2:], bytes(range(256))]
+    for payload in garbage:
+        probe.wrench.publish(payload)
+        probe.joints.publish(payload)
+        probe.command.publish(payload)
+    harness.spin_for(0.2)
+    probe.send_state(0)
+    assert harness.spin_until(lambda: len(probe.commands) >= 1)
+    assert harness.spin_until(lambda: len(probe.actuators) >= 1)
+    assert controller._report_control().values['malformed_inputs'] == 2 * len(garbage)
+    assert allocator._report().values['malformed_commands'] == len(garbage)
+    err = capfd.readouterr().err
+    assert err.count('malformed input payloads') == 1
+    assert err.count('malformed generalized force payloads') == 1

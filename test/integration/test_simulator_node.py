@@ -18,6 +18,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
@@ -466,3 +467,26 @@ def test_a_simulator_process_that_could_not_run_does_not_time_out(harness: Harne
     sim = harness.start(lockstep_timeout_s=1.0, duration_s=0.01)
     harness.spin_until(lambda: sim.finished, timeout_s=20.0)
     assert sim.timeouts == 0
+
+
+def test_malformed_command_payloads_are_counted_and_survived(
+    harness: Harness, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """Raw garbage on command/actuators: logged once, counted on /diagnostics, run goes on."""
+    arrays = collect(harness, DiagnosticArray, '/diagnostics', 10)
+    harness.responder.answer = lambda _: False
+    sim = harness.start(lockstep_timeout_s=60.0)
+    harness.spin_until(lambda: len(harness.responder.states) == 1)
+    valid = ActuatorCommand(thrust=[0.0] * N_THRUSTERS, joint_torques=[0.0] * 3)
+    good = serialize_message(valid)
+    garbage = [b'', good[:-5], b'\x7f\x7f' + good[2:], bytes(range(256))]
+    for payload in garbage:
+        harness.responder.publisher.publish(payload)
+    harness.spin_for(0.2)
+    assert sim.sim_time_ns == 0
+    harness.responder.send(0)
+    harness.spin_until(lambda: sim.sim_time_ns == 2_000_000)
+    harness.spin_until(lambda: any(
+        simulation_status([a])[1].get('malformed_commands') == str(len(garbage))
+        for a in arrays), timeout_s=5.0)
+    assert capfd.readouterr().err.count('malformed actuator command payloads') == 1

@@ -29,13 +29,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import PointStamped, WrenchStamped
-from nav_msgs.msg import Odometry
+from geometry_msgs.msg import PointStamped
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import JointState
+from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.diagnostics import robot_name as urdf_robot_name
 from uvms_common.exchange_qos import input_qos
@@ -45,7 +44,7 @@ from uvms_common.rate_gate import RateGate
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
 from uvms_common import robot_parameters as robots
-from uvms_control import conversions, task_conversions
+from uvms_control import raw_conversions, task_conversions
 from uvms_control.controller_safety import ControllerSafety, safety_limits
 from uvms_control.core.contact_task import TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
@@ -98,7 +97,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         self._joint_names: list[str] = []
         self._inputs: dict[str, Input | None] = dict.fromkeys(TOPICS)
         self._pending = PendingStamps(TOPICS)
-        self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0}
+        self._counts = {'steps': 0, 'rejected': 0, 'zeroed': 0, 'malformed': 0}
         self._faults = FaultLog(self.get_logger())
         self._allocator: AllocatorWatch | None = None
         self._halted: str | None = None  # why control stopped (stale, allocator); None: runs
@@ -107,8 +106,6 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         self._stale = False
         self._staleness = StalenessMonitor()
         self._misses: MissCounter | None = None
-        self._command_msg: GeneralizedForce | None = None
-        self._state_msg: ControllerState | None = None
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.tasks = ContactTaskServer(self, lambda: self.supervisor if self._active else None,
                                        lambda: self.get_clock().now().nanoseconds * 1e-9,
@@ -183,16 +180,12 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         self._state_gate = RateGate(float(node['state_rate_hz']))
         self._entities = [(self.destroy_publisher, self._command_pub),
                           (self.destroy_publisher, self._state_pub)]
-        readers = {
-            'joint_states': (JointState,
-                             lambda m: conversions.joint_state_arrays(m, self._joint_names)),
-            'odometry': (Odometry, conversions.odometry_arrays),
-            'wrench': (WrenchStamped, conversions.wrench_force),
-        }
-        for topic, (msg_type, read) in readers.items():
+        self._command_writer = raw_conversions.GeneralizedForceWriter(joint_names)
+        self._state_writer = raw_conversions.ControllerStateWriter()
+        for topic, (msg_type, read) in raw_conversions.controller_readers(joint_names).items():
             self._entities.append((self.destroy_subscription, self.create_subscription(
                 msg_type, topic_for(topic, str(node['state_source'])),
-                lambda msg, t=topic, r=read: self._on_input(t, r, msg), inputs)))
+                lambda data, t=topic, r=read: self._on_input(t, r, data), inputs, raw=True)))
         if not self._lockstep:
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.
@@ -258,11 +251,19 @@ class ControllerNode(ControllerSafety, LifecycleNode):
     # ------------------------------------------------------------------------ inputs
 
     @guarded('input callback')
-    def _on_input(self, topic: str, read: Any, msg: Any) -> None:
+    def _on_input(self, topic: str, reader: raw_conversions.Reader, data: bytes) -> None:
         """Convert and keep one input; in lockstep, compute once a stamp is complete."""
-        stamp = conversions.stamp_ns(msg.header.stamp)
         try:
-            value = read(msg)
+            decoded = reader.decode(data)
+        except MalformedPayloadError as error:
+            self._counts['rejected'] += 1
+            self._counts['malformed'] += 1
+            self.get_logger().error(f'malformed input payloads (counted on /diagnostics), '
+                                    f'first on {topic}: {error}', once=True)
+            return
+        stamp = decoded.stamp_ns
+        try:
+            value = reader.value(decoded)
         except ControlInputError as error:
             self._counts['rejected'] += 1
             self.get_logger().error(f'rejected {topic}: {error}', throttle_duration_sec=1.0)
@@ -365,9 +366,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
         if self._state_gate.due(t_ns):
-            self._state_msg = conversions.controller_state_message(t_ns, result,
-                                                                   self._state_msg)
-            self._state_pub.publish(self._state_msg)
+            self._state_pub.publish(self._state_writer.payload(t_ns, result))
         self.tasks.finish(events)
         self.tasks.publish_feedback(self.supervisor, t)
         breach = self.supervisor.breach
@@ -386,9 +385,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
             self._publish_command(t_ns, self._last_tau_b)
 
     def _publish_command(self, t_ns: int, tau_b: np.ndarray) -> None:
-        self._command_msg = conversions.generalized_force_message(
-            t_ns, tau_b, self._joint_names, self._command_msg)
-        self._command_pub.publish(self._command_msg)
+        self._command_pub.publish(self._command_writer.payload(t_ns, tau_b))
 
     # ------------------------------------------------------------------------ diagnostics
 
@@ -421,6 +418,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
                                        else 'not watched',
                                        **self._faults.values(),
                                        'rejected_inputs': self._counts['rejected'],
+                                       'malformed_inputs': self._counts['malformed'],
                                        'zero_commands': self._counts['zeroed'],
                                        'missed_periods': misses.missed if misses else None,
                                        'missed_share': misses.share if misses else None,

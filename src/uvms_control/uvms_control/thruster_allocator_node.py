@@ -27,6 +27,7 @@ from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
@@ -41,7 +42,7 @@ from uvms_common.robot_parameters import (
 )
 from uvms_model.thrusters import ThrusterLayout
 
-from uvms_control import conversions
+from uvms_control import raw_conversions
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
 from uvms_control.core.errors import ControlInputError, ControlParameterError
 from uvms_control.core.parameter_specs import ALLOCATOR_PARAMETER_SPECS
@@ -201,9 +202,10 @@ class ThrusterAllocatorNode(LifecycleNode):
             'never_fresh': 'no generalized force command since start-up: thrusters and '
                            'motors set to zero',
             'resumed': 'fresh generalized force commands: resumed'})
-        # Refilled for each publication (rclpy serializes at publish).
-        self._actuator_msg: ActuatorCommand | None = None
-        self._state_msg: ThrusterState | None = None
+        # Raw CDR through the robot's fixed layouts (uvms_control.raw_conversions).
+        self._actuator_writer = raw_conversions.ActuatorCommandWriter(layout.count, joint_names)
+        self._state_writer = raw_conversions.ThrusterStateWriter(layout.count)
+        self._reader = raw_conversions.generalized_force_reader(joint_names)
 
         # Plain publishers, not lifecycle ones: inactive, the node still commands zero.
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -215,7 +217,7 @@ class ThrusterAllocatorNode(LifecycleNode):
             (self.destroy_publisher, self._state_pub),
             (self.destroy_subscription, self.create_subscription(
                 GeneralizedForce, 'command/generalized_force', self._on_command,
-                input_qos(self._lockstep)))]
+                input_qos(self._lockstep), raw=True))]
         if not self._lockstep:
             # On the steady clock, as the controller's: /clock bursts must not drop periods.
             self._entities.append((self.destroy_timer, self.create_timer(
@@ -255,15 +257,22 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     # ------------------------------------------------------------------------ callbacks
 
-    def _on_command(self, msg: GeneralizedForce) -> None:
+    def _on_command(self, data: bytes) -> None:
         """Keep a valid command; in lockstep answer it at once with its own stamp."""
-        stamp = conversions.stamp_ns(msg.header.stamp)
+        try:
+            decoded = self._reader.decode(data)
+        except MalformedPayloadError as error:
+            self._rejected += 1
+            self.get_logger().error('malformed generalized force payloads (counted on '
+                                    f'/diagnostics), first: {error}', once=True)
+            return
+        stamp = decoded.stamp_ns
         if not self._active:
             if self._lockstep:
                 self._publish_zero(stamp)
             return
         try:
-            _, tau_b = conversions.generalized_force_arrays(msg, self._joint_names)
+            tau_b = self._reader.value(decoded)
         except ControlInputError as error:
             self._rejected += 1
             self.get_logger().error(
@@ -322,20 +331,15 @@ class ThrusterAllocatorNode(LifecycleNode):
         output = self.core.step(tau_b, dt)
         self._published += 1
         self._saturated += output.allocation.saturation_scale < 1.0
-        self._actuator_msg = conversions.actuator_command_message(
-            t_ns, output.thrust, self._joint_names, output.joint_torques, self._actuator_msg
-        )
-        self._actuator_pub.publish(self._actuator_msg)
+        self._actuator_pub.publish(
+            self._actuator_writer.payload(t_ns, output.thrust, output.joint_torques))
         if self._state_gate.due(t_ns):
-            self._state_msg = conversions.thruster_state_message(t_ns, output, self._state_msg)
-            self._state_pub.publish(self._state_msg)
+            self._state_pub.publish(self._state_writer.payload(t_ns, output))
 
     def _publish_zero(self, t_ns: int) -> None:
         """Zero thrust and zero joint torque stamped t_ns (inactive, or leaving active)."""
-        self._actuator_msg = conversions.actuator_command_message(
-            t_ns, self._zero_thrust, self._joint_names, self._zero_torque, self._actuator_msg
-        )
-        self._actuator_pub.publish(self._actuator_msg)
+        self._actuator_pub.publish(
+            self._actuator_writer.payload(t_ns, self._zero_thrust, self._zero_torque))
 
     def _report(self) -> Report:
         """/diagnostics: lifecycle state, output rate, input age, rejections, saturation."""
@@ -352,6 +356,7 @@ class ThrusterAllocatorNode(LifecycleNode):
             'trigger_mode': self._trigger_mode, 'output_rate_hz': step_hz, 'input_age_s': age_s,
             'missed_periods': self._misses.missed, 'missed_share': self._misses.share,
             'rejected_commands': self._rejected, 'rejected_per_s': rates['rejected'],
+            'malformed_commands': self._reader.decoder.malformed,
             'saturation_share': saturated_hz / step_hz if step_hz and saturated_hz is not None
             else None})
         if not self._active:

@@ -183,10 +183,10 @@ def robot_parameters(
 ) -> dict[str, RobotParameter]:
     """The values a node takes as defaults from robot ``name``'s parameter files.
 
-    Every value of ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml`` and
-    ``navigation.yaml``, ``start.yaml`` for ``node`` (flat dotted names). The URDF and hydrodynamics paths are not
-    among them (a recording would carry this machine's paths): ``with_description_paths``
-    fills them in.
+    Every value of ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``,
+    ``navigation.yaml`` and ``start.yaml`` for ``node`` (flat dotted names). The URDF and
+    hydrodynamics paths are not among them (a recording would carry this machine's paths):
+    ``with_description_paths`` fills them in.
 
     Raises:
         RobotFolderError: See ``robot_files`` and ``parameter_file_values``; also a name given

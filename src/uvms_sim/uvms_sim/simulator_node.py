@@ -22,6 +22,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.exchange_qos import input_qos
 from uvms_common.node_main import run_node
@@ -38,7 +39,7 @@ from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, Navigat
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
-from uvms_sim import conversions
+from uvms_sim import conversions, raw_conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError, StartupError
 from uvms_sim.lockstep_wait import AttentiveWait
 from uvms_sim.navigation_topics import NavigationTopics
@@ -122,12 +123,15 @@ class SimulatorNode(Node):
             depth=1, reliability=ReliabilityPolicy.RELIABLE,
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
+        # The hot topics go as raw CDR through fixed layouts (uvms_common.cdr_codecs).
         self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command,
-                                 input_qos(cfg.mode == 'lockstep'))
+                                 input_qos(cfg.mode == 'lockstep'), raw=True)
+        self._commands = raw_conversions.ActuatorCommandReader(self._plant.n_thrusters,
+                                                               self._plant.joint_names)
         # imu, dvl, depth (position_fix) only when asked for: recordings stay as they were.
         self._navigation = (NavigationTopics(self, self._navigation_params, params.sensor.seed)
                             if self._navigation_params.switch.enabled else None)
-        self._messages = conversions.StateMessages(self._plant.joint_names)
+        self._messages = raw_conversions.RawStateMessages(self._plant.joint_names)
         self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
         self._command: tuple[int, Any, Any] | None = None
@@ -188,11 +192,14 @@ class SimulatorNode(Node):
         except ParameterException as exc:
             raise SimParameterError(f'invalid parameter {name!r}: {exc}') from exc
 
-    def _on_command(self, msg: ActuatorCommand) -> None:
+    def _on_command(self, data: bytes) -> None:
         """Keep a valid command; in lockstep only the one for the current state, then step."""
         try:
-            command = conversions.actuator_command_arrays(
-                msg, self._plant.n_thrusters, self._plant.joint_names)
+            command = self._commands.read(data)
+        except MalformedPayloadError as exc:
+            self.get_logger().error(f'malformed actuator command payloads (counted on '
+                                    f'/diagnostics), first: {exc}', once=True)
+            return
         except CommandError as exc:
             self.get_logger().error(f'rejected actuator command: {exc}',
                                     throttle_duration_sec=1.0)
@@ -384,6 +391,7 @@ class SimulatorNode(Node):
         values = {'mode': mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
                   'real_time_factor': factor, 'lockstep_timeouts': self.timeouts,
                   'steps_behind_real_time': self._behind.missed,
+                  'malformed_commands': self._commands.decoder.malformed,
                   'behind_real_time_share': self._behind.share}
         if self._finished:
             return Report(OK, f'finished at t = {t_ns * 1e-9:.3f} s', values)

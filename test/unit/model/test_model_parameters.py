@@ -120,7 +120,7 @@ def test_robot_yaml_and_the_paper_robot_hold_every_parameter_at_its_default() ->
     tree = yaml.safe_load(ROBOT_YAML.read_text())
     world = _flatten(tree['/**']['ros__parameters'])
     robot = {name: item.value for name, item in robot_parameters('paper_uvms', 'simulator').items()
-             if not name.startswith(('description.', 'initial.', 'navigation.'))}  # initial.*: the node's start
+             if not name.startswith(('description.', 'initial.', 'navigation.'))}
     assert not set(world) & set(robot)
     flat = {**world, **robot}
     assert set(flat) == {spec.name for spec in PARAMETER_SPECS} - {
