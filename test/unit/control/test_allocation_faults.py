@@ -12,9 +12,10 @@ from uvms_control.core.allocation import (
     weighted_pseudo_inverse,
 )
 from uvms_control.core.errors import ControlInputError
+from uvms_model.thrusters import ThrusterLayout
+
 from uvms_description.robots import robot_parameters
 from uvms_model import UvmsParameters
-from uvms_model.thrusters import ThrusterLayout
 
 #: Six unit thrusters along the wrench axes plus a seventh doubling surge (hand example).
 T_HAND = np.hstack([np.eye(6), np.eye(6)[:, :1]])
