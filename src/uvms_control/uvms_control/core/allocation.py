@@ -111,7 +111,7 @@ def weighted_pseudo_inverse(
     rank = int(np.count_nonzero(sigma > RANK_TOLERANCE * max(float(sigma[0]), 1e-300)))
     if rank == t_eff.shape[0]:
         return t_eff.T @ np.linalg.inv(t_eff @ t_eff.T), rank
-    return np.linalg.pinv(t_eff, rcond=RANK_TOLERANCE), rank
+    return np.asarray(np.linalg.pinv(t_eff, rcond=RANK_TOLERANCE), dtype=np.float64), rank
 
 
 @dataclass(frozen=True)
