@@ -33,7 +33,14 @@ import numpy.typing as npt
 from uvms_model.jit import kernel
 
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.fault_detection import ThrusterFaultDetector
 from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
+from uvms_control.core.thruster_faults import (
+    EscFeedback,
+    EscSensor,
+    ThrusterFaultInjector,
+    reference_speed,
+)
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -221,8 +228,9 @@ class AllocatorOutput:
         thrust: actual thrusts F_t,act (p,) (N).
         joint_torques: motor torques (n,) (N m); the motors are taken as ideal.
         propeller_speed: Ω (p,) (rad/s).
-        reference_speed: Ω_r (p,) (rad/s).
+        reference_speed: Ω_r (p,) of the desired thrusts, as the ESCs are told (rad/s).
         motor_current: i_m (p,) (A).
+        esc: what the ESCs report (None without an ``EscSensor``).
     """
 
     allocation: AllocationResult
@@ -231,6 +239,7 @@ class AllocatorOutput:
     propeller_speed: FloatArray
     reference_speed: FloatArray
     motor_current: FloatArray
+    esc: EscFeedback | None = None
 
 
 class ThrusterAllocator:
@@ -258,6 +267,12 @@ class ThrusterAllocator:
         self._t_eff = t  # T diag(η̂): T itself while every thruster is taken as healthy
         self._effectiveness = np.ones(self._p)
         self._rank = 6
+        # Plant side (thruster_faults): faults of the physical thrusters, ESC telemetry.
+        self.injector = ThrusterFaultInjector((), self._p)
+        self.esc: EscSensor | None = None
+        # Allocation side: detection on the ESC telemetry, and whether η̂ is used.
+        self.detector: ThrusterFaultDetector | None = None
+        self.accommodate = True
         self._inv_limit = 1.0 / params.max_thrust
         self._inv_joint = 1.0 / params.max_joint_torque
         self.thrusters = ThrusterBank(params.thruster, self._p)
@@ -325,8 +340,10 @@ class ThrusterAllocator:
         return rank
 
     def reset(self) -> None:
-        """Stop the thrusters (zero speed, current and flow)."""
+        """Stop the thrusters (zero speed, current and flow); fault declarations stay."""
         self.thrusters.reset()
+        if self.detector is not None:
+            self.detector.restart_model()
 
     def allocate(self, tau_b: npt.ArrayLike) -> AllocationResult:
         """Desired thrusts and motor torques for tau_b (6 + n,) (eq. 10), saturated by scaling.
@@ -353,20 +370,35 @@ class ThrusterAllocator:
             f'tau_b must be {6 + self._n} finite values, got {np.ravel(tau).tolist()}'
         )
 
-    def step(self, tau_b: npt.ArrayLike, dt: float) -> AllocatorOutput:
+    def step(self, tau_b: npt.ArrayLike, dt: float, t_s: float = 0.0) -> AllocatorOutput:
         """Allocate tau_b and advance the thrusters by dt (s) toward the desired thrusts.
+
+        The physical thrusters follow the desired thrusts through the injected faults
+        (``injector``, at time t_s); the detector, if any, compares the ESC readings with its
+        model and, under ``accommodate``, the next allocation runs on its η̂.
 
         Raises:
             ControlInputError: if tau_b is not a finite (6 + n,) vector or dt is negative.
         """
         allocation = self.allocate(tau_b)
         bank = self.thrusters
-        thrust = bank.step(allocation.thrust, dt)
+        demand = self.injector.motor_demand(allocation.thrust, t_s)
+        thrust = bank.step(demand, dt)
+        reference = bank.omega_r if demand is allocation.thrust else reference_speed(
+            allocation.thrust, bank.calibration.alpha_2)
+        esc = None
+        if self.esc is not None:
+            esc = self.esc.measure(reference, bank.omega, bank.motor_current)
+            if self.detector is not None and self.detector.update(
+                    allocation.thrust, esc.measured_speed, esc.measured_current, dt, t_s
+            ) and self.accommodate:
+                self.set_effectiveness(self.detector.effectiveness)
         return AllocatorOutput(
             allocation=allocation,
             thrust=thrust,
             joint_torques=allocation.joint_torques,
             propeller_speed=bank.omega,
-            reference_speed=bank.omega_r,
+            reference_speed=reference,
             motor_current=bank.motor_current,
+            esc=esc,
         )
