@@ -43,14 +43,21 @@ from uvms_model.thrusters import ThrusterLayout
 from uvms_control import conversions
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
 from uvms_control.core.parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.parameters import (
     thruster_parameters_from_flat_dict,
     validate_node_parameters,
 )
+from uvms_control.health_conversions import (
+    HEALTH_TOPIC,
+    health_message,
+    health_report,
+    on_set_fault_parameters,
+)
 from uvms_control.ros_parameters import declare_parameters
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
-from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
+from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterHealth, ThrusterState
 
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
@@ -72,7 +79,9 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._robot = robot_model_values(declare_parameters(self, PARAMETER_SPECS, robot),
                                          self.robot_name)
         self._values = declare_parameters(self, ALLOCATOR_PARAMETER_SPECS, robot)
+        self._fault_values = declare_parameters(self, FAULT_PARAMETER_SPECS, robot)
         check_all_declared(self, robot)
+        self.add_on_set_parameters_callback(self._on_set_fault_parameters)
         guard_change_state(self)
         starting = declare_autostart(self)
         self.core: ThrusterAllocator | None = None
@@ -85,6 +94,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._meters = {name: RateMeter() for name in ('published', 'saturated', 'rejected')}
         self._diagnostics = DiagnosticsPublisher(self)
         self._diagnostics.add('allocation', self._report)
+        self._diagnostics.add('thruster health', lambda: health_report(self.core))
         if starting and not autostart(self):
             error = self._transition_error or RuntimeError('autostart failed (see the log)')
             self.destroy_node()
@@ -171,6 +181,8 @@ class ThrusterAllocatorNode(LifecycleNode):
             layout.thrust_matrix(), layout.max_thrust_n, torque_limits, thruster
         )
         self.core = ThrusterAllocator(limits)
+        faults = fault_settings(self._fault_values, layout.count)
+        equip(self.core, faults)  # injection (plant side), ESC telemetry, detection
         self._diagnostics.hardware_id = robot_name(description.urdf_text)
         self._joint_names = joint_names
         self._trigger_mode = str(values['trigger_mode'])
@@ -206,9 +218,14 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._actuator_pub = self.create_publisher(ActuatorCommand, 'command/actuators', qos)
         self._state_pub = self.create_publisher(ThrusterState, 'thrusters/state', qos)
         self._state_gate = RateGate(float(values['state_rate_hz']))
+        self._health_pub = self.create_publisher(ThrusterHealth, HEALTH_TOPIC, qos)
+        self._health_gate = RateGate(faults.health_rate_hz)
+        self._health_msg: ThrusterHealth | None = None
+        self._health_key: tuple[Any, ...] | None = None
         self._entities = [
             (self.destroy_publisher, self._actuator_pub),
             (self.destroy_publisher, self._state_pub),
+            (self.destroy_publisher, self._health_pub),
             (self.destroy_subscription, self.create_subscription(
                 GeneralizedForce, 'command/generalized_force', self._on_command, qos))]
         if not self._lockstep:
@@ -314,7 +331,7 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def _step(self, t_ns: int, tau_b: np.ndarray, dt: float) -> None:
         assert self.core is not None
-        output = self.core.step(tau_b, dt)
+        output = self.core.step(tau_b, dt, t_ns * 1e-9)
         self._published += 1
         self._saturated += output.allocation.saturation_scale < 1.0
         self._actuator_msg = conversions.actuator_command_message(
@@ -324,6 +341,26 @@ class ThrusterAllocatorNode(LifecycleNode):
         if self._state_gate.due(t_ns):
             self._state_msg = conversions.thruster_state_message(t_ns, output, self._state_msg)
             self._state_pub.publish(self._state_msg)
+        self._publish_health(t_ns, output)
+
+    def _publish_health(self, t_ns: int, output: Any) -> None:
+        """thrusters/health at its rate, and at once when a status or the rank changes."""
+        assert self.core is not None
+        detector = self.core.detector
+        key = (self.core.rank, self.core.accommodate,
+               None if detector is None else detector.status.tobytes())
+        if self._health_gate.due(t_ns) or key != self._health_key:
+            self._health_key = key
+            self._health_msg = health_message(t_ns, self.core, output, self._health_msg)
+            self._health_pub.publish(self._health_msg)
+
+    def _on_set_fault_parameters(self, parameters: list[Any]) -> Any:
+        """Faults injected and accommodation switched at run time (docs/controller.md)."""
+        result = on_set_fault_parameters(getattr(self, 'core', None), parameters)
+        if result.successful:
+            self._fault_values.update({p.name: p.value for p in parameters
+                                       if p.name in self._fault_values})
+        return result
 
     def _publish_zero(self, t_ns: int) -> None:
         """Zero thrust and zero joint torque stamped t_ns (inactive, or leaving active)."""
