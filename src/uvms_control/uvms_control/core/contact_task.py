@@ -33,6 +33,7 @@ class TaskCode(enum.IntEnum):
     PREEMPTED = 5
     CANCELED = 6
     INACTIVE = 7
+    ACTUATION_LOST = 9
 
 
 class TaskGoalError(ValueError):
