@@ -20,6 +20,8 @@ from uvms_recording.mcap_reader import RecordedMessage, open_recording
 from uvms_recording.mcap_writer import RUN_METADATA_NAME
 from uvms_recording.typestore import uvms_typestore
 
+from uvms_analysis.thruster_health import HealthSeries, health_series
+
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
@@ -31,6 +33,7 @@ TOPIC_CONTACT = '/uvms/contact'
 TOPIC_ODOMETRY = '/uvms/odometry'
 TOPIC_EE_POSE = '/uvms/ee_pose'
 TOPIC_THRUSTERS = '/uvms/thrusters/state'
+TOPIC_HEALTH = '/uvms/thrusters/health'
 
 #: The topics that ``load_run`` turns into series.
 ANALYSIS_TOPICS = (
@@ -39,6 +42,7 @@ ANALYSIS_TOPICS = (
     TOPIC_ODOMETRY,
     TOPIC_EE_POSE,
     TOPIC_THRUSTERS,
+    TOPIC_HEALTH,
 )
 
 
@@ -190,6 +194,7 @@ class Run:
     odometry: OdometrySeries | None = None
     ee_pose: PoseSeries | None = None
     thrusters: ThrusterSeries | None = None
+    health: HealthSeries | None = None  # thrusters/health (uvms_analysis.thruster_health)
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     time_origin_ns: int = 0
     problem: str | None = None
@@ -321,6 +326,7 @@ _SERIES_BUILDERS = {
     TOPIC_ODOMETRY: ('odometry', odometry_series),
     TOPIC_EE_POSE: ('ee_pose', pose_series),
     TOPIC_THRUSTERS: ('thrusters', thruster_series),
+    TOPIC_HEALTH: ('health', health_series),
 }
 
 
