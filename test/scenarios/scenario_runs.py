@@ -29,7 +29,7 @@ RUN_TIMEOUT_S = 600.0
 #: Simulated duration per scenario where a test needs less than the scenario file's (s).
 #: hybrid_only touches the wall 0.45 s after its task starts (t = 2 s: the mission's start)
 #: and its claim is about the first 0.5 s of contact.
-SHORTENED_S = {'hybrid_only': 5.0}
+SHORTENED_S = {'hybrid_only': 5.0, 'idle_wall': 5.0}  # idle_wall: an hour of holding
 #: First ROS_DOMAIN_ID of the scenario runs (each run gets the next one; the rest of the
 #: suite runs in the default domain 0 or its own random ones).
 SCENARIO_DOMAIN_BASE = 150
