@@ -1,7 +1,9 @@
 """The ``thruster_allocator`` node: allocation (paper eq. 10) and thruster dynamics (eq. 11-15).
 
 Subscribes ``command/generalized_force``; publishes ``command/actuators`` (actual thrusts
-after the thruster dynamics, motor torques) and ``thrusters/state``. ``trigger_mode:
+after the thruster dynamics, motor torques), ``thrusters/state`` and ``thrusters/health``
+(thruster faults: injected on the thruster model, detected from its ESC feedback, allocated
+around; ``core.thruster_faults``, ``core.fault_detection``, docs/controller.md). ``trigger_mode:
 lockstep`` answers every command with its stamp, integrating the thrusters over the time
 between command stamps; ``timer`` steps at ``rate_hz`` of the steady clock on the latest
 command, stamped with the node clock. A rejected command (NaN/Inf, wrong size, frame or
