@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from uvms_model.jit import kernel
 
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
@@ -34,6 +35,32 @@ from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParam
 FloatArray = npt.NDArray[np.float64]
 
 STATUS_OK, STATUS_DEGRADED, STATUS_FAILED = 0, 1, 2
+
+
+@kernel
+def residual_step(measured_speed: FloatArray, measured_current: FloatArray,
+                  omega_model: FloatArray, current_model: FloatArray, speed_residual: FloatArray,
+                  current_residual: FloatArray, over_s: FloatArray, over: npt.NDArray[np.bool_],
+                  status: npt.NDArray[np.uint8], detected_at_s: FloatArray, dt: float, t_s: float,
+                  speed_threshold: float, relative_threshold: float,
+                  persistence_s: float) -> bool:
+    """Residuals, persistence and new declarations of one step, in place (module docstring).
+
+    Returns:
+        Whether any thruster is declared (this step or before).
+    """
+    declared = False
+    for i in range(omega_model.size):
+        speed_residual[i] = measured_speed[i] - omega_model[i]
+        current_residual[i] = measured_current[i] - current_model[i]
+        threshold = max(speed_threshold, relative_threshold * abs(omega_model[i]))
+        over[i] = abs(speed_residual[i]) > threshold
+        over_s[i] = over_s[i] + dt if over[i] else 0.0
+        if status[i] == STATUS_OK and over[i] and over_s[i] >= persistence_s:
+            status[i] = STATUS_DEGRADED
+            detected_at_s[i] = t_s
+        declared = declared or status[i] != STATUS_OK
+    return declared
 
 
 @dataclass(frozen=True)
@@ -94,6 +121,7 @@ class ThrusterFaultDetector:
         self.speed_residual = np.zeros(count)
         self.current_residual = np.zeros(count)
         self._over_s = np.zeros(count)
+        self._over = np.zeros(count, dtype=np.bool_)
         self._ratio = np.ones(count)
 
     def reset(self) -> None:
@@ -130,19 +158,14 @@ class ThrusterFaultDetector:
         model = self.model
         model.step(commanded, dt)
         omega_model = model.omega
-        np.subtract(measured_speed, omega_model, out=self.speed_residual)
-        np.subtract(measured_current, model.motor_current, out=self.current_residual)
-        threshold = np.maximum(p.speed_threshold_rad_s, p.relative_threshold * np.abs(omega_model))
-        over = np.abs(self.speed_residual) > threshold
-        self._over_s = np.where(over, self._over_s + dt, 0.0)
-        newly = (self.status == STATUS_OK) & (self._over_s >= p.persistence_s) & over
-        before = self.effectiveness.copy()
-        if np.any(newly):
-            self.detected_at_s[newly] = t_s
-            self.status[newly] = STATUS_DEGRADED
-        declared = self.status != STATUS_OK
-        if not np.any(declared):
+        if not residual_step(measured_speed, measured_current, omega_model, model.motor_current,
+                             self.speed_residual, self.current_residual, self._over_s,
+                             self._over, self.status, self.detected_at_s, float(dt), float(t_s),
+                             p.speed_threshold_rad_s, p.relative_threshold, p.persistence_s):
             return False
+        over = self._over
+        before = self.effectiveness.copy()
+        declared = self.status != STATUS_OK
         excited = declared & over & (np.abs(omega_model) > p.min_speed_rad_s)
         if np.any(excited):
             m = omega_model[excited]

@@ -9,6 +9,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from uvms_control.core.allocation import ThrusterAllocator
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.fault_detection import DetectionParameters, ThrusterFaultDetector
@@ -128,6 +130,11 @@ def equip(allocator: ThrusterAllocator, settings: FaultSettings) -> None:
     allocator.detector = ThrusterFaultDetector(
         settings.detection, allocator.params.thruster, count) if settings.enabled else None
     allocator.accommodate = settings.accommodate
+    if allocator.detector is not None:
+        # Load the detector's kernel now, not in the first control period (as the allocator).
+        zeros = np.zeros(count)
+        allocator.detector.update(zeros, zeros, zeros, 0.0, 0.0)
+        allocator.detector.reset()
 
 
 def set_accommodation(allocator: ThrusterAllocator, accommodate: bool) -> None:

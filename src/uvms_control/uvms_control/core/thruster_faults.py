@@ -221,10 +221,20 @@ class EscSensor:
         self.speed_noise = float(speed_noise_rad_s)
         self.current_noise = float(current_noise_a)
         self._rng = np.random.default_rng(seed)
+        self._noise = np.zeros((0, 2, count))  # drawn in blocks: one call per _BLOCK steps
+        self._next = 0
 
     def measure(self, reference: FloatArray, omega: FloatArray,
                 current: FloatArray) -> EscFeedback:
         """Readings of one step (new arrays)."""
-        noise = self._rng.standard_normal((2, self.count))
+        if self._next >= len(self._noise):
+            self._noise = self._rng.standard_normal((_BLOCK, 2, self.count))
+            self._next = 0
+        noise = self._noise[self._next]
+        self._next += 1
         return EscFeedback(reference.copy(), omega + self.speed_noise * noise[0],
                            current + self.current_noise * noise[1])
+
+
+#: Steps of ESC noise drawn at once.
+_BLOCK = 1024
