@@ -58,12 +58,11 @@ from uvms_control.core.parameter_specs import (
 from uvms_control.core.parameters import ControllerParameters, validate_node_parameters
 from uvms_control.core.task_supervisor import TaskSupervisor
 from uvms_control.core.unified_controller import UnifiedForceController
-from uvms_control.health_conversions import HEALTH_TOPIC
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
-from uvms_msgs.msg import ControllerState, GeneralizedForce, ThrusterHealth
+from uvms_msgs.msg import ControllerState, GeneralizedForce
 
 TOPICS = ('joint_states', 'odometry', 'wrench')
 SUCCESS = TransitionCallbackReturn.SUCCESS
@@ -116,9 +115,6 @@ class ControllerNode(LifecycleNode):
         self.tasks = ContactTaskServer(self, lambda: self.supervisor if self._active else None,
                                        lambda: self.get_clock().now().nanoseconds * 1e-9)
         self.create_subscription(PointStamped, 'controller/target_position', self._on_target,
-                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
-        self._actuation_lost = False
-        self.create_subscription(ThrusterHealth, HEALTH_TOPIC, self._on_thruster_health,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
         self._diagnostics.add('control', self._report_control)
@@ -321,17 +317,6 @@ class ControllerNode(LifecycleNode):
         elif not self.supervisor.set_target(target):
             self.get_logger().warn('target_position ignored while a contact task runs',
                                    throttle_duration_sec=5.0)
-
-    def _on_thruster_health(self, msg: ThrusterHealth) -> None:
-        """The thrusters left cannot make every wrench: end the goal ACTUATION_LOST, hold."""
-        lost = not msg.fully_actuated
-        if lost and not self._actuation_lost and self.supervisor is not None and self._active:
-            self.get_logger().error(f'actuation lost: thruster allocation rank {msg.rank} < 6; '
-                                    'ending the running goal and holding')
-            self.tasks.finish(self.supervisor.abort_all(
-                TaskCode.ACTUATION_LOST, f'actuation lost: thruster allocation rank {msg.rank} '
-                '< 6 (thrusters/health)'))
-        self._actuation_lost = lost
 
     # ------------------------------------------------------------------------ control
 

@@ -6,18 +6,23 @@ meets messages and parameters: the allocator node calls these in a few lines.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Header
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
 from uvms_control.conversions import BASE_LINK_FRD, time_from_ns
 from uvms_control.core.allocation import AllocatorOutput, ThrusterAllocator
+from uvms_control.core.contact_task import TaskCode
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.fault_parameters import set_accommodation
+from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
 from uvms_control.core.thruster_faults import PARAMETER, ThrusterFaultInjector, parse_faults
 from uvms_msgs.msg import ThrusterHealth
 
@@ -97,3 +102,37 @@ def on_set_fault_parameters(allocator: ThrusterAllocator | None,
         elif parameter.name == 'fault_detection.accommodate' and allocator is not None:
             set_accommodation(allocator, bool(parameter.value))
     return SetParametersResult(successful=True)
+
+
+class ActuationWatch:
+    """The controller's side: a goal ends ACTUATION_LOST once the thrusters are not enough.
+
+    Subscribes ``thrusters/health``; on the first message that says ``fully_actuated``
+    false it ends the running task with ``TaskCode.ACTUATION_LOST`` through the supervisor
+    (which holds where X_d was, with what the vehicle still controls) and hands the events
+    to ``finish`` (the action server's). Created by the controller's ``ContactTaskServer``.
+
+    Args:
+        node: The controller node.
+        supervisor: Returns the running ``TaskSupervisor``, or None while the node is inactive.
+        finish: Delivers task events (results) to the action clients.
+    """
+
+    def __init__(self, node: Node, supervisor: Callable[[], TaskSupervisor | None],
+                 finish: Callable[[Iterable[TaskEvent]], None]) -> None:
+        self._node = node
+        self._supervisor = supervisor
+        self._finish = finish
+        self.lost = False
+        node.create_subscription(ThrusterHealth, HEALTH_TOPIC, self.on_health,
+                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+
+    def on_health(self, msg: ThrusterHealth) -> None:
+        """End the running goal at the first sign that actuation is lost."""
+        lost = not msg.fully_actuated
+        supervisor = self._supervisor()
+        if lost and not self.lost and supervisor is not None:
+            reason = f'actuation lost: thruster allocation rank {msg.rank} < 6 (thrusters/health)'
+            self._node.get_logger().error(f'{reason}: ending the running goal and holding')
+            self._finish(supervisor.abort_all(TaskCode.ACTUATION_LOST, reason))
+        self.lost = lost
