@@ -24,7 +24,7 @@ FAULT_AT_S = 2.5
 
 @pytest.fixture(scope='module')
 def lost() -> Probe:
-    """A 100 N press; two horizontal thrusters off at 2.5 s (a run-time parameter)."""
+    """A 100 N press, two horizontals off at 2.5 s (at run time), a goal sent at 3.5 s."""
     def watch(probe: Probe) -> None:
         probe.notes['health'] = []
         probe.notes['levels'] = []
@@ -45,7 +45,7 @@ def lost() -> Probe:
             value=f'index=0 kind=off at_s={FAULT_AT_S}; index=1 kind=off at_s={FAULT_AT_S}')])[0]
 
     return run(5.0, [(0.0, watch), (0.05, lambda p: p.send('press', wall_goal(press_s=4.0))),
-                     (2.4, fail)])
+                     (2.4, fail), (3.5, lambda p: p.send('again', wall_goal(start_s=3.6)))])
 
 
 def test_bad_fault_at_run_time_is_refused_with_the_reason(lost: Probe) -> None:
@@ -79,3 +79,9 @@ def test_diagnostics_say_error_once_not_fully_actuated(lost: Probe) -> None:
     assert DiagnosticStatus.OK in levels
     assert levels[-1] == DiagnosticStatus.ERROR
     assert 'rank 5' in lost.notes['levels'][-1][1]
+
+
+def test_goal_sent_while_actuation_is_lost_ends_actuation_lost(lost: Probe) -> None:
+    """A goal accepted after the loss ends ACTUATION_LOST at the next health message."""
+    _, result = lost.results['again']
+    assert result.error_code == ContactTask.Result.ACTUATION_LOST, result.error_string

@@ -108,7 +108,8 @@ class ActuationWatch:
     """The controller's side: a goal ends ACTUATION_LOST once the thrusters are not enough.
 
     Subscribes ``thrusters/health``; on the first message that says ``fully_actuated``
-    false it ends the running task with ``TaskCode.ACTUATION_LOST`` through the supervisor
+    false, and on every later one while a goal runs (a goal sent while actuation is lost), it
+    ends the running task with ``TaskCode.ACTUATION_LOST`` through the supervisor
     (which holds where X_d was, with what the vehicle still controls) and hands the events
     to ``finish`` (the action server's). Created by the controller's ``ContactTaskServer``.
 
@@ -128,10 +129,10 @@ class ActuationWatch:
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
 
     def on_health(self, msg: ThrusterHealth) -> None:
-        """End the running goal at the first sign that actuation is lost."""
+        """End the running goal when actuation is lost, and any goal started while it is."""
         lost = not msg.fully_actuated
         supervisor = self._supervisor()
-        if lost and not self.lost and supervisor is not None:
+        if lost and supervisor is not None and (not self.lost or supervisor.goal_id is not None):
             reason = f'actuation lost: thruster allocation rank {msg.rank} < 6 (thrusters/health)'
             self._node.get_logger().error(f'{reason}: ending the running goal and holding')
             self._finish(supervisor.abort_all(TaskCode.ACTUATION_LOST, reason))
