@@ -49,16 +49,11 @@ def health_message(t_ns: int, allocator: ThrusterAllocator, output: AllocatorOut
     msg.speed_residual = _floats(detector.speed_residual) if detector is not None else []
     msg.current_residual = _floats(detector.current_residual) if detector is not None else []
     msg.detected_at_s = (_floats(detector.detected_at_s) if detector is not None
-                         else [math_nan()] * p)
+                         else [float('nan')] * p)
     msg.rank = allocator.rank
     msg.fully_actuated = allocator.fully_actuated
     msg.accommodating = allocator.accommodate
     return msg
-
-
-def math_nan() -> float:
-    """NaN, the 'not detected' time."""
-    return float('nan')
 
 
 def health_report(allocator: ThrusterAllocator | None) -> Report:
