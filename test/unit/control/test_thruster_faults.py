@@ -13,6 +13,12 @@ from uvms_control.core.fault_detection import (
     DetectionParameters,
     ThrusterFaultDetector,
 )
+from uvms_control.core.fault_parameters import (
+    FAULT_PARAMETER_SPECS,
+    equip,
+    fault_settings,
+    set_accommodation,
+)
 from uvms_control.core.thruster_faults import (
     EscSensor,
     ThrusterFault,
@@ -155,3 +161,37 @@ def test_no_false_alarm_under_sensor_noise_and_changing_commands(seed: int) -> N
     assert allocator.detector is not None
     assert np.all(allocator.detector.status == STATUS_OK)
     assert np.all(allocator.effectiveness == 1.0)
+
+
+def defaults() -> dict[str, object]:
+    """The fault parameters at their spec defaults."""
+    return {spec.name: spec.default for spec in FAULT_PARAMETER_SPECS}
+
+
+def test_detection_disabled_leaves_the_allocation_on_t() -> None:
+    """fault_detection.enabled false: no detector, η̂ stays 1 even with a thruster off."""
+    allocator = ThrusterAllocator(AllocatorParameters(
+        LAYOUT.thrust_matrix(), LAYOUT.max_thrust_n, np.full(3, 100.0)))
+    values = {**defaults(), 'fault_detection.enabled': False,
+              'fault_injection.thrusters': 'index=0 kind=off at_s=0'}
+    equip(allocator, fault_settings(values, LAYOUT.count))
+    assert allocator.detector is None
+    _, desired, actual = run(allocator, PRESS, 0.5)[-1]
+    assert actual[0] == pytest.approx(0.0, abs=1e-6) and abs(desired[0]) > 1.0
+    assert np.all(allocator.effectiveness == 1.0)
+
+
+def test_accommodation_switched_at_run_time_moves_the_allocation() -> None:
+    """Off: the allocation goes back to T; on again: to T diag(η̂)."""
+    allocator = make_allocator('index=0 kind=off at_s=0.2')
+    run(allocator, PRESS, 1.0)
+    set_accommodation(allocator, False)
+    assert np.all(allocator.effectiveness == 1.0)
+    set_accommodation(allocator, True)
+    assert allocator.effectiveness[0] == 0.0
+
+
+def test_out_of_range_detection_parameter_is_refused_by_name() -> None:
+    """A negative persistence names fault_detection.persistence_s and its range."""
+    with pytest.raises(ControlParameterError, match=r'fault_detection\.persistence_s'):
+        fault_settings({**defaults(), 'fault_detection.persistence_s': -1.0}, LAYOUT.count)
