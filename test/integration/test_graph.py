@@ -32,6 +32,7 @@ SCHEMAS = {
     '/uvms/controller/task_record': 'uvms_msgs/msg/ContactTaskRecord',
     '/uvms/command/actuators': 'uvms_msgs/msg/ActuatorCommand',
     '/uvms/thrusters/state': 'uvms_msgs/msg/ThrusterState',
+    '/uvms/thrusters/health': 'uvms_msgs/msg/ThrusterHealth',
     '/tf': 'tf2_msgs/msg/TFMessage',
     '/tf_static': 'tf2_msgs/msg/TFMessage',
     '/robot_description': 'std_msgs/msg/String',

@@ -78,7 +78,8 @@ def test_overrides_of_shipped_scenarios_are_declared_parameters(name: str) -> No
     check_scenario_overrides(load_scenario(SCENARIOS / f'{name}.yaml'))
 
 
-@pytest.mark.parametrize('name', ['bluerov2_alpha5_free_motion', 'bluerov2_alpha5_contact'])
+@pytest.mark.parametrize('name', ['bluerov2_alpha5_free_motion', 'bluerov2_alpha5_contact',
+                                  'bluerov2_alpha5_thruster_fault'])
 def test_bluerov2_scenarios_name_their_robot_and_declared_parameters(name: str) -> None:
     """robot: bluerov2_alpha5, and every override is a parameter of that robot's nodes."""
     scenario = load_scenario(SCENARIOS / f'{name}.yaml')

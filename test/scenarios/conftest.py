@@ -77,6 +77,18 @@ def hybrid_only(scenario_runs: ScenarioRuns) -> ScenarioResult:
     return scenario_runs.get('hybrid_only')
 
 
+@pytest.fixture(scope='session')
+def bluerov2_alpha5_thruster_fault(scenario_runs: ScenarioRuns) -> ScenarioResult:
+    """bluerov2_alpha5_contact with thruster T1 off from 11 s (issue 32)."""
+    return scenario_runs.get('bluerov2_alpha5_thruster_fault')
+
+
+@pytest.fixture(scope='session')
+def case1_thruster_fault(scenario_runs: ScenarioRuns) -> ScenarioResult:
+    """case1_ke1e4 with thruster 0 at efficiency 0.3 from 11 s (issue 32)."""
+    return scenario_runs.get('case1_thruster_fault')
+
+
 #: The scenario fixtures above: a selected test that uses one starts its run early.
 @pytest.fixture(scope='session')
 def bluerov2_alpha5_contact(scenario_runs: ScenarioRuns) -> ScenarioResult:
@@ -106,4 +118,5 @@ SCENARIO_FIXTURES = frozenset({
     'free_motion', 'case1_ke1e4', 'case1_ke1e5', 'case2_noise', 'case3_moving_wall',
     'case4_model_error', 'impedance_only', 'hybrid_only', 'bluerov2_alpha5_contact',
     'bluerov2_alpha5_free_motion', 'case1_current', 'bluerov2_alpha5_current',
+    'bluerov2_alpha5_thruster_fault', 'case1_thruster_fault', 'idle_wall',
 })

@@ -9,7 +9,7 @@ so no display and no global figure state are involved.
 | force_response.png | 8, 9, 11, 12, 15: contact force F_e against F_d |
 | position_errors_weight.png | 10: position errors X_d - X and fuzzy weight W |
 | vehicle_motion.png | 14: vehicle position and attitude change |
-| thrusters.png | (extra) actual and allocated thrusts, propeller speeds |
+| thrusters.png | (extra) thrusts, propeller speeds; η̂, faults and detections (health) |
 | fuzzy_membership.png | 4: membership functions of the fuzzy switch (``--fuzzy``) |
 | fuzzy_surface.png | 5: switching surface W(F_e/F_d, v_e) (``--fuzzy``) |
 """
@@ -30,6 +30,7 @@ from uvms_analysis.figure_style import FIGSIZE_TALL, _figure, _save
 from uvms_analysis.fuzzy_plots import plot_fuzzy
 from uvms_analysis.metrics import SETTLING_BAND, compute_metrics, contact_intervals, normal_force
 from uvms_analysis.series import AnalysisError, CurrentSeries, FloatArray, Run, load_run
+from uvms_analysis.thruster_health import draw_health_panel, injected_faults
 
 AXIS_COLORS = ('tab:red', 'tab:green', 'tab:blue')
 
@@ -315,7 +316,11 @@ def figure_thrusters(run: Run) -> Figure | None:
         return None
     thr = run.thrusters
     fig = _figure(FIGSIZE_TALL)
-    ax_f, ax_w = fig.subplots(2, 1, sharex=True)
+    axes = fig.subplots(2 if run.health is None else 3, 1, sharex=True)
+    ax_f, ax_w = axes[0], axes[1]
+    if run.health is not None:  # η̂, injected faults and detections (issue 32)
+        draw_health_panel(axes[2], run.health, injected_faults(run.metadata),
+                          run.time_origin_ns * 1e-9)
     count = thr.actual_thrust.shape[1]
     spacing = max(1, thr.t.size // _THRUSTER_MARKERS)
     for i in range(count):
@@ -330,10 +335,10 @@ def figure_thrusters(run: Run) -> Figure | None:
     ax_f.plot([], [], color='0.3', linewidth=0.7, alpha=0.45, label='allocated')
     ax_f.set_ylabel('thrust (N)')
     ax_w.set_ylabel('propeller speed Ω (rad/s)')
-    ax_w.set_xlabel('time t (s)')
+    axes[-1].set_xlabel('time t (s)')
     ax_f.set_title(f'Thrusters, actual (with markers) and allocated (faint): {run.name}')
     fig.legend(*ax_f.get_legend_handles_labels(), loc='outside right upper', fontsize='small')
-    for ax in (ax_f, ax_w):
+    for ax in axes:
         ax.grid(True, alpha=0.4)
     return fig
 

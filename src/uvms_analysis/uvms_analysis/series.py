@@ -21,6 +21,7 @@ from uvms_recording.mcap_writer import RUN_METADATA_NAME
 from uvms_recording.typestore import uvms_typestore
 
 from uvms_analysis.tasks import TOPIC_TASK_RECORD, TaskRecord, task_records
+from uvms_analysis.thruster_health import HealthSeries, health_series
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -34,6 +35,7 @@ TOPIC_ODOMETRY = '/uvms/odometry'
 TOPIC_EE_POSE = '/uvms/ee_pose'
 TOPIC_THRUSTERS = '/uvms/thrusters/state'
 TOPIC_OCEAN_CURRENT = '/uvms/ocean/current'
+TOPIC_HEALTH = '/uvms/thrusters/health'
 
 #: The topics that ``load_run`` turns into series.
 ANALYSIS_TOPICS = (
@@ -44,6 +46,7 @@ ANALYSIS_TOPICS = (
     TOPIC_THRUSTERS,
     TOPIC_OCEAN_CURRENT,
     TOPIC_TASK_RECORD,
+    TOPIC_HEALTH,
 )
 
 
@@ -207,6 +210,7 @@ class Run:
     thrusters: ThrusterSeries | None = None
     current: CurrentSeries | None = None
     tasks: tuple[TaskRecord, ...] = ()
+    health: HealthSeries | None = None  # thrusters/health (uvms_analysis.thruster_health)
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     time_origin_ns: int = 0
     problem: str | None = None
@@ -345,6 +349,7 @@ _SERIES_BUILDERS = {
     TOPIC_THRUSTERS: ('thrusters', thruster_series),
     TOPIC_OCEAN_CURRENT: ('current', current_series),
     TOPIC_TASK_RECORD: ('tasks', task_records),
+    TOPIC_HEALTH: ('health', health_series),
 }
 
 

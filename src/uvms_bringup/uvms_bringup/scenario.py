@@ -22,6 +22,14 @@ random seed, and overrides ROS parameters of the nodes of the graph::
         normal: [1.0, 0.0, 0.0]
         force_n: 150.0
         start_time_s: 2.0
+    faults:                           # mapping, optional: injected faults (plant side)
+      thrusters:                      # list: one mapping per fault
+        - {index: 2, kind: 'off', at_s: 10.0}     # index from 0 (robot's thrusters.yaml)
+        - {index: 5, kind: efficiency, value: 0.3, at_s: 8.0}  # kinds: off, efficiency
+                                      # (eta in [0, 1]), stuck (N), saturation (N > 0)
+
+``faults`` becomes the thruster allocator's ``fault_injection.thrusters`` parameter
+(docs/controller.md "Thruster faults"), which a run can also change at run time.
 
 Parameter values are booleans, integers, floats, strings or non-empty lists of one of
 them, as in a ROS 2 parameter file. Whether each overridden name is a parameter the node
@@ -42,6 +50,8 @@ from typing import Any, TypeAlias
 
 import numpy as np
 import yaml
+from uvms_control.core.thruster_faults import PARAMETER as FAULT_PARAMETER
+from uvms_control.core.thruster_faults import check_fault, format_faults
 from uvms_tasks.errors import TaskFileError
 from uvms_tasks.task_file import TaskSpec, Yaml12Loader, parse_mission
 
@@ -54,7 +64,8 @@ ParameterValue: TypeAlias = (
 NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder', 'estimator')
 
 _REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
-_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'robot': 'str', 'mission': 'list of tasks'}
+_OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'robot': 'str', 'mission': 'list of tasks',
+             'faults': 'mapping with thrusters: a list of faults'}
 _KNOWN_KEYS = (*_REQUIRED, *_OPTIONAL, *NODE_SECTIONS)
 _NAME_SEGMENT = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _MAX_SEED = 2**31 - 1
@@ -287,6 +298,14 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         flat: dict[str, ParameterValue] = {}
         _flatten(section, node, '', flat, path)
         overrides[node] = flat
+    if data.get('faults') is not None:
+        faults = parse_faults_key(data['faults'], path)
+        allocator = overrides.setdefault('thruster_allocator', {})
+        if FAULT_PARAMETER in allocator:
+            msg = (f'{path}: key faults and thruster_allocator.{FAULT_PARAMETER} both set '
+                   'the injected faults; keep one')
+            raise ScenarioError(msg)
+        allocator[FAULT_PARAMETER] = faults
     try:
         mission = tuple(parse_mission(data['mission'], str(path))) if 'mission' in data else ()
     except TaskFileError as exc:
@@ -302,6 +321,37 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         mission=mission,
         robot=robot,
     )
+
+
+def parse_faults_key(value: Any, path: Path) -> str:
+    """The ``faults`` key as the allocator's ``fault_injection.thrusters`` text.
+
+    Raises:
+        ScenarioError: naming the file, the key (``faults.thrusters[i]``) and what is valid.
+    """
+    if not isinstance(value, dict) or set(value) - {'thrusters'}:
+        raise ScenarioError(type_error_message(
+            path, 'faults', 'a mapping with the one key thrusters', value))
+    entries = value.get('thrusters') or []
+    if not isinstance(entries, list):
+        raise ScenarioError(type_error_message(path, 'faults.thrusters', 'a list of faults',
+                                               entries))
+    faults = []
+    for i, entry in enumerate(entries):
+        where = f'{path}: key faults.thrusters[{i}]'
+        if not isinstance(entry, dict):
+            msg = f'{where}: expected a mapping {{index, kind, value, at_s}}, got {entry!r}'
+            raise ScenarioError(msg)
+        unknown = set(entry) - {'index', 'kind', 'value', 'at_s'}
+        if unknown:
+            msg = f'{where}: unknown keys {sorted(unknown)}; a fault has index, kind, value, at_s'
+            raise ScenarioError(msg)
+        try:
+            faults.append(check_fault(entry.get('index'), entry.get('kind'), entry.get('value'),
+                                      entry.get('at_s'), where))
+        except ValueError as exc:
+            raise ScenarioError(str(exc)) from exc
+    return format_faults(faults)
 
 
 def _flatten(

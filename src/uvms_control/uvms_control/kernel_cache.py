@@ -15,6 +15,7 @@ from uvms_model.kernel_cache import compile_model_kernels, robot_models, warm_st
 from uvms_model.thrusters import ThrusterLayout
 
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
+from uvms_control.core.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
 from uvms_control.core.parameters import ControllerParameters
 from uvms_control.core.unified_controller import UnifiedForceController
 
@@ -34,6 +35,8 @@ def compile_control_kernels() -> None:
         allocator = ThrusterAllocator(AllocatorParameters(
             layout.thrust_matrix(), layout.max_thrust_n, np.full(model.n_joints, 100.0)))
         allocator.step(np.ones(model.n_dof), 0.002)
+        equip(allocator, fault_settings({s.name: s.default for s in FAULT_PARAMETER_SPECS},
+                                        layout.count))  # compiles the fault detector's kernel
 
 
 def main() -> int:

@@ -22,6 +22,7 @@ from rclpy.node import Node
 
 from uvms_control.core.contact_task import ContactTaskGoal, TaskCode, TaskGoalError, TaskResult
 from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
+from uvms_control.health_conversions import ActuationWatch
 from uvms_control.task_conversions import (
     contact_task_feedback,
     contact_task_goal,
@@ -75,6 +76,8 @@ class ContactTaskServer:
             cancel_callback=self._cancel,
             callback_group=callback_group,
         )
+        # Thruster faults (issue 32): a goal ends ACTUATION_LOST once the thrusters are short.
+        self.actuation = ActuationWatch(node, supervisor, self.finish)
 
     def destroy(self) -> None:
         """End every open goal (INACTIVE) and remove the action server."""

@@ -1,7 +1,9 @@
 """The ``thruster_allocator`` node: allocation (paper eq. 10) and thruster dynamics (eq. 11-15).
 
 Subscribes ``command/generalized_force``; publishes ``command/actuators`` (actual thrusts
-after the thruster dynamics, motor torques) and ``thrusters/state``. ``trigger_mode:
+after the thruster dynamics, motor torques), ``thrusters/state`` and ``thrusters/health``
+(thruster faults: injected on the thruster model, detected from its ESC feedback, allocated
+around; ``core.thruster_faults``, ``core.fault_detection``, docs/controller.md). ``trigger_mode:
 lockstep`` answers every command with its stamp, integrating the thrusters over the time
 between command stamps; ``timer`` steps at ``rate_hz`` of the steady clock on the latest
 command, stamped with the node clock. A rejected command (NaN/Inf, wrong size, frame or
@@ -45,15 +47,22 @@ from uvms_model.thrusters import ThrusterLayout
 from uvms_control import raw_conversions
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
 from uvms_control.core.parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.parameters import (
     thruster_parameters_from_flat_dict,
     validate_node_parameters,
 )
+from uvms_control.health_conversions import (
+    HEALTH_TOPIC,
+    health_message,
+    health_report,
+    on_set_fault_parameters,
+)
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.unconfigured import allocator_zero_answer, answer_while_unconfigured
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
-from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
+from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterHealth, ThrusterState
 
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
@@ -75,7 +84,9 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._robot = robot_model_values(declare_parameters(self, PARAMETER_SPECS, robot),
                                          self.robot_name)
         self._values = declare_parameters(self, ALLOCATOR_PARAMETER_SPECS, robot)
+        self._fault_values = declare_parameters(self, FAULT_PARAMETER_SPECS, robot)
         check_all_declared(self, robot)
+        self.add_on_set_parameters_callback(self._on_set_fault_parameters)
         guard_change_state(self)
         starting = declare_autostart(self)
         self.core: ThrusterAllocator | None = None
@@ -90,6 +101,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._diagnostics.add('allocation', self._report)
         answer_while_unconfigured(self, self._values['trigger_mode'] == 'lockstep', not starting,
                                   lambda: allocator_zero_answer(self, self._robot))
+        self._diagnostics.add('thruster health', lambda: health_report(self.core))
         if starting and not autostart(self):
             error = self._transition_error or RuntimeError('autostart failed (see the log)')
             self.destroy_node()
@@ -176,6 +188,8 @@ class ThrusterAllocatorNode(LifecycleNode):
             layout.thrust_matrix(), layout.max_thrust_n, torque_limits, thruster
         )
         self.core = ThrusterAllocator(limits)
+        faults = fault_settings(self._fault_values, layout.count)
+        equip(self.core, faults)  # injection (plant side), ESC telemetry, detection
         self._diagnostics.hardware_id = robot_name(description.urdf_text)
         self._joint_names = joint_names
         self._trigger_mode = str(values['trigger_mode'])
@@ -212,9 +226,14 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._actuator_pub = self.create_publisher(ActuatorCommand, 'command/actuators', qos)
         self._state_pub = self.create_publisher(ThrusterState, 'thrusters/state', qos)
         self._state_gate = RateGate(float(values['state_rate_hz']))
+        self._health_pub = self.create_publisher(ThrusterHealth, HEALTH_TOPIC, qos)
+        self._health_gate = RateGate(faults.health_rate_hz)
+        self._health_msg: ThrusterHealth | None = None
+        self._health_key: tuple[Any, ...] | None = None
         self._entities = [
             (self.destroy_publisher, self._actuator_pub),
             (self.destroy_publisher, self._state_pub),
+            (self.destroy_publisher, self._health_pub),
             (self.destroy_subscription, self.create_subscription(
                 GeneralizedForce, 'command/generalized_force', self._on_command,
                 input_qos(self._lockstep), raw=True))]
@@ -328,13 +347,33 @@ class ThrusterAllocatorNode(LifecycleNode):
 
     def _step(self, t_ns: int, tau_b: np.ndarray, dt: float) -> None:
         assert self.core is not None
-        output = self.core.step(tau_b, dt)
+        output = self.core.step(tau_b, dt, t_ns * 1e-9)
         self._published += 1
         self._saturated += output.allocation.saturation_scale < 1.0
         self._actuator_pub.publish(
             self._actuator_writer.payload(t_ns, output.thrust, output.joint_torques))
         if self._state_gate.due(t_ns):
             self._state_pub.publish(self._state_writer.payload(t_ns, output))
+        self._publish_health(t_ns, output)
+
+    def _publish_health(self, t_ns: int, output: Any) -> None:
+        """thrusters/health at its rate, and at once when a status or the rank changes."""
+        assert self.core is not None
+        detector = self.core.detector
+        key = (self.core.rank, self.core.accommodate,
+               None if detector is None else detector.status.tobytes())
+        if self._health_gate.due(t_ns) or key != self._health_key:
+            self._health_key = key
+            self._health_msg = health_message(t_ns, self.core, output, self._health_msg)
+            self._health_pub.publish(self._health_msg)
+
+    def _on_set_fault_parameters(self, parameters: list[Any]) -> Any:
+        """Faults injected and accommodation switched at run time (docs/controller.md)."""
+        result = on_set_fault_parameters(getattr(self, 'core', None), parameters)
+        if result.successful:
+            self._fault_values.update({p.name: p.value for p in parameters
+                                       if p.name in self._fault_values})
+        return result
 
     def _publish_zero(self, t_ns: int) -> None:
         """Zero thrust and zero joint torque stamped t_ns (inactive, or leaving active)."""

@@ -45,6 +45,7 @@ DEFAULT_TOPICS = (
     'controller/task_record:uvms_msgs/msg/ContactTaskRecord',
     'command/actuators:uvms_msgs/msg/ActuatorCommand',
     'thrusters/state:uvms_msgs/msg/ThrusterState',
+    'thrusters/health:uvms_msgs/msg/ThrusterHealth',
     '/tf:tf2_msgs/msg/TFMessage',
     '/tf_static:tf2_msgs/msg/TFMessage',
     '/robot_description:std_msgs/msg/String',

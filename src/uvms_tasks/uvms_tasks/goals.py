@@ -31,6 +31,7 @@ ERROR_CODE_NAMES = {
     for name in ('SUCCEEDED', 'INVALID_GOAL', 'NO_CONTACT', 'FORCE_LIMIT', 'TRACKING_LIMIT',
                  'PREEMPTED', 'CANCELED', 'INACTIVE')
 }
+ERROR_CODE_NAMES[ContactTask.Result.ACTUATION_LOST] = 'ACTUATION_LOST'  # thruster faults
 #: ContactTask.Feedback.phase -> name (the fuzzy switch's phase, paper sec. 4.3).
 PHASE_NAMES = {
     ContactTask.Feedback.PHASE_FREE: 'free',

@@ -9,6 +9,8 @@ import pytest
 
 MODULES = [
     'uvms_control.core.allocation',
+    'uvms_control.core.fault_detection',
+    'uvms_control.core.thruster_faults',
     'uvms_control.core.filters',
     'uvms_control.core.force_figures',
     'uvms_control.core.fuzzy_sets',

@@ -14,6 +14,14 @@ Thrust limits are the magnitudes ``thrusters.max_thrust_n`` of the robot, in bot
 reverse thrust is weaker per revolution (thruster_dynamics), so the propeller turns faster in
 reverse for the same thrust, and the start-up check makes sure the motor current limit can
 hold each limit in both directions.
+
+Accommodation of thruster faults: with an estimated effectiveness η̂ (p,) in [0, 1] per
+thruster (``uvms_control.core.fault_detection``), the allocation runs on T diag(η̂) by its
+pseudo-inverse u = (T diag(η̂))⁺ tau_v = diag(η̂) Tᵀ (T diag(η̂²) Tᵀ)⁻¹ tau_v, the weighted
+minimum-norm solution: a thruster at η̂ = 0 has its column out and is commanded zero, a weak
+one is used less. The rank of T diag(η̂) is checked: below 6 the vehicle is no longer fully
+actuated, the allocation is the least-squares one (the wrench's reachable part) and
+``ThrusterAllocator.fully_actuated`` is False. η̂ = 1 everywhere gives T⁺, as above.
 """
 
 from __future__ import annotations
@@ -25,7 +33,14 @@ import numpy.typing as npt
 from uvms_model.jit import kernel
 
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.fault_detection import ThrusterFaultDetector
 from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
+from uvms_control.core.thruster_faults import (
+    EscFeedback,
+    EscSensor,
+    ThrusterFaultInjector,
+    reference_speed,
+)
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -73,6 +88,37 @@ def saturate_allocation(
     for i in range(joints.size):
         joints[i] = tau[6 + i]
     return True, scale, _scale_into_limits(joints, inv_joint)
+
+
+#: Relative singular-value tolerance under which T diag(η̂) counts as rank deficient.
+RANK_TOLERANCE = 1e-9
+
+
+def weighted_pseudo_inverse(
+    thrust_matrix: FloatArray, effectiveness: FloatArray
+) -> tuple[FloatArray, int]:
+    """(T diag(η̂))⁺ (p, 6) and the rank of T diag(η̂) (see the module docstring).
+
+    Args:
+        thrust_matrix: T (6, p).
+        effectiveness: η̂ (p,), each in [0, 1].
+
+    Returns:
+        The pseudo-inverse and the rank (singular values above ``RANK_TOLERANCE`` times
+        the largest).
+
+    Example:
+        >>> t = np.hstack([np.eye(6), np.eye(6)[:, :1]])  # a 7th thruster doubling surge
+        >>> pinv, rank = weighted_pseudo_inverse(t, np.array([0.0, 1, 1, 1, 1, 1, 1]))
+        >>> rank, (pinv @ np.eye(6)[0]).round(12).tolist()
+        (6, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
+    """
+    t_eff = thrust_matrix * np.asarray(effectiveness, dtype=np.float64)[np.newaxis, :]
+    sigma = np.linalg.svd(t_eff, compute_uv=False)
+    rank = int(np.count_nonzero(sigma > RANK_TOLERANCE * max(float(sigma[0]), 1e-300)))
+    if rank == t_eff.shape[0]:
+        return t_eff.T @ np.linalg.inv(t_eff @ t_eff.T), rank
+    return np.asarray(np.linalg.pinv(t_eff, rcond=RANK_TOLERANCE), dtype=np.float64), rank
 
 
 @dataclass(frozen=True)
@@ -158,7 +204,8 @@ class AllocationResult:
     Attributes:
         thrust: desired thrusts F_td,v (p,) within the limits (N).
         joint_torques: motor torques F_td,m (n,) within the limits (N m).
-        achieved_wrench: T F_td,v (6,), the vehicle wrench the desired thrusts produce.
+        achieved_wrench: T diag(η̂) F_td,v (6,), the vehicle wrench the desired thrusts
+            produce at the estimated effectiveness η̂ (T F_td,v while every η̂ is 1).
         saturation_scale: s in (0, 1] applied to the vehicle wrench; 1 when unsaturated.
         joint_scale: factor in (0, 1] applied to the joint torques.
     """
@@ -181,8 +228,9 @@ class AllocatorOutput:
         thrust: actual thrusts F_t,act (p,) (N).
         joint_torques: motor torques (n,) (N m); the motors are taken as ideal.
         propeller_speed: Ω (p,) (rad/s).
-        reference_speed: Ω_r (p,) (rad/s).
+        reference_speed: Ω_r (p,) of the desired thrusts, as the ESCs are told (rad/s).
         motor_current: i_m (p,) (A).
+        esc: what the ESCs report (None without an ``EscSensor``).
     """
 
     allocation: AllocationResult
@@ -191,6 +239,7 @@ class AllocatorOutput:
     propeller_speed: FloatArray
     reference_speed: FloatArray
     motor_current: FloatArray
+    esc: EscFeedback | None = None
 
 
 class ThrusterAllocator:
@@ -215,6 +264,15 @@ class ThrusterAllocator:
         self._t = t
         # T⁺ = Tᵀ (T Tᵀ)⁻¹, once: E⁺ = blockdiag(T⁺, I_n) because E is block diagonal.
         self._t_pinv = t.T @ np.linalg.inv(t @ t.T)
+        self._t_eff = t  # T diag(η̂): T itself while every thruster is taken as healthy
+        self._effectiveness = np.ones(self._p)
+        self._rank = 6
+        # Plant side (thruster_faults): faults of the physical thrusters, ESC telemetry.
+        self.injector = ThrusterFaultInjector((), self._p)
+        self.esc: EscSensor | None = None
+        # Allocation side: detection on the ESC telemetry, and whether η̂ is used.
+        self.detector: ThrusterFaultDetector | None = None
+        self.accommodate = True
         self._inv_limit = 1.0 / params.max_thrust
         self._inv_joint = 1.0 / params.max_joint_torque
         self.thrusters = ThrusterBank(params.thruster, self._p)
@@ -243,9 +301,49 @@ class ThrusterAllocator:
         e_pinv[self._p :, 6:] = np.eye(self._n)
         return e_pinv
 
+    @property
+    def effectiveness(self) -> FloatArray:
+        """η̂ (p,) the allocation assumes (a copy)."""
+        return self._effectiveness.copy()
+
+    @property
+    def rank(self) -> int:
+        """Rank of T diag(η̂): 6 while the thrusters can produce any vehicle wrench."""
+        return self._rank
+
+    @property
+    def fully_actuated(self) -> bool:
+        """Whether T diag(η̂) has full row rank 6."""
+        return self._rank == 6
+
+    def set_effectiveness(self, effectiveness: npt.ArrayLike) -> int:
+        """Allocate on T diag(η̂) from now on (module docstring); returns its rank.
+
+        Raises:
+            ControlInputError: if η̂ is not p values in [0, 1].
+        """
+        eta = np.asarray(effectiveness, dtype=np.float64)
+        if eta.shape != (self._p,) or not np.all((eta >= 0.0) & (eta <= 1.0)):
+            raise ControlInputError(
+                f'effectiveness must be {self._p} values in [0, 1], got {np.ravel(eta).tolist()}'
+            )
+        if np.array_equal(eta, self._effectiveness):
+            return self._rank
+        t = self._t
+        if np.all(eta == 1.0):
+            pinv, rank, t_eff = t.T @ np.linalg.inv(t @ t.T), 6, t
+        else:
+            pinv, rank = weighted_pseudo_inverse(t, eta)
+            t_eff = t * eta[np.newaxis, :]
+        self._t_pinv, self._rank, self._t_eff = pinv, rank, t_eff
+        self._effectiveness = eta.copy()
+        return rank
+
     def reset(self) -> None:
-        """Stop the thrusters (zero speed, current and flow)."""
+        """Stop the thrusters (zero speed, current and flow); fault declarations stay."""
         self.thrusters.reset()
+        if self.detector is not None:
+            self.detector.restart_model()
 
     def allocate(self, tau_b: npt.ArrayLike) -> AllocationResult:
         """Desired thrusts and motor torques for tau_b (6 + n,) (eq. 10), saturated by scaling.
@@ -264,7 +362,7 @@ class ThrusterAllocator:
                 return AllocationResult(
                     thrust=thrust,
                     joint_torques=joints,
-                    achieved_wrench=self._t @ thrust,
+                    achieved_wrench=self._t_eff @ thrust,
                     saturation_scale=scale,
                     joint_scale=joint_scale,
                 )
@@ -272,20 +370,35 @@ class ThrusterAllocator:
             f'tau_b must be {6 + self._n} finite values, got {np.ravel(tau).tolist()}'
         )
 
-    def step(self, tau_b: npt.ArrayLike, dt: float) -> AllocatorOutput:
+    def step(self, tau_b: npt.ArrayLike, dt: float, t_s: float = 0.0) -> AllocatorOutput:
         """Allocate tau_b and advance the thrusters by dt (s) toward the desired thrusts.
+
+        The physical thrusters follow the desired thrusts through the injected faults
+        (``injector``, at time t_s); the detector, if any, compares the ESC readings with its
+        model and, under ``accommodate``, the next allocation runs on its η̂.
 
         Raises:
             ControlInputError: if tau_b is not a finite (6 + n,) vector or dt is negative.
         """
         allocation = self.allocate(tau_b)
         bank = self.thrusters
-        thrust = bank.step(allocation.thrust, dt)
+        demand = self.injector.motor_demand(allocation.thrust, t_s)
+        thrust = bank.step(demand, dt)
+        reference = bank.omega_r if demand is allocation.thrust else reference_speed(
+            allocation.thrust, bank.calibration.alpha_2)
+        esc = None
+        if self.esc is not None:
+            esc = self.esc.measure(reference, bank.omega, bank.motor_current)
+            if self.detector is not None and self.detector.update(
+                    allocation.thrust, esc.measured_speed, esc.measured_current, dt, t_s
+            ) and self.accommodate:
+                self.set_effectiveness(self.detector.effectiveness)
         return AllocatorOutput(
             allocation=allocation,
             thrust=thrust,
             joint_torques=allocation.joint_torques,
             propeller_speed=bank.omega,
-            reference_speed=bank.omega_r,
+            reference_speed=reference,
             motor_current=bank.motor_current,
+            esc=esc,
         )

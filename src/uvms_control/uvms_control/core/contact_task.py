@@ -38,6 +38,7 @@ class TaskCode(enum.IntEnum):
     CANCELED = 6
     INACTIVE = 7
     INPUTS_STALE = 8
+    ACTUATION_LOST = 9
 
 
 class TaskGoalError(ValueError):
