@@ -10,7 +10,7 @@ import yaml
 from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, validate_goal
 from uvms_tasks.task_file import TaskSpec, load_task_file, parse_mission
 
-from uvms_description.robots import robot_parameters
+from uvms_description.robots import robot_parameters, robot_start
 
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 SCENARIOS = sorted((CONFIG / 'scenarios').glob('*.yaml'))
@@ -45,9 +45,13 @@ def scenario(path: Path) -> dict[str, object]:
 
 
 def start_of(data: dict[str, object]) -> np.ndarray:
-    """The end effector's initial position of a scenario (m, map_ned)."""
-    initial = data['simulator']['initial']  # type: ignore[index]
-    return np.array(initial['ee_position'], dtype=np.float64)
+    """The end effector's initial position of a scenario (m, map_ned): its own or its robot's."""
+    simulator = data.get('simulator') or {}
+    initial = simulator.get('initial', {}) if isinstance(simulator, dict) else {}
+    if 'ee_position' in initial:
+        return np.array(initial['ee_position'], dtype=np.float64)
+    start = robot_start(str(data.get('robot', 'paper_uvms')))
+    return np.array(start['initial.ee_position'], dtype=np.float64)
 
 
 @pytest.mark.parametrize('path', [p for p in SCENARIOS if 'mission' in scenario(p)],
