@@ -21,7 +21,7 @@ from uvms_common.stop_event import StopEvent
 from uvms_control.core.reference import HalfCircleReference
 from uvms_tasks.client import ContactTaskClient
 from uvms_tasks.goals import goal_from_task, goal_waypoints
-from uvms_tasks.mission_node import MissionNode
+from uvms_tasks.mission_node import MissionNode, mission_goal_uuid
 from uvms_tasks.task_file import parse_mission
 
 from uvms_msgs.action import ContactTask
@@ -59,6 +59,7 @@ class FakeController:
         self.codes = codes or {}
         self.ticks = ticks
         self.goals: list[ContactTask.Goal] = []
+        self.goal_ids: list[bytes] = []
         self.cancel_requests = 0
         #: Called when a goal is accepted (a test's Ctrl-C).
         self.on_accept: Callable[[], None] | None = None
@@ -69,6 +70,7 @@ class FakeController:
 
     def _accepted(self, handle: ServerGoalHandle) -> None:
         self.goals.append(handle.request)
+        self.goal_ids.append(bytes(handle.goal_id.uuid))
         self._active, self._count = handle, 0
         if self.on_accept is not None:
             self.on_accept()
@@ -174,6 +176,23 @@ def test_mission_sends_goals_in_order_from_the_current_hold_target(graph: Graph)
     assert len(circle.velocity) == len(circle.acceleration) == 41
     np.testing.assert_array_equal(goal_waypoints(last), MISSION[2]['path'])
     assert mission.last_feedback is not None
+
+
+def test_mission_goal_ids_are_the_same_in_every_run(graph: Graph) -> None:
+    """The goal ids come from the tasks, not from chance: a recording repeats byte for byte.
+
+    Before, rclpy drew a random UUID per goal, and controller/task_record (which carries it)
+    differed between two runs of one scenario and seed.
+    """
+    fake = FakeController(graph.context)
+    graph.add(fake.node)
+    tasks = parse_mission(MISSION, 'mission.yaml')
+    mission = MissionNode(tasks=tasks, namespace='uvms', context=graph.context)
+    graph.add(mission)
+    assert graph.spin_until(lambda: mission.finished)
+    expected = [bytes(mission_goal_uuid(k, task.name).uuid) for k, task in enumerate(tasks)]
+    assert fake.goal_ids == expected
+    assert len(set(expected)) == len(tasks)
 
 
 def test_mission_stops_after_a_goal_that_fails(graph: Graph) -> None:

@@ -44,6 +44,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.serialization import deserialize_message
 from rclpy.task import Future
+from unique_identifier_msgs.msg import UUID
 from uvms_common.node_main import make_executor
 
 from uvms_msgs.action import ContactTask
@@ -124,13 +125,18 @@ class ContactTaskClient:
     # ------------------------------------------------------------------ non-blocking
 
     def send_goal_async(
-        self, goal: ContactTask.Goal, feedback_callback: FeedbackCallback | None = None
+        self, goal: ContactTask.Goal, feedback_callback: FeedbackCallback | None = None,
+        goal_uuid: UUID | None = None,
     ) -> Future:
-        """Send a goal; the future gives its ClientGoalHandle (``accepted`` tells)."""
+        """Send a goal; the future gives its ClientGoalHandle (``accepted`` tells).
+
+        ``goal_uuid``: the goal id; None draws a random one (rclpy's default).
+        """
         if feedback_callback is None:
-            return self._action.send_goal_async(goal)
+            return self._action.send_goal_async(goal, goal_uuid=goal_uuid)
         return self._action.send_goal_async(
-            goal, feedback_callback=lambda message: feedback_callback(message.feedback))
+            goal, feedback_callback=lambda message: feedback_callback(message.feedback),
+            goal_uuid=goal_uuid)
 
     @staticmethod
     def result_async(handle: ClientGoalHandle) -> Future:

@@ -18,6 +18,7 @@ As its own process: ``ros2 run uvms_tasks mission --ros-args -r __ns:=/uvms
 
 from __future__ import annotations
 
+import hashlib
 import sys
 import time
 from collections.abc import Sequence
@@ -31,6 +32,7 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 from rclpy.task import Future
+from unique_identifier_msgs.msg import UUID
 from uvms_common.node_main import run_node
 
 from uvms_msgs.action import ContactTask
@@ -40,6 +42,16 @@ from uvms_tasks.errors import TaskError, TaskFileError
 from uvms_tasks.goals import TaskOutcome, describe_task, goal_from_task
 from uvms_tasks.task_file import TaskSpec, load_task_file
 
+
+def mission_goal_uuid(index: int, name: str) -> UUID:
+    """The goal id of a mission's task ``index`` named ``name``: the same in every run.
+
+    rclpy draws a random id per goal; a mission's ids are derived from its tasks instead, so
+    that a recording (``controller/task_record`` carries the id) stays byte-identical between
+    runs of one scenario and seed. Distinct tasks of one mission get distinct ids.
+    """
+    digest = hashlib.sha256(f'uvms mission task {index}: {name}'.encode()).digest()
+    return UUID(uuid=list(digest[:16]))
 
 class MissionNode(Node):
     """Sends a mission through the controller's ContactTask action (node name ``mission``).
@@ -149,7 +161,8 @@ class MissionNode(Node):
         self._busy = True
         self.sent_goals.append(goal)
         self.get_logger().info(f'sending {describe_task(task)}')
-        future = self.client.send_goal_async(goal, self._on_feedback)
+        future = self.client.send_goal_async(goal, self._on_feedback,
+                                             mission_goal_uuid(len(self.results), task.name))
         future.add_done_callback(self._on_goal_response)
 
     def _on_feedback(self, feedback: ContactTask.Feedback) -> None:
