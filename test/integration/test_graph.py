@@ -182,8 +182,10 @@ def test_realtime_graph_holds_and_names_a_controller_left_unconfigured(
     Before issue 29 the simulator integrated from its first tick with zero commands.
     """
     run = scenario('free_motion')
+    # Long enough for discovery of the nodes' get_state services on a slow, loaded machine
+    # (2 s once named both nodes 'not running' here): the error must name the state.
     overrides = {**run.overrides, 'controller': {'autostart': False},
-                 'simulator': {**run.overrides.get('simulator', {}), 'startup.timeout_s': 2.0}}
+                 'simulator': {**run.overrides.get('simulator', {}), 'startup.timeout_s': 8.0}}
     graph = build_graph(dataclasses.replace(run, overrides=overrides), 'realtime',
                         duration_s=0.3)
     with pytest.raises(GraphError, match='controller is unconfigured') as error:

@@ -498,7 +498,7 @@ def test_a_launch_whose_loop_never_closes_ends_naming_the_silent_node(tmp_path: 
     scenario.write_text(yaml.safe_dump({
         'name': 'no_allocator', 'description': 'allocator left unconfigured',
         'duration_s': 5.0, 'thruster_allocator': {'autostart': False},
-        'simulator': {'startup': {'timeout_s': 3.0}},
+        'simulator': {'startup': {'timeout_s': 12.0}},  # every process up and discovered
     }))
     process = start([str(BIN / 'uvms'), 'launch', str(scenario)])
     err = finish(process, 60.0)
