@@ -420,7 +420,7 @@ def test_sigint_gives_130_and_a_closed_recording_of_the_graph(launched: LaunchRu
     assert run['scenario'] == 'case1_ke1e4'
     given = yaml.safe_load(run['parameters'])
     assert given['/uvms/simulator']['ros__parameters']['contact']['stiffness_n_m'] == 1.0e4
-    assert given['/uvms/controller']['ros__parameters']['trigger_mode'] == 'timer'
+    assert given['/uvms/controller']['ros__parameters']['trigger_mode'] == 'lockstep'
 
 
 def _launch_pids(stderr: str) -> list[int]:

@@ -119,7 +119,8 @@ def generate_launch_description() -> LaunchDescription:
         ),
         DeclareLaunchArgument(
             'mode', default_value='realtime', choices=list(MODES),
-            description='realtime: wall-clock timers; lockstep: the simulator waits for the '
+            description='realtime: the simulator on a wall-clock timer, controller and '
+                        'allocator answering each state; lockstep: the simulator waits for the '
                         'actuator command of each step (deterministic).',
         ),
         DeclareLaunchArgument(

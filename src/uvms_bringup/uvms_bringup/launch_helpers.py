@@ -27,7 +27,12 @@ MODES = ('lockstep', 'realtime')
 
 #: Parameter of the controller and the allocator selecting what triggers a step, per mode.
 TRIGGER_PARAMETER = 'trigger_mode'
-TRIGGER = {'lockstep': 'lockstep', 'realtime': 'timer'}
+#: In both modes a step runs when the data of one stamp has arrived (``lockstep``: the
+#: controller on each state, the allocator on each command), so each state the simulator
+#: publishes is answered once. In real time the simulator alone keeps the wall clock; a
+#: controller on its own 500 Hz timer (``timer``) beats against the simulator's timer and
+#: found no new state in 13-18 % of its periods (bench_realtime, 2026-12-03), 0.0 % so.
+TRIGGER = {'lockstep': 'lockstep', 'realtime': 'lockstep'}
 
 
 @dataclass(frozen=True)
