@@ -101,3 +101,21 @@ def test_ray_is_imported_by_the_sweep_package_only() -> None:
                 if any(name.split('.')[0] == 'ray' for name in names):
                     users.add(package)
     assert users <= {'uvms_sweep'}, users
+
+
+def test_test_modules_have_unique_basenames() -> None:
+    """Pytest (rootdir imports) refuses to collect the suite when two test files share a name.
+
+    Two branches each added a test_thruster_faults.py (unit and scenarios) and the merged
+    suite stopped at collection: caught here, in a second, not by the whole run.
+    """
+    tests = Path(__file__).resolve().parents[1]
+    seen: dict[str, Path] = {}
+    clashes = []
+    for path in sorted(tests.rglob('*.py')):
+        if path.name in ('conftest.py', '__init__.py'):
+            continue
+        if path.name in seen:
+            clashes.append((seen[path.name], path))
+        seen.setdefault(path.name, path)
+    assert not clashes, f'test modules with the same basename: {clashes}'
