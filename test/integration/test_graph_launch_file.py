@@ -109,6 +109,22 @@ def test_both_modes_trigger_controller_and_allocator_on_their_inputs() -> None:
         assert node_parameters(CORE_NODES[0], None, mode)['mode'] == mode
 
 
+def test_a_controller_on_the_estimate_keeps_its_timer_in_real_time(tmp_path: Path) -> None:
+    """state_source estimate: the estimate lags its stamp, so real time runs on the timer.
+
+    Waiting for complete stamps, the launched case1_estimated stalled (INPUTS_STALE).
+    """
+    from uvms_bringup.scenario import parse_scenario
+
+    scenario = parse_scenario({'name': 's', 'description': 'd', 'duration_s': 1.0,
+                               'controller': {'state_source': 'estimate'}},
+                              tmp_path / 's.yaml')
+    controller, allocator = CORE_NODES[1], CORE_NODES[2]
+    assert node_parameters(controller, scenario, 'realtime')['trigger_mode'] == 'timer'
+    assert node_parameters(allocator, scenario, 'realtime')['trigger_mode'] == 'lockstep'
+    assert node_parameters(controller, scenario, 'lockstep')['trigger_mode'] == 'lockstep'
+
+
 def test_robot_reaches_every_node_that_loads_a_robot_folder(tmp_path: Path) -> None:
     """--robot (or a scenario's robot:) sets robot_name of simulator, controller, allocator."""
     from uvms_bringup.scenario import parse_scenario

@@ -189,6 +189,10 @@ def node_parameters(
         values['duration_s'] = float(duration_s or 0.0)
     elif spec in (CONTROLLER, THRUSTER_ALLOCATOR):
         values[TRIGGER_PARAMETER] = TRIGGER[mode]
+        if spec is CONTROLLER and mode == 'realtime' and uses_estimator(scenario):
+            # The estimate arrives after the state it is stamped with, and not for every
+            # stamp under load: a controller waiting for complete stamps stalled (INPUTS_STALE).
+            values[TRIGGER_PARAMETER] = 'timer'
     elif spec is FOXGLOVE_SERVER:
         host, port = foxglove_address or (FOXGLOVE_HOST, FOXGLOVE_PORT)
         values['host'] = host
