@@ -26,6 +26,7 @@ from uvms_model.body_forces import BodyForces
 from uvms_model.coordinates import Vec3
 from uvms_model.description import RobotDescription
 from uvms_model.jit import kernel
+from uvms_model.loop_products import spatial_cross_force
 from uvms_model.parameters import HydrodynamicsParameters
 from uvms_model.pinocchio_models import dynamic_model, strided_rows
 
@@ -234,21 +235,3 @@ def solve_with_hull(
     mass_b[:6, :6] += hull_added
     result: FloatArray = np.linalg.solve(mass_b, tau_b - bias_b)  # type: ignore[assignment]
     return result
-
-
-@kernel
-def spatial_cross_force(nu: FloatArray, f: FloatArray) -> FloatArray:
-    """ν ×* f = [ω × f_lin; v × f_lin + ω × f_ang] for ν = [v; ω] (Featherstone 2008, 2.9).
-
-    With f = M_A ν this is the Coriolis-centripetal force C_A(ν) ν of added mass (Fossen 2011,
-    eq. 6.43) in Kirchhoff's form. Compiled (numpy's cross costs 60 µs per call here).
-
-    >>> spatial_cross_force(np.array([1.0, 0, 0, 0, 0, 1.0]), np.array([2.0, 0, 0, 0, 0, 0]))
-    array([0., 2., 0., 0., 0., 0.])
-    """
-    out = np.zeros(6)
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        out[i] = nu[3 + j] * f[k] - nu[3 + k] * f[j]
-        out[3 + i] = (nu[j] * f[k] - nu[k] * f[j]) + (nu[3 + j] * f[3 + k] - nu[3 + k] * f[3 + j])
-    return out

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from uvms_model.jit import kernel
-from uvms_model.loop_products import matvec
+from uvms_model.loop_products import matvec, spatial_cross_force
 
 FloatArray = NDArray[np.float64]
 
@@ -42,17 +42,6 @@ def flow_in_bodies(rotations: FloatArray, current_base: FloatArray, flow: FloatA
             flow[body, r] = (rotations[row, 0] * current_base[0]
                              + rotations[row, 1] * current_base[1]
                              + rotations[row, 2] * current_base[2])
-
-
-@kernel
-def cross_force(nu: FloatArray, f: FloatArray) -> FloatArray:
-    """Spatial cross product nu x* f = [omega x f_lin; v x f_lin + omega x f_ang], Featherstone."""
-    out = np.zeros(6)
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        out[i] = nu[3 + j] * f[k] - nu[3 + k] * f[j]
-        out[3 + i] = (nu[j] * f[k] - nu[k] * f[j]) + (nu[3 + j] * f[3 + k] - nu[3 + k] * f[3 + j])
-    return out
 
 
 @kernel
@@ -83,8 +72,8 @@ def added_mass_flow_force(
             j, m = (i + 1) % 3, (i + 2) % 3
             nu_c_dot[i] = -(nu[3 + j] * flow[body, m] - nu[3 + m] * flow[body, j])
         mass = matrices[k]
-        absolute = cross_force(nu, matvec(mass, nu))
-        relative = cross_force(nu_r, matvec(mass, nu_r))
+        absolute = spatial_cross_force(nu, matvec(mass, nu))
+        relative = spatial_cross_force(nu_r, matvec(mass, nu_r))
         acceleration = matvec(mass, nu_c_dot)
         for i in range(6):
             forces[base + i] += absolute[i] - relative[i] + acceleration[i]
