@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import PoseStamped, TwistWithCovarianceStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -265,6 +265,31 @@ def test_static_tf_reaches_late_subscriber(harness: Harness) -> None:
     harness.spin_until(lambda: bool(latched))
     pairs = {(t.header.frame_id, t.child_frame_id) for t in latched[0].transforms}
     assert {('map', 'map_ned'), ('base_link_frd', 'base_link')} <= pairs
+
+
+def test_dvl_frame_is_on_tf_static_at_the_robots_mounting(harness: Harness) -> None:
+    """With navigation on, each dvl message's frame resolves: base_link_frd -> dvl_link.
+
+    The mounting is the robot's navigation.yaml (BlueROV2: navigation.dvl.position_m
+    [-0.1, 0.0, 0.15] m, axes along base_link_frd).
+    """
+    harness.responder.torques = [0.0] * 4  # the Alpha 5's four joints
+    dvl = collect(harness, TwistWithCovarianceStamped, 'dvl')
+    sim = harness.start(robot_name='bluerov2_alpha5', navigation__enabled=True,
+                        world__seabed_depth_m=2.0, duration_s=0.2)
+    harness.spin_until(lambda: sim.finished and bool(dvl))
+    latched = collect(harness, TFMessage, '/tf_static', QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    harness.spin_until(lambda: bool(latched))
+    by_child = {t.child_frame_id: t for t in latched[0].transforms}
+    assert {msg.header.frame_id for msg in dvl} == {'dvl_link'}
+    mount = by_child['dvl_link']
+    assert mount.header.frame_id == 'base_link_frd'
+    t = mount.transform
+    assert (t.translation.x, t.translation.y, t.translation.z) == pytest.approx(
+        (-0.1, 0.0, 0.15), abs=1e-12)
+    assert (t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w) == pytest.approx(
+        (0.0, 0.0, 0.0, 1.0), abs=1e-12)
 
 
 def test_tf_is_published_at_its_own_rate(harness: Harness) -> None:

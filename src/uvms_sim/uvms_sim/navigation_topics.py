@@ -38,9 +38,14 @@ from uvms_model.nav_sensors import (
     Reading,
 )
 
-from uvms_sim.conversions import quaternion_from_rpy, time_from_ns
+from uvms_sim.conversions import (
+    BASE_LINK_FRD,
+    DVL_LINK,
+    MAP_NED,
+    quaternion_from_rpy,
+    time_from_ns,
+)
 
-MAP_NED, BASE_LINK_FRD, DVL_LINK = 'map_ned', 'base_link_frd', 'dvl_link'
 UNUSED_VARIANCE = 1.0e9
 """Variance of a pose component a message does not measure (robot_localization ignores it)."""
 

@@ -115,8 +115,11 @@ class SimulatorNode(Node):
             self._tf_pub = self.create_publisher(TFMessage, '/tf', QoSProfile(depth=100))
             self._static_tf_pub = self.create_publisher(TFMessage, '/tf_static', QoSProfile(
                 depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
-            self._static_tf_pub.publish(
-                conversions.static_tf_message(0, self._plant.frame_poses()))
+            dvl = self._navigation_params.dvl
+            self._static_tf_pub.publish(conversions.static_tf_message(
+                0, self._plant.frame_poses(),
+                (dvl.position_m, dvl.orientation_rpy)
+                if self._navigation_params.switch.enabled else None))
         # The URDF the plant was built from, latched as robot_state_publisher offers it, so
         # that RViz, Foxglove and a recording draw the robot.
         self._description_pub = self.create_publisher(String, '/robot_description', QoSProfile(
