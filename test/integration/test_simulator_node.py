@@ -469,6 +469,46 @@ def test_realtime_simulator_holds_the_initial_state_until_the_loop_closes(
     assert clocks and {c.clock.sec * 10**9 + c.clock.nanosec for c in clocks} == {0}
 
 
+@pytest.mark.parametrize('mode', ['lockstep', 'realtime'])
+def test_first_state_waits_for_the_recorder_to_subscribe(harness: Harness, mode: str) -> None:
+    """startup.recorder: nothing goes out before that node subscribes; its record starts at 0.
+
+    What ``uvms launch --output`` relies on: a recorder process that starts after the
+    simulator still records the run from t = 0.
+    """
+    overrides: dict[str, Any] = {'mode': mode, 'startup__recorder': 'recorder',
+                                 'duration_s': 0.02}
+    if mode == 'realtime':
+        overrides['startup__hold'] = False  # no managed nodes here: the recorder alone holds
+    sim = harness.start(**overrides)
+    harness.spin_for(1.0)
+    assert harness.responder.states == []
+    assert sim.sim_time_ns == 0
+    recorder = rclpy.create_node('recorder', namespace='uvms', context=harness.context)
+    received: dict[str, list[Any]] = {}
+    for topic, msg_type in [('/clock', Clock), ('joint_states', JointState),
+                            ('odometry', Odometry), ('wrench', WrenchStamped),
+                            ('ee_pose', PoseStamped), ('contact', ContactState)]:
+        received[topic] = []
+        recorder.create_subscription(msg_type, topic, received[topic].append, 100)
+    harness.executor.add_node(recorder)
+    try:
+        harness.spin_until(lambda: sim.finished and bool(received['contact']))
+    finally:
+        harness.executor.remove_node(recorder)
+        recorder.destroy_node()
+    assert received['/clock'][0].clock.sec == received['/clock'][0].clock.nanosec == 0
+    for topic in ('joint_states', 'odometry', 'wrench', 'ee_pose', 'contact'):
+        assert stamp_ns(received[topic][0]) == 0, topic
+
+
+def test_a_recorder_that_never_subscribes_stops_the_start_naming_it(harness: Harness) -> None:
+    """After startup.timeout_s without the recorder, the error names it and the topics."""
+    harness.start(startup__recorder='recorder', startup__timeout_s=0.5)
+    with pytest.raises(StartupError, match=r'recorder did not subscribe .* /clock'):
+        harness.spin_for(2.0)
+
+
 def test_realtime_start_up_timeout_names_the_inactive_node(harness: Harness) -> None:
     """Real time: a managed node that never reports active is named when the start-up ends."""
     harness.responder.answer = lambda _: False

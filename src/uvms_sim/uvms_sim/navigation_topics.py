@@ -106,6 +106,13 @@ def position_fix_message(reading: PositionFixReading) -> PoseWithCovarianceStamp
     return _pose_message(reading.t_ns, reading.p_ned, list(reading.sigma_m ** 2))
 
 
+def dvl_mount(params: NavigationParameters) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
+    """The DVL's mounting (position m, roll-pitch-yaw rad in base_link_frd), None when off."""
+    if not params.switch.enabled:
+        return None
+    return params.dvl.position_m, params.dvl.orientation_rpy
+
+
 class NavigationTopics:
     """Samples the navigation sensors at each published state and publishes what is due.
 
