@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 from uvms_analysis.estimate_errors import estimate_errors
+from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.graph import RunResult, build_graph, run_graph
 from uvms_bringup.launch_helpers import ESTIMATOR, graph_nodes, uses_estimator
 from uvms_bringup.scenario import load_scenario
@@ -47,11 +49,35 @@ def estimated(tmp_path_factory: pytest.TempPathFactory) -> tuple[RunResult, Path
 
 def test_estimated_scenarios_start_the_estimator() -> None:
     """A scenario with state_source: estimate runs the estimator; the paper's do not."""
-    for name in ('case1_estimated', 'bluerov2_alpha5_contact_estimated'):
+    for name in ('case1_estimated', 'bluerov2_alpha5_contact_estimated',
+                 'case1_estimated_current', 'bluerov2_alpha5_contact_estimated_current'):
         scenario = load_scenario(SCENARIOS / f'{name}.yaml')
+        assert scenario.name == name
         assert uses_estimator(scenario), name
         assert ESTIMATOR in graph_nodes(record=True, estimator=uses_estimator(scenario))
         assert scenario.overrides['simulator']['navigation.enabled'] is True
+        check_scenario_overrides(scenario)  # every key a declared parameter of its node
+
+
+@pytest.mark.parametrize(('name', 'still_water'), [
+    ('case1_estimated_current', 'case1_estimated'),
+    ('bluerov2_alpha5_contact_estimated_current', 'bluerov2_alpha5_contact_estimated'),
+])
+def test_estimated_current_scenarios_add_only_the_current(name: str, still_water: str) -> None:
+    """The estimated runs in a current are their still-water twins plus the 0.2 m/s current.
+
+    The current is the one of case1_current / bluerov2_alpha5_current (east, along the wall).
+    """
+    scenario = load_scenario(SCENARIOS / f'{name}.yaml').overrides
+    twin = load_scenario(SCENARIOS / f'{still_water}.yaml').overrides
+    current = {key: value for key, value in scenario['simulator'].items()
+               if key.startswith('ocean.current.')}
+    assert current['ocean.current.mean_speed_m_s'] == 0.2
+    assert current['ocean.current.direction_rad'] == pytest.approx(math.pi / 2)
+    rest = {key: value for key, value in scenario['simulator'].items() if key not in current}
+    assert rest == twin['simulator']
+    assert {k: v for k, v in scenario.items() if k != 'simulator'} == {
+        k: v for k, v in twin.items() if k != 'simulator'}
     assert not uses_estimator(load_scenario(SCENARIOS / 'case1_ke1e4.yaml'))
     assert ESTIMATOR not in graph_nodes(record=True)
     assert topic_for('odometry', 'estimate') == 'odometry/filtered'

@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import PoseStamped, TwistWithCovarianceStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -267,6 +267,31 @@ def test_static_tf_reaches_late_subscriber(harness: Harness) -> None:
     assert {('map', 'map_ned'), ('base_link_frd', 'base_link')} <= pairs
 
 
+def test_dvl_frame_is_on_tf_static_at_the_robots_mounting(harness: Harness) -> None:
+    """With navigation on, each dvl message's frame resolves: base_link_frd -> dvl_link.
+
+    The mounting is the robot's navigation.yaml (BlueROV2: navigation.dvl.position_m
+    [-0.1, 0.0, 0.15] m, axes along base_link_frd).
+    """
+    harness.responder.torques = [0.0] * 4  # the Alpha 5's four joints
+    dvl = collect(harness, TwistWithCovarianceStamped, 'dvl')
+    sim = harness.start(robot_name='bluerov2_alpha5', navigation__enabled=True,
+                        world__seabed_depth_m=2.0, duration_s=0.2)
+    harness.spin_until(lambda: sim.finished and bool(dvl))
+    latched = collect(harness, TFMessage, '/tf_static', QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    harness.spin_until(lambda: bool(latched))
+    by_child = {t.child_frame_id: t for t in latched[0].transforms}
+    assert {msg.header.frame_id for msg in dvl} == {'dvl_link'}
+    mount = by_child['dvl_link']
+    assert mount.header.frame_id == 'base_link_frd'
+    t = mount.transform
+    assert (t.translation.x, t.translation.y, t.translation.z) == pytest.approx(
+        (-0.1, 0.0, 0.15), abs=1e-12)
+    assert (t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w) == pytest.approx(
+        (0.0, 0.0, 0.0, 1.0), abs=1e-12)
+
+
 def test_tf_is_published_at_its_own_rate(harness: Harness) -> None:
     """/tf comes every 10th state at tf_rate_hz = 50 (500 Hz states)."""
     tf = collect(harness, TFMessage, '/tf')
@@ -442,6 +467,46 @@ def test_realtime_simulator_holds_the_initial_state_until_the_loop_closes(
     assert len(harness.responder.states) >= 5  # the held state, re-offered
     assert {stamp_ns(m) for m in harness.responder.states} == {0}
     assert clocks and {c.clock.sec * 10**9 + c.clock.nanosec for c in clocks} == {0}
+
+
+@pytest.mark.parametrize('mode', ['lockstep', 'realtime'])
+def test_first_state_waits_for_the_recorder_to_subscribe(harness: Harness, mode: str) -> None:
+    """startup.recorder: nothing goes out before that node subscribes; its record starts at 0.
+
+    What ``uvms launch --output`` relies on: a recorder process that starts after the
+    simulator still records the run from t = 0.
+    """
+    overrides: dict[str, Any] = {'mode': mode, 'startup__recorder': 'recorder',
+                                 'duration_s': 0.02}
+    if mode == 'realtime':
+        overrides['startup__hold'] = False  # no managed nodes here: the recorder alone holds
+    sim = harness.start(**overrides)
+    harness.spin_for(1.0)
+    assert harness.responder.states == []
+    assert sim.sim_time_ns == 0
+    recorder = rclpy.create_node('recorder', namespace='uvms', context=harness.context)
+    received: dict[str, list[Any]] = {}
+    for topic, msg_type in [('/clock', Clock), ('joint_states', JointState),
+                            ('odometry', Odometry), ('wrench', WrenchStamped),
+                            ('ee_pose', PoseStamped), ('contact', ContactState)]:
+        received[topic] = []
+        recorder.create_subscription(msg_type, topic, received[topic].append, 100)
+    harness.executor.add_node(recorder)
+    try:
+        harness.spin_until(lambda: sim.finished and bool(received['contact']))
+    finally:
+        harness.executor.remove_node(recorder)
+        recorder.destroy_node()
+    assert received['/clock'][0].clock.sec == received['/clock'][0].clock.nanosec == 0
+    for topic in ('joint_states', 'odometry', 'wrench', 'ee_pose', 'contact'):
+        assert stamp_ns(received[topic][0]) == 0, topic
+
+
+def test_a_recorder_that_never_subscribes_stops_the_start_naming_it(harness: Harness) -> None:
+    """After startup.timeout_s without the recorder, the error names it and the topics."""
+    harness.start(startup__recorder='recorder', startup__timeout_s=0.5)
+    with pytest.raises(StartupError, match=r'recorder did not subscribe .* /clock'):
+        harness.spin_for(2.0)
 
 
 def test_realtime_start_up_timeout_names_the_inactive_node(harness: Harness) -> None:

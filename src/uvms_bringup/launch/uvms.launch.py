@@ -35,6 +35,7 @@ from uvms_bringup.launch_helpers import (
     graph_nodes,
     node_parameters,
     parameters_file_text,
+    recorder_wait,
     resolve_scenario_path,
     uses_estimator,
     write_mission_file,
@@ -73,6 +74,7 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
                             estimator=uses_estimator(scenario)):
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
                                     foxglove_address, robot)
+        overrides.update(recorder_wait(spec, bool(output_path)))
         if spec is MISSION:
             assert scenario is not None
             overrides['mission_file'] = str(write_mission_file(

@@ -125,6 +125,17 @@ def uses_estimator(scenario: Scenario | None) -> bool:
     return 'estimator' in scenario.overrides or controller.get('state_source') == 'estimate'
 
 
+def recorder_wait(spec: NodeSpec, record: bool) -> dict[str, ParameterValue]:
+    """The simulator's ``startup.recorder`` when a recorder runs in a process of its own.
+
+    The simulator then publishes its first state only once the recorder's subscriptions to
+    the state topics are matched, so the recording starts at t = 0 however long the
+    recorder's process takes to start (``uvms launch``, ``uvms.launch.py``; in one process
+    the graph runner builds the recorder before the first state goes out).
+    """
+    return {'startup.recorder': RECORDER.name} if spec is SIMULATOR and record else {}
+
+
 def graph_nodes(record: bool, foxglove: bool = False, mission: bool = False,
                 estimator: bool = False) -> tuple[NodeSpec, ...]:
     """The nodes of a run; estimator, mission sender, live view and recorder (last) if asked."""

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
@@ -32,6 +33,7 @@ from uvms_bringup.launch_helpers import (
     graph_nodes,
     node_parameters,
     parameters_file_text,
+    recorder_wait,
     uses_estimator,
     write_mission_file,
 )
@@ -41,6 +43,7 @@ from uvms_bringup.processes import (
     EXIT_OK,
     Launcher,
     LaunchError,
+    NodeProcess,
     NodeProcessSpec,
     StopRequest,
     describe_status,
@@ -127,6 +130,7 @@ def plan_launch(
             continue
         overrides: dict[str, Any] = {
             **node_parameters(spec, scenario, mode, duration_s, output, foxglove),
+            **recorder_wait(spec, output is not None),
             **(extra_overrides or {}).get(spec.name, {}),
         }
         files = [config / file for file in spec.parameter_files]
@@ -157,12 +161,15 @@ def _mission_process(scenario: Scenario, namespace: str, parameters_dir: Path,
                      ) -> NodeProcessSpec:
     """The mission sender of a scenario: its ``mission:`` copied into a mission file."""
     mission_file = write_mission_file(scenario, parameters_dir)
+    outcome_file = parameters_dir / 'mission_outcome.json'
     generated = parameters_dir / 'mission_parameters.yaml'
     generated.write_text(parameters_file_text({f'/{namespace.strip("/")}/mission': {
-        'mission_file': str(mission_file)}}), encoding='utf-8')
+        'mission_file': str(mission_file), 'outcome_file': str(outcome_file)}}),
+        encoding='utf-8')
     command = [*node_executable(MISSION, bin_dir),
                *ros_arguments(MISSION, namespace, [generated], log_level)]
-    return NodeProcessSpec(MISSION, f'{MISSION.executable}-{index}', tuple(command), generated)
+    return NodeProcessSpec(MISSION, f'{MISSION.executable}-{index}', tuple(command), generated,
+                           outcome_file)
 
 
 def launch_graph(
@@ -199,7 +206,9 @@ def launch_graph(
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
-        request, 1 when a node ended by itself with an error (named on stderr).
+        request, 1 when a node ended by itself with an error (named on stderr), 3
+        (``EXIT_MISSION_FAILED``) when the scenario's mission failed (``mission failed:
+        CODE (message)`` on stderr) and no node did.
 
     Raises:
         ScenarioError: A scenario override names no parameter of its node or has the wrong
@@ -251,12 +260,26 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
         until = f'until {duration_s:g} s simulated or Ctrl-C' if duration_s else 'until Ctrl-C'
         launcher.report(f'uvms launch: {mode} graph, one process per node: {started}; '
                         f'running {until}')
+    told: list[NodeProcess] = []
+
+    def tell_failed_job(process: NodeProcess) -> None:
+        """The mission failed: say what failed on a line of its own, once."""
+        if process.status == EXIT_MISSION_FAILED and process not in told:
+            told.append(process)
+            outcome = (read_outcome(process.plan.outcome_file)
+                       if process.plan.outcome_file is not None else None)
+            launcher.report(outcome.line() if outcome is not None else
+                            f'mission failed: {process.name} wrote no outcome; its log says why')
+
     try:
         # Without a duration the simulator never finishes: its exit, even with 0 (a signal
         # sent to it alone), ends the launch as a failure naming it.
-        outcome, process = launcher.wait_for_exit(stop, SIMULATOR.name if duration_s else None)
+        outcome, process = launcher.wait_for_exit(
+            stop, SIMULATOR.name if duration_s else None, tell_failed_job)
     finally:
         launcher.stop()
+    for job in launcher.failed_jobs():
+        tell_failed_job(job)  # a mission that failed as the run ended
     for other in launcher.unclean_stops():
         if other is not process:
             launcher.report(f'uvms launch: error: node {other.name!r} exited: '
@@ -267,10 +290,13 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
                         'nodes')
         return EXIT_FAILURE
     unclean = bool(launcher.unclean_stops())
+    mission = '; the mission failed' if told else ''
     # The closing line is printed with --quiet too: it is the one summary of the launch.
     if outcome == 'stopped':
-        launcher.report('uvms launch: interrupted; every node stopped')
-        return EXIT_INTERRUPTED
+        launcher.report(f'uvms launch: interrupted; every node stopped{mission}')
+        return EXIT_MISSION_FAILED if told else EXIT_INTERRUPTED
     launcher.report(f'uvms launch: the simulator reached {duration_s or 0.0:g} s; '
-                    'every node stopped')
-    return EXIT_FAILURE if unclean else EXIT_OK
+                    f'every node stopped{mission}')
+    if unclean:
+        return EXIT_FAILURE
+    return EXIT_MISSION_FAILED if told else EXIT_OK

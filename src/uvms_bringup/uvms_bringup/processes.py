@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import IO, Protocol
 
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED
 
 from uvms_bringup.launch_helpers import RECORDER, SIMULATOR, NodeSpec
 
@@ -37,6 +38,8 @@ SIGKILL_TIMEOUT_S = 5.0
 POLL_PERIOD_S = 0.05
 #: Exit statuses of a node that stopped because it was asked to (signal handled, or 0).
 _STOPPED_STATUSES = (0, EXIT_INTERRUPTED, -signal.SIGINT, -signal.SIGTERM)
+#: Exit statuses of a finishing node (the mission) that did its job, or whose job failed.
+_FINISHED_STATUSES = (0, EXIT_MISSION_FAILED)
 
 _PR_SET_PDEATHSIG = 1
 _SIGTERM = int(signal.SIGTERM)
@@ -63,12 +66,15 @@ class NodeProcessSpec:
         label: Name in the output prefix, ``executable-N`` as ros2 launch numbers them.
         command: Executable and arguments, ``--ros-args ...`` included.
         parameters_file: The generated parameter file of the overrides, if any.
+        outcome_file: Where a finishing node (the mission) writes how its job ended
+            (``uvms_tasks.mission_outcome``), if anywhere.
     """
 
     spec: NodeSpec
     label: str
     command: tuple[str, ...]
     parameters_file: Path | None = None
+    outcome_file: Path | None = None
 
 
 @dataclass
@@ -240,29 +246,52 @@ class Launcher:
         return [process for process in self.processes if process.poll() is None]
 
     def wait_for_exit(
-        self, stop: StopRequest, end_node: str | None = SIMULATOR.name
+        self, stop: StopRequest, end_node: str | None = SIMULATOR.name,
+        on_finished: Callable[[NodeProcess], None] | None = None,
     ) -> tuple[str, NodeProcess | None]:
         """Watch the children until a stop request or the first one that ends.
+
+        A node that finishes by itself (``NodeSpec.finishes``: the mission) ends the watch
+        only when it crashed: its job done (0) or failed (``EXIT_MISSION_FAILED``), the run
+        goes on and ``on_finished`` is called once with it.
 
         Args:
             stop: Polled every ``POLL_PERIOD_S``.
             end_node: The node whose exit with status 0 is the run's normal end.
+            on_finished: Called once per finishing node that ended with 0 or
+                ``EXIT_MISSION_FAILED``.
 
         Returns:
             ``('stopped', None)`` after a stop request, ``('finished', node)`` when
             ``end_node`` exited 0, ``('failed', node)`` when another one ended.
         """
+        seen: set[int] = set()
         while True:
             if stop.is_set():
                 return 'stopped', None
             for process in self.processes:
                 status = process.poll()
-                if status is None or process.plan.spec.finishes:
-                    continue  # running, or done with its job (a mission logs its own outcome)
+                if status is None:
+                    continue
+                if self.finished_its_job(process):
+                    if id(process) not in seen and on_finished is not None:
+                        on_finished(process)
+                    seen.add(id(process))
+                    continue
                 if process.name == end_node and status == 0:
                     return 'finished', process
                 return 'failed', process
             time.sleep(POLL_PERIOD_S)
+
+    @staticmethod
+    def finished_its_job(process: NodeProcess) -> bool:
+        """A finishing node (the mission) that ended by itself, its job done or failed."""
+        return process.plan.spec.finishes and process.status in _FINISHED_STATUSES
+
+    def failed_jobs(self) -> list[NodeProcess]:
+        """Finishing nodes whose job failed (exit ``EXIT_MISSION_FAILED``: the mission)."""
+        return [p for p in self.processes
+                if p.plan.spec.finishes and p.status == EXIT_MISSION_FAILED]
 
     def stop(self) -> None:
         """Stop every running node, the recorder last; escalate SIGINT, SIGTERM, SIGKILL."""
@@ -301,6 +330,7 @@ class Launcher:
                 process.poll()
 
     def unclean_stops(self) -> list[NodeProcess]:
-        """Processes that ended with an error while being stopped (not 0/130/by signal)."""
+        """Processes that ended with an error (not 0/130/by signal, nor a failed mission)."""
         return [p for p in self.processes
-                if p.status is not None and p.status not in _STOPPED_STATUSES]
+                if p.status is not None and p.status not in _STOPPED_STATUSES
+                and not self.finished_its_job(p)]

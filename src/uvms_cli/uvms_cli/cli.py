@@ -140,10 +140,17 @@ def build_parser() -> argparse.ArgumentParser:
                     '--foxglove, recorder with --output) each as its own process, as ros2 '
                     'launch uvms_bringup uvms.launch.py would, on wall-clock timers by '
                     'default. Ctrl-C or '
-                    "SIGTERM stops every node (exit 130); the run ends when the simulator "
-                    "reaches the scenario's duration_s or --duration (exit 0; --duration 0 "
+                    "SIGTERM stops every node; the run ends when the simulator "
+                    "reaches the scenario's duration_s or --duration (--duration 0 "
                     'runs on until stopped); a node that fails is named and the others are '
-                    'stopped (exit 1).')
+                    "stopped. When the scenario's mission fails, one line says what failed "
+                    '("mission failed: NO_CONTACT (the path ended without contact)") and the '
+                    'run goes on to its end.',
+        epilog='exit status: 0 the simulator reached the duration and every node stopped; '
+               '1 a node failed (could not start, crashed, or the simulation diverged; named '
+               'on stderr); 2 bad usage or a bad scenario file (nothing started); 3 the '
+               "scenario's mission failed (a task did not succeed) and no node failed; 130 "
+               'stopped by Ctrl-C/SIGTERM.')
     launch.add_argument('scenario', metavar='SCENARIO.yaml', nargs='?',
                         help='scenario file or name (default: the parameter files only)')
     launch.add_argument('--duration', type=_seconds_or_zero, metavar='S',

@@ -28,6 +28,7 @@ from std_msgs.msg import Header
 from tf2_msgs.msg import TFMessage
 from uvms_model.contact import ContactState as ContactTruth
 from uvms_model.coordinates import quaternion_xyzw
+from uvms_model.kinematics import rot_ned_from_body
 
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim.errors import CommandError
@@ -42,6 +43,8 @@ MAP_ENU = 'map'
 BASE_LINK_FLU = 'base_link'
 
 EE_LINK = 'ee_link'
+#: Frame of the DVL's velocity (``dvl`` topic), fixed to base_link_frd by its mounting.
+DVL_LINK = 'dvl_link'
 
 #: map_ned axes in map (ENU): north = y_enu, east = x_enu, down = -z_enu.
 ROT_ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -294,22 +297,36 @@ def tf_message(
 
 
 def static_tf_message(
-    t_ns: int, poses: Mapping[str, tuple[FloatArray, FloatArray]]
+    t_ns: int, poses: Mapping[str, tuple[FloatArray, FloatArray]],
+    dvl_mount: tuple[Sequence[float], Sequence[float]] | None = None,
 ) -> TFMessage:
-    """/tf_static: the ENU/FLU twins and the sensor mount.
+    """/tf_static: the ENU/FLU twins and the sensor mounts.
 
     ``map`` (ENU) is the parent of ``map_ned``; ``base_link`` (FLU) hangs under
     ``base_link_frd`` (a frame has one parent in tf2, and base_link_frd's is map_ned), so
     tools that expect ``map`` and ``base_link`` find them; ``ft_sensor_link`` is fixed to
-    ``ee_link``.
+    ``ee_link``; ``dvl_link`` (the frame of ``dvl`` messages) to ``base_link_frd``.
+
+    Args:
+        t_ns: Stamp (ns).
+        poses: Frame poses of the model (``UvmsModel.frame_poses``).
+        dvl_mount: The DVL's ``navigation.dvl.position_m`` (m, in base_link_frd) and
+            ``orientation_rpy`` (rad, ZYX: rot_body_from_dvl as ``uvms_model.nav_sensors``
+            uses it); None: no DVL, no ``dvl_link``.
     """
     p_ee, rot_ee = poses[EE_LINK]
     p_s, rot_s = poses[FT_SENSOR_LINK]
-    return TFMessage(transforms=[
+    transforms = [
         _transform(t_ns, MAP_ENU, MAP_NED, np.zeros(3), ROT_ENU_FROM_NED),
         _transform(t_ns, BASE_LINK_FRD, BASE_LINK_FLU, np.zeros(3), ROT_FRD_FROM_FLU),
         _transform(t_ns, EE_LINK, FT_SENSOR_LINK, rot_ee.T @ (p_s - p_ee), rot_ee.T @ rot_s),
-    ])
+    ]
+    if dvl_mount is not None:
+        position_m, rpy = dvl_mount
+        transforms.append(_transform(t_ns, BASE_LINK_FRD, DVL_LINK,
+                                     np.asarray(position_m, dtype=np.float64),
+                                     rot_ned_from_body(*(float(a) for a in rpy))))
+    return TFMessage(transforms=transforms)
 
 
 def actuator_command_arrays(

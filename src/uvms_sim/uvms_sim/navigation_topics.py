@@ -38,9 +38,14 @@ from uvms_model.nav_sensors import (
     Reading,
 )
 
-from uvms_sim.conversions import quaternion_from_rpy, time_from_ns
+from uvms_sim.conversions import (
+    BASE_LINK_FRD,
+    DVL_LINK,
+    MAP_NED,
+    quaternion_from_rpy,
+    time_from_ns,
+)
 
-MAP_NED, BASE_LINK_FRD, DVL_LINK = 'map_ned', 'base_link_frd', 'dvl_link'
 UNUSED_VARIANCE = 1.0e9
 """Variance of a pose component a message does not measure (robot_localization ignores it)."""
 
@@ -99,6 +104,13 @@ def depth_message(reading: DepthReading, bias_max_m: float) -> PoseWithCovarianc
 def position_fix_message(reading: PositionFixReading) -> PoseWithCovarianceStamped:
     """A position fix as a pose in map_ned with the position's variances."""
     return _pose_message(reading.t_ns, reading.p_ned, list(reading.sigma_m ** 2))
+
+
+def dvl_mount(params: NavigationParameters) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
+    """The DVL's mounting (position m, roll-pitch-yaw rad in base_link_frd), None when off."""
+    if not params.switch.enabled:
+        return None
+    return params.dvl.position_m, params.dvl.orientation_rpy
 
 
 class NavigationTopics:

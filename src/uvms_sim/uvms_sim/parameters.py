@@ -115,6 +115,13 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         'lifecycle state active (<node>/get_state) before physics starts.',
     ),
     ParameterSpec(
+        'startup.recorder', '',
+        'A node (name relative to the namespace, e.g. recorder) whose subscriptions to the '
+        'state topics (/clock, joint_states, odometry, wrench, ee_pose, contact) must be '
+        'matched before the first state is published, so that its recording starts at t = 0 '
+        '(both modes; uvms launch sets it when it records); empty: publish at once.',
+    ),
+    ParameterSpec(
         'watchdog_timeout_s', 0.1,
         'Age in simulated time above which an actuator command is stale and thrusters and '
         'motors are set to zero (s).',
@@ -246,7 +253,8 @@ class SimulatorSettings:
             ee_position=np.array(checked['initial.ee_position'], dtype=float),
             startup=StartupSettings(bool(checked['startup.hold']),
                                     round(float(checked['startup.timeout_s']) * 1e9),
-                                    tuple(checked['startup.nodes'])),
+                                    tuple(checked['startup.nodes']),
+                                    str(checked['startup.recorder'])),
         )
 
 

@@ -42,7 +42,7 @@ from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions, raw_conversions
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError, StartupError
 from uvms_sim.lockstep_wait import AttentiveWait
-from uvms_sim.navigation_topics import NavigationTopics
+from uvms_sim.navigation_topics import NavigationTopics, dvl_mount
 from uvms_sim.ocean_node import OceanCurrentInterface
 from uvms_sim.parameters import (
     SIMULATOR_PARAMETERS,
@@ -50,7 +50,7 @@ from uvms_sim.parameters import (
     default_joint_positions,
 )
 from uvms_sim.plant import Plant, initial_coordinates
-from uvms_sim.startup_watch import StartupWatch
+from uvms_sim.startup_watch import StartupWatch, SubscriberWait
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
@@ -115,8 +115,8 @@ class SimulatorNode(Node):
             self._tf_pub = self.create_publisher(TFMessage, '/tf', QoSProfile(depth=100))
             self._static_tf_pub = self.create_publisher(TFMessage, '/tf_static', QoSProfile(
                 depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
-            self._static_tf_pub.publish(
-                conversions.static_tf_message(0, self._plant.frame_poses()))
+            self._static_tf_pub.publish(conversions.static_tf_message(
+                0, self._plant.frame_poses(), dvl_mount(self._navigation_params)))
         # The URDF the plant was built from, latched as robot_state_publisher offers it, so
         # that RViz, Foxglove and a recording draw the robot.
         self._description_pub = self.create_publisher(String, '/robot_description', QoSProfile(
@@ -147,6 +147,9 @@ class SimulatorNode(Node):
         # Until the loop is closed (docs/running.md, start-up): None once it is, or unwatched.
         self._startup: StartupWatch | None = None
         self._held_published_ns = 0
+        self._first_state = SubscriberWait(self, cfg.startup, [  # startup.recorder's, first
+            self._clock_pub, self._joint_pub, self._odom_pub, self._wrench_pub, self._ee_pub,
+            self._contact_pub])
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
@@ -222,7 +225,9 @@ class SimulatorNode(Node):
         self._answered()
 
     def _on_kick(self) -> None:
-        """Lockstep start: publish the initial state once the executor runs."""
+        """Lockstep start: publish the initial state once the executor runs (and recorder)."""
+        if not self._first_state.passed(self.get_clock().now().nanoseconds):
+            return  # the kick timer asks again
         self._kick.cancel()
         self._publish_state()
         self._watch_startup()
@@ -322,6 +327,8 @@ class SimulatorNode(Node):
     def _loop_closed(self, now_ns: int) -> bool:
         """Real time: hold (re-publish) the initial state until the loop is closed."""
         if self._published == 0:
+            if not self._first_state.passed(now_ns):
+                return False
             if not self._settings.startup.hold:
                 return True
             self._publish_state()

@@ -50,11 +50,14 @@ class StartupSettings:
             error (ns); 0 waits forever.
         nodes: Real time: managed nodes (names relative to the simulator's namespace) that
             must report ``active`` before physics starts.
+        recorder: A node whose subscriptions to the state topics must be matched before
+            the first state is published (``subscriber_matched``); '' none.
     """
 
     hold: bool
     timeout_ns: int
     nodes: tuple[str, ...]
+    recorder: str = ''
 
 
 class LoopStartup:
@@ -131,6 +134,34 @@ class LoopStartup:
         if not self._commanded:
             return f'{head} {_silent(CONTROLLER, COMMAND_TOPIC, publishers)}'
         return f'{head} {_silent(ALLOCATOR, ACTUATOR_TOPIC, publishers)}'
+
+
+def subscriber_matched(subscriber: str, namespace: str,
+                       endpoints: Sequence[tuple[str, str, bool]], matched: int) -> bool:
+    """Whether a node subscribes to a topic and the publisher has matched it.
+
+    The ROS graph names the subscribing nodes; the publisher's matched count does not, so
+    the count must cover every subscription the graph shows whose QoS can match (a
+    subscription that asks for more than the publisher offers never matches and must not
+    hold the start forever).
+
+    Args:
+        subscriber: Node name, relative to ``namespace`` or absolute (``/uvms/recorder``).
+        namespace: The simulator's namespace (``/uvms``).
+        endpoints: The topic's subscriptions as the graph shows them: node name, node
+            namespace, and whether its QoS is compatible with the publisher's.
+        matched: Subscriptions the publisher has matched.
+
+    >>> subscriber_matched('recorder', '/uvms', [('recorder', '/uvms', True)], 1)
+    True
+    >>> subscriber_matched('recorder', '/uvms', [('controller', '/uvms', True),
+    ...                                          ('recorder', '/uvms', True)], 1)
+    False
+    """
+    wanted = subscriber if subscriber.startswith('/') else (
+        f'{namespace.rstrip("/")}/{subscriber}')
+    names = {f'{ns.rstrip("/")}/{name}' for name, ns, _ in endpoints}
+    return wanted in names and matched >= sum(1 for *_, compatible in endpoints if compatible)
 
 
 def _silent(role: str, topic: str, publishers: dict[str, Sequence[str]]) -> str:

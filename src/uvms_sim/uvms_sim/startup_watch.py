@@ -10,15 +10,24 @@ carries no extra subscription.
 from __future__ import annotations
 
 import struct
+from collections.abc import Sequence
 from typing import Any
 
 from lifecycle_msgs.srv import GetState
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.publisher import Publisher
+from rclpy.qos import QoSCompatibility, QoSProfile, ReliabilityPolicy, qos_check_compatible
 from rclpy.task import Future
 
 from uvms_msgs.msg import GeneralizedForce
-from uvms_sim.startup import ACTUATOR_TOPIC, COMMAND_TOPIC, LoopStartup, StartupSettings
+from uvms_sim.errors import StartupError
+from uvms_sim.startup import (
+    ACTUATOR_TOPIC,
+    COMMAND_TOPIC,
+    LoopStartup,
+    StartupSettings,
+    subscriber_matched,
+)
 
 #: Wall time between two ``get_state`` requests to a node that is not active yet (s).
 POLL_PERIOD_S = 0.2
@@ -95,3 +104,78 @@ class StartupWatch:
             self._node.destroy_client(client)
         self._clients = {}
         self._pending = {}
+
+
+class SubscriberWait:
+    """Before the first state: whether a node (the recorder) subscribes to the state topics.
+
+    ``startup.recorder``: the simulator publishes its first state only once that node's
+    subscriptions to each of ``publishers`` are matched, so that a recording holds the run
+    from t = 0. The ROS graph is asked at most every ``POLL_PERIOD_S``.
+    """
+
+    def __init__(self, node: Node, settings: StartupSettings,
+                 publishers: Sequence[Publisher]) -> None:
+        """Wait for ``settings.recorder`` (none: ``passed`` at once) on ``publishers``, from now.
+
+        The timeout is ``settings.timeout_ns`` of the node's clock (the simulator's: wall time).
+        """
+        self._node = node
+        self.subscriber = subscriber = settings.recorder
+        self._publishers = list(publishers)
+        self.start_ns = node.get_clock().now().nanoseconds
+        self._timeout_ns = settings.timeout_ns
+        self._asked_ns: int | None = None
+        self.missing = [publisher.topic_name for publisher in self._publishers]
+        self._passed = not subscriber
+        if subscriber:
+            node.get_logger().info(f'publishing the first state once {subscriber} subscribes '
+                                   'to the state topics (startup.recorder)')
+
+    def passed(self, now_ns: int) -> bool:
+        """Whether the node has subscribed (True at once without one); raise after the timeout.
+
+        Raises:
+            StartupError: ``startup.timeout_s`` passed without it subscribing; the message
+                names the node and the topics.
+        """
+        if self._passed:
+            return True
+        if self.ready(now_ns):
+            self._passed = True
+            self._node.get_logger().info(
+                f'{self.subscriber} subscribed to the state topics after '
+                f'{(now_ns - self.start_ns) * 1e-9:.2f} s: publishing the initial state')
+            return True
+        if self.expired(now_ns):
+            msg = self.failure(now_ns)
+            self._node.get_logger().fatal(msg)
+            raise StartupError(msg)
+        return False
+
+    def ready(self, now_ns: int) -> bool:
+        """Whether every state topic's subscription of the node is matched (asks the graph)."""
+        if self._asked_ns is not None and now_ns - self._asked_ns < POLL_PERIOD_S * 1e9:
+            return not self.missing
+        self._asked_ns = now_ns
+        namespace = self._node.get_namespace()
+        self.missing = []
+        for publisher in self._publishers:
+            endpoints = [(info.node_name, info.node_namespace, qos_check_compatible(
+                publisher.qos_profile, info.qos_profile)[0] != QoSCompatibility.ERROR)
+                for info in self._node.get_subscriptions_info_by_topic(publisher.topic_name)]
+            if not subscriber_matched(self.subscriber, namespace, endpoints,
+                                      publisher.get_subscription_count()):
+                self.missing.append(publisher.topic_name)
+        return not self.missing
+
+    def expired(self, now_ns: int) -> bool:
+        """Whether ``startup.timeout_s`` passed without the node subscribing (0: never)."""
+        return 0 < self._timeout_ns <= now_ns - self.start_ns
+
+    def failure(self, now_ns: int) -> str:
+        """The start-up error naming the node and the topics it did not subscribe to."""
+        return (f'{self.subscriber} did not subscribe to the state topics within '
+                f'startup.timeout_s = {self._timeout_ns * 1e-9:g} s '
+                f'({(now_ns - self.start_ns) * 1e-9:.1f} s; startup.recorder): no matched '
+                f'subscription of it on {", ".join(self.missing)}')

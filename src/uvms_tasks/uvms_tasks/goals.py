@@ -79,6 +79,23 @@ class TaskOutcome:
         return (self.status == GoalStatus.STATUS_SUCCEEDED and self.result is not None
                 and self.result.error_code == ContactTask.Result.SUCCEEDED)
 
+    @property
+    def code(self) -> str:
+        """The result's code name (``NO_CONTACT``), ``REJECTED``, or the goal status name."""
+        if self.rejected:
+            return 'REJECTED'
+        if self.result is None:
+            return STATUS_NAMES.get(self.status, f'status {self.status}')
+        return ERROR_CODE_NAMES.get(self.result.error_code,
+                                    f'error code {self.result.error_code}')
+
+    @property
+    def message(self) -> str:
+        """The result's ``error_string``; for a refused goal, where to read why."""
+        if self.rejected:
+            return 'the controller refused the goal; its log says why'
+        return str(self.result.error_string) if self.result is not None else ''
+
     def describe(self) -> str:
         """One line: name, status, error code and the result's numbers."""
         return f'{self.name}: {describe_result(self.status, self.result, self.rejected)}'

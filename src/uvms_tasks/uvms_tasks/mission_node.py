@@ -13,7 +13,10 @@ In process::
     executor.add_node(node)               # spin until node.finished; node.results
 
 As its own process: ``ros2 run uvms_tasks mission --ros-args -r __ns:=/uvms
--p mission_file:=mission.yaml`` (exit 0 when every goal SUCCEEDED, 1 otherwise).
+-p mission_file:=mission.yaml`` (exit 0 when every goal SUCCEEDED, 3 when one did not,
+``uvms_tasks.mission_outcome.EXIT_MISSION_FAILED``; 1 when the node could not start or
+crashed). With ``-p outcome_file:=F.json`` it writes how the mission ended there
+(``uvms_tasks.mission_outcome``): ``uvms launch`` reads it to say what failed.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ from uvms_msgs.msg import ControllerState
 from uvms_tasks.client import DISCOVERY_SETTLE_S, ContactTaskClient
 from uvms_tasks.errors import TaskError, TaskFileError
 from uvms_tasks.goals import TaskOutcome, describe_task, goal_from_task
+from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, MissionOutcome, write_outcome
 from uvms_tasks.task_file import TaskSpec, load_task_file
 
 
@@ -87,6 +91,10 @@ class MissionNode(Node):
                             'first goal (s); 0 when the server is in the same process',
                 read_only=True, floating_point_range=[
                     FloatingPointRange(from_value=0.0, to_value=10.0, step=0.0)])).value
+        self.outcome_file: str = self.declare_parameter(
+            'outcome_file', '', ParameterDescriptor(
+                description='File to write the outcome of the mission to when it ends (JSON, '
+                            'uvms_tasks.mission_outcome); empty: none', read_only=True)).value
         if tasks is None:
             if not mission_file:
                 msg = 'mission: no tasks: set parameter mission_file to a task or mission file'
@@ -210,6 +218,15 @@ class MissionNode(Node):
             self.get_logger().info(summary)
         else:
             self.get_logger().error(summary)
+        if self.outcome_file:
+            write_outcome(self.outcome_file, self.outcome())
+
+    def outcome(self) -> MissionOutcome:
+        """How the mission ended: succeeded, or the first failed task's code and message."""
+        failed = next((result for result in self.results if not result.succeeded), None)
+        if failed is None:
+            return MissionOutcome(self.succeeded)
+        return MissionOutcome(False, failed.name, failed.code, failed.message)
 
     def destroy_node(self) -> None:
         """Ask the controller to cancel a goal still running, then destroy the node."""
@@ -232,7 +249,7 @@ def main(args: list[str] | None = None) -> None:
     status = run_node(make_node, args, 'mission', (TaskError, ParameterException),
                       finished=lambda node: getattr(node, 'finished', False))
     if status == 0 and nodes and nodes[0].finished and not nodes[0].succeeded:
-        status = 1
+        status = EXIT_MISSION_FAILED
     sys.exit(status)
 
 

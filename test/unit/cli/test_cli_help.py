@@ -36,3 +36,13 @@ def test_help_lists_every_node_the_graph_can_start(
     text = _help([command, '--help'], capsys)
     for spec in graph_nodes(record=True, foxglove=True, mission=True):
         assert spec.name in text, spec.name
+
+
+def test_launch_help_documents_every_exit_status(capsys: pytest.CaptureFixture[str]) -> None:
+    """0, 1, 2, 3 (a failed mission, distinct from a node that failed) and 130 are explained."""
+    text = _help(['launch', '--help'], capsys)
+    statuses = re.search(r'exit status: (.*)', text)
+    assert statuses is not None
+    for status, meaning in [('0', 'reached the duration'), ('1', 'a node failed'),
+                            ('2', 'bad usage'), ('3', 'mission failed'), ('130', 'Ctrl-C')]:
+        assert re.search(rf'(^|; ){status} [^;]*{meaning}', statuses.group(1)), (status, text)

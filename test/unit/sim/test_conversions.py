@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
 from uvms_model.kinematics import rot_ned_from_body
+from uvms_model.nav_sensor_parameters import DvlParameters
+from uvms_model.nav_sensors import Dvl
 from uvms_sim.errors import CommandError
 
 from uvms_model import UvmsModel
@@ -83,6 +85,33 @@ def test_tf_tree_gives_each_frame_one_parent_and_reaches_map() -> None:
             frame = parents[frame]
         assert frame == 'map'
     assert {'map_ned', 'base_link', 'base_link_frd', 'ee_link', 'ft_sensor_link'} <= set(parents)
+
+
+@pytest.mark.parametrize('rpy', [(0.0, 0.0, 0.0), (0.0, 0.0, math.pi / 4), (0.1, -0.3, 2.0)])
+def test_dvl_link_is_fixed_to_base_link_frd_by_its_mounting(
+        rpy: tuple[float, float, float]) -> None:
+    """/tf_static's base_link_frd -> dvl_link takes a DVL velocity back to the body frame.
+
+    The DVL model measures v_dvl = rot_body_from_dvl^T v_body (uvms_model.nav_sensors.Dvl);
+    the transform's rotation (read through the quaternion oracle) must undo it, and its
+    translation is the mounting position.
+    """
+    position = (-0.1, 0.02, 0.15)
+    model = UvmsModel()
+    poses = model.frame_poses(np.array([0, 0, 0, 0, 0, 0, 0.1, 0.4, -0.8]))
+    transforms = conversions.static_tf_message(0, poses, (position, rpy)).transforms
+    [dvl] = [t for t in transforms if t.child_frame_id == 'dvl_link']
+    assert dvl.header.frame_id == 'base_link_frd'
+    t = dvl.transform
+    np.testing.assert_allclose([t.translation.x, t.translation.y, t.translation.z], position)
+    rot_body_from_dvl = rotation_from_quaternion(t.rotation.x, t.rotation.y, t.rotation.z,
+                                                 t.rotation.w)
+    sensor = Dvl(DvlParameters(position_m=position, orientation_rpy=rpy), seed=1)
+    v_body = np.array([0.3, -0.2, 0.1])
+    v_dvl = sensor.rot_body_from_dvl.T @ v_body
+    np.testing.assert_allclose(rot_body_from_dvl @ v_dvl, v_body, atol=1e-12)
+    assert 'dvl_link' not in {t.child_frame_id
+                              for t in conversions.static_tf_message(0, poses).transforms}
 
 
 def test_tf_chain_reproduces_end_effector_pose() -> None:
