@@ -40,6 +40,7 @@ from uvms_bringup.launch_helpers import (
 )
 from uvms_bringup.node_factory import GraphError, make_node
 from uvms_bringup.scenario import ParameterValue, Scenario
+from uvms_bringup.stall_watch import StallWatch, stall_limit_s
 
 #: Longest wall-clock wait for any callback before the lockstep loop checks on the graph (s).
 _SPIN_TIMEOUT_S = 0.5
@@ -219,12 +220,17 @@ def run_graph(
         executor.add_node(node)
     output_path = graph.output_path
     interrupted = False
+    stall = StallWatch(stall_limit_s(sim.get_parameter('startup.timeout_s').value,
+                                     sim.get_parameter('lockstep_timeout_s').value))
     start = time.monotonic()
     try:
         while not sim.finished:
             if stop is not None and stop.is_set():
                 raise KeyboardInterrupt
             executor.spin_once(timeout_sec=_SPIN_TIMEOUT_S)
+            stalled = stall.check(sim.sim_time_ns, time.monotonic())
+            if stalled is not None:
+                raise RuntimeError(stalled)
             if progress is not None:
                 progress.update_to(sim.sim_time_ns * 1e-9)
             if on_spin is not None:
