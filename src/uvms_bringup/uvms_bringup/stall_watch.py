@@ -9,9 +9,9 @@ forever. Pure; wall times in seconds of a monotonic clock.
 
 Example::
 
-    watch = StallWatch(limit_s=90.0)
+    watch = StallWatch(limit_s=151.0)
     watch.check(sim_time_ns=0, wall_s=0.0)        # None: just started
-    watch.check(sim_time_ns=0, wall_s=95.0)       # the message: 95 s without progress
+    watch.check(sim_time_ns=0, wall_s=155.0)      # the message: 155 s without progress
 """
 
 from __future__ import annotations
@@ -21,8 +21,12 @@ MARGIN_S = 30.0
 
 
 def stall_limit_s(startup_timeout_s: float, lockstep_timeout_s: float) -> float:
-    """Wall time without simulated progress after which a graph is stalled (s)."""
-    return max(startup_timeout_s, lockstep_timeout_s) + MARGIN_S
+    """Wall time without simulated progress after which a graph is stalled (s).
+
+    The simulator's longest wait at one simulated time: ``startup.timeout_s`` for the
+    recorder (``startup.recorder``), again for the loop to close, then a lockstep timeout.
+    """
+    return 2.0 * startup_timeout_s + lockstep_timeout_s + MARGIN_S
 
 
 class StallWatch:

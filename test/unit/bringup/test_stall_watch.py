@@ -31,8 +31,8 @@ def test_progress_restarts_the_wait() -> None:
 
 
 def test_limit_lies_beyond_the_simulators_own_timeouts() -> None:
-    """The limit exceeds the start-up and lockstep timeouts by the margin."""
-    assert stall_limit_s(60.0, 1.0) == 60.0 + MARGIN_S
-    assert stall_limit_s(5.0, 20.0) == 20.0 + MARGIN_S
+    """The limit exceeds the recorder and loop start-up waits and a lockstep timeout."""
+    assert stall_limit_s(60.0, 1.0) == 2 * 60.0 + 1.0 + MARGIN_S
+    assert stall_limit_s(5.0, 20.0) == 2 * 5.0 + 20.0 + MARGIN_S
     with pytest.raises(ValueError, match='stall limit'):
         StallWatch(0.0)
