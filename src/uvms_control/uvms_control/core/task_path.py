@@ -100,7 +100,9 @@ class TaskPath:
 
         The first waypoint is replaced by the state's position when its time is ``time``,
         otherwise the state is prepended; the state's velocity and acceleration are kept, so
-        a preempting goal continues the running reference without a jump in any of them.
+        a preempting goal continues the running reference without a jump in any of them. A
+        goal's first waypoint away from X_d gets a transit before it comes here
+        (``contact_task.planned_goal``), so the replaced waypoint is X_d itself.
         """
         start = np.asarray(state, dtype=np.float64).reshape(3, 3)
         times = np.asarray(times, dtype=np.float64)
