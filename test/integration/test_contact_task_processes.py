@@ -78,6 +78,20 @@ def test_uvms_task_presses_on_the_wall_of_a_launched_graph(
     assert 'peak' in result.stdout
 
 
+def test_uvms_task_prints_why_the_controller_rejected_a_goal(
+        launch: subprocess.Popen[str], tmp_path: Path) -> None:
+    """A goal over safety.max_contact_force_n: rejected, the reason printed, exit 1."""
+    task = tmp_path / 'too_hard.yaml'
+    task.write_text(TASK.replace('force_n: 60.0', 'force_n: 500.0'), encoding='utf-8')
+    result = subprocess.run(
+        [str(BIN / 'uvms'), 'task', str(task), '--timeout', str(START_TIMEOUT_S)],
+        capture_output=True, text=True, env=environment(), timeout=TASK_TIMEOUT_S, check=False)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert result.stdout.strip() == (
+        'press: REJECTED: force_n = 500.0: exceeds safety.max_contact_force_n = 400.0 N'), (
+        result.stdout + result.stderr)
+
+
 def test_script_client_gets_result_and_diagnostics_of_every_node(
         launch: subprocess.Popen[str]) -> None:
     """A script's ContactTaskClient presses again; /diagnostics names every node process."""

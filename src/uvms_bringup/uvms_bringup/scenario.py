@@ -178,6 +178,7 @@ def contact_estimate(scenario: Scenario) -> ContactEstimate | None:
                 isinstance(x0, list) and len(x0) == 3):
             return None
         task = task.expanded([float(value) for value in x0])
+    task = task.expanded()  # a half circle with its own start
     if start_s is None:
         return None
     x = task.path[:, 0]

@@ -55,6 +55,7 @@ def contact_task_result(result: TaskResult) -> ContactTask.Result:
         peak_force_n=float(result.peak_force_n),
         rms_force_error_n=float(result.rms_force_error_n),
         settling_time_s=float(result.settling_time_s),
+        transit_s=float(result.transit_s),
     )
 
 
@@ -94,6 +95,8 @@ def contact_task_feedback(progress: TaskProgress, step: ControllerResult) -> Con
      feedback.position_desired.z) = step.X_d.tolist()
     feedback.progress = float(progress.progress)
     feedback.state = int(progress.state)
+    feedback.transit_s = float(progress.transit_s)
+    feedback.in_transit = bool(progress.in_transit)
     return feedback
 
 

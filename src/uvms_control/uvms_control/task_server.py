@@ -1,9 +1,13 @@
 """The ContactTask action server of the controller: goals in, feedback and results out.
 
-A thin adapter between rclpy's ActionServer and the task core (``TaskSupervisor``): it
-accepts every well-formed request, hands the goal to the supervisor (which refuses an
-invalid one with INVALID_GOAL and the field named, or lets it preempt the running task),
-and answers when the control loop says the task ended. The control loop drives everything:
+A thin adapter between rclpy's ActionServer and the task core (``TaskSupervisor``): its goal
+callback rejects a goal that fails the checks (``TaskSupervisor.check``, the pure
+``validate_goal`` that runs again when the goal is taken and when it starts) and logs why in
+one line, ``contact task goal rejected: <field> = <value>: <limit>`` (a rejected goal gets
+no result message in ROS 2 actions: the log, on /rosout, is where a client reads the reason).
+It hands an accepted goal to the supervisor (which still ends it INVALID_GOAL when the state
+changed in between, or during a retreat, or lets it preempt the running task), and answers
+when the control loop says the task ended. The control loop drives everything:
 rclpy's coroutine execute callback would poll the executor while a task runs, so the goal
 stays ACCEPTED while it runs and ``execute`` is called only to deliver its result. Each
 task that ran a step is also published once on ``controller/task_record`` (goal id, F_d,
@@ -34,6 +38,8 @@ from uvms_msgs.msg import ContactTaskRecord
 
 #: Feedback period on the controller's clock (s): 20 Hz, above the 10 Hz the contract asks.
 FEEDBACK_PERIOD_S = 0.05
+#: Start of the log line (/rosout) of a rejected goal; its reason follows.
+REJECTED_PREFIX = 'contact task goal rejected: '
 
 
 def _goal_key(handle: ServerGoalHandle) -> bytes:
@@ -67,11 +73,12 @@ class ContactTaskServer:
         self._records = node.create_publisher(ContactTaskRecord, 'controller/task_record', 10)
         self._last_feedback_s = -float('inf')
         self.goals_received = 0
+        self.goals_rejected = 0
         self.last_outcome = 'none'
         self._server = ActionServer(
             node, ContactTask, 'controller/contact_task',
             execute_callback=self._deliver,
-            goal_callback=lambda _request: GoalResponse.ACCEPT,
+            goal_callback=self._check,
             handle_accepted_callback=self._accepted,
             cancel_callback=self._cancel,
             callback_group=callback_group,
@@ -87,6 +94,30 @@ class ContactTaskServer:
     def open_goal_forces(self) -> list[float]:
         """force_n of every goal not ended yet (N)."""
         return [float(handle.request.force_n) for handle in self._handles.values()]
+
+    def _check(self, request: ContactTask.Goal) -> GoalResponse:
+        """Reject a goal that fails the checks, logging why; accept the rest.
+
+        An inactive controller accepts (the goal then ends INACTIVE with its result).
+        """
+        try:
+            supervisor = self._supervisor()
+            if supervisor is not None:
+                supervisor.check(contact_task_goal(request), self._now_s())
+        except TaskGoalError as error:
+            return self._reject(str(error))
+        except Exception as error:  # nothing escapes into the executor
+            if self._on_error is not None:
+                self._on_error('contact task goal callback', error)
+            return self._reject(f'the controller could not check the goal: '
+                                f'{type(error).__name__}: {error}')
+        return GoalResponse.ACCEPT
+
+    def _reject(self, reason: str) -> GoalResponse:
+        self.goals_rejected += 1
+        self.last_outcome = f'REJECTED: {reason}'
+        self._node.get_logger().warn(f'{REJECTED_PREFIX}{reason}')
+        return GoalResponse.REJECT
 
     def _accepted(self, handle: ServerGoalHandle) -> None:
         try:

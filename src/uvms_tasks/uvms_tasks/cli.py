@@ -2,8 +2,11 @@
 
 Joins the graph of the ROS domain in the environment, sends each task through the
 controller's ContactTask action (the next when the previous one SUCCEEDED), shows a progress
-line on stderr (state, phase, W, force, progress) and prints each result on stdout. Ctrl-C
-cancels the running goal (the controller ramps the force down and backs off) and exits 130.
+line on stderr (state, phase, W, force, progress) and prints each result on stdout. A task
+whose first waypoint is away from the controller's X_d starts with a transit there: a line
+on stderr says how far and how long. A goal the controller rejects is printed ``REJECTED:``
+with the reason the controller logged (read back from /rosout). Ctrl-C cancels the running
+goal (the controller ramps the force down and backs off) and exits 130.
 
 Exit status: 0 every task SUCCEEDED, 1 one did not (or no controller answered), 2 a bad file
 or bad usage, 130 interrupted.
@@ -12,6 +15,7 @@ or bad usage, 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import time
@@ -126,6 +130,7 @@ class _TaskRun:
     def run(self, tasks: list[TaskSpec]) -> int:
         """Send every task, stopping after the first that does not succeed."""
         client = self.client
+        client.watch_rejections()
         if not self.spin(client.server_is_ready, self.timeout_s):
             if self.stop.is_set():
                 return EXIT_INTERRUPTED
@@ -166,7 +171,10 @@ class _TaskRun:
                                              state.desired_position.y,
                                              state.desired_position.z)
         print(f'sending {describe_task(task)}', file=sys.stderr, flush=True)
-        sent = client.send_goal_async(goal_from_task(task, start), self.progress.update)
+        goal = goal_from_task(task, start)
+        transit = _TransitNote(task.name, goal, start, self.progress)
+        since = time.monotonic()
+        sent = client.send_goal_async(goal, transit.feedback)
         if not self.spin(sent.done, self.timeout_s):
             # Interrupted before the answer: wait for it, so that an accepted goal is canceled.
             if not self.stop.is_set() or not client.spin_until(sent.done, self.timeout_s):
@@ -174,7 +182,8 @@ class _TaskRun:
                 raise TaskClientError(msg)
         handle = sent.result()
         if not handle.accepted:
-            return TaskOutcome(task.name, int(handle.status), rejected=True)
+            return TaskOutcome(task.name, int(handle.status), rejected=True,
+                               reason=client.rejection_reason(since))
         result = client.result_async(handle)
         if not self.spin(result.done, None):
             self.cancel(task, handle, result)
@@ -196,6 +205,30 @@ class _TaskRun:
             response = result.result()
             print(TaskOutcome(task.name, int(response.status), response.result).describe(),
                   flush=True)
+
+
+class _TransitNote:
+    """Says once, on stderr, that a goal starts with a transit to its first waypoint."""
+
+    def __init__(self, name: str, goal: Any, start: Sequence[float] | None,
+                 progress: _ProgressLine) -> None:
+        self.name = name
+        self.first = (goal.path[0].x, goal.path[0].y, goal.path[0].z) if goal.path else None
+        self.start = start
+        self.progress = progress
+        self.said = False
+
+    def feedback(self, feedback: Any) -> None:
+        """Pass the feedback on to the progress line, after the note at the first transit."""
+        if not self.said and feedback.transit_s > 0.0:
+            self.said = True
+            self.progress.end()
+            distance = ('' if self.start is None or self.first is None
+                        else f' {math.dist(self.start, self.first):.3f} m')
+            print(f'{self.name}: transit{distance} from X_d to path[0] first, in '
+                  f'{feedback.transit_s:.2f} s (the path times count from its end)',
+                  file=sys.stderr, flush=True)
+        self.progress.update(feedback)
 
 
 class _ProgressLine:

@@ -36,16 +36,18 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from rcl_interfaces.msg import Log
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.callback_groups import CallbackGroup
 from rclpy.executors import Executor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from rclpy.task import Future
 from unique_identifier_msgs.msg import UUID
 from uvms_common.node_main import make_executor
+from uvms_control.task_server import REJECTED_PREFIX
 
 from uvms_msgs.action import ContactTask
 from uvms_msgs.msg import ControllerState
@@ -63,6 +65,8 @@ STATE_TOPIC = 'controller/state'
 DISCOVERY_SETTLE_S = 0.5
 #: Longest single executor turn of the blocking methods (s): Ctrl-C is seen this fast.
 SPIN_TURN_S = 0.1
+#: Wall time to wait, after a rejection, for the controller's log line that says why (s).
+REJECTION_WAIT_S = 2.0
 
 FeedbackCallback = Callable[[ContactTask.Feedback], None]
 
@@ -99,6 +103,8 @@ class ContactTaskClient:
             callback_group=callback_group, raw=True)
         self._executor = executor
         self._own_executor = False
+        self._rejections: list[tuple[float, str]] = []  # (monotonic s, reason)
+        self._rosout: Any = None
 
     @property
     def action_name(self) -> str:
@@ -121,6 +127,35 @@ class ContactTaskClient:
 
     def _on_state(self, data: bytes) -> None:
         self._latest_state = data
+
+    def watch_rejections(self) -> None:
+        """Listen on /rosout for the controller's lines on rejected goals (``rejection_reason``).
+
+        A rejected goal gets no result message in ROS 2 actions; the controller logs why in
+        one line (``uvms_control.task_server.REJECTED_PREFIX``), which this reads back.
+        """
+        if self._rosout is None:
+            self._rosout = self.node.create_subscription(
+                Log, '/rosout', self._on_log,
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+
+    def _on_log(self, msg: Log) -> None:
+        if msg.msg.startswith(REJECTED_PREFIX):
+            self._rejections.append((time.monotonic(), msg.msg[len(REJECTED_PREFIX):]))
+
+    def rejection_reason(self, since: float, timeout_s: float = REJECTION_WAIT_S) -> str | None:
+        """Why the controller rejected a goal sent at ``since`` (time.monotonic(), s), or None.
+
+        The first rejection line received after ``since`` (``watch_rejections`` must have been
+        called before the goal was sent); None when none arrives within timeout_s. Another
+        client's goal rejected at the same moment could be mistaken for this one.
+        """
+        def found() -> bool:
+            return any(t >= since for t, _ in self._rejections)
+
+        if self._rosout is None or not self.spin_until(found, timeout_s):
+            return None
+        return next(reason for t, reason in self._rejections if t >= since)
 
     # ------------------------------------------------------------------ non-blocking
 
@@ -244,9 +279,11 @@ class ContactTaskClient:
         Raises:
             TaskClientError: No answer or no result within the timeout (s).
         """
+        since = time.monotonic()
         handle = self.send_goal(goal, feedback_callback)
         if not handle.accepted:
-            return TaskOutcome(name=name, status=int(handle.status), rejected=True)
+            return TaskOutcome(name=name, status=int(handle.status), rejected=True,
+                               reason=self.rejection_reason(since))
         status, result = self.wait_for_result(handle, timeout_s)
         return TaskOutcome(name=name, status=status, result=result)
 
@@ -254,6 +291,8 @@ class ContactTaskClient:
         """Destroy the action client and subscription (and the client's own executor)."""
         self._action.destroy()
         self.node.destroy_subscription(self._state_subscription)
+        if self._rosout is not None:
+            self.node.destroy_subscription(self._rosout)
         if self._own_executor and self._executor is not None:
             self._executor.remove_node(self.node)
             self._executor.shutdown()

@@ -66,12 +66,14 @@ class TaskOutcome:
         status: action_msgs GoalStatus of the goal (SUCCEEDED, ABORTED, CANCELED, ...).
         result: The server's result; None if the goal was rejected before it ran.
         rejected: Whether the server refused the goal at once (no result then).
+        reason: Why, as the controller logged it (None: its log line was not seen).
     """
 
     name: str
     status: int
     result: ContactTask.Result | None = None
     rejected: bool = False
+    reason: str | None = None
 
     @property
     def succeeded(self) -> bool:
@@ -98,7 +100,8 @@ class TaskOutcome:
 
     def describe(self) -> str:
         """One line: name, status, error code and the result's numbers."""
-        return f'{self.name}: {describe_result(self.status, self.result, self.rejected)}'
+        text = describe_result(self.status, self.result, self.rejected, self.reason)
+        return f'{self.name}: {text}'
 
 
 def stamp_from_seconds(t_s: float | None) -> Time:
@@ -110,16 +113,15 @@ def stamp_from_seconds(t_s: float | None) -> Time:
 
 
 def goal_from_task(task: TaskSpec, start: Sequence[float] | None = None) -> ContactTask.Goal:
-    """The ContactTask goal of a task; a half circle is expanded from X0 = ``start`` (m).
+    """The ContactTask goal of a task; a half circle is expanded from its own start or ``start``.
 
     Raises:
-        TaskGoalError: A half circle without ``start``.
+        TaskGoalError: A half circle without either.
     """
-    if task.needs_start:
-        if start is None:
-            msg = f'{task.name}: a half circle needs its start X0 (the controller X_d)'
-            raise TaskGoalError(msg)
-        task = task.expanded(start)
+    if task.needs_start and start is None:
+        msg = f'{task.name}: a half circle needs its start X0 (the controller X_d)'
+        raise TaskGoalError(msg)
+    task = task.expanded(start)
     goal = ContactTask.Goal()
     goal.header = Header(stamp=stamp_from_seconds(task.start_time_s), frame_id=GOAL_FRAME)
     goal.path = [Point(x=x, y=y, z=z) for x, y, z in task.path.tolist()]
@@ -153,10 +155,16 @@ def describe_task(task: TaskSpec) -> str:
 
 
 def describe_result(status: int, result: ContactTask.Result | None,
-                    rejected: bool = False) -> str:
-    """One line of a goal's end: ``SUCCEEDED: contact 12.30 s, peak 151.2 N, ...``."""
+                    rejected: bool = False, reason: str | None = None) -> str:
+    """One line of a goal's end: ``SUCCEEDED: contact 12.30 s, peak 151.2 N, ...``.
+
+    A rejected goal: ``REJECTED: <reason>`` (the controller's log line), or a pointer to the
+    controller's log when the reason was not seen. A transit before the path is named last.
+    """
     if rejected:
-        return 'REJECTED by the server (its log says why)'
+        if reason is None:
+            return 'REJECTED by the server (the controller log says why)'
+        return f'REJECTED: {reason}'
     if result is None:
         return STATUS_NAMES.get(status, f'status {status}')
     code = ERROR_CODE_NAMES.get(result.error_code, f'error code {result.error_code}')
@@ -165,12 +173,15 @@ def describe_result(status: int, result: ContactTask.Result | None,
                f'RMS error {_maybe(result.rms_force_error_n, "N")}, '
                f'settled in {_maybe(result.settling_time_s, "s")}')
     detail = f': {result.error_string}' if result.error_string else ''
-    return f'{text}{detail}; {numbers}'
+    transit = (f'; transit to path[0] first: {result.transit_s:.2f} s'
+               if result.transit_s > 0.0 else '')
+    return f'{text}{detail}; {numbers}{transit}'
 
 
 def describe_feedback(feedback: ContactTask.Feedback) -> str:
-    """One line of progress: state, phase, W, force and desired force, progress."""
-    state = STATE_NAMES.get(feedback.state, f'state {feedback.state}')
+    """One line of progress: state (``transit`` on the way to path[0]), phase, W, F, progress."""
+    state = ('transit' if feedback.in_transit
+             else STATE_NAMES.get(feedback.state, f'state {feedback.state}'))
     phase = PHASE_NAMES.get(feedback.phase, f'phase {feedback.phase}')
     return (f'{state:<10} {phase:<11} W {feedback.weight:4.2f}  '
             f'F {feedback.force_n:7.1f} / {feedback.force_desired_n:6.1f} N  '

@@ -13,6 +13,7 @@ a list of tasks sent one after another. Scenario files use the same list under t
         normal: [1.0, 0.0, 0.0]        # force direction into the surface, required, non-zero
       - half_circle:                   # the paper's reference (sec. 5.1, Fig. 7), from X0
           duration_s: 20.0             # number > 0, required (s)
+          start: [1.70, 0.0, -0.10]    # X0 (m), point A; default: the controller's X_d
           radius_m: 0.1                # number > 0 (m), default 0.1
           toward: [1.0, 0.0, 0.0]      # n, default: the task's normal
           sweep: [0.0, 0.0, 1.0]       # d, default down; not parallel to toward
@@ -25,10 +26,12 @@ a list of tasks sent one after another. Scenario files use the same list under t
                                        # default: when the controller accepts the goal
 
 A task gives either ``path`` with ``time_from_start_s`` or ``half_circle``. The half circle
-starts at X0, the controller's hold target when the goal is sent, so it becomes waypoints
-only then (``TaskSpec.expanded``): positions with their exact velocities and accelerations,
-sampled from ``uvms_control.core.reference.HalfCircleReference``. Integers are accepted
-where numbers are expected; ``1e4`` reads as a number (YAML 1.2, as ROS 2 parameter files).
+starts at X0: its ``start`` when given (the controller then reaches it by a transit first,
+wherever it holds), else the controller's hold target when the goal is sent, so it becomes
+waypoints only then (``TaskSpec.expanded``): positions with their exact velocities and
+accelerations, sampled from ``uvms_control.core.reference.HalfCircleReference``. Integers
+are accepted where numbers are expected; ``1e4`` reads as a number (YAML 1.2, as ROS 2
+parameter files).
 Each error is one line naming the file, the key (``mission[1].half_circle.radius_m``) and
 what is expected.
 """
@@ -57,7 +60,7 @@ Vector3 = tuple[float, float, float]
 PATH_KEYS = ('path', 'time_from_start_s', 'velocity', 'acceleration')
 TASK_KEYS = ('name', *PATH_KEYS, 'half_circle', 'normal', 'force_n', 'force_ramp_s',
              'require_contact', 'start_time_s')
-HALF_CIRCLE_KEYS = ('duration_s', 'radius_m', 'toward', 'sweep', 'points')
+HALF_CIRCLE_KEYS = ('duration_s', 'start', 'radius_m', 'toward', 'sweep', 'points')
 #: Defaults: the controller's force ramp (config/controller.yaml) and the paper's half circle.
 DEFAULT_FORCE_RAMP_S = 1.0
 DEFAULT_RADIUS_M = 0.1
@@ -95,6 +98,7 @@ class HalfCircle:
         toward: n, toward the surface in map_ned; None: the task's normal.
         sweep: d, the diameter's direction in map_ned (default down).
         points: Waypoints sampled over the duration, both ends included.
+        start: X0 in map_ned (m); None: the controller's X_d when the goal is sent.
     """
 
     duration_s: float
@@ -102,6 +106,7 @@ class HalfCircle:
     toward: Vector3 | None = None
     sweep: Vector3 = DEFAULT_SWEEP
     points: int = DEFAULT_POINTS
+    start: Vector3 | None = None
 
     def reference(self, normal: Sequence[float]) -> HalfCircleReference:
         """The reference generator, starting at t = 0 (no delay)."""
@@ -160,17 +165,25 @@ class TaskSpec:
 
     @property
     def needs_start(self) -> bool:
-        """Whether the waypoints depend on X0 (a half circle not yet expanded)."""
-        return self.half_circle is not None
+        """Whether the waypoints depend on X0 (a half circle without its own start)."""
+        return self.half_circle is not None and self.half_circle.start is None
 
-    def expanded(self, start: Sequence[float]) -> TaskSpec:
-        """The task with its half circle turned into waypoints from X0 = ``start`` (m).
+    def expanded(self, start: Sequence[float] | None = None) -> TaskSpec:
+        """The task with its half circle turned into waypoints from X0 (m).
 
-        A task with explicit waypoints is returned unchanged.
+        X0 is the half circle's own ``start``, else ``start`` (the controller's X_d). A task
+        with explicit waypoints is returned unchanged.
+
+        Raises:
+            ValueError: a half circle with neither.
         """
         if self.half_circle is None:
             return self
-        times, x_d, x_d_dot, x_d_ddot = self.half_circle.sample(start, self.normal.tolist())
+        origin = self.half_circle.start if self.half_circle.start is not None else start
+        if origin is None:
+            msg = f'{self.name}: a half circle needs its start X0 (the controller X_d)'
+            raise ValueError(msg)
+        times, x_d, x_d_dot, x_d_ddot = self.half_circle.sample(origin, self.normal.tolist())
         return replace(self, path=x_d, time_from_start_s=times, velocity=x_d_dot,
                        acceleration=x_d_ddot, half_circle=None)
 
@@ -282,6 +295,7 @@ def _half_circle(data: Any, source: str, key: str, normal: Vector3) -> HalfCircl
         toward=_vector(data, 'toward', source, prefix, nonzero=True),
         sweep=_vector(data, 'sweep', source, prefix, nonzero=True) or DEFAULT_SWEEP,
         points=points,
+        start=_vector(data, 'start', source, prefix),
     )
     try:
         half_circle.reference(normal)

@@ -7,7 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, validate_goal
+from uvms_control.core.contact_task import (
+    ContactTaskGoal,
+    SafetyLimits,
+    planned_goal,
+    validate_goal,
+)
 from uvms_tasks.task_file import TaskSpec, load_task_file, parse_mission
 
 from uvms_description.robots import robot_parameters, robot_start
@@ -16,6 +21,11 @@ CONFIG = Path(__file__).resolve().parents[3] / 'config'
 SCENARIOS = sorted((CONFIG / 'scenarios').glob('*.yaml'))
 TASK_FILES = sorted((CONFIG / 'tasks').glob('*.yaml'))
 IDLE_WALL = CONFIG / 'scenarios' / 'idle_wall.yaml'  # the graph the task files are sent to
+POINT_A = np.array([1.70, 0.0, -0.10])  # of the paper's Fig. 7 (m, map_ned)
+#: Where the robot may hold when a task file is sent (m, map_ned): A, the half circle's end D,
+#: where press_100n lets go of the wall, and somewhere else in reach.
+HOLDS = {'A': POINT_A, 'D': np.array([1.70, 0.0, 0.10]),
+         'press_end': np.array([1.775, 0.0, -0.06]), 'elsewhere': np.array([1.55, 0.1, 0.05])}
 
 
 def robot_limits(robot: str) -> tuple[SafetyLimits, float]:
@@ -72,3 +82,23 @@ def test_task_files_pass_the_goal_checks_from_idle_wall(path: Path) -> None:
     start = start_of(scenario(IDLE_WALL))
     for task in load_task_file(path):
         validate_goal(as_goal(task, start), start, limits, threshold, now_s=0.0)
+
+
+@pytest.mark.parametrize('hold', sorted(HOLDS))
+@pytest.mark.parametrize('path', TASK_FILES, ids=lambda p: p.stem)
+def test_task_files_run_from_point_a_wherever_the_robot_holds(path: Path, hold: str) -> None:
+    """Each task file's path starts at point A, the same from every hold, and is accepted.
+
+    The controller reaches A by a transit first (none when it holds at A).
+    """
+    limits, threshold = robot_limits('paper_uvms')
+    x = HOLDS[hold]
+    for task in load_task_file(path):
+        goal = as_goal(task, x)
+        reference = as_goal(task, POINT_A)
+        np.testing.assert_allclose(goal.path, reference.path, atol=1e-12)
+        np.testing.assert_allclose(goal.path[0], POINT_A, atol=1e-12)
+        validate_goal(goal, x, limits, threshold, now_s=0.0, start=x)
+        planned, transit_s = planned_goal(goal, x, limits)
+        assert (transit_s > 0.0) == (hold != 'A')
+        np.testing.assert_allclose(planned.path[0], x, atol=1e-12)

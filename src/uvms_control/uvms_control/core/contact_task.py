@@ -11,19 +11,27 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
 
 from uvms_control.core.force_figures import force_figures
-from uvms_control.core.task_path import TaskPath
+from uvms_control.core.task_path import (
+    QUINTIC_PEAK_SPEED,
+    TaskPath,
+    transit_duration,
+    with_transit,
+)
 
 FloatArray = npt.NDArray[np.float64]
 
+__all__ = ['QUINTIC_PEAK_SPEED', 'TRANSIT_TOLERANCE_M', 'ContactTaskGoal', 'SafetyLimits',
+           'TaskCode', 'TaskFigures', 'TaskGoalError', 'TaskResult', 'planned_goal',
+           'validate_goal']
 
-#: Peak of ds/dσ of the quintic rest-to-rest time scaling 10σ³ - 15σ⁴ + 6σ⁵ (at σ = 1/2).
-QUINTIC_PEAK_SPEED = 1.875
+#: A goal's first waypoint farther than this from the reference's X_d gets a transit (m).
+TRANSIT_TOLERANCE_M = 1e-3
 
 
 class TaskCode(enum.IntEnum):
@@ -132,9 +140,42 @@ def _finite(field: str, values: npt.ArrayLike) -> FloatArray:
     return array
 
 
+def planned_goal(goal: ContactTaskGoal, start: npt.ArrayLike | None,
+                 limits: SafetyLimits) -> tuple[ContactTaskGoal, float]:
+    """The goal as it will run from the reference's X_d = ``start`` at rest, and its transit (s).
+
+    A first waypoint farther than ``TRANSIT_TOLERANCE_M`` from start is reached first by a
+    transit: a straight rest-to-rest quintic from start to path[0] that peaks at
+    ``limits.max_path_speed_m_s`` or ``limits.max_path_acceleration_m_s2``, whichever it
+    reaches first (``task_path.transit_duration``); the goal's own path follows, its times
+    shifted by the transit's duration, from rest at path[0]. Closer (or start None), the goal
+    is returned unchanged with 0.0: its path starts from X_d, as it always did.
+
+    Example:
+        >>> goal = ContactTaskGoal(np.array([[0.1, 0, 0], [0.2, 0, 0]]), np.array([0.0, 2.0]),
+        ...                        None, None, np.array([1.0, 0, 0]), 0.0, 1.0)
+        >>> planned, transit_s = planned_goal(goal, [0.0, 0.0, 0.0], SafetyLimits())
+        >>> round(transit_s, 3), planned.times.round(3).tolist()
+        (0.76, [0.0, 0.76, 2.76])
+    """
+    if start is None:
+        return goal, 0.0
+    first = np.asarray(goal.path, dtype=np.float64)[0]
+    distance = float(np.linalg.norm(first - np.asarray(start, dtype=np.float64)))
+    if not distance > TRANSIT_TOLERANCE_M:
+        return goal, 0.0
+    transit_s = transit_duration(distance, limits.max_path_speed_m_s,
+                                 limits.max_path_acceleration_m_s2)
+    times, path, velocities, accelerations = with_transit(
+        np.asarray(start, dtype=np.float64).tolist(), goal.times, goal.path, goal.velocities,
+        goal.accelerations, transit_s)
+    return replace(goal, path=path, times=times, velocities=velocities,
+                   accelerations=accelerations), transit_s
+
+
 def validate_goal(
     goal: ContactTaskGoal,
-    X: FloatArray,
+    X: FloatArray | None,
     limits: SafetyLimits,
     contact_threshold_n: float,
     now_s: float | None = None,
@@ -144,13 +185,15 @@ def validate_goal(
 
     Args:
         goal: the goal.
-        X: end-effector position at acceptance (m), map_ned.
+        X: end-effector position at acceptance (m), map_ned; None (no state yet): only the
+            checks that need no state (every field, the path from path[0] at rest).
         limits: the safety limits.
         contact_threshold_n: force that counts as contact (N); a non-zero force_n must
             exceed it.
         now_s: the controller clock (s): the stamp may be at most
             ``limits.max_goal_delay_s`` ahead of it; None: not checked.
-        start: the reference position the path will start from, at rest (m); None: X.
+        start: the reference position the path will start from, at rest (m); None: X. The
+            path is checked as it will run from there, its transit included (``planned_goal``).
 
     Raises:
         TaskGoalError: naming the first field that is wrong, with its value.
@@ -203,43 +246,51 @@ def validate_goal(
                 'header.stamp', f'{stamp:.3f} s',
                 f'is {stamp - now_s:.3f} s ahead of the controller clock ({now_s:.3f} s), '
                 f'more than safety.max_goal_delay_s = {limits.max_goal_delay_s} s')
-    X = np.asarray(X, dtype=np.float64)
-    distance = np.linalg.norm(path - X, axis=1)
-    far = int(np.argmax(distance))
-    if distance[far] > limits.max_path_distance_m:
-        raise TaskGoalError(
-            f'path[{far}]', np.round(path[far], 4).tolist(),
-            f'is {distance[far]:.3f} m from the end effector, more than '
-            f'safety.max_path_distance_m = {limits.max_path_distance_m} m')
-    _check_interpolated_path(goal, X, X if start is None else start, limits)
+    if X is not None:
+        X = np.asarray(X, dtype=np.float64)
+        distance = np.linalg.norm(path - X, axis=1)
+        far = int(np.argmax(distance))
+        if distance[far] > limits.max_path_distance_m:
+            raise TaskGoalError(
+                f'path[{far}]', np.round(path[far], 4).tolist(),
+                f'is {distance[far]:.3f} m from the end effector, more than '
+                f'safety.max_path_distance_m = {limits.max_path_distance_m} m')
+        start = X if start is None else start
+    _check_interpolated_path(goal, X, path[0] if start is None else start, limits)
 
 
-def _check_interpolated_path(goal: ContactTaskGoal, X: FloatArray, start: npt.ArrayLike,
+def _check_interpolated_path(goal: ContactTaskGoal, X: FloatArray | None, start: npt.ArrayLike,
                              limits: SafetyLimits) -> None:
     """The path as it will run (from ``start`` at rest, user velocities included) within limits.
 
-    Speed, acceleration and distance from X are sampled 64 times per quintic segment; a
-    violation names the waypoint that ends the segment.
+    Speed, acceleration and distance from X (unless None) are sampled 64 times per quintic
+    segment, the transit to path[0] included (``planned_goal``); a violation names the
+    waypoint that ends the segment (path[0] for the transit and a hold there).
     """
+    planned, _ = planned_goal(goal, start, limits)
     state = [*np.asarray(start, dtype=np.float64).tolist(), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-    path = TaskPath.from_state(0.0, state, np.asarray(goal.times, dtype=np.float64),
-                               goal.path, goal.velocities, goal.accelerations)
+    path = TaskPath.from_state(0.0, state, np.asarray(planned.times, dtype=np.float64),
+                               planned.path, planned.velocities, planned.accelerations)
     positions, velocities, accelerations = path.sample()
-    shift = 0 if goal.times[0] > 0.0 else 1  # a segment prepended from the start ends at path[0]
+    # Segment s ends at the planned waypoint s (+1 when the start replaces waypoint 0); the
+    # planned goal has the goal's waypoints after the transit's ones.
+    shift = (0 if planned.times[0] > 0.0 else 1) - (len(planned.times) - len(goal.times))
+    distances = (np.zeros(positions.shape[:2]) if X is None
+                 else np.linalg.norm(positions - X, axis=2))
     checks = (
         (np.linalg.norm(velocities, axis=2), limits.max_path_speed_m_s, 'm/s',
          'reaches a speed of', 'safety.max_path_speed_m_s', 'time_from_start_s'),
         (np.linalg.norm(accelerations, axis=2), limits.max_path_acceleration_m_s2, 'm/s²',
          'reaches an acceleration of', 'safety.max_path_acceleration_m_s2',
          'time_from_start_s'),
-        (np.linalg.norm(positions - X, axis=2), limits.max_path_distance_m, 'm',
+        (distances, limits.max_path_distance_m, 'm',
          'swings away from the end effector by', 'safety.max_path_distance_m', 'path'),
     )
     for values, limit, unit, what, name, field in checks:
         segment, _ = np.unravel_index(int(np.argmax(values)), values.shape)
         peak = float(values[segment].max())
         if peak > limit:
-            k = int(segment) + shift
+            k = max(int(segment) + shift, 0)
             value = (float(goal.times[k]) if field == 'time_from_start_s'
                      else np.round(goal.path[k], 4).tolist())
             raise TaskGoalError(
@@ -255,6 +306,7 @@ class TaskResult:
     ``start_s`` and ``end_s`` are the times of the first and last control step the figures
     were computed from (NaN for a task that never ran a step): a recording's task record
     carries them, so that `uvms report` computes the same figures from the same samples.
+    ``transit_s`` is the duration of the transit put before the goal's path (s; 0: none).
     """
 
     code: TaskCode
@@ -265,6 +317,7 @@ class TaskResult:
     settling_time_s: float
     start_s: float = math.nan
     end_s: float = math.nan
+    transit_s: float = 0.0
 
 
 class TaskFigures:

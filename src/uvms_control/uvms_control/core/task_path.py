@@ -100,7 +100,9 @@ class TaskPath:
 
         The first waypoint is replaced by the state's position when its time is ``time``,
         otherwise the state is prepended; the state's velocity and acceleration are kept, so
-        a preempting goal continues the running reference without a jump in any of them.
+        a preempting goal continues the running reference without a jump in any of them. A
+        goal's first waypoint away from X_d gets a transit before it comes here
+        (``contact_task.planned_goal``), so the replaced waypoint is X_d itself.
         """
         start = np.asarray(state, dtype=np.float64).reshape(3, 3)
         times = np.asarray(times, dtype=np.float64)
@@ -177,3 +179,73 @@ class TaskPath:
         acceleration = ((20.0 * c5 * x + 12.0 * c4) * x + 6.0 * c3) * x + 2.0 * c2
         return (np.transpose(position, (0, 2, 1)), np.transpose(velocity, (0, 2, 1)),
                 np.transpose(acceleration, (0, 2, 1)))
+
+
+#: Peak |s̈| of the quintic rest-to-rest time scaling 10σ³ - 15σ⁴ + 6σ⁵ over T = 1 s
+#: (at σ = 1/2 ± √3/6): 10/√3.
+QUINTIC_PEAK_ACCELERATION = 10.0 / math.sqrt(3.0)
+#: Peak |ṡ| of that scaling over T = 1 s (at σ = 1/2).
+QUINTIC_PEAK_SPEED = 1.875
+#: Margin on the transit's duration, so that its sampled peaks stay strictly under the limits.
+_TRANSIT_MARGIN = 1.0 + 1e-6
+
+
+def transit_duration(distance_m: float, max_speed_m_s: float,
+                     max_acceleration_m_s2: float) -> float:
+    """Shortest rest-to-rest quintic over distance_m within a speed and acceleration limit (s).
+
+    The quintic peaks at 1.875 d/T in speed and (10/√3) d/T² in acceleration, so
+    T = max(1.875 d / v_max, √(5.774 d / a_max)).
+
+    Example:
+        >>> round(transit_duration(0.26, 0.5, 1.0), 3)
+        1.225
+    """
+    if distance_m <= 0.0:
+        return 0.0
+    return _TRANSIT_MARGIN * max(QUINTIC_PEAK_SPEED * distance_m / max_speed_m_s,
+                                 math.sqrt(QUINTIC_PEAK_ACCELERATION * distance_m
+                                           / max_acceleration_m_s2))
+
+
+def with_transit(
+    start: Sequence[float],
+    times: FloatArray,
+    points: FloatArray,
+    velocities: FloatArray | None,
+    accelerations: FloatArray | None,
+    transit_s: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Waypoints with a rest-to-rest transit from ``start`` to points[0] put before them.
+
+    The transit takes transit_s (s) from time 0; the waypoints follow with their times shifted
+    by transit_s and their own velocities (shape-preserving ones when None: zero at both ends
+    of the path, as without the transit) and accelerations. The path rests at points[0] from
+    the transit's end until the path's own time of points[0] (its times[0] after the transit).
+
+    Example:
+        >>> t, x, v, _ = with_transit([0.0, 0, 0], np.array([0.0, 2.0]),
+        ...                           np.array([[0.2, 0, 0], [0.3, 0, 0]]), None, None, 1.0)
+        >>> t.tolist(), x[:, 0].tolist(), v[:, 0].tolist()
+        ([0.0, 1.0, 3.0], [0.0, 0.2, 0.3], [0.0, 0.0, 0.0])
+
+    Returns:
+        times (n + 1,) (s), points (n + 1, 3) (m), velocities and accelerations (n + 1, 3).
+    """
+    times = np.asarray(times, dtype=np.float64)
+    points = np.asarray(points, dtype=np.float64)
+    if velocities is None:
+        velocities = shape_preserving_velocities(times, points)
+    velocities = np.array(velocities, dtype=np.float64)
+    accelerations = (np.zeros_like(points) if accelerations is None
+                     else np.array(accelerations, dtype=np.float64))
+    velocities[0] = accelerations[0] = 0.0  # the transit ends at rest
+    origin = np.asarray(start, dtype=np.float64).reshape(1, 3)
+    rest = np.zeros((1, 3))
+    if times[0] > 0.0:  # at rest on points[0] from the transit's end to the path's times[0]
+        times = np.concatenate(([0.0], times))
+        points = np.concatenate((points[:1], points))
+        velocities = np.concatenate((rest, velocities))
+        accelerations = np.concatenate((rest, accelerations))
+    return (np.concatenate(([0.0], transit_s + times)), np.concatenate((origin, points)),
+            np.concatenate((rest, velocities)), np.concatenate((rest, accelerations)))

@@ -58,18 +58,24 @@ class TaskEvent:
 
 @dataclass(frozen=True)
 class TaskProgress:
-    """The running task at the last step (the action's feedback)."""
+    """The running task at the last step (the action's feedback).
+
+    ``transit_s``: the duration of the transit to path[0] put before the goal's path (s; 0:
+    none); ``in_transit``: the reference is on it now.
+    """
 
     goal_id: Hashable
     state: TaskState
     progress: float
     force_n: float
     force_desired_n: float
+    transit_s: float = 0.0
+    in_transit: bool = False
 
 
 @dataclass
 class RunningTask:
-    """The goal the supervisor runs, its unit normal, figures and how it is to end."""
+    """The goal the supervisor runs, its unit normal, figures, transit (s) and how it ends."""
 
     goal_id: Hashable
     goal: ContactTaskGoal
@@ -78,6 +84,7 @@ class RunningTask:
     start_s: float | None = None
     end_code: TaskCode = TaskCode.SUCCEEDED
     end_message: str = ''
+    transit_s: float = 0.0
 
 
 def empty_result(code: TaskCode, message: str) -> TaskResult:

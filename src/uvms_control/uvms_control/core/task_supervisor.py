@@ -9,8 +9,8 @@ X_d = X at rest, following X while in contact, until ``reset``). The limits
 step in every state. A breach outside a retreat starts a protected retreat that no goal can
 preempt: a goal arriving then is refused (INVALID_GOAL, the message names the retreat), and
 the running goal's result (with the breach's code) comes when the retreat is done.
-Everything happens inside ``step``, on the control loop's own clock, so a lockstep run stays
-deterministic. The diagram: docs/interfaces.md, "Safety".
+All inside ``step``, on the control loop's clock (lockstep stays deterministic); the
+diagram: docs/interfaces.md, "Safety". A first waypoint away from X_d gets a transit.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from uvms_control.core.contact_task import (
     TaskCode,
     TaskFigures,
     TaskGoalError,
+    planned_goal,
     validate_goal,
 )
 from uvms_control.core.safety_checks import (
@@ -86,7 +87,6 @@ class TaskSupervisor:
         self._safe_hold_reason: str | None = None
         self._capturing = True  # the hold point is captured at the next step
 
-    # ------------------------------------------------------------------------ queries
 
     @property
     def goal_id(self) -> Hashable | None:
@@ -108,14 +108,15 @@ class TaskSupervisor:
         running, last = self._running, self._last
         if running is None or last is None:
             return None
-        path = self.controller.task.path
-        share = (path.progress(self._t_last or 0.0)
-                 if path is not None and self.state == SupervisorState.FOLLOWING
+        path, t = self.controller.task.path, self._t_last or 0.0
+        path = path if self.state == SupervisorState.FOLLOWING else None
+        share = (path.progress(t) if path is not None
                  else 1.0 if self.state == SupervisorState.RELEASING else 0.0)
+        in_transit = path is not None and t < path.start_time + running.transit_s
         return TaskProgress(running.goal_id, TASK_STATE[self.state], share,
-                            float(running.normal @ last.F_e), float(running.normal @ last.F_d))
+                            float(running.normal @ last.F_e), float(running.normal @ last.F_d),
+                            running.transit_s, in_transit)
 
-    # ------------------------------------------------------------------------ commands
 
     def submit(self, goal_id: Hashable, goal: ContactTaskGoal, now_s: float) -> list[TaskEvent]:
         """Take a new goal at time now_s (s); return the tasks that ended by it.
@@ -140,13 +141,8 @@ class TaskSupervisor:
             return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
                 f'refused: the controller is in safe hold ({self._safe_hold_reason}); '
                 'deactivate and activate it to clear the safe hold')))]
-        last = self._last
-        task = self.controller.task
-        holding = self.state in (SupervisorState.HOLD, SupervisorState.WAITING) and task.ready
-        start = task.state(now_s)[:3] if holding else last.X  # where the new path will start
         try:
-            validate_goal(goal, last.X, self.limits, task.contact_threshold_n,
-                          now_s=now_s, start=np.asarray(start))
+            self.check(goal, now_s)
         except TaskGoalError as error:
             return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, str(error)))]
         events: list[TaskEvent] = []
@@ -161,6 +157,19 @@ class TaskSupervisor:
         self._cancel_requested = False
         self._target = None
         return events
+
+    def check(self, goal: ContactTaskGoal, now_s: float) -> None:
+        """``validate_goal`` as ``submit`` takes it now (also the action's goal callback).
+
+        From the hold point (else X), transit included; before the first step, no state.
+        Raises ``TaskGoalError`` naming the field and its value.
+        """
+        last, task = self._last, self.controller.task
+        holding = self.state in (SupervisorState.HOLD, SupervisorState.WAITING) and task.ready
+        start = None if last is None else task.state(now_s)[:3] if holding else last.X
+        validate_goal(goal, None if last is None else last.X, self.limits,
+                      task.contact_threshold_n, now_s=now_s,
+                      start=None if start is None else np.asarray(start))
 
     def set_target(self, target: list[float]) -> bool:
         """Stream a new hold target (m, map_ned); False (``refusal`` says why) unless holding.
@@ -246,7 +255,6 @@ class TaskSupervisor:
         self.controller.task.hold()
         return events
 
-    # ------------------------------------------------------------------------ the step
 
     def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
              f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
@@ -289,17 +297,18 @@ class TaskSupervisor:
         return []
 
     def _start(self, t: float, running: RunningTask) -> list[TaskEvent]:
-        """Start a waiting goal from the reference at rest, checked again as it will run."""
+        """Start a waiting goal from the reference at rest (a transit first: ``planned_goal``)."""
         assert self._last is not None
+        start = np.asarray(self.controller.task.state(t)[:3])
         try:
             validate_goal(replace(running.goal, start_time_s=None), self._last.X, self.limits,
-                          self.controller.task.contact_threshold_n,
-                          start=np.asarray(self.controller.task.state(t)[:3]))
+                          self.controller.task.contact_threshold_n, start=start)
         except TaskGoalError as error:
             self.state = SupervisorState.HOLD
             return self._end_running(TaskCode.INVALID_GOAL, f'at its start: {error}')
         self._release = None
-        self.controller.start_task(t, running.goal)
+        planned, running.transit_s = planned_goal(running.goal, start, self.limits)
+        self.controller.start_task(t, planned)
         running.start_s = t
         self.state = SupervisorState.FOLLOWING
         return []
@@ -427,7 +436,8 @@ class TaskSupervisor:
         running = self._running
         self._running = None
         self._cancel_requested = False
-        return [TaskEvent(running.goal_id, running.figures.result(code, message))]
+        return [TaskEvent(running.goal_id, replace(running.figures.result(code, message),
+                                                   transit_s=running.transit_s))]
 
     def _take_pending(self) -> list[TaskEvent]:
         events, self._pending = self._pending, []
