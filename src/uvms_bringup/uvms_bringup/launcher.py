@@ -206,7 +206,8 @@ def launch_graph(
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
-        request, 1 when a node ended by itself with an error (named on stderr), 3
+        request (whatever the mission did: its failure is on stderr), 1 when a node ended
+        by itself with an error (named on stderr), 3
         (``EXIT_MISSION_FAILED``) when the scenario's mission failed (``mission failed:
         CODE (message)`` on stderr) and no node did.
 
@@ -294,7 +295,7 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
     # The closing line is printed with --quiet too: it is the one summary of the launch.
     if outcome == 'stopped':
         launcher.report(f'uvms launch: interrupted; every node stopped{mission}')
-        return EXIT_MISSION_FAILED if told else EXIT_INTERRUPTED
+        return EXIT_INTERRUPTED  # a stop asked for is 130, as a shell expects after Ctrl-C
     launcher.report(f'uvms launch: the simulator reached {duration_s or 0.0:g} s; '
                     f'every node stopped{mission}')
     if unclean:
