@@ -213,6 +213,41 @@ def test_lockstep_controller_waits_for_all_three_inputs(harness: Harness) -> Non
     assert harness.probe.commands == []
 
 
+def test_odometry_trigger_steps_once_per_estimate_on_the_latest_inputs(harness: Harness
+                                                                       ) -> None:
+    """trigger_mode odometry on the estimate: a command per odometry/filtered, its stamp.
+
+    Joint states and wrench alone compute nothing; each estimate computes once with the
+    latest of them, stamped with the estimate's stamp, even when they are newer (real time:
+    the estimate arrives a hop after the state it is stamped with).
+    """
+    harness.add(ControllerNode, trigger_mode='odometry', state_source='estimate',
+                watchdog_timeout_s=5.0)
+    probe = harness.probe
+    estimate = probe.node.create_publisher(Odometry, 'odometry/filtered', 10)
+
+    def send_estimate(t_ns: int) -> None:
+        odometry = Odometry(header=header(t_ns, 'map_ned'), child_frame_id='base_link_frd')
+        odometry.pose.pose.orientation.w = 1.0
+        estimate.publish(odometry)
+
+    probe.send_state(0, skip=('odometry',))
+    harness.spin_for(0.2)
+    assert probe.commands == []
+    send_estimate(0)
+    assert harness.spin_until(lambda: len(probe.commands) == 1)
+    probe.send_state(2 * MS, skip=('odometry',))
+    probe.send_state(4 * MS, skip=('odometry',))
+    harness.spin_for(0.2)
+    assert len(probe.commands) == 1
+    send_estimate(2 * MS)
+    assert harness.spin_until(lambda: len(probe.commands) == 2)
+    harness.spin_for(0.1)
+    assert [stamp_ns(c) for c in probe.commands] == [0, 2 * MS]
+    assert [stamp_ns(s) for s in probe.states] == [0, 2 * MS]
+    assert all(np.all(np.isfinite(tau_of(c))) for c in probe.commands)
+
+
 def test_controller_state_reports_the_measured_force_in_map_ned(harness: Harness) -> None:
     """The wrench (ft_sensor_link) is rotated by rot_ned_from_ee into the state's F_e."""
     harness.add(ControllerNode)

@@ -162,3 +162,26 @@ def test_estimator_tracks_the_simulated_vehicle(graph: Graph) -> None:
     names = {s.name for array in diagnostics for s in array.status}
     assert 'estimator: estimate' in names
     assert estimator is not None
+
+
+def test_malformed_navigation_payloads_are_counted_and_survived(
+    graph: Graph, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """Raw garbage on imu, dvl, depth and position_fix: counted, logged once, estimate goes on."""
+    filtered = graph.collect('odometry/filtered', Odometry)
+    estimator = graph.add(EstimatorNode, use_sim_time=True)
+    assert isinstance(estimator, EstimatorNode)
+    garbage = [b'', b'\x00\x01\x00\x00', b'\x7f\x7f' + bytes(300), bytes(range(256))]
+    publishers = {topic: graph.probe.create_publisher(msg_type, topic, 10)
+                  for topic, msg_type in NAV_TOPICS.items()}
+    graph.spin_until(lambda: all(p.get_subscription_count() == 1 for p in publishers.values()))
+    for publisher in publishers.values():
+        for payload in garbage:
+            publisher.publish(payload)
+    graph.spin_until(lambda: estimator.malformed == len(garbage) * len(publishers),
+                     timeout_s=10.0)
+    _run(graph, 0.5, navigation__enabled=True, world__seabed_depth_m=5.0)
+    assert len(filtered) > 200  # the filter started and answered the states after the garbage
+    report = estimator._report()
+    assert report.values['malformed_inputs'] == len(garbage) * len(publishers)
+    assert capfd.readouterr().err.count('malformed input payloads') == 1

@@ -109,10 +109,12 @@ def test_both_modes_trigger_controller_and_allocator_on_their_inputs() -> None:
         assert node_parameters(CORE_NODES[0], None, mode)['mode'] == mode
 
 
-def test_a_controller_on_the_estimate_keeps_its_timer_in_real_time(tmp_path: Path) -> None:
-    """state_source estimate: the estimate lags its stamp, so real time runs on the timer.
+def test_a_controller_on_the_estimate_steps_on_each_estimate_in_real_time(tmp_path: Path
+                                                                          ) -> None:
+    """state_source estimate: the estimate lags its stamp, so real time steps on each estimate.
 
-    Waiting for complete stamps, the launched case1_estimated stalled (INPUTS_STALE).
+    Waiting for complete stamps, the launched case1_estimated stalled (INPUTS_STALE); on its
+    timer the controller beat against the states (docs/running.md).
     """
     from uvms_bringup.scenario import parse_scenario
 
@@ -120,7 +122,7 @@ def test_a_controller_on_the_estimate_keeps_its_timer_in_real_time(tmp_path: Pat
                                'controller': {'state_source': 'estimate'}},
                               tmp_path / 's.yaml')
     controller, allocator = CORE_NODES[1], CORE_NODES[2]
-    assert node_parameters(controller, scenario, 'realtime')['trigger_mode'] == 'timer'
+    assert node_parameters(controller, scenario, 'realtime')['trigger_mode'] == 'odometry'
     assert node_parameters(allocator, scenario, 'realtime')['trigger_mode'] == 'lockstep'
     assert node_parameters(controller, scenario, 'lockstep')['trigger_mode'] == 'lockstep'
 

@@ -202,8 +202,10 @@ def node_parameters(
         values[TRIGGER_PARAMETER] = TRIGGER[mode]
         if spec is CONTROLLER and mode == 'realtime' and uses_estimator(scenario):
             # The estimate arrives after the state it is stamped with, and not for every
-            # stamp under load: a controller waiting for complete stamps stalled (INPUTS_STALE).
-            values[TRIGGER_PARAMETER] = 'timer'
+            # stamp under load: a controller waiting for complete stamps stalled (INPUTS_STALE),
+            # one on its timer beat against the states (docs/running.md). It steps on each
+            # estimate instead, with the latest joint states and wrench.
+            values[TRIGGER_PARAMETER] = 'odometry'
     elif spec is FOXGLOVE_SERVER:
         host, port = foxglove_address or (FOXGLOVE_HOST, FOXGLOVE_PORT)
         values['host'] = host

@@ -8,10 +8,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import (
+    PoseStamped,
+    PoseWithCovarianceStamped,
+    TwistWithCovarianceStamped,
+    WrenchStamped,
+)
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Imu, JointState
 
 from uvms_common.cdr_codecs import MessageCodec
 from uvms_msgs.msg import (
@@ -25,6 +30,7 @@ from uvms_msgs.msg import (
 MAP_NED = 'map_ned'
 BASE_LINK_FRD = 'base_link_frd'
 FT_SENSOR_LINK = 'ft_sensor_link'
+DVL_LINK = 'dvl_link'
 #: The ThrusterState arrays, one value per thruster each.
 THRUSTER_ARRAYS = ('desired_thrust', 'actual_thrust', 'propeller_speed', 'reference_speed',
                    'motor_current')
@@ -88,8 +94,38 @@ def thruster_state_codec(n_thrusters: int) -> MessageCodec:
                                         **dict.fromkeys(THRUSTER_ARRAYS, n_thrusters)})
 
 
+def imu_codec() -> MessageCodec:
+    """sensor_msgs/Imu in base_link_frd, AHRS orientation in map_ned (``imu``)."""
+    return MessageCodec(Imu, {'header.frame_id': BASE_LINK_FRD})
+
+
+def dvl_codec() -> MessageCodec:
+    """geometry_msgs/TwistWithCovarianceStamped of the DVL in dvl_link (``dvl``)."""
+    return MessageCodec(TwistWithCovarianceStamped, {'header.frame_id': DVL_LINK})
+
+
+def pose_covariance_codec() -> MessageCodec:
+    """geometry_msgs/PoseWithCovarianceStamped in map_ned (``depth``, ``position_fix``)."""
+    return MessageCodec(PoseWithCovarianceStamped, {'header.frame_id': MAP_NED})
+
+
+def navigation_codecs() -> dict[str, MessageCodec]:
+    """The navigation topics' codecs (no robot-dependent length), by relative topic name."""
+    return {
+        'imu': imu_codec(),
+        'dvl': dvl_codec(),
+        'depth': pose_covariance_codec(),
+        'position_fix': pose_covariance_codec(),
+        'odometry/filtered': odometry_codec(),
+    }
+
+
 def hot_codecs(joint_names: Sequence[str], n_thrusters: int) -> dict[str, MessageCodec]:
-    """Every hot topic's codec for one robot, by topic name (relative, as the nodes use them)."""
+    """Every hot topic's codec for one robot, by topic name (relative, as the nodes use them).
+
+    The navigation topics (`navigation_codecs`) are among them: the simulator publishes them
+    and the estimator answers each state with ``odometry/filtered`` when navigation is on.
+    """
     return {
         '/clock': clock_codec(),
         'joint_states': joint_state_codec(joint_names),
@@ -101,4 +137,5 @@ def hot_codecs(joint_names: Sequence[str], n_thrusters: int) -> dict[str, Messag
         'controller/state': controller_state_codec(),
         'command/actuators': actuator_command_codec(n_thrusters, joint_names),
         'thrusters/state': thruster_state_codec(n_thrusters),
+        **navigation_codecs(),
     }

@@ -6,8 +6,10 @@ Subscribes ``joint_states``, ``odometry``, ``wrench`` and ``controller/target_po
 ``controller/contact_task`` (relative names: run it in ``/uvms``). ``trigger_mode:
 lockstep`` computes once the three inputs with one stamp have arrived and stamps the
 command alike; ``timer`` computes at ``control_rate_hz`` of the steady clock on the latest
-inputs. Rejected inputs are logged; stale inputs (older than ``watchdog_timeout_s``, or a
-gap that long between two steps) give a zero command, logged once, and end a running task
+inputs; ``odometry`` computes on each vehicle state (``odometry/filtered`` on the estimate)
+with the latest joint states and wrench, stamped with the state's stamp. Rejected inputs
+are logged; stale inputs (older than ``watchdog_timeout_s``, or a gap that long between two
+steps) give a zero command, logged once, and end a running task
 INPUTS_STALE; so does a thruster allocator that is not active (its ``transition_event``,
 ``node_safety.AllocatorWatch``). Control resumes holding the position measured then.
 
@@ -155,6 +157,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
     def _configure_topics(self, node: dict[str, Any], joint_names: list[str]) -> None:
         self._joint_names = joint_names
         self._lockstep = node['trigger_mode'] == 'lockstep'
+        self._on_odometry = node['trigger_mode'] == 'odometry'
         self._watchdog_ns = round(float(node['watchdog_timeout_s']) * 1e9)
         self._last_tau_b = np.zeros(len(joint_names) + 6)
         self._last_stamp_ns, self._zeroed_stamp_ns = -1, -1
@@ -186,7 +189,7 @@ class ControllerNode(ControllerSafety, LifecycleNode):
             self._entities.append((self.destroy_subscription, self.create_subscription(
                 msg_type, topic_for(topic, str(node['state_source'])),
                 lambda data, t=topic, r=read: self._on_input(t, r, data), inputs, raw=True)))
-        if not self._lockstep:
+        if node['trigger_mode'] == 'timer':
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.
             self._entities.append((self.destroy_timer, self.create_timer(
@@ -269,8 +272,11 @@ class ControllerNode(ControllerSafety, LifecycleNode):
             self.get_logger().error(f'rejected {topic}: {error}', throttle_duration_sec=1.0)
             value = None
         if not self._lockstep:
-            if value is not None:  # timer mode computes on the last valid input
-                self._inputs[topic] = Input(stamp, self.get_clock().now().nanoseconds, value)
+            if value is not None:  # timer and odometry modes compute on the last valid input
+                now = self.get_clock().now().nanoseconds
+                self._inputs[topic] = Input(stamp, now, value)
+                if self._on_odometry and topic == 'odometry':
+                    self._step_on_latest(stamp, now)
             return
         entry = self._pending.arrive(stamp, topic, value)
         if value is not None:
@@ -306,6 +312,20 @@ class ControllerNode(ControllerSafety, LifecycleNode):
             self.get_logger().warning(
                 f'missed {share:.1%} of the control periods in the last {MISS_WINDOW_S:g} s '
                 '(no new state published: late timer or no new simulated time)')
+
+    def _step_on_latest(self, stamp: int, now: int) -> None:
+        """Odometry mode: one step per vehicle state, on the latest joint states and wrench.
+
+        In real time the estimate reaches the controller a hop after the state it is stamped
+        with (simulator, estimator, controller); a step per estimate answers each state the
+        estimator answered, once, with no beat against a timer and nothing waiting for a
+        stamp that may not come (``docs/running.md``).
+        """
+        inputs = [self._inputs[name] for name in TOPICS]
+        if any(i is None for i in inputs):
+            self.get_logger().info('waiting for joint_states and wrench', once=True)
+        elif self._checked_fresh(now, inputs):
+            self._compute(stamp, inputs)
 
     def _checked_fresh(self, now: int, inputs: list[Input | None]) -> bool:
         """Timer mode: whether the inputs are fresh; zero command and log when not."""

@@ -30,7 +30,8 @@ def time_from_ns(t_ns: int) -> Time:
     return Time(sec=t_ns // 1_000_000_000, nanosec=t_ns % 1_000_000_000)
 
 
-def _rpy_from_xyzw(x: float, y: float, z: float, w: float) -> np.ndarray:
+def rpy_from_xyzw(x: float, y: float, z: float, w: float) -> np.ndarray:
+    """Roll, pitch, yaw (rad, ZYX) of a unit quaternion (x, y, z, w)."""
     rot = np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
@@ -43,7 +44,7 @@ def imu_arrays(msg: Imu) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """(t_ns, rate rad/s, specific force m/s^2, AHRS roll/pitch/yaw rad) of an Imu."""
     o, w, a = msg.orientation, msg.angular_velocity, msg.linear_acceleration
     return (stamp_ns(msg.header.stamp), np.array([w.x, w.y, w.z]), np.array([a.x, a.y, a.z]),
-            _rpy_from_xyzw(o.x, o.y, o.z, o.w))
+            rpy_from_xyzw(o.x, o.y, o.z, o.w))
 
 
 def dvl_arrays(msg: TwistWithCovarianceStamped) -> tuple[int, np.ndarray]:

@@ -6,7 +6,11 @@ the subscriptions; activate starts publishing. The filter (``uvms_navigation.esk
 on each IMU sample and fuses the others as they arrive; on every ``/clock`` tick the node
 publishes ``odometry/filtered`` stamped with it (the estimate carried to that instant), so a
 lockstep controller finds an estimate for each state. ``/diagnostics``: DVL lost, covariance
-growing, horizontal sigma (``uvms_navigation.health``).
+growing, horizontal sigma (``uvms_navigation.health``), malformed input payloads.
+
+Inputs and output travel as raw CDR through the fixed layouts of ``uvms_common.hot_messages``
+(``uvms_navigation.raw_conversions``), as every topic of the control period does; a payload
+that is no message of its topic's type is counted, logged once and dropped.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackRet
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
+from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
@@ -30,7 +35,7 @@ from uvms_model.errors import ModelError
 from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
 
 from uvms_common import robot_parameters as robots
-from uvms_navigation import conversions
+from uvms_navigation import raw_conversions
 from uvms_navigation.eskf import ErrorStateEkf, EstimatorSettings
 from uvms_navigation.health import HealthLimits, HealthMonitor
 
@@ -79,6 +84,12 @@ class EstimatorNode(LifecycleNode):
         self._depth: float | None = None
         self._started = False
         self._early_clock_ns: int | None = None
+        self._readers = {'imu': raw_conversions.imu_reader(),
+                         'dvl': raw_conversions.dvl_reader(),
+                         'depth': raw_conversions.depth_reader(),
+                         'position_fix': raw_conversions.position_fix_reader(),
+                         '/clock': raw_conversions.clock_reader()}
+        self._odometry = raw_conversions.OdometryWriter()
         self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
         self._diagnostics.add('estimate', self._report)
         if starting and not autostart(self):
@@ -116,7 +127,9 @@ class EstimatorNode(LifecycleNode):
         qos = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
         self._odom_pub = self.create_publisher(Odometry, 'odometry/filtered', qos)
         self._entities = [(self.destroy_publisher, self._odom_pub)] + [
-            (self.destroy_subscription, self.create_subscription(t, n, cb, qos)) for t, n, cb in (
+            (self.destroy_subscription, self.create_subscription(
+                t, n, lambda data, n=n, cb=cb: self._on_payload(n, cb, data), qos, raw=True))
+            for t, n, cb in (
                 (Imu, 'imu', self._on_imu), (TwistWithCovarianceStamped, 'dvl', self._on_dvl),
                 (PoseWithCovarianceStamped, 'depth', self._on_depth),
                 (PoseWithCovarianceStamped, 'position_fix', self._on_fix),
@@ -160,10 +173,23 @@ class EstimatorNode(LifecycleNode):
         self._entities = []
         self.ekf = None
 
-    def _on_imu(self, msg: Imu) -> None:
+    @property
+    def malformed(self) -> int:
+        """Input payloads that were no message of their topic's type, all topics."""
+        return sum(reader.decoder.malformed for reader in self._readers.values())
+
+    def _on_payload(self, topic: str, callback: Any, data: bytes) -> None:
+        try:
+            t_ns, value = self._readers[topic].read(data)
+        except MalformedPayloadError as error:
+            self.get_logger().error(f'malformed input payloads (counted on /diagnostics), '
+                                    f'first on {topic}: {error}', once=True)
+            return
+        callback(t_ns, *value)
+
+    def _on_imu(self, t_ns: int, w_m: np.ndarray, f_m: np.ndarray, rpy: np.ndarray) -> None:
         if self.ekf is None:
             return
-        t_ns, w_m, f_m, rpy = conversions.imu_arrays(msg)
         if not (np.isfinite(w_m).all() and np.isfinite(f_m).all() and np.isfinite(rpy).all()):
             self.get_logger().error('imu: non-finite reading rejected', throttle_duration_sec=1.0)
             return
@@ -179,24 +205,20 @@ class EstimatorNode(LifecycleNode):
         self.ekf.predict(t_ns, w_m, f_m)
         self.ekf.update_attitude(rpy)
 
-    def _on_dvl(self, msg: TwistWithCovarianceStamped) -> None:
-        _, v = conversions.dvl_arrays(msg)
+    def _on_dvl(self, t_ns: int, v: np.ndarray) -> None:
         if self.ekf is not None and self._started and np.isfinite(v).all():
             self.ekf.update_dvl(v)
 
-    def _on_depth(self, msg: PoseWithCovarianceStamped) -> None:
-        _, depth = conversions.depth_value(msg)
+    def _on_depth(self, t_ns: int, depth: float) -> None:
         self._depth = depth
         if self.ekf is not None and self._started and np.isfinite(depth):
             self.ekf.update_depth(depth)
 
-    def _on_fix(self, msg: PoseWithCovarianceStamped) -> None:
-        _, p, sigma = conversions.position_arrays(msg)
+    def _on_fix(self, t_ns: int, p: np.ndarray, sigma: np.ndarray) -> None:
         if self.ekf is not None and self._started and np.isfinite(p).all():
             self.ekf.update_position(p, sigma)
 
-    def _on_clock(self, msg: Clock) -> None:
-        t_ns = conversions.stamp_ns(msg.clock)
+    def _on_clock(self, t_ns: int) -> None:
         if not self._started:
             self._early_clock_ns = t_ns
             return
@@ -207,16 +229,17 @@ class EstimatorNode(LifecycleNode):
         if not self._active or ekf is None:
             return
         p, rot, v = ekf.extrapolated(t_ns)
-        self._odom_pub.publish(conversions.odometry_message(
+        self._odom_pub.publish(self._odometry.payload(
             t_ns, p, rot, v, ekf.w_body, ekf.pose_covariance(), ekf.twist_covariance()))
 
     def _report(self) -> Report:
         state = state_label(self)
+        malformed = {'malformed_inputs': self.malformed}
         if self.ekf is None or not self._started:
             return Report(WARN, f'{state}: waiting for the first imu reading',
-                          {'lifecycle_state': state})
+                          {'lifecycle_state': state, **malformed})
         level, message, values = self._health.report(self.ekf)
-        return Report(_LEVELS[level], message, {'lifecycle_state': state, **values})
+        return Report(_LEVELS[level], message, {'lifecycle_state': state, **values, **malformed})
 
 
 def main(args: list[str] | None = None) -> None:

@@ -1,8 +1,11 @@
 """The simulator's navigation sensor topics: imu, dvl, depth, position_fix (when enabled).
 
-The one place where the readings of ``uvms_model.nav_sensors`` become messages, typed for
-now (the hot-path topics use the raw CDR codecs of uvms_common; these can switch here).
-Messages, as robot_localization consumes them:
+The one place where the readings of ``uvms_model.nav_sensors`` become messages. They go on
+the wire as raw CDR through the fixed layouts of ``uvms_common.hot_messages``
+(``uvms_sim.raw_conversions.RawNavigationMessages``), as the other topics of each control
+period do; the typed builders below are the reference those payloads are tested against
+(same types, frames and values, so any typed subscriber reads them unchanged). Messages, as
+robot_localization consumes them:
 
 - ``imu``: sensor_msgs/Imu in ``base_link_frd`` (the IMU at the vehicle origin): angular
   velocity (rad/s) and specific force (m/s^2, -9.81 along z at rest, as a NED/FRD IMU
@@ -45,9 +48,10 @@ from uvms_sim.conversions import (
     quaternion_from_rpy,
     time_from_ns,
 )
+from uvms_sim.raw_conversions import UNUSED_VARIANCE, RawNavigationMessages
 
-UNUSED_VARIANCE = 1.0e9
-"""Variance of a pose component a message does not measure (robot_localization ignores it)."""
+__all__ = ['UNUSED_VARIANCE', 'NavigationTopics', 'depth_message', 'dvl_message', 'dvl_mount',
+           'imu_message', 'position_fix_message']
 
 
 def _stamp(t_ns: int) -> Time:
@@ -132,6 +136,8 @@ class NavigationTopics:
         imu = params.imu
         self._gyro_var = imu.gyro_noise_density ** 2 * imu.rate_hz
         self._accel_var = imu.accel_noise_density ** 2 * imu.rate_hz
+        self._raw = RawNavigationMessages(self._gyro_var, self._accel_var)
+        self._depth_bias_var = params.depth.bias_max_m ** 2 / 3.0
         self._last: tuple[int, np.ndarray] | None = None
 
     def publish(self, t_ns: int, q: np.ndarray, w: np.ndarray) -> None:
@@ -147,12 +153,17 @@ class NavigationTopics:
             self._send(reading)
 
     def _send(self, reading: Reading) -> None:
+        raw = self._raw
         if isinstance(reading, ImuReading):
-            self._imu.publish(imu_message(reading, self._gyro_var, self._accel_var))
+            self._imu.publish(raw.imu(reading.t_ns, reading.rpy, reading.rpy_sigma,
+                                      reading.w_body, reading.f_body))
         elif isinstance(reading, DvlReading):
             if reading.valid:
-                self._dvl.publish(dvl_message(reading))
+                self._dvl.publish(raw.dvl(reading.t_ns, reading.v_dvl, reading.sigma_m_s))
         elif isinstance(reading, DepthReading):
-            self._depth.publish(depth_message(reading, self.params.depth.bias_max_m))
+            variance = reading.sigma_m ** 2 + self._depth_bias_var
+            self._depth.publish(raw.pose(reading.t_ns, (0.0, 0.0, reading.depth_m),
+                                         (UNUSED_VARIANCE, UNUSED_VARIANCE, variance)))
         elif self._fix is not None:
-            self._fix.publish(position_fix_message(reading))
+            self._fix.publish(raw.pose(reading.t_ns, reading.p_ned,
+                                       (reading.sigma_m ** 2).tolist()))

@@ -17,9 +17,12 @@ from uvms_common.hot_messages import (
     actuator_command_codec,
     clock_codec,
     contact_codec,
+    dvl_codec,
+    imu_codec,
     joint_state_codec,
     odometry_codec,
     pose_codec,
+    pose_covariance_codec,
     wrench_codec,
 )
 
@@ -73,6 +76,63 @@ class RawStateMessages:
             bool(truth.in_contact), *np.asarray(truth.force_ned, dtype=float).tolist(),
             float(truth.penetration_m), float(truth.wall_position_m),
             float(truth.wall_velocity_m_s)))
+
+
+#: Variance of a pose or twist component a message does not measure (robot_localization
+#: ignores it); `uvms_sim.navigation_topics` builds the typed twins with the same value.
+UNUSED_VARIANCE = 1.0e9
+_IMU_FIELDS = ('orientation', 'orientation_covariance', 'angular_velocity',
+               'angular_velocity_covariance', 'linear_acceleration',
+               'linear_acceleration_covariance')
+
+
+def _diagonal(variances: Sequence[float]) -> list[float]:
+    """A row-major covariance matrix with the given diagonal, as a flat list."""
+    return np.diag(np.asarray(variances, dtype=float)).ravel().tolist()
+
+
+class RawNavigationMessages:
+    """Payloads of the navigation sensor topics: the raw twins of `navigation_topics`' messages.
+
+    Same frames and values as ``imu_message``, ``dvl_message``, ``depth_message`` and
+    ``position_fix_message`` of `uvms_sim.navigation_topics` (the reference, which the tests
+    compare these with).
+
+    Args:
+        gyro_var: Angular-rate variance per axis ((rad/s)^2).
+        accel_var: Specific-force variance per axis ((m/s^2)^2).
+    """
+
+    def __init__(self, gyro_var: float, accel_var: float) -> None:
+        self._imu = PayloadWriter(imu_codec(), _IMU_FIELDS)
+        self._dvl = PayloadWriter(dvl_codec(), ['twist'])
+        self._pose = PayloadWriter(pose_covariance_codec(), ['pose'])
+        self._gyro_cov = _diagonal([gyro_var] * 3)
+        self._accel_cov = _diagonal([accel_var] * 3)
+
+    def imu(self, t_ns: int, rpy: FloatArray, rpy_sigma: FloatArray, w_body: FloatArray,
+            f_body: FloatArray) -> bytes:
+        """sensor_msgs/Imu: AHRS rpy (rad) and its sigma, rate (rad/s), specific force."""
+        quaternion = conversions.quaternion_from_rpy(*(float(a) for a in rpy))
+        return self._imu.fill(t_ns, (
+            *quaternion, *_diagonal(np.asarray(rpy_sigma, dtype=float) ** 2),
+            *np.asarray(w_body, dtype=float).tolist(), *self._gyro_cov,
+            *np.asarray(f_body, dtype=float).tolist(), *self._accel_cov))
+
+    def dvl(self, t_ns: int, v_dvl: FloatArray, sigma_m_s: float) -> bytes:
+        """geometry_msgs/TwistWithCovarianceStamped: velocity in dvl_link (m/s), its sigma."""
+        return self._dvl.fill(t_ns, (
+            *np.asarray(v_dvl, dtype=float).tolist(), 0.0, 0.0, 0.0,
+            *_diagonal([sigma_m_s ** 2] * 3 + [UNUSED_VARIANCE] * 3)))
+
+    def pose(self, t_ns: int, p_ned: FloatArray, variances: Sequence[float]) -> bytes:
+        """geometry_msgs/PoseWithCovarianceStamped in map_ned: position, identity attitude.
+
+        ``variances`` are those of x, y, z (m^2); the attitude's are `UNUSED_VARIANCE`.
+        """
+        return self._pose.fill(t_ns, (
+            *np.asarray(p_ned, dtype=float).tolist(), 0.0, 0.0, 0.0, 1.0,
+            *_diagonal([*variances, *[UNUSED_VARIANCE] * 3])))
 
 
 class ActuatorCommandReader:

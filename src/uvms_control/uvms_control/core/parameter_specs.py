@@ -20,6 +20,8 @@ class ParameterSpec(NamedTuple):
 
 
 TRIGGER_MODES = ('lockstep', 'timer')
+#: The controller's trigger modes: the allocator's and 'odometry' (a step per vehicle state).
+CONTROLLER_TRIGGER_MODES = (*TRIGGER_MODES, 'odometry')
 STATE_SOURCES = ('truth', 'estimate')
 SWITCH_MODES = ('fuzzy', 'impedance', 'hybrid')
 
@@ -29,7 +31,9 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         'lockstep',
         "'lockstep': compute once joint states, odometry and wrench with the same stamp have "
         "arrived and stamp the command alike; 'timer': compute at control_rate_hz on the "
-        'latest inputs (real time).',
+        "latest inputs (real time); 'odometry': compute on each vehicle state (odometry, or "
+        'odometry/filtered on the estimate) with the latest joint states and wrench, stamped '
+        'with its stamp (real time on the estimate).',
     ),
     ParameterSpec('control_rate_hz', 500.0, 'Control rate in timer mode (Hz).', 1.0, 10000.0),
     ParameterSpec(

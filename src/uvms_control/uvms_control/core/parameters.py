@@ -20,6 +20,7 @@ from uvms_control.core.fuzzy_sets import FuzzySwitchParameters, Trapezoid
 from uvms_control.core.parameter_specs import (
     ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
+    CONTROLLER_TRIGGER_MODES,
     STATE_SOURCES,
     SWITCH_MODES,
     TRIGGER_MODES,
@@ -302,8 +303,9 @@ def validate_node_parameters(
     """
     merged = _merged(specs, values)
     mode = merged.get('trigger_mode')
-    if mode is not None and mode not in TRIGGER_MODES:
-        raise ControlParameterError('trigger_mode', mode, f'one of {list(TRIGGER_MODES)}')
+    modes = CONTROLLER_TRIGGER_MODES if 'state_source' in merged else TRIGGER_MODES
+    if mode is not None and mode not in modes:
+        raise ControlParameterError('trigger_mode', mode, f'one of {list(modes)}')
     source = merged.get('state_source')
     if source is not None and source not in STATE_SOURCES:
         raise ControlParameterError('state_source', source, f'one of {list(STATE_SOURCES)}')
