@@ -83,8 +83,8 @@ from uvms_common.robot_parameters import robot_model_values  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.controller_node import safety_limits  # noqa: E402
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS  # noqa: E402
 from uvms_control.core.parameter_specs import (  # noqa: E402
-    ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )

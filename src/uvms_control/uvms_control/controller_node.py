@@ -27,7 +27,6 @@ lifecycle state, the task and any safety limit reached.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -37,8 +36,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.cdr_codecs import MalformedPayloadError
-from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, RateMeter, Report
-from uvms_common.diagnostics import robot_name as urdf_robot_name
+from uvms_common.diagnostics import DiagnosticsPublisher, RateMeter
 from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
@@ -47,6 +45,7 @@ from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, Stalen
 
 from uvms_common import robot_parameters as robots
 from uvms_control import raw_conversions, task_conversions
+from uvms_control.controller_reports import ControllerReports
 from uvms_control.controller_safety import ControllerSafety, safety_limits
 from uvms_control.core.contact_task import TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
@@ -71,7 +70,7 @@ SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
 
 
-class ControllerNode(ControllerSafety, LifecycleNode):
+class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
     """Unified force controller: sensor topics and tasks in, generalized force and state out."""
 
     def __init__(self, **kwargs: Any) -> None:
@@ -406,57 +405,6 @@ class ControllerNode(ControllerSafety, LifecycleNode):
 
     def _publish_command(self, t_ns: int, tau_b: np.ndarray) -> None:
         self._command_pub.publish(self._command_writer.payload(t_ns, tau_b))
-
-    # ------------------------------------------------------------------------ diagnostics
-
-    def _hardware_id(self) -> str:
-        try:
-            urdf = UvmsParameters.from_flat_dict(self._robot).description.urdf_path
-            return urdf_robot_name(Path(urdf).read_text())
-        except (ModelError, OSError):
-            return urdf_robot_name(None)
-
-    def _report_control(self) -> Report:
-        state = state_label(self)
-        now = self.get_clock().now().nanoseconds
-        rate = self._rate.rate_hz(self._counts['steps'], now)
-        ages = {f'{topic}_age_s': (now - value.arrival_ns) * 1e-9 if value and value.arrival_ns
-                else None for topic, value in self._inputs.items()}
-        stale = self._stale or self._staleness.alarmed
-        misses = self._misses
-        level = OK if state == 'active' and not stale else WARN
-        message = 'stale inputs: zero command' if stale else state
-        if not stale and self._staleness.stale:
-            message = f'{state}: waiting for fresh inputs (start-up)'
-        allocator = self._allocator
-        if allocator is not None and not allocator.active:
-            level, message = WARN, f'thruster allocator {allocator.label}: zero command'
-        if self._faults.recent:
-            level, message = ERROR, f'survived a fault: {self._faults.last}'
-        return Report(level, message, {'lifecycle_state': state, 'rate_hz': rate,
-                                       'allocator': allocator.label if allocator
-                                       else 'not watched',
-                                       **self._faults.values(),
-                                       'rejected_inputs': self._counts['rejected'],
-                                       'malformed_inputs': self._counts['malformed'],
-                                       'zero_commands': self._counts['zeroed'],
-                                       'missed_periods': misses.missed if misses else None,
-                                       'missed_share': misses.share if misses else None,
-                                       **ages})
-
-    def _report_task(self) -> Report:
-        supervisor = self.supervisor
-        progress = supervisor.progress() if supervisor is not None else None
-        last = supervisor.last_result if supervisor is not None else None
-        values = {'task': 'none' if progress is None else progress.state.name.lower(),
-                  'progress': None if progress is None else progress.progress,
-                  'phase': None if last is None else last.phase.name.lower(),
-                  'weight': None if last is None else last.W,
-                  'goals_received': self.tasks.goals_received,
-                  'last_result': self.tasks.last_outcome}
-        if self._breach is not None:
-            return Report(ERROR, f'safety limit: {self._breach}', values)
-        return Report(OK, 'holding' if progress is None else 'running a contact task', values)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -46,9 +46,9 @@ from uvms_model.thrusters import ThrusterLayout
 
 from uvms_control import raw_conversions
 from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
+from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.errors import ControlInputError, ControlParameterError
 from uvms_control.core.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
-from uvms_control.core.parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.parameters import (
     thruster_parameters_from_flat_dict,
     validate_node_parameters,

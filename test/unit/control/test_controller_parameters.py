@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.contact_task import (
     ContactTaskGoal,
     SafetyLimits,
@@ -15,7 +16,6 @@ from uvms_control.core.contact_task import (
 )
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.parameter_specs import (
-    ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.fuzzy_sets import FuzzySwitchParameters, Trapezoid
 from uvms_control.core.parameter_specs import (
-    ALLOCATOR_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
     CONTROLLER_TRIGGER_MODES,
     STATE_SOURCES,
