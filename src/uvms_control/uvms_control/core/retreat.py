@@ -72,7 +72,8 @@ class Retreat:
         #: |F_e| (N) beyond which a breach during the retreat latches the safe hold.
         self.force_cap_n = RETREAT_FORCE_MARGIN * max(limits.max_contact_force_n, magnitude)
         self.direction = force_direction(last.F_e, normal, task.contact_threshold_n)
-        self.end_s = t
+        #: When the back-off's time is up (s): a whole retreat_time_s after its (re)start.
+        self.end_s = t + limits.retreat_time_s
         self._back_off(t, last.X)
 
     def _back_off(self, t: float, X: FloatArray) -> None:
