@@ -125,9 +125,12 @@ def test_cancel_releases_the_force_and_ends_after_the_retreat() -> None:
     np.testing.assert_allclose(pressing[-1].F_d, 100.0 * NORMAL, atol=1e-9)
     assert run.supervisor.cancel('a')
     t_cancel = run.t
-    retreat = []
+    retreat = [pressing[-1]]
     while not run.events and run.t < t_cancel + 3.0:
-        retreat.append(run.step(force_normal_n=100.0))
+        # The surface lets go once X_d has backed off 2 cm from the (fixed) end effector.
+        backed_off = float(NORMAL @ (retreat[-1].X_d - X)) < -0.02
+        retreat.append(run.step(force_normal_n=0.0 if backed_off else 100.0))
+    retreat = retreat[1:]
     [(t_end, event)] = run.events
     assert event.goal_id == 'a'
     assert event.result.code == TaskCode.CANCELED

@@ -1,9 +1,10 @@
 """The task supervisor's safety checks: the limits at every step, and the release of a contact.
 
 ``check_limits`` reads one controller step against ``SafetyLimits`` (|F_e|, wrist-sensor
-saturation, |X_d - X|); ``Release`` is what "released" means at the end of a goal or after a
-preemption: F_d ramps down for good, then X_d backs off the surface until the measured force
-is under half the contact threshold.
+saturation, |X_d - X|); ``Release`` is what "released" means at the end of a goal, after a
+preemption and at the end of a retreat still in contact: F_d ramps down for good, then X_d
+backs off against the measured force until it is under half the contact threshold. The
+retreat itself: ``retreat.Retreat``.
 """
 
 from __future__ import annotations
@@ -81,8 +82,9 @@ def check_limits(result: ControllerResult, f_sensor: FloatArray, f_normal: float
 def force_direction(F_e: FloatArray, normal: FloatArray, threshold_n: float) -> FloatArray:
     """The unit direction into the surface: along the measured force in contact, else n.
 
-    A retreat or a back-off moves along minus this, so a wrong normal (reversed, tilted)
-    still moves the end effector off the surface it actually presses on.
+    A retreat starts along minus this, so a wrong normal (reversed, tilted) still moves the
+    end effector off the surface it actually presses on; out of contact n is not verified, and
+    the retreat turns if it meets a contact on its way (``retreat.Retreat``).
     """
     magnitude = float(np.linalg.norm(F_e))
     if magnitude >= threshold_n:
@@ -94,35 +96,43 @@ def force_direction(F_e: FloatArray, normal: FloatArray, threshold_n: float) -> 
 class Release:
     """F_d ramping down for good, then X_d backing off until the contact is gone.
 
+    The back-off moves against the force measured at each step (the contact it is in), never
+    along a normal it was given: a reversed or wrong normal does not move it into the surface.
+
     Args:
         task: the reference whose hold point backs off.
-        direction: unit direction into the surface (``force_direction``).
         speed_m_s: back-off speed (m/s): retreat_m / retreat_time_s.
         max_distance_m: the back-off ends here even with a force left (m).
         threshold_n: the contact threshold (N).
     """
 
-    def __init__(self, task: TaskReference, direction: FloatArray, speed_m_s: float,
-                 max_distance_m: float, threshold_n: float) -> None:
+    def __init__(self, task: TaskReference, speed_m_s: float, max_distance_m: float,
+                 threshold_n: float) -> None:
         self.task = task
-        self.direction: list[float] = direction.tolist()
         self.speed_m_s = speed_m_s
         self.max_distance_m = max_distance_m
         self.threshold_n = threshold_n
         self.travelled_m = 0.0
 
+    @staticmethod
+    def released_from(F_e: FloatArray, threshold_n: float) -> bool:
+        """|F_e| (N) under ``RELEASED_SHARE`` of the contact threshold threshold_n (N)."""
+        f0, f1, f2 = F_e.tolist()
+        return math.sqrt(f0 * f0 + f1 * f1 + f2 * f2) < RELEASED_SHARE * threshold_n
+
     def released(self, F_e: FloatArray) -> bool:
         """|F_e| (N) under half the contact threshold."""
-        return float(np.linalg.norm(F_e)) < RELEASED_SHARE * self.threshold_n
+        return self.released_from(F_e, self.threshold_n)
 
     def step(self, t: float, F_e: FloatArray, dt: float) -> None:
-        """Back X_d off by speed dt along -direction once F_d is zero, while in contact."""
+        """Back X_d off by speed dt against F_e once F_d is zero, while in contact."""
         if not self.task.force_idle or self.released(F_e) \
                 or self.travelled_m >= self.max_distance_m:
             return
         self.task.hold_reached(t)
         distance = min(self.speed_m_s * dt, self.max_distance_m - self.travelled_m)
-        self.task.shift_hold([-distance * d for d in self.direction])
+        scale = distance / float(np.linalg.norm(F_e))
+        self.task.shift_hold([-scale * f for f in F_e.tolist()])
         self.travelled_m += distance
 
     def done(self, F_e: FloatArray) -> bool:

@@ -75,15 +75,13 @@ class TaskProgress:
 
 @dataclass
 class RunningTask:
-    """The goal the supervisor runs, its unit normal, figures, transit (s) and how it ends."""
+    """The goal the supervisor runs, its unit normal, figures and transit (s)."""
 
     goal_id: Hashable
     goal: ContactTaskGoal
     normal: FloatArray
     figures: TaskFigures
     start_s: float | None = None
-    end_code: TaskCode = TaskCode.SUCCEEDED
-    end_message: str = ''
     transit_s: float = 0.0
 
 

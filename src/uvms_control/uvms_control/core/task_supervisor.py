@@ -2,8 +2,9 @@
 
 States (``SupervisorState``): HOLD (no goal: the hold point at rest), WAITING (a goal waits for
 its stamp), FOLLOWING (its path), RELEASING (F_d ramps down at the path's end, then X_d backs
-off until the contact is gone), RETREATING (a cancel or a limit: back off along the measured
-force from the measured position) and SAFE_HOLD (a limit breached during a retreat: F_d = 0,
+off until the contact is gone), RETREATING (a cancel or a limit: back off from the measured
+position, against the measured force, turning at a contact met on the way, until the contact
+is gone: ``retreat.Retreat``) and SAFE_HOLD (a limit breached during a retreat: F_d = 0,
 X_d = X at rest, following X while in contact, until ``reset``). The limits
 (``safety_checks.check_limits``: |F_e|, sensor saturation, |X_d - X|) are checked at every
 step in every state. A breach outside a retreat starts a protected retreat that no goal can
@@ -31,9 +32,9 @@ from uvms_control.core.contact_task import (
     planned_goal,
     validate_goal,
 )
+from uvms_control.core.retreat import Retreat
 from uvms_control.core.safety_checks import (
     MAX_MOTION_STEP_S,
-    RETREAT_FORCE_MARGIN,
     SATURATION_SHARE,
     Breach,
     Release,
@@ -81,9 +82,7 @@ class TaskSupervisor:
         self._t_last: float | None = None
         self._target: list[float] | None = None
         self._release: Release | None = None
-        self._retreat_end_s = 0.0
-        self._retreat_force_cap_n = math.inf
-        self._retreat_reason = ''
+        self._retreating: Retreat | None = None
         self._safe_hold_reason: str | None = None
         self._capturing = True  # the hold point is captured at the next step
 
@@ -132,10 +131,10 @@ class TaskSupervisor:
         if self._last is None:
             self._queued.append((goal_id, goal))
             return []
-        if self.state == SupervisorState.RETREATING:
+        if self._retreating is not None:
             return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
-                f'refused: the arm is retreating ({self._retreat_reason}) until '
-                f't = {self._retreat_end_s:.3f} s; no goal preempts a retreat, send it again '
+                f'refused: the arm is retreating ({self._retreating.message}) until at least '
+                f't = {self._retreating.end_s:.3f} s; no goal preempts a retreat, send it again '
                 'after it')))]
         if self.state == SupervisorState.SAFE_HOLD:
             return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
@@ -238,7 +237,7 @@ class TaskSupervisor:
                                                'the hold point was re-captured')
         self.controller.task.hold()
         self._capturing = True
-        self._release = None
+        self._release = self._retreating = None
         self._target = None
         self._t_last = None
         if self.state != SupervisorState.SAFE_HOLD:
@@ -277,6 +276,8 @@ class TaskSupervisor:
             task.move_hold_toward(self._target, self.limits.max_target_speed_m_s * dt)
         if self._release is not None and self._last is not None:
             self._release.step(t, self._last.F_e, dt)
+        if self._retreating is not None and self._last is not None:
+            self._retreating.move(t, self._last.F_e, dt)
         if running is None:
             return []
         if self._cancel_requested and state != SupervisorState.RETREATING:
@@ -327,26 +328,18 @@ class TaskSupervisor:
         # How far X_d is held inside the surface beyond X: the back-off may need it too.
         penetration = (0.0 if hold_measured else
                        max(float(direction @ (self._last.X_d - self._last.X)), 0.0))
-        self._release = Release(task, direction, speed, self.limits.retreat_m + penetration,
+        self._release = Release(task, speed, self.limits.retreat_m + penetration,
                                 task.contact_threshold_n)
 
     def _retreat(self, t: float, code: TaskCode, message: str) -> None:
-        """Back off along the measured force (or -n) from the measured position, protected."""
+        """Back off from the measured position, protected (``Retreat``)."""
         assert self._last is not None
-        last, limits, task = self._last, self.limits, self.controller.task
         normal = self._running.normal if self._running is not None else self.controller.n
-        if self._running is not None:
-            self._running.end_code, self._running.end_message = code, message
         self.state = SupervisorState.RETREATING
         self._release = None
         self._target = None
-        self._retreat_reason = message
-        self._retreat_end_s = t + limits.retreat_time_s
-        magnitude = float(np.linalg.norm(last.F_e))
-        self._retreat_force_cap_n = RETREAT_FORCE_MARGIN * max(limits.max_contact_force_n,
-                                                               magnitude)
-        direction = force_direction(last.F_e, normal, task.contact_threshold_n)
-        task.retreat(t, last.X.tolist(), direction, limits.retreat_m, limits.retreat_time_s)
+        self._retreating = Retreat(self.controller.task, self.limits, t, self._last, normal,
+                                   code, message)
 
     def _enter_safe_hold(self, code: TaskCode, reason: str) -> list[TaskEvent]:
         """F_d = 0 at once and X_d = X at rest, latched until ``reset``."""
@@ -354,7 +347,7 @@ class TaskSupervisor:
         self.state = SupervisorState.SAFE_HOLD
         self._safe_hold_reason = reason
         self.breach = f'safe hold: {reason}'
-        self._release = None
+        self._release = self._retreating = None
         self.controller.task.hold(self._last.X.tolist())
         return self._end_running(code, f'safe hold: {reason}')
 
@@ -398,18 +391,17 @@ class TaskSupervisor:
     def _check_retreat(self, t: float, result: ControllerResult,
                        breach: Breach | None) -> list[TaskEvent]:
         """A breach during a retreat goes to SAFE_HOLD; a retreat done ends its goal."""
-        magnitude = float(np.linalg.norm(result.F_e))
-        done = t >= self._retreat_end_s and self.controller.task.force_idle
-        if breach is not None and (breach.code == TaskCode.TRACKING_LIMIT
-                                   or magnitude > self._retreat_force_cap_n or done):
-            return self._enter_safe_hold(breach.code, f'{breach.message}, during a retreat')
-        if not done:
+        retreat = self._retreating
+        assert retreat is not None
+        outcome = retreat.check(t, result, breach)
+        if isinstance(outcome, Breach):
+            return self._enter_safe_hold(outcome.code, outcome.message)
+        if not outcome:
             return []
+        self._retreating = None
         self.controller.task.hold(result.X_d.tolist())
         self.state = SupervisorState.HOLD
-        if self._running is None:
-            return []
-        return self._end_running(self._running.end_code, self._running.end_message)
+        return self._end_running(retreat.code, retreat.outcome(result.F_e))
 
     def _finish_goal(self, released: bool) -> list[TaskEvent]:
         """The end of a released goal: SUCCEEDED or NO_CONTACT, then hold X_d."""
