@@ -7,6 +7,7 @@ import functools
 import importlib
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -21,6 +22,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
+from uvms_common.raw_clock import take_clock_raw
 
 from uvms_recording.errors import RecordingError
 from uvms_recording.mcap_writer import (
@@ -150,6 +152,7 @@ class RecorderNode(Node):
 
         """
         super().__init__('recorder', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         output_path = self.declare_parameter(
             'output_path', '',
             ParameterDescriptor(description='MCAP file to write (required), e.g. run.mcap',
@@ -274,7 +277,11 @@ class RecorderNode(Node):
         return self._recorder
 
     def _on_message(self, topic: str, data: bytes) -> None:
-        log_time_ns = self.get_clock().now().nanoseconds
+        # The node clock's now, without building rclpy Time objects per message: the last
+        # /clock stamp under use_sim_time (what ROSClock.now() returns then), else the
+        # system clock.
+        source = self._clock_source
+        log_time_ns = source.last_ns if source.ros_time_is_active else time.time_ns()
         with self._lock:
             if self._recorder.closed:
                 self._dropped += 1

@@ -23,6 +23,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
+from uvms_common.raw_clock import take_clock_raw
 from visualization_msgs.msg import MarkerArray
 
 from uvms_msgs.msg import ContactState, ControllerState
@@ -41,6 +42,7 @@ class VisualizerNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('visualizer', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         rate_hz = self.declare_parameter(
             'marker_rate_hz', 20.0, ParameterDescriptor(
                 description='Marker publications per simulated second (Hz)', read_only=True,
