@@ -47,10 +47,35 @@ class RawClockTimeSource(TimeSource):
         """Attach to ``node`` as rclpy's TimeSource does (reads ``use_sim_time``)."""
         self.malformed = 0
         self.last_ns = 0
+        self._fed = False
         super().__init__(node=node)
 
+    @property
+    def fed(self) -> bool:
+        """Whether the node feeds the time itself (``feed_from_node``), not /clock."""
+        return self._fed
+
+    def feed_from_node(self) -> None:
+        """The node sets the time itself (``advance``): no /clock subscription of its own.
+
+        For a node that receives every /clock message anyway (the recorder records it) or
+        whose clock only times what its stamped inputs bring: one subscription (500 messages
+        a second) less. ``use_sim_time`` still switches simulated time on and off.
+        """
+        self._fed = True
+        if self._clock_sub is not None:
+            node = self._get_node()
+            if node is not None:
+                node.destroy_subscription(self._clock_sub)
+            self._clock_sub = None
+
+    def advance(self, stamp_ns: int) -> None:
+        """Set the clocks to ``stamp_ns`` under ``use_sim_time`` (ignored on wall time)."""
+        if self.ros_time_is_active:
+            self._set(stamp_ns)
+
     def _subscribe_to_clock_topic(self) -> None:
-        if self._clock_sub is None:
+        if self._clock_sub is None and not self._fed:
             node = self._get_node()
             if node is not None:
                 self._clock_sub = node.create_subscription(
@@ -63,8 +88,11 @@ class RawClockTimeSource(TimeSource):
             self.malformed += 1
             return
         sec, nanosec = (_BIG if data[1] == 0 else _LITTLE).unpack_from(data, 4)
-        self.last_ns = sec * 1_000_000_000 + nanosec
-        time = Time(nanoseconds=self.last_ns, clock_type=ClockType.ROS_TIME)
+        self._set(sec * 1_000_000_000 + nanosec)
+
+    def _set(self, stamp_ns: int) -> None:
+        self.last_ns = stamp_ns
+        time = Time(nanoseconds=stamp_ns, clock_type=ClockType.ROS_TIME)
         self._last_time_set = time
         for clock in self._associated_clocks:
             clock.set_ros_time_override(time)

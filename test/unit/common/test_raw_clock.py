@@ -114,3 +114,20 @@ def test_short_payload_is_counted_and_leaves_the_clock(context: Context) -> None
                               + (10).to_bytes(4, 'big'))  # big-endian CDR
     assert node.get_clock().now().nanoseconds == 7_000_000_010
     node.destroy_node()
+
+
+def test_fed_node_takes_its_time_from_its_stamps_not_clock(context: Context) -> None:
+    """feed_from_node: no /clock subscription, even after use_sim_time toggles; advance sets it."""
+    node = rclpy.create_node('fed', context=context,
+                             parameter_overrides=[Parameter('use_sim_time', value=True)])
+    source = take_clock_raw(node)
+    source.feed_from_node()
+    assert source.fed and subscriptions_of(node, '/clock') == 0
+    source.advance(3_000_000_007)
+    assert node.get_clock().now().nanoseconds == 3_000_000_007
+    node.set_parameters([Parameter('use_sim_time', value=False)])
+    source.advance(5)  # wall time: stamps do not move the clock
+    assert abs(node.get_clock().now().nanoseconds - time.time_ns()) < 5_000_000_000
+    node.set_parameters([Parameter('use_sim_time', value=True)])
+    assert subscriptions_of(node, '/clock') == 0
+    node.destroy_node()
