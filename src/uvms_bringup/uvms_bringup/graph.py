@@ -23,7 +23,7 @@ from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from uvms_common.node_main import StopEvent, make_executor, spin_turn
+from uvms_common.node_main import StopEvent, make_executor
 from uvms_tasks.mission_node import MissionNode
 
 from uvms_bringup.bars import RunBar
@@ -45,9 +45,6 @@ from uvms_bringup.scenario import ParameterValue, Scenario
 _SPIN_TIMEOUT_S = 0.5
 #: Wall-clock time given to the last messages to reach the recorder after the run (s).
 _DRAIN_S = 0.1
-#: One executor turn without ``on_spin`` (s): the run ends at most this long after its
-#: duration, and the stop signal and the progress bar are looked at this often.
-_TURN_S = 0.01
 
 
 @dataclass
@@ -227,10 +224,7 @@ def run_graph(
         while not sim.finished:
             if stop is not None and stop.is_set():
                 raise KeyboardInterrupt
-            if on_spin is None:  # every callback due in a short turn, in C++ when it can
-                spin_turn(executor, _TURN_S)
-            else:
-                executor.spin_once(timeout_sec=_SPIN_TIMEOUT_S)
+            executor.spin_once(timeout_sec=_SPIN_TIMEOUT_S)
             if progress is not None:
                 progress.update_to(sim.sim_time_ns * 1e-9)
             if on_spin is not None:

@@ -32,7 +32,6 @@ from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from rclpy.task import Future
 
 from uvms_common.node_entry import flush_output
 from uvms_common.ros_environment import ros_environment_defaults
@@ -40,7 +39,7 @@ from uvms_common.stop_event import StopEvent, active_stop_event
 
 __all__ = ['EXECUTORS', 'SPIN_TURN_S', 'TEARDOWN_BACKSTOP_S', 'TEARDOWN_GRACE_S', 'StopEvent',
            'TeardownDeadline', 'make_executor', 'profiled', 'run_node',
-           'spin_turn', 'spin_until_stopped']
+           'spin_until_stopped']
 
 #: The node class a process runs.
 N = TypeVar('N', bound=Node)
@@ -121,25 +120,8 @@ def spin_until_stopped(
 ) -> None:
     """Spin in short turns until a stop signal, ``finished()``, or the context shuts down."""
     while not stop.is_set() and not finished() and rclpy.ok(context=context):
-        spin_turn(executor, SPIN_TURN_S)
+        executor.spin_once(timeout_sec=SPIN_TURN_S)
 
-
-def spin_turn(executor: Executor, timeout_sec: float) -> None:
-    """One turn of the executor: up to ``timeout_sec`` of work and waiting.
-
-    The EventsExecutor (C++) runs every callback due within the turn in its own loop (a
-    ``spin_until_future_complete`` on a future nothing completes): no return to Python per
-    message, measured 8 us of CPU less per message than a ``spin_once`` per callback
-    (bench/profile_nodes.py). rclpy's Python executors run one callback (``spin_once``), as
-    their own ``spin_until_future_complete`` would, in Python, anyway.
-
-    Raises:
-        Whatever a callback raised; ExternalShutdownException when the context shut down.
-    """
-    if isinstance(executor, Executor):
-        executor.spin_once(timeout_sec=timeout_sec)
-    else:
-        executor.spin_until_future_complete(Future(), timeout_sec=timeout_sec)
 
 
 class TeardownDeadline:

@@ -66,8 +66,7 @@ from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 
 TOPICS = ('joint_states', 'odometry', 'wrench')
-SUCCESS = TransitionCallbackReturn.SUCCESS
-FAILURE = TransitionCallbackReturn.FAILURE
+SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 
 
 class ControllerNode(ControllerSafety, LifecycleNode):

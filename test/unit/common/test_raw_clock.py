@@ -13,7 +13,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from uvms_common.node_main import make_executor, spin_turn
+from uvms_common.node_main import make_executor
 from uvms_common.raw_clock import RawClockTimeSource, take_clock_raw
 
 
@@ -41,7 +41,7 @@ def spin_until(context: Context, nodes: list[Node], condition: Callable[[], bool
     try:
         while time.monotonic() < deadline:
             action()
-            spin_turn(executor, 0.05)
+            executor.spin_once(timeout_sec=0.05)
             if condition():
                 return True
         return False
