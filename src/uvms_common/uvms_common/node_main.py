@@ -18,12 +18,13 @@ process with the status it would have had, well before the launcher's SIGTERM an
 
 from __future__ import annotations
 
+import contextlib
 import faulthandler
 import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TypeVar
 
 import rclpy
@@ -37,7 +38,8 @@ from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent, active_stop_event
 
 __all__ = ['EXECUTORS', 'SPIN_TURN_S', 'TEARDOWN_BACKSTOP_S', 'TEARDOWN_GRACE_S', 'StopEvent',
-           'TeardownDeadline', 'make_executor', 'run_node', 'spin_until_stopped']
+           'TeardownDeadline', 'make_executor', 'profiled', 'run_node',
+           'spin_until_stopped']
 
 #: The node class a process runs.
 N = TypeVar('N', bound=Node)
@@ -84,6 +86,32 @@ def make_executor(kind: str | None = None, context: Context | None = None) -> Ex
     raise ValueError(msg)
 
 
+@contextlib.contextmanager
+def profiled(name: str) -> Iterator[None]:
+    """Profile the block with cProfile when ``UVMS_PROFILE`` names a directory.
+
+    The statistics go to ``<UVMS_PROFILE>/<name>-<pid>.prof`` (read them with ``pstats`` or
+    ``bench/profile_nodes.py``). Times are the CPU time of the spinning thread
+    (``time.thread_time``), not wall time: an executor waiting for work counts nothing, and
+    the middleware's own threads (Fast DDS receive and event threads) are not in it. Unset
+    (the default), nothing is profiled.
+    """
+    directory = os.environ.get('UVMS_PROFILE')
+    if not directory:
+        yield
+        return
+    import cProfile
+
+    profile = cProfile.Profile(time.thread_time)
+    profile.enable()
+    try:
+        yield
+    finally:
+        profile.disable()
+        os.makedirs(directory, exist_ok=True)
+        profile.dump_stats(os.path.join(directory, f'{name}-{os.getpid()}.prof'))
+
+
 def spin_until_stopped(
     executor: Executor,
     stop: StopEvent,
@@ -93,6 +121,7 @@ def spin_until_stopped(
     """Spin in short turns until a stop signal, ``finished()``, or the context shuts down."""
     while not stop.is_set() and not finished() and rclpy.ok(context=context):
         executor.spin_once(timeout_sec=SPIN_TURN_S)
+
 
 
 class TeardownDeadline:
@@ -182,8 +211,9 @@ def run_node(
         executor = make_executor()
         executor.add_node(node)
         built = node
-        spin_until_stopped(executor, stop,
-                           (lambda: finished(built)) if finished is not None else lambda: False)
+        with profiled(logger_name):
+            spin_until_stopped(executor, stop, (lambda: finished(built))
+                               if finished is not None else lambda: False)
     except startup_errors as exc:
         logger.fatal(str(exc))
         status = 1

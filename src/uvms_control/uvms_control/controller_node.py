@@ -41,6 +41,7 @@ from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
+from uvms_common.raw_clock import take_clock_raw
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 
 from uvms_common import robot_parameters as robots
@@ -66,8 +67,7 @@ from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 
 TOPICS = ('joint_states', 'odometry', 'wrench')
-SUCCESS = TransitionCallbackReturn.SUCCESS
-FAILURE = TransitionCallbackReturn.FAILURE
+SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 
 
 class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
@@ -80,6 +80,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
             ControlParameterError: a parameter that configure refused, under ``autostart``.
         """
         super().__init__('controller', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         self.robot_name, robot = robots.declare_robot(self)
         self._robot_files = robot
         self._robot = robots.robot_model_values(declare_parameters(self, PARAMETER_SPECS, robot),

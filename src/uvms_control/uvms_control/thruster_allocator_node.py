@@ -35,6 +35,7 @@ from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
+from uvms_common.raw_clock import take_clock_raw
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 from uvms_common.robot_parameters import (
     check_all_declared,
@@ -79,6 +80,7 @@ class ThrusterAllocatorNode(LifecycleNode):
                 that configure refused (named, with its value and valid range).
         """
         super().__init__('thruster_allocator', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         self.robot_name, robot = declare_robot(self)
         self._robot_files = robot
         self._robot = robot_model_values(declare_parameters(self, PARAMETER_SPECS, robot),

@@ -31,6 +31,7 @@ from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
+from uvms_common.raw_clock import take_clock_raw
 from uvms_model.errors import ModelError
 from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
 
@@ -64,6 +65,7 @@ class EstimatorNode(LifecycleNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('estimator', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         self.robot_name, robot = robots.declare_robot(self)
         names = [s for s in NAVIGATION_PARAMETER_SPECS
                  if not s.name.startswith(('world.', 'navigation.enabled'))]

@@ -37,6 +37,7 @@ from rclpy.subscription import Subscription
 from rclpy.task import Future
 from unique_identifier_msgs.msg import UUID
 from uvms_common.node_main import run_node
+from uvms_common.raw_clock import take_clock_raw
 
 from uvms_msgs.action import ContactTask
 from uvms_msgs.msg import ControllerState
@@ -77,6 +78,7 @@ class MissionNode(Node):
     def __init__(self, tasks: Sequence[TaskSpec] | None = None,
                  server_settle_s: float = 0.0, **kwargs: Any) -> None:
         super().__init__('mission', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         mission_file = self.declare_parameter(
             'mission_file', '', ParameterDescriptor(
                 description='Task or mission YAML file (uvms_tasks.task_file); ignored when '

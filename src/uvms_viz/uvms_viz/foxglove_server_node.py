@@ -26,6 +26,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
+from uvms_common.raw_clock import take_clock_raw
 from uvms_recording.errors import RecordingError
 from uvms_recording.recorder_node import (
     DEFAULT_TOPICS,
@@ -110,6 +111,7 @@ class FoxgloveServerNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('foxglove_server', **kwargs)
+        self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time
         host = self.declare_parameter(
             'host', FOXGLOVE_HOST, ParameterDescriptor(
                 description='Address the WebSocket server binds; 127.0.0.1 keeps it on this '

@@ -7,7 +7,8 @@ state. Both arrive at the control rate (500 Hz) but are used at the marker rate 
 they are subscribed raw and only the ones used are deserialized. The markers depend on
 message contents only, so lockstep runs stay deterministic; the hot path of the graph
 (simulator, controller, allocator) does not wait for this node. ``/diagnostics`` reports
-the rates of controller states received and marker arrays published (per node-clock second).
+the rates of controller states received and marker arrays published (per node-clock second;
+under ``use_sim_time`` the node clock is the last controller state's stamp, not ``/clock``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
+from uvms_common.raw_clock import take_clock_raw
 from visualization_msgs.msg import MarkerArray
 
 from uvms_msgs.msg import ContactState, ControllerState
@@ -41,6 +43,10 @@ class VisualizerNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('visualizer', **kwargs)
+        # Under use_sim_time the node clock follows the controller states' stamps (it only
+        # times /diagnostics): no /clock subscription, 500 messages a second fewer.
+        self._clock_source = take_clock_raw(self)
+        self._clock_source.feed_from_node()
         rate_hz = self.declare_parameter(
             'marker_rate_hz', 20.0, ParameterDescriptor(
                 description='Marker publications per simulated second (Hz)', read_only=True,
@@ -99,6 +105,7 @@ class VisualizerNode(Node):
             self.get_logger().error(f'ignored controller state: {exc}', throttle_duration_sec=5.0)
             return
         self._states += 1
+        self._clock_source.advance(t_ns)
         if t_ns < self._next_due_ns:
             return
         self._next_due_ns = (t_ns // self._period_ns + 1) * self._period_ns

@@ -148,6 +148,14 @@ def test_log_time_is_the_simulated_clock_under_use_sim_time(context: Context,
     assert times['/uvms/wrench'] == 5_000_000_250
 
 
+def test_recorded_clock_is_the_only_clock_subscription(context: Context, tmp_path: Path) -> None:
+    """Under use_sim_time the recording's /clock subscription also sets the node clock."""
+    recorder = _recorder(context, tmp_path / 'run.mcap', use_sim_time=True)
+    assert sum(1 for s in recorder.subscriptions if s.topic_name == '/clock') == 1
+    assert recorder.get_clock().ros_time_is_active
+    recorder.destroy_node()
+
+
 def test_latched_tf_static_published_before_the_recorder_is_recorded(context: Context,
                                                                       tmp_path: Path) -> None:
     """/tf_static is subscribed transient local, so an earlier latched message arrives."""
