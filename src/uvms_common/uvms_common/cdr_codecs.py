@@ -29,7 +29,7 @@ from __future__ import annotations
 import importlib
 import itertools
 import struct
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -344,3 +344,34 @@ class RawDecoder:
             self.last_error = f'{self.codec.msg_type.__name__}: {reason}'
             raise MalformedPayloadError(self.last_error) from error
         return Decoded(int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec), None, message)
+
+
+class RawReader:
+    """One input topic: decode a payload, then convert it (in place, or typed as before).
+
+    Args:
+        codec: The layout our graph publishes on the topic.
+        fast: A payload in that layout (its ``struct`` reads) to the value.
+        typed: A node's typed reader, the reference, for a message of any other layout.
+    """
+
+    def __init__(self, codec: MessageCodec, fast: Callable[[bytes], Any],
+                 typed: Callable[[Any], Any]) -> None:
+        self.decoder = RawDecoder(codec)
+        self._fast = fast
+        self._typed = typed
+
+    def decode(self, data: bytes) -> Decoded:
+        """Stamp and payload or message (raises `MalformedPayloadError`, counted)."""
+        return self.decoder.decode(data)
+
+    def value(self, decoded: Decoded) -> Any:
+        """The converted value (the converters' own errors pass through)."""
+        if decoded.view is not None:
+            return self._fast(decoded.view)
+        return self._typed(decoded.message)
+
+    def read(self, data: bytes) -> tuple[int, Any]:
+        """Stamp (ns) and value of one payload."""
+        decoded = self.decode(data)
+        return decoded.stamp_ns, self.value(decoded)

@@ -12,14 +12,14 @@ builders of `uvms_control.conversions` put in their messages.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
-from uvms_common.cdr_codecs import Decoded, MessageCodec, PayloadWriter, RawDecoder
+from uvms_common.cdr_codecs import PayloadWriter
+from uvms_common.cdr_codecs import RawReader as Reader
 from uvms_common.hot_messages import (
     THRUSTER_ARRAYS,
     actuator_command_codec,
@@ -46,37 +46,6 @@ def _finite(name: str, values: tuple[float, ...]) -> FloatArray:
     if not math.isfinite(sum(values)) and not all(math.isfinite(v) for v in values):
         raise ControlInputError(f'{name} holds a non-finite value: {list(values)}')
     return np.array(values)
-
-
-class Reader:
-    """One input topic: decode a payload, then convert it (in place, or typed as before).
-
-    Args:
-        codec: The layout our graph publishes on the topic.
-        fast: Numbers of a payload in that layout (its ``struct`` reads) to the value.
-        typed: The typed reader of `uvms_control.conversions` for any other layout.
-    """
-
-    def __init__(self, codec: MessageCodec, fast: Callable[[bytes], Any],
-                 typed: Callable[[Any], Any]) -> None:
-        self.decoder = RawDecoder(codec)
-        self._fast = fast
-        self._typed = typed
-
-    def decode(self, data: bytes) -> Decoded:
-        """Stamp and payload or message (raises `MalformedPayloadError`, counted)."""
-        return self.decoder.decode(data)
-
-    def value(self, decoded: Decoded) -> Any:
-        """The converted value (raises `ControlInputError` naming the field)."""
-        if decoded.view is not None:
-            return self._fast(decoded.view)
-        return self._typed(decoded.message)
-
-    def read(self, data: bytes) -> tuple[int, Any]:
-        """Stamp (ns) and value of one payload, for callers that need no stamp on error."""
-        decoded = self.decode(data)
-        return decoded.stamp_ns, self.value(decoded)
 
 
 def joint_state_reader(joint_names: Sequence[str]) -> Reader:

@@ -15,7 +15,8 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from uvms_common.cdr_codecs import MessageCodec, PayloadWriter, RawDecoder
+from uvms_common.cdr_codecs import PayloadWriter
+from uvms_common.cdr_codecs import RawReader as Reader
 from uvms_common.hot_messages import (
     clock_codec,
     dvl_codec,
@@ -29,31 +30,9 @@ from uvms_model.kinematics import euler_from_rotation
 from uvms_navigation import conversions
 
 
-class Reader:
-    """One input topic: a payload to the stamp (ns) and the numbers the filter takes.
-
-    Args:
-        codec: The layout the simulator publishes on the topic.
-        fast: A payload in that layout to its value.
-        typed: The typed reader of `uvms_navigation.conversions` for any other layout.
-    """
-
-    def __init__(self, codec: MessageCodec, fast: Callable[[bytes], Any],
-                 typed: Callable[[Any], Any]) -> None:
-        self.decoder = RawDecoder(codec)
-        self._fast = fast
-        self._typed = typed
-
-    def read(self, data: bytes) -> tuple[int, Any]:
-        """Stamp (ns) and value of one payload.
-
-        Raises:
-            MalformedPayloadError: Neither the layout nor rclpy reads it (counted).
-        """
-        decoded = self.decoder.decode(data)
-        if decoded.view is not None:
-            return decoded.stamp_ns, self._fast(decoded.view)
-        return decoded.stamp_ns, self._typed(decoded.message)[1:]
+def _without_stamp(typed: Callable[[Any], tuple[Any, ...]]) -> Callable[[Any], Any]:
+    """A typed reader of `conversions` (stamp first) giving the value without its stamp."""
+    return lambda msg: typed(msg)[1:]
 
 
 def imu_reader() -> Reader:
@@ -68,7 +47,7 @@ def imu_reader() -> Reader:
                 np.array(f_struct.unpack_from(data, f_at)),
                 conversions.rpy_from_xyzw(*q_struct.unpack_from(data, q_at)))
 
-    return Reader(codec, fast, conversions.imu_arrays)
+    return Reader(codec, fast, _without_stamp(conversions.imu_arrays))
 
 
 def dvl_reader() -> Reader:
@@ -76,7 +55,7 @@ def dvl_reader() -> Reader:
     codec = dvl_codec()
     at, linear = codec.struct(['twist.twist.linear'])
     return Reader(codec, lambda data: (np.array(linear.unpack_from(data, at)),),
-                  conversions.dvl_arrays)
+                  _without_stamp(conversions.dvl_arrays))
 
 
 def depth_reader() -> Reader:
@@ -84,7 +63,7 @@ def depth_reader() -> Reader:
     codec = pose_covariance_codec()
     at, z = codec.struct(['pose.pose.position.z'])
     return Reader(codec, lambda data: (float(z.unpack_from(data, at)[0]),),
-                  conversions.depth_value)
+                  _without_stamp(conversions.depth_value))
 
 
 def position_fix_reader() -> Reader:
@@ -97,12 +76,12 @@ def position_fix_reader() -> Reader:
         cov = np.array(c_struct.unpack_from(data, c_at)).reshape(6, 6)
         return np.array(p_struct.unpack_from(data, p_at)), np.sqrt(np.diag(cov)[:3])
 
-    return Reader(codec, fast, conversions.position_arrays)
+    return Reader(codec, fast, _without_stamp(conversions.position_arrays))
 
 
 def clock_reader() -> Reader:
     """``/clock`` to its time (ns) alone; rosgraph_msgs/Clock has no other field."""
-    return Reader(clock_codec(), lambda data: (), lambda msg: (msg.clock,))
+    return Reader(clock_codec(), lambda data: (), lambda msg: ())
 
 
 class OdometryWriter:
