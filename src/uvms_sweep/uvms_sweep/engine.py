@@ -5,8 +5,9 @@ Each point is one Ray task (one CPU, no retries) that supervises the point's own
 each a ROS_DOMAIN_ID that no other running point has, records every finished point in
 DIR/points.csv at once, and skips points whose row says ``done`` (resume).
 
-Ctrl-C sets a flag held by a small actor (``StopFlag``) that every running task polls; each
-stops its point process and returns. ``ray.cancel`` is only the last resort for a task that
+Ctrl-C sets a flag held by a small actor (``stop_flag.StopFlag``, started and answering
+before any point is sent) that every running task polls; each stops its point process and
+returns. ``ray.cancel`` is only the last resort for a task that
 has not returned after ``CANCEL_GRACE_S``: in Ray 2.60 a cancellation that races with the
 task's own reply aborts the driver ("Tried to complete task that was not pending",
 ray-project/ray#54798), which a sweep stopped mid-point hit in CI.
@@ -44,7 +45,7 @@ from uvms_bringup.scenario import Scenario
 from uvms_common.node_main import StopEvent
 
 from uvms_sweep.maps import draw_figures
-from uvms_sweep.point import execute_point
+from uvms_sweep.stop_flag import point_task, start_stop_flag
 from uvms_sweep.sweep_file import Sweep, SweepPoint
 from uvms_sweep.table import outcome_row, read_table, write_table
 
@@ -69,8 +70,6 @@ _TOKEN_HOW = ("put the cluster's token (`ray get-auth-token` on its head node) i
 LOCAL_OBJECT_STORE_BYTES = 256 * 2**20
 #: Wall time given to stopped tasks to end their point processes before a forced kill (s).
 CANCEL_GRACE_S = 5.0
-#: Wall-clock limit of one task's question to the StopFlag actor (s); no answer: go on.
-_STOP_ASK_TIMEOUT_S = 5.0
 #: Wall-clock period at which the driver checks for Ctrl-C while points run (s).
 _WAIT_S = 0.5
 
@@ -212,37 +211,6 @@ def _import_ray() -> Any:
     return ray
 
 
-class StopFlag:
-    """A flag the driver sets on Ctrl-C and the running point tasks poll (a Ray actor)."""
-
-    def __init__(self) -> None:
-        """Not set."""
-        self._set = False
-
-    def set(self) -> None:
-        """Ask every running point to stop."""
-        self._set = True
-
-    def is_set(self) -> bool:
-        """Whether the sweep is stopping."""
-        return self._set
-
-
-def point_task(
-    request: Mapping[str, Any], domain_id: int, timeout_s: float, stop_flag: Any
-) -> dict[str, Any]:
-    """The Ray task of one point: ``execute_point``, stopped when ``stop_flag`` is set."""
-    import ray
-
-    def should_stop() -> bool:
-        try:
-            return bool(ray.get(stop_flag.is_set.remote(), timeout=_STOP_ASK_TIMEOUT_S))
-        except (ray.exceptions.GetTimeoutError, ray.exceptions.RayActorError):
-            return False
-
-    return execute_point(request, domain_id, timeout_s, should_stop=should_stop)
-
-
 def run_sweep(
     sweep: Sweep,
     scenario: Scenario,
@@ -326,13 +294,15 @@ def _dispatch(
 ) -> None:
     """Keep ``capacity`` point tasks in flight until all ran or a stop arrives."""
     task = ray.remote(num_cpus=1, max_retries=0)(point_task)
-    stop_flag = ray.remote(num_cpus=0)(StopFlag).remote()
+    stop_flag = start_stop_flag(ray, stop)
     duration_s = sweep.duration_s if sweep.duration_s is not None else scenario.duration_s
     pending = list(todo)
     free_domains = list(DOMAIN_IDS[:capacity])
     in_flight: dict[Any, tuple[SweepPoint, int]] = {}
     try:
         while pending or in_flight:
+            if stop is not None and stop.is_set():
+                raise KeyboardInterrupt
             while pending and free_domains:
                 point = pending.pop(0)
                 domain = free_domains.pop(0)
@@ -355,7 +325,8 @@ def _dispatch(
         summary.interrupted = True
         _stop_in_flight(ray, stop_flag, in_flight, sweep, out_dir, points, rows, summary)
     finally:
-        ray.kill(stop_flag)
+        if stop_flag is not None:
+            ray.kill(stop_flag)
 
 
 def point_request(
@@ -410,7 +381,8 @@ def _stop_in_flight(
     A point that failed while the sweep stopped is not recorded: the stop may be its cause,
     and the next run tries it again either way.
     """
-    stop_flag.set.remote()
+    if stop_flag is not None:
+        stop_flag.set.remote()
     deadline = time.monotonic() + CANCEL_GRACE_S
     left = list(in_flight)
     while left and time.monotonic() < deadline:
