@@ -16,24 +16,18 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import re
 import resource
 import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
 
+from other_revision import extract_revision, python_path
+
 REPO = Path(__file__).resolve().parents[1]
 UVMS = Path(sys.executable).parent / 'uvms'
-
-
-def python_path(root: Path) -> str:
-    """PYTHONPATH importing a tree's packages (uvms_msgs is the built one of the venv)."""
-    return ':'.join(str(p) for p in sorted((root / 'src').glob('uvms_*'))
-                    if p.name != 'uvms_msgs')
 
 
 def run(root: Path, scenario: str, duration: float, output: Path) -> tuple[float, str]:
@@ -60,10 +54,7 @@ def main() -> None:
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp) / 'base'
-        archive = subprocess.run(['git', 'archive', args.rev, 'src', 'config'], cwd=REPO,
-                                 capture_output=True, check=True).stdout
-        with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
-            tar.extractall(base, filter='data')
+        extract_revision(args.rev, base)
         run(base, args.scenario, 0.5, Path(tmp) / 'warm.mcap')
         print(f'{args.scenario}, {args.duration:g} s simulated, lockstep, recording on; '
               f'{args.rev} against this tree; CPU = user + system of the uvms run process')

@@ -30,15 +30,15 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import signal
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
+
+from other_revision import extract_revision, python_path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(p) for p in sorted((REPO / 'src').glob('uvms_*')) if p.name != 'uvms_msgs']
@@ -124,12 +124,6 @@ def conversion_costs(rounds: int = 5, seconds: float = 2.0) -> dict[str, tuple[f
     return out
 
 
-def python_path(root: Path) -> str:
-    """PYTHONPATH importing a tree's packages (uvms_msgs is the built one of the venv)."""
-    return ':'.join(str(p) for p in sorted((root / 'src').glob('uvms_*'))
-                    if p.name != 'uvms_msgs')
-
-
 def run(root: Path, scenario: str, duration_s: float, work: Path, domain: int
         ) -> dict[str, float]:
     """CPU seconds per node process of one lockstep run of ``duration_s`` simulated s."""
@@ -187,10 +181,7 @@ def main() -> None:
         return
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp) / 'base'
-        archive = subprocess.run(['git', 'archive', args.rev, 'src', 'config'], cwd=REPO,
-                                 capture_output=True, check=True).stdout
-        with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
-            tar.extractall(base, filter='data')
+        extract_revision(args.rev, base)
         domain = 40 + os.getpid() % 50
         work = Path(tmp) / 'params'
         work.mkdir()

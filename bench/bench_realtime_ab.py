@@ -17,23 +17,17 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import io
 import os
 import re
 import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
 
+from other_revision import extract_revision, python_path
+
 REPO = Path(__file__).resolve().parents[1]
 NODES = ('simulator', 'controller', 'thruster_allocator', 'visualizer', 'mission', 'recorder')
-
-
-def python_path(root: Path) -> str:
-    """PYTHONPATH importing a tree's packages (uvms_msgs is the built one of the venv)."""
-    return ':'.join(str(p) for p in sorted((root / 'src').glob('uvms_*'))
-                    if p.name != 'uvms_msgs')
 
 
 def run(root: Path, scenario: str, seconds: float) -> dict[str, float]:
@@ -66,10 +60,7 @@ def main() -> None:
     runs: dict[str, list[dict[str, float]]] = {args.rev: [], 'this tree': []}
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp) / 'base'
-        archive = subprocess.run(['git', 'archive', args.rev, 'src', 'config', 'bench'],
-                                 cwd=REPO, capture_output=True, check=True).stdout
-        with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
-            tar.extractall(base, filter='data')
+        extract_revision(args.rev, base, ('src', 'config', 'bench'))
         run(base, args.scenario, 1.0)  # compiles the other tree's kernels
         print(f'{args.scenario}, real time, {args.seconds:g} s measured per run, one process '
               f'per node, recording on; CPU in % of one core')

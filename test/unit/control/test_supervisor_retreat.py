@@ -75,6 +75,17 @@ class Run:
         return [(event.goal_id, event.result.code) for _, event in self.events]
 
 
+def canceled_out_of_contact(before_cancel_s: float = 0.2, after_cancel_s: float = 0.2) -> Run:
+    """A Run whose reversed goal was canceled before any contact, backing off along -n."""
+    run = Run()
+    run.step()
+    run.supervisor.submit('a', reversed_goal(X), run.t)
+    run.run(before_cancel_s)
+    run.supervisor.cancel('a')
+    run.run(after_cancel_s)
+    return run
+
+
 def test_cancel_before_contact_with_a_reversed_normal_ends_released() -> None:
     """The property test's sequence: CANCELED comes with the contact gone, and it stays gone.
 
@@ -101,12 +112,7 @@ def test_cancel_before_contact_with_a_reversed_normal_ends_released() -> None:
 
 def test_a_back_off_along_an_unverified_normal_turns_at_the_first_contact() -> None:
     """Cancel out of contact: X_d backs off along -n; a contact ahead turns it against F_e."""
-    run = Run()
-    run.step()
-    run.supervisor.submit('a', reversed_goal(X), run.t)
-    run.run(0.2)
-    run.supervisor.cancel('a')
-    run.run(0.3)
+    run = canceled_out_of_contact(after_cancel_s=0.3)
     path = run.supervisor.controller.task.path
     assert path is not None
     np.testing.assert_allclose(path.points[-1], X + LIMITS.retreat_m * N, atol=1e-12)  # -n
@@ -124,12 +130,7 @@ def test_a_back_off_along_an_unverified_normal_turns_at_the_first_contact() -> N
 
 def test_a_second_contact_along_the_back_off_latches_the_safe_hold() -> None:
     """After one turn, a back-off that meets a contact again yields in the safe hold."""
-    run = Run()
-    run.step()
-    run.supervisor.submit('a', reversed_goal(X), run.t)
-    run.run(0.2)
-    run.supervisor.cancel('a')
-    run.run(0.2)
+    run = canceled_out_of_contact()
     run.step(20.0 * N)  # turns: now backing off along -x
     run.run(0.2)
     run.step(-20.0 * N)  # a surface behind, pressed on by the turned back-off
@@ -141,12 +142,7 @@ def test_a_second_contact_along_the_back_off_latches_the_safe_hold() -> None:
 
 def test_the_result_waits_while_the_retreat_is_still_in_contact() -> None:
     """Time up with |F_e| still measured: X_d backs off on against it; the result after."""
-    run = Run()
-    run.step()
-    run.supervisor.submit('a', reversed_goal(X), run.t)
-    run.run(0.2)
-    run.supervisor.cancel('a')
-    run.run(0.2)
+    run = canceled_out_of_contact()
     run.step(20.0 * N)  # the turn: a retreat_time_s from here
     pressed = run.run(LIMITS.retreat_time_s + 0.5, 20.0 * N)  # the wall follows the arm
     assert run.codes() == []
@@ -162,12 +158,7 @@ def test_the_result_waits_while_the_retreat_is_still_in_contact() -> None:
 
 def test_a_retreat_that_cannot_let_go_ends_after_its_whole_distance_saying_so() -> None:
     """A contact that never goes: the result after retreat_m more, naming the force left."""
-    run = Run()
-    run.step()
-    run.supervisor.submit('a', reversed_goal(X), run.t)
-    run.run(0.2)
-    run.supervisor.cancel('a')
-    run.run(0.2)
+    run = canceled_out_of_contact()
     run.run(2 * LIMITS.retreat_time_s + 0.5, 20.0 * N)
     [(_, event)] = run.events
     assert event.result.code == TaskCode.CANCELED
