@@ -14,7 +14,6 @@ from typing import Any
 
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -26,11 +25,11 @@ from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.exchange_qos import input_qos
 from uvms_common.node_main import run_node
+from uvms_common.parameter_declaration import Spec, declare_specs
 from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
 from uvms_common.robot_parameters import (
     check_all_declared,
     declare_robot,
-    robot_default,
     robot_model_values,
     robot_start_values,
     with_robot_source,
@@ -60,6 +59,10 @@ _BEHIND_REAL_TIME_FACTOR = 0.9
 _HOLD_REPUBLISH_S = 0.1
 
 
+def _parameter_error(spec: Spec, exc: ParameterException) -> SimParameterError:
+    return SimParameterError(f'invalid parameter {spec.name!r}: {exc}')
+
+
 class SimulatorNode(Node):
     """Simulated UVMS: actuator commands in, sensor topics, ``/clock`` and ``/tf`` out."""
 
@@ -70,15 +73,9 @@ class SimulatorNode(Node):
                    'its own simulated time; valid: False')
             raise SimParameterError(msg)
         self.robot_name, files = declare_robot(self)
-        robot = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
-                                       s.description, s.min_value, s.max_value)
-                 for s in PARAMETER_SPECS}
-        values = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
-                                        s.description, s.min_value, s.max_value, s.choices)
-                  for s in SIMULATOR_PARAMETERS}
-        navigation = {s.name: self._declare(s.name, robot_default(files, s.name, s.default),
-                                            s.description, s.min_value, s.max_value)
-                      for s in NAVIGATION_PARAMETER_SPECS}
+        robot = declare_specs(self, PARAMETER_SPECS, files, _parameter_error)
+        values = declare_specs(self, SIMULATOR_PARAMETERS, files, _parameter_error)
+        navigation = declare_specs(self, NAVIGATION_PARAMETER_SPECS, files, _parameter_error)
         check_all_declared(self, files)
         try:
             params = UvmsParameters.from_flat_dict(robot_model_values(robot, self.robot_name))
@@ -174,26 +171,6 @@ class SimulatorNode(Node):
     def finished(self) -> bool:
         """True once ``duration_s`` is reached and the last state has been answered."""
         return self._finished
-
-    def _declare(self, name: str, default: Any, description: str, lo: float | None,
-                 hi: float | None, choices: tuple[str, ...] = ()) -> Any:
-        """Declare a read-only parameter with its range, and return its value."""
-        descriptor = ParameterDescriptor(description=description, read_only=True)
-        if choices:
-            descriptor.additional_constraints = 'one of: ' + ', '.join(choices)
-        elif lo is not None and hi is not None and not isinstance(default, bool | list | str):
-            if isinstance(default, int):
-                descriptor.integer_range = [IntegerRange(from_value=int(lo), to_value=int(hi),
-                                                         step=1)]
-            else:
-                descriptor.floating_point_range = [FloatingPointRange(
-                    from_value=float(lo), to_value=float(hi), step=0.0)]
-        elif lo is not None or hi is not None:
-            descriptor.additional_constraints = f'each value in [{lo}, {hi}]'
-        try:
-            return self.declare_parameter(name, default, descriptor).value
-        except ParameterException as exc:
-            raise SimParameterError(f'invalid parameter {name!r}: {exc}') from exc
 
     def _on_command(self, data: bytes) -> None:
         """Keep a valid command; in lockstep only the one for the current state, then step."""
