@@ -13,25 +13,8 @@ effector exerts on the environment, in map_ned):
    to body form τ_b = Bᵀ τ. Power is invariant, τ·q̇ = τ_b·w with q̇ = B w (eq. 4), which
    forces Bᵀ; the paper prints τ = B τ_b under eq. 18, which violates it.
 
-Null space. The paper drops the null-space part of eq. 24 (sec. 4.1 and 5.2.3). For this
-redundant UVMS (9 DOF, 3-D task) τ = Jᵀ F_c alone leaves six directions uncontrolled, so
-the vehicle pose and the arm posture drift, and the closed loop is not the task-space model
-eq. 28 claims: premultiplying eq. 25 by J̃⁺ (eq. 27) discards the part of the joint-space
-equation that Jᵀ F cannot produce. With ``null_space_enabled`` we apply the joint-space law
-the paper derives from, eq. 20 with eq. 24 and a posture acceleration φ̈:
-
-    τ = M̂_q [J⁺ (a_c - J̇ q̇) + N φ̈] + ζ̂_q + Jᵀ F_e,   N = I - J⁺ J,
-    φ̈ = K_n (q_0 - q) - D_n q̇,   a_c = M̂⁻¹ (F_c - ζ̂ - F_e),
-
-written as τ = Jᵀ F_c + τ_null with
-τ_null = (I - Jᵀ J̃⁺) (M̂_q J⁺ (a_c - J̇ q̇) + ζ̂_q) + M̂_q N φ̈ (Jᵀ J̃⁺ = J⁺ J). Its first part lies
-in the null space of J̃⁺ (it leaves the task-space command F_c of the paper unchanged and
-restores the equation eq. 27 drops); the posture part M̂_q N φ̈ also has a row-space share,
-which is exactly what cancels the inertial coupling of N φ̈ into the task. With an exact
-model the end effector then follows Ẍ = a_c exactly, so eq. 21 (impedance) and eq. 36
-(hybrid) hold, while the null-space coordinates settle to the posture q_0 captured at the
-first step (vehicle pose and arm posture). With ``null_space_enabled = False`` the command is
-τ = Jᵀ F_c, the paper's own.
+Null space: the paper drops the null-space part of eq. 24; ``null_space_enabled`` applies the
+joint-space law it derives from instead (why and how: ``uvms_control.core.null_space``).
 """
 
 from __future__ import annotations
