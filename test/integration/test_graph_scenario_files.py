@@ -164,3 +164,44 @@ def test_cli_reports_bad_scenario_in_one_line_with_exit_status_2(
     assert err.startswith('uvms run: error: ') and "unknown key 'speed'" in err
     assert 'Traceback' not in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_the_check_builds_its_nodes_where_no_graph_of_the_caller_sees_them(
+    tmp_path: Path,
+) -> None:
+    """The throwaway nodes join a domain of their own, not the caller's (a running graph's).
+
+    A participant made and destroyed per checked node, discovering a running graph's
+    participants, is what livelocked Fast DDS 2.14 in destroy_node and hung a test run.
+    An observer in the caller's domain watches the graph while the check runs.
+    """
+    import threading
+    import time
+
+    import rclpy
+    from rclpy.context import Context
+    from uvms_bringup.declared import CHECK_DOMAIN_ID
+
+    context = Context()
+    rclpy.init(args=[], context=context)
+    assert context.get_domain_id() != CHECK_DOMAIN_ID
+    observer = rclpy.create_node('observer', context=context)
+    seen: set[str] = set()
+    done = threading.Event()
+
+    def watch() -> None:
+        while not done.is_set():
+            seen.update(f'{ns}/{name}' for name, ns in observer.get_node_names_and_namespaces())
+            time.sleep(0.02)
+
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    try:
+        checked = check_scenario_overrides(load_scenario(write(tmp_path, VALID)), config=CONFIG)
+    finally:
+        done.set()
+        watcher.join()
+        observer.destroy_node()
+        rclpy.try_shutdown(context=context)
+    assert checked.overrides['simulator']['contact.stiffness_n_m'] == 1e4
+    assert not any(name.startswith('/uvms') or 'declared_check' in name for name in seen), seen

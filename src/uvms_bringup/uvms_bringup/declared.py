@@ -3,12 +3,21 @@
 The nodes are built once in a throwaway context with their parameter files only, to read
 each declared parameter's name and type; a scenario key no node declares, or a value of
 another type, then stops the run before it starts, with the file, the key and the type.
+
+The throwaway context is kept away from every running graph: it joins ROS domain
+``CHECK_DOMAIN_ID``, which no graph of ours uses, and holds one participant for the whole
+check (a small keeper node keeps it alive while the checked nodes come and go). Fast DDS
+2.14 can livelock destroying a participant while its discovery callbacks run
+(``DomainParticipant::set_listener`` spinning; eProsima/Fast-DDS#6513): a participant
+created and destroyed per checked node, in the domain of a running test's graph, hung a
+whole test run in ``destroy_node`` that way.
 """
 
 from __future__ import annotations
 
 import difflib
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -28,6 +37,11 @@ from uvms_bringup.launch_helpers import (
 )
 from uvms_bringup.node_factory import GraphError, make_node
 from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
+
+#: ROS domain of the throwaway context: the last of the default port mapping (0-232), which
+#: no graph of ours joins (sweeps take 215-231 and 101-1, tests 1-200, bench_scenarios
+#: 200-214).
+CHECK_DOMAIN_ID = 232
 
 _TYPE_NAMES = {
     Parameter.Type.BOOL: 'bool',
@@ -73,9 +87,7 @@ def check_scenario_overrides(
     if not to_check:
         return scenario
     checked = {node: dict(values) for node, values in scenario.overrides.items()}
-    context = Context()
-    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
-    try:
+    with _throwaway_context() as context:
         for spec in to_check:
             # The throwaway node's start-up lines would read as the run's own (e.g. "lockstep
             # trigger" before a real-time launch): only its warnings and errors are shown.
@@ -92,9 +104,24 @@ def check_scenario_overrides(
                     node.destroy_node()
             finally:
                 rclpy.logging.set_logger_level(logger, level)
-    finally:
-        rclpy.try_shutdown(context=context)
     return replace(scenario, overrides=checked)
+
+
+@contextmanager
+def _throwaway_context() -> Iterator[Context]:
+    """A context in ``CHECK_DOMAIN_ID`` whose one participant lives until the block ends."""
+    context = Context()
+    rclpy.init(args=[], context=context, domain_id=CHECK_DOMAIN_ID,
+               signal_handler_options=SignalHandlerOptions.NO)
+    keeper = None
+    try:
+        keeper = Node('uvms_declared_check', context=context, enable_rosout=False,
+                      start_parameter_services=False)
+        yield context
+    finally:
+        if keeper is not None:
+            keeper.destroy_node()
+        rclpy.try_shutdown(context=context)
 
 
 def _throwaway_node(scenario: Scenario, spec: NodeSpec, config: Path, namespace: str,
@@ -181,10 +208,8 @@ def declared_parameters(
     """
     specs = specs if specs is not None else graph_nodes(record=False, estimator=True)
     config = config if config is not None else config_dir()
-    context = Context()
-    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     declared: dict[str, dict[str, Parameter.Type]] = {}
-    try:
+    with _throwaway_context() as context:
         for spec in specs:
             node = make_node(spec, {}, config, namespace, context)
             try:
@@ -194,6 +219,4 @@ def declared_parameters(
                 }
             finally:
                 node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
     return declared

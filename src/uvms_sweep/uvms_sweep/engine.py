@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from uvms_bringup.bars import PointBar
+from uvms_bringup.declared import CHECK_DOMAIN_ID
 from uvms_bringup.scenario import Scenario
 from uvms_common.node_main import StopEvent
 
@@ -49,9 +50,10 @@ from uvms_sweep.stop_flag import point_task, start_stop_flag
 from uvms_sweep.sweep_file import Sweep, SweepPoint
 from uvms_sweep.table import outcome_row, read_table, write_table
 
-#: ROS_DOMAIN_IDs handed to running points, first to last: 215-232 (Fast DDS's default port
-#: mapping allows 0-232; the test suite uses 0-100 and 100-199), then 101 down to 1.
-DOMAIN_IDS = (*range(215, 233), *range(101, 0, -1))
+#: ROS_DOMAIN_IDs handed to running points, first to last: 215-231 (Fast DDS's default port
+#: mapping allows 0-232, and 232 is the parameter check's, ``declared.CHECK_DOMAIN_ID``; the
+#: test suite uses 1-200), then 101 down to 1.
+DOMAIN_IDS = (*range(215, CHECK_DOMAIN_ID), *range(101, 0, -1))
 #: Environment of a local Ray, set before ``import ray`` (see the module docstring).
 LOCAL_RAY_ENVIRONMENT = {
     'RAY_USAGE_STATS_ENABLED': '0',
