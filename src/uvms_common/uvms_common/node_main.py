@@ -233,6 +233,13 @@ def run_node(
         # process SIGKILLed by the launcher. Nothing is left to lose now.
         deadline = TeardownDeadline(logger_name, status)
         if executor is not None:
+            # Off the executor first, which unhooks the node's entities from it: a request or
+            # message arriving between the executor's shutdown and the node's destruction
+            # otherwise reaches a shut-down EventsExecutor from a DDS thread (a SIGSEGV seen
+            # once in CI: the controller, the mission cancelling its goal as the graph
+            # stopped; ros2/rclpy#1644 is of this family).
+            if node is not None and node in executor.get_nodes():
+                executor.remove_node(node)
             executor.shutdown()
         if node is not None:
             node.destroy_node()
