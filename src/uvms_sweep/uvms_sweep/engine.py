@@ -46,7 +46,7 @@ from uvms_bringup.scenario import Scenario
 from uvms_common.node_main import StopEvent
 
 from uvms_sweep.maps import draw_figures
-from uvms_sweep.stop_flag import point_task, start_stop_flag
+from uvms_sweep.stop_flag import point_task, ray_error_line, start_stop_flag
 from uvms_sweep.sweep_file import Sweep, SweepPoint
 from uvms_sweep.table import outcome_row, read_table, write_table
 
@@ -348,9 +348,8 @@ def _outcome(ray: Any, ref: Any, point: SweepPoint) -> dict[str, Any]:
     try:
         return dict(ray.get(ref))
     except ray.exceptions.RayError as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ''
         return {'point_id': point.point_id, 'status': 'failed',
-                'reason': f'Ray: {type(exc).__name__}: {first}', 'metrics': {}}
+                'reason': f'Ray: {ray_error_line(exc)}', 'metrics': {}}
 
 
 def _record(

@@ -70,6 +70,12 @@ def point_task(
     return execute_point(request, domain_id, timeout_s, should_stop=should_stop)
 
 
+def ray_error_line(exc: BaseException) -> str:
+    """``Type: first line of the message`` of an error Ray raised (its messages run long)."""
+    text = str(exc).strip()
+    return f'{type(exc).__name__}: {text.splitlines()[0] if text else ""}'
+
+
 def start_stop_flag(
     ray: Any, stop: StopEvent | None, *, timeout_s: float = FLAG_START_TIMEOUT_S
 ) -> Any | None:
@@ -105,7 +111,6 @@ def _first_answer(ray: Any, flag: Any, stop: StopEvent | None, timeout_s: float)
         except ray.exceptions.GetTimeoutError:
             continue
         except ray.exceptions.RayError as exc:
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else ''
-            return f'failed: {type(exc).__name__}: {first}'
+            return f'failed: {ray_error_line(exc)}'
         return None
     return f'did not answer within {timeout_s:g} s'
