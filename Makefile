@@ -30,7 +30,7 @@ define make_venv
 	@tools/check-platform $(1)
 	$(1) -m venv $(2)
 	$(2)/bin/python -m pip install --quiet --upgrade pip
-	$(2)/bin/python -m pip install --quiet -e '.[test,sweep]'
+	$(2)/bin/python -m pip install --quiet -e '.[test,sweep,tune]'
 	touch $(2)/.installed
 endef
 

@@ -1,0 +1,29 @@
+"""ament_python build of uvms_hardware."""
+
+from setuptools import find_packages, setup
+
+package_name = 'uvms_hardware'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='UVMS developers',
+    maintainer_email='dev@uvms.local',
+    description=(
+        "Bridges from the UVMS graph to the robot's own protocols (ArduSub over MAVLink, "
+        'Water Linked DVL, Reach Alpha serial protocol, ATI Net F/T), their pure protocol '
+        'codecs, and protocol twins to test them against.'
+    ),
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+        ],
+    },
+)

@@ -1,0 +1,1 @@
+"""Bridges from the UVMS graph to the robot's own protocols (ArduSub over MAVLink, Water Linked DVL, Reach Alpha serial protocol, ATI Net F/T), their pure protocol codecs, and protocol twins to test them against."""
