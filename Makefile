@@ -73,6 +73,9 @@ sweeps: setup
 	    --workers $(SWEEP_WORKERS) || exit $$?; \
 	done
 
+# tools/run_suite.py runs each integration module (and each unit folder, the scenario tests)
+# in a pytest process of its own with a time limit: a test hung inside C (a Fast DDS
+# livelock) ends its module with its threads' stacks, and the rest of the suite runs on.
 # Each suite is bounded as a whole too (SUITE_LIMIT_S, about 2.4x what it takes on the 2-core
 # development machine): past it pytest gets SIGINT, prints where it was and its summary, and
 # the target fails, rather than a hang running into the CI job's own limit without a word.
@@ -82,7 +85,7 @@ SUITE_GUARD := timeout --signal=INT --kill-after=120 $(SUITE_LIMIT_S)
 test: setup
 	$(BIN)/ruff check .
 	$(BIN)/mypy
-	$(SUITE_GUARD) tools/loopback-netns $(BIN)/pytest
+	$(SUITE_GUARD) tools/loopback-netns $(BIN)/python tools/run_suite.py
 	$(MAKE) --no-print-directory test-py312
 
 test-py312:
@@ -90,7 +93,7 @@ ifeq ($(PYTHON_312),)
 	@echo 'make test: no Python 3.12 interpreter found; the suite ran on Python 3.11 only'
 else
 	$(MAKE) --no-print-directory $(VENV_312)/.interfaces $(VENV_312)/.kernels
-	$(SUITE_GUARD) tools/loopback-netns $(VENV_312)/bin/pytest -q -m 'not colcon'
+	$(SUITE_GUARD) tools/loopback-netns $(VENV_312)/bin/python tools/run_suite.py -q -m 'not colcon'
 endif
 
 clean:

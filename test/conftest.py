@@ -21,8 +21,20 @@ from uvms_common.ros_environment import ros_environment_defaults
 ros_environment_defaults()
 
 #: Domains handed to test modules in turn (1-100: their UDP ports stay below Linux's
-#: ephemeral range); 0 is left to whatever runs outside the tests.
-_MODULE_DOMAINS = itertools.cycle(range(1, 101))
+#: ephemeral range); 0 is left to whatever runs outside the tests. tools/run_suite.py starts
+#: each of its pytest processes at another one (UVMS_TEST_DOMAIN_START).
+_FIRST_DOMAIN = int(os.environ.get('UVMS_TEST_DOMAIN_START', '1'))
+_MODULE_DOMAINS = itertools.cycle([*range(_FIRST_DOMAIN, 101), *range(1, _FIRST_DOMAIN)])
+#: tools/run_suite.py's progress file: the test now running, named in its summary when the
+#: process has to be killed.
+_PROGRESS = os.environ.get('UVMS_TEST_PROGRESS')
+
+
+def pytest_runtest_logstart(nodeid: str, location: tuple[str, int | None, str]) -> None:
+    """Write the id of the test that starts to the suite runner's progress file."""
+    if _PROGRESS:
+        with open(_PROGRESS, 'w') as progress:
+            progress.write(nodeid)
 
 
 @pytest.fixture(scope='module', autouse=True)

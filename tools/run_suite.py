@@ -1,0 +1,222 @@
+#!/usr/bin/env python3
+"""Run the test suite as one pytest process per group, so that no module can hang the job.
+
+A Fast DDS livelock in a participant's teardown spins inside C, where neither pytest-timeout's
+signal nor SIGINT reaches it (CI of 2026-12-03 and 12-04). So every integration module (the
+modules that start DDS participants and node processes) runs in a pytest process of its own;
+the unit tests run one process per sub-folder, the scenario tests in one process (their runs
+are shared across modules and happen in child processes with their own time limit). Each
+process gets a time limit (``--group-limit``, the scenario group ``--scenario-limit``); past it
+the process gets SIGABRT, on which Python's faulthandler (enabled by pytest) prints every
+thread's stack, then its whole process group is killed. The rest of the suite runs on, and the
+summary names the group, the test it was in (the progress file written by test/conftest.py)
+and its stacks above.
+
+    tools/run_suite.py [--group-limit S] [--scenario-limit S] [--list] [PYTEST_ARG ...] [PATH ...]
+
+Arguments that are existing paths under test/ select groups; every other argument goes to
+each pytest. The last line is pytest's: ``N passed, N failed, N skipped`` (or ``N errors``)
+for the whole suite. Exit status 0 when every group passed, 1 otherwise, 5 when no test ran.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+TESTS = ROOT / 'test'
+#: Top-level test folders whose every module runs in a process of its own.
+ISOLATED = ('integration',)
+#: Top-level test folders that run whole, in one process (their fixtures span modules).
+WHOLE = ('scenarios', 'ros2_way')
+#: Seconds between SIGABRT (stacks printed) and SIGKILL of the group's process group.
+ABORT_GRACE_S = 10.0
+#: pytest's own "no tests collected" status (every test deselected): not a failure.
+NO_TESTS = 5
+
+
+@dataclass
+class Group:
+    """One pytest process: the paths it runs and what it reported."""
+
+    name: str
+    paths: list[Path]
+    limit_s: float
+    counts: dict[str, int] = field(default_factory=dict)
+    failed: list[str] = field(default_factory=list)
+    status: int | None = None
+    timed_out: bool = False
+    last_test: str = ''
+    took_s: float = 0.0
+
+
+def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float) -> list[Group]:
+    """The groups that run ``paths`` (files or folders under test/), in a stable order."""
+    groups: dict[str, Group] = {}
+
+    def add(name: str, path: Path, limit_s: float) -> None:
+        groups.setdefault(name, Group(name, [], limit_s)).paths.append(path)
+
+    for path in paths:
+        files = [path] if path.is_file() else sorted(path.rglob('test_*.py'))
+        for module in files:
+            parts = module.relative_to(TESTS).parts
+            top = parts[0] if len(parts) > 1 else ''
+            if top in ISOLATED:
+                add(str(module.relative_to(ROOT)), module, group_limit_s)
+            elif top in WHOLE:
+                add(f'test/{top}', module,
+                    scenario_limit_s if top == 'scenarios' else group_limit_s)
+            else:
+                folder = module.parent.relative_to(ROOT)
+                add(str(folder), module, group_limit_s)
+    return list(groups.values())
+
+
+def read_junit(group: Group, path: Path) -> None:
+    """Counts and failed test ids of a group from its JUnit XML (absent when it was killed)."""
+    if not path.exists():
+        return
+    root = ET.parse(path).getroot()
+    for suite in root.iter('testsuite'):
+        for key in ('tests', 'failures', 'errors', 'skipped'):
+            group.counts[key] = group.counts.get(key, 0) + int(suite.get(key, 0))
+        for case in suite.iter('testcase'):
+            if case.find('failure') is not None or case.find('error') is not None:
+                group.failed.append(f"{case.get('classname')}::{case.get('name')}")
+
+
+def run_group(group: Group, index: int, pytest_args: list[str], work: Path) -> None:
+    """Run one group's pytest to its end or its time limit, streaming its output."""
+    junit = work / f'{index}.xml'
+    progress = work / f'{index}.progress'
+    env = dict(os.environ, UVMS_TEST_PROGRESS=str(progress),
+               UVMS_TEST_DOMAIN_START=str(1 + (index * 7) % 100))
+    command = [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider',
+               '-o', 'addopts=-ra --strict-markers', f'--junitxml={junit}',
+               *pytest_args, *(str(p.relative_to(ROOT)) for p in group.paths)]
+    start = time.monotonic()
+    process = subprocess.Popen(command, cwd=ROOT, env=env, start_new_session=True)
+    try:
+        group.status = process.wait(timeout=group.limit_s)
+    except subprocess.TimeoutExpired:
+        group.timed_out = True
+        print(f'\nrun_suite: {group.name} still running after {group.limit_s:.0f} s: '
+              "SIGABRT (its threads' stacks follow), then SIGKILL", flush=True)
+        process.send_signal(signal.SIGABRT)
+        try:
+            process.wait(timeout=ABORT_GRACE_S)
+        except subprocess.TimeoutExpired:
+            pass
+        group.status = -1
+    except KeyboardInterrupt:
+        process.send_signal(signal.SIGINT)
+        process.wait(timeout=60)
+        raise
+    finally:
+        _kill_group(process.pid)
+    group.took_s = time.monotonic() - start
+    if progress.exists():
+        group.last_test = progress.read_text().strip()
+    read_junit(group, junit)
+
+
+def _kill_group(pgid: int) -> None:
+    """SIGKILL whatever the group's processes left behind (node processes, a hung pytest)."""
+    try:
+        os.killpg(pgid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+
+
+def closing_line(groups: list[Group]) -> str:
+    """The closing line for the whole suite, as pytest words it."""
+    total = sum(g.counts.get('tests', 0) for g in groups)
+    failed = sum(g.counts.get('failures', 0) for g in groups)
+    errors = sum(g.counts.get('errors', 0) for g in groups)
+    skipped = sum(g.counts.get('skipped', 0) for g in groups)
+    passed = total - failed - errors - skipped
+    broken = sum(1 for g in groups if g.timed_out or _crashed(g))
+    parts = [f'{passed} passed', f'{failed + broken} failed']
+    if skipped:
+        parts.append(f'{skipped} skipped')
+    if errors:
+        parts.append(f'{errors} errors')
+    return ', '.join(parts)
+
+
+def _crashed(group: Group) -> bool:
+    """A group that ended badly without a failure of its own on record (killed, no XML)."""
+    bad = group.status not in (0, 1, NO_TESTS)
+    return not group.timed_out and bad and not group.failed
+
+
+def summary(groups: list[Group], took_s: float) -> list[str]:
+    """What went wrong, the slowest groups, and the closing line."""
+    lines = ['', f'run_suite: {len(groups)} pytest processes in {took_s:.0f} s']
+    for group in sorted(groups, key=lambda g: -g.took_s)[:8]:
+        lines.append(f'  {group.took_s:7.1f} s  {group.name}')
+    for group in groups:
+        if group.timed_out:
+            lines.append(f'TIMED OUT {group.name} after {group.limit_s:.0f} s, in test '
+                         f'{group.last_test or "(before its first test)"}')
+        elif _crashed(group):
+            lines.append(f'CRASHED {group.name} (exit status {group.status}), in test '
+                         f'{group.last_test or "(before its first test)"}')
+        lines.extend(f'FAILED {test_id}' for test_id in group.failed)
+    lines.append(closing_line(groups))
+    return lines
+
+
+def split_arguments(arguments: list[str]) -> tuple[list[Path], list[str]]:
+    """(paths under test/, the other arguments for pytest)."""
+    paths, rest = [], []
+    for argument in arguments:
+        candidate = (ROOT / argument).resolve()
+        if not argument.startswith('-') and candidate.exists() and TESTS in (
+                candidate, *candidate.parents):
+            paths.append(candidate)
+        else:
+            rest.append(argument)
+    return paths or [TESTS], rest
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the groups one after the other; print the summary; 0 when all passed."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--group-limit', type=float, default=900.0, metavar='S',
+                        help='seconds one group may take (default 900)')
+    parser.add_argument('--scenario-limit', type=float, default=1500.0, metavar='S',
+                        help='seconds the scenario group may take (default 1500)')
+    parser.add_argument('--list', action='store_true', help='print the groups and stop')
+    options, arguments = parser.parse_known_args(argv)
+    paths, pytest_args = split_arguments(arguments)
+    groups = groups_for(paths, options.group_limit, options.scenario_limit)
+    if options.list:
+        for group in groups:
+            print(f'{group.name} ({len(group.paths)} modules, limit {group.limit_s:.0f} s)')
+        return 0
+    start = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix='uvms-suite-') as work:
+        for index, group in enumerate(groups):
+            print(f'\n== run_suite [{index + 1}/{len(groups)}] {group.name}', flush=True)
+            run_group(group, index, pytest_args, Path(work))
+    for line in summary(groups, time.monotonic() - start):
+        print(line)
+    if all(g.status == NO_TESTS for g in groups):
+        return NO_TESTS
+    ok = all(g.status in (0, NO_TESTS) and not g.timed_out for g in groups)
+    return 0 if ok else 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())
