@@ -24,6 +24,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
+            'alpha5_bridge = uvms_hardware.entry_points:alpha5_bridge',
         ],
     },
 )
