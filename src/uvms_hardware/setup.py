@@ -25,6 +25,7 @@ setup(
     entry_points={
         'console_scripts': [
             'alpha5_bridge = uvms_hardware.entry_points:alpha5_bridge',
+            'netft_bridge = uvms_hardware.entry_points:netft_bridge',
         ],
     },
 )

@@ -81,7 +81,11 @@ class UdpLink:
 
     def read(self) -> bytes:
         """Every datagram waiting, from the peer only, concatenated."""
-        chunks = []
+        return b''.join(self.read_datagrams())
+
+    def read_datagrams(self) -> list[bytes]:
+        """Every datagram waiting from the peer, one bytes each (others are dropped)."""
+        datagrams = []
         while True:
             try:
                 data, sender = self._socket.recvfrom(4096)
@@ -91,8 +95,8 @@ class UdpLink:
                 self.refused += 1
                 continue
             if sender[1] == self._peer[1]:
-                chunks.append(data)
-        return b''.join(chunks)
+                datagrams.append(data)
+        return datagrams
 
     def wait(self, timeout_s: float) -> bool:
         """True when something can be read within ``timeout_s``."""
