@@ -141,9 +141,10 @@ class Alpha5BridgeNode(LifecycleNode):
             collect(link, feed, request, timeout_s)
             if PacketId.MODEL not in answers:
                 break
-        mode = answers.get(PacketId.MODE)
-        if mode is not None and len(mode.data) == 1 and mode.data[0] in Mode._value2member_map_:
-            self.modes_before[drive.device_id] = Mode(mode.data[0])
+        answer = answers.get(PacketId.MODE)
+        mode = rp.mode_of(answer.data[0]) if answer is not None and answer.data else None
+        if mode is not None:
+            self.modes_before[drive.device_id] = mode
         return check_device(drive, answers, timeout_s)
 
     def _refuse(self, errors: list[str]) -> TransitionCallbackReturn:

@@ -117,6 +117,14 @@ class Packet:
         return data_floats(self.data)
 
 
+def mode_of(value: int) -> Mode | None:
+    """The Mode of a MODE packet's byte; None for a value the document does not list."""
+    try:
+        return Mode(value)
+    except ValueError:
+        return None
+
+
 def crc8(data: bytes) -> int:
     """CRC-8 of the protocol over ``data`` (the raw packet less its CRC byte)."""
     return int(_crc8(bytes(data)))

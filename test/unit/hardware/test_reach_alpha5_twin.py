@@ -121,3 +121,12 @@ def test_serves_udp_on_loopback(twin: Alpha5Twin) -> None:
         reply, _ = sock.recvfrom(4096)
     (packet,) = rp.FrameSplitter().feed(reply)
     assert (packet.device_id, packet.packet_id, packet.data) == (5, PacketId.MODEL, b'alpha5')
+
+
+def test_mode_standby_after_velocity_and_unknown_mode_ignored(twin: Alpha5Twin) -> None:
+    """MODE Standby (value 0) is taken; a mode value the document does not list is ignored."""
+    send(twin, rp.encode_velocity(0x05, 0.1))
+    send(twin, rp.encode_mode(0x05, Mode.STANDBY))
+    assert twin.joint_commands()['joint_1'][0] == Mode.STANDBY
+    send(twin, rp.encode_packet(0x05, PacketId.MODE, b'\x77'))
+    assert twin.joint_commands()['joint_1'][0] == Mode.STANDBY

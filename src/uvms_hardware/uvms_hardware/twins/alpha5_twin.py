@@ -155,8 +155,9 @@ class Alpha5Twin:
     def _apply(self, device: TwinDevice, packet: rp.Packet) -> None:
         pid = packet.packet_id
         if pid == PacketId.MODE and len(packet.data) == 1:
-            if packet.data[0] in Mode._value2member_map_:
-                device.mode = Mode(packet.data[0])
+            mode = rp.mode_of(packet.data[0])
+            if mode is not None:  # a value the document does not list is ignored
+                device.mode = mode
             return
         if pid not in rp.CONTROL_MODES or len(packet.data) != 4 or device.mode in _IGNORING_MODES:
             return
