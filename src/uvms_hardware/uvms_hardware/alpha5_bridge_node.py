@@ -54,7 +54,9 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
     ('connection', 'udp:127.0.0.1:6789',
      'udp:HOST:PORT, or serial:DEVICE[:BAUD] (8N1, 115200 unless given)'),
     ('watchdog_timeout_s', 0.1, 'No command for this long: VELOCITY 0 to every joint (s)'),
-    ('feedback_rate_hz', 100.0, 'joint_states rate; each device is asked this often (Hz)'),
+    ('feedback_rate_hz', 125.0,
+     'Each device is asked this often, joint_states published once per round (Hz); above '
+     '100 so that a late timer on a busy host still gives >= 100 Hz per joint'),
     ('command_mode', 'current',
      'current: torque as CURRENT mA (Kt, gear, efficiency); velocity: a fallback, '
      'VELOCITY = velocity_gain_rad_s_per_n_m * torque'),
