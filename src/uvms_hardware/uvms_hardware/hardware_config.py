@@ -21,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from uvms_model.description import load_description
+from uvms_model.errors import DescriptionError
 
 from uvms_description.robots import RobotFolderError, robot_files, urdf_text
 from uvms_hardware.errors import HardwareError
@@ -136,6 +138,19 @@ def urdf_joint_limits(robot_name: str) -> dict[str, tuple[float, float, float]]:
     return limits
 
 
+def urdf_arm_joints(robot_name: str) -> tuple[str, ...]:
+    """The URDF's arm joints, base to tip, as the model reads them (uvms_model.description).
+
+    Raises:
+        HardwareConfigError: The description cannot be read.
+    """
+    try:
+        files = robot_files(robot_name)
+        return load_description(files.urdf, files.hydrodynamics).joint_names
+    except (RobotFolderError, DescriptionError) as exc:
+        raise HardwareConfigError(f'robot {robot_name!r}: {exc}') from exc
+
+
 def _number(path: Path, where: str, item: Mapping[str, Any], key: str) -> float:
     value = item.get(key)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
@@ -155,6 +170,10 @@ def load_alpha5(robot_name: str, jaw_joint: str = '') -> Alpha5Hardware:
     joints = section.get('joints')
     if not isinstance(joints, Mapping) or not joints:
         raise HardwareConfigError(f'{path}: alpha5.joints: expected a mapping joint -> drive')
+    arm_joints = urdf_arm_joints(robot_name)
+    if tuple(joints) != arm_joints:
+        raise HardwareConfigError(f'{path}: alpha5.joints {list(joints)}: expected the URDF arm '
+                                  f'joints, base to wrist: {list(arm_joints)}')
     drives = []
     for name, item in joints.items():
         where = f'alpha5.joints.{name}'

@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import pytest
 from uvms_hardware.hardware_config import HardwareConfigError, load_alpha5, load_netft
+
+from uvms_description.robots import robot_files
 
 ROBOT = 'bluerov2_alpha5'
 
@@ -52,3 +57,16 @@ def test_robot_without_hardware_file_is_named() -> None:
     """The paper robot has no hardware.yaml: the error names the file."""
     with pytest.raises(HardwareConfigError, match=r'hardware\.yaml'):
         load_alpha5('paper_uvms')
+
+
+def test_hardware_joints_must_be_the_urdf_arm_joints(tmp_path: Path) -> None:
+    """A hardware.yaml naming joint_2 before joint_1 is refused, naming the URDF's order."""
+    folder = tmp_path / 'swapped'
+    shutil.copytree(robot_files(ROBOT).directory, folder)
+    text = (folder / 'hardware.yaml').read_text(encoding='utf-8')
+    lines = text.splitlines(keepends=True)
+    first = next(i for i, line in enumerate(lines) if line.strip().startswith('joint_1:'))
+    lines[first], lines[first + 1] = lines[first + 1], lines[first]
+    (folder / 'hardware.yaml').write_text(''.join(lines), encoding='utf-8')
+    with pytest.raises(HardwareConfigError, match='base to wrist'):
+        load_alpha5(str(folder))
