@@ -101,7 +101,8 @@ class NetFtBridgeNode(LifecycleNode):
             return self._refuse(str(exc))
         link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
         timeout_s = float(v['answer_timeout_s'])
-        seen = collect(link, lambda chunk: [1] if chunk else [], [1], timeout_s)
+        seen = collect(link, lambda chunk: [1] if chunk and not len(chunk) % rdt.RECORD_BYTES
+                       else [], [1], timeout_s)
         link.send(rdt.encode_request(rdt.COMMAND_STOP))
         if not seen:
             link.close()

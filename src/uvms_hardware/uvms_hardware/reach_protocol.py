@@ -24,7 +24,7 @@ overhead (taken as the raw packet, footer included).
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -283,8 +283,9 @@ class FrameSplitter:
         """Every dropped frame: CRC, length and COBS errors."""
         return self.crc_errors + self.length_errors + self.cobs_errors
 
-    def feed(self, chunk: bytes) -> Iterator[Packet]:
-        """Yield the packets that ``chunk`` completes, in order."""
+    def feed(self, chunk: bytes) -> list[Packet]:
+        """The packets that ``chunk`` completes, in order (bad frames dropped and counted)."""
+        packets = []
         for byte in chunk:
             if byte != 0:
                 if len(self._buffer) < self.MAX_ENCODED_BYTES:
@@ -300,7 +301,8 @@ class FrameSplitter:
             elif frame:  # an empty frame (two terminators) is padding, not an error
                 packet = self._decode(frame)
                 if packet is not None:
-                    yield packet
+                    packets.append(packet)
+        return packets
 
     def _decode(self, frame: bytes) -> Packet | None:
         try:
