@@ -24,6 +24,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
+            'alpha5_bridge = uvms_hardware.entry_points:alpha5_bridge',
+            'netft_bridge = uvms_hardware.entry_points:netft_bridge',
         ],
     },
 )

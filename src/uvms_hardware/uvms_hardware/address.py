@@ -31,7 +31,8 @@ def parse_host_port(text: str, default_port: int, name: str = 'address') -> Host
     if not sep:
         host, port_text = text.strip(), str(default_port)
     if not host:
-        raise AddressError(f'{name} = {text!r}: expected HOST[:PORT], e.g. {LOOPBACK}:{default_port}')
+        raise AddressError(
+            f'{name} = {text!r}: expected HOST[:PORT], e.g. {LOOPBACK}:{default_port}')
     return HostPort(host, parse_port(port_text, text, name))
 
 

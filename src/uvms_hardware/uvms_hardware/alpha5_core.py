@@ -1,0 +1,269 @@
+"""The Alpha 5 bridge's core: frames out, packets in, joint state and health; no ROS, no I/O.
+
+The node (``alpha5_bridge_node``) owns the link and the clock and calls, per period::
+
+    core = Alpha5Core(load_alpha5('bluerov2_alpha5'), watchdog_timeout_s=0.1)
+    errors = core.check_device(drive, answers)      # configure: limits and MODEL, per device
+    link.send(core.command(t_s, names, torques))    # on each ActuatorCommand
+    core.receive(link.read(), t_s)                  # every period
+    frames, round_done = core.tick(t_s)             # next feedback REQUEST, watchdog neutral
+    names, q, qd = core.joint_state()               # rad, rad/s (jaw m, m/s)
+
+Feedback asks one device at a time (REQUEST POSITION, VELOCITY), never all at once: broadcast
+requests collide on RS-485. Commands: joint torque as CURRENT mA through Kt, gear ratio and
+efficiency (``hardware.yaml``); or, with ``command_mode`` ``velocity`` (a fallback for arms
+whose current mode is not to be used), VELOCITY = gain * torque, clamped at the joint's speed
+limit: a plain admittance, documented as such. The watchdog sends VELOCITY 0 to every joint
+when commands stop for ``watchdog_timeout_s``, and repeats it every ``HOLD_RESEND_S`` until a
+new command arrives (a lost UDP datagram must not leave a joint driven).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from uvms_hardware import reach_protocol as rp
+from uvms_hardware.errors import ProtocolError
+from uvms_hardware.hardware_config import Alpha5Hardware, Drive
+from uvms_hardware.reach_protocol import Mode, PacketId
+from uvms_hardware.watchdog import CommandWatchdog
+
+#: Command modes of the bridge.
+COMMAND_MODES = ('current', 'velocity')
+#: Packets asked of every device at configure.
+IDENTITY_REQUEST = (PacketId.MODEL, PacketId.MODE)
+LIMITS_REQUEST = (PacketId.POSITION_LIMITS, PacketId.VELOCITY_LIMITS, PacketId.CURRENT_LIMITS)
+FEEDBACK_REQUEST = (PacketId.POSITION, PacketId.VELOCITY)
+#: Largest difference between a device's limit and ours that still agrees (float32 and the
+#: URDF's two decimals; rad, m/s, mA alike).
+LIMIT_TOLERANCE = 1e-3
+#: While the watchdog holds, VELOCITY 0 is sent again this often (s).
+HOLD_RESEND_S = 0.1
+#: A HARDWARE_STATUS error is reported this long after its last packet (s): it comes at 1 Hz.
+STATUS_HOLD_S = 2.5
+#: Modes the bridge restores at the end (others become Standby: the arm is left at rest).
+RESTING_MODES = (Mode.STANDBY, Mode.DISABLE, Mode.PASSIVE)
+
+
+def describe(drive: Drive) -> str:
+    """``joint_2 (device 0x04, D)``: how messages name a joint."""
+    return f'{drive.joint_name} (device {drive.device_id:#04x}, {drive.axis})'
+
+
+def _unit(drive: Drive, packet_id: int) -> str:
+    if packet_id == PacketId.CURRENT_LIMITS:
+        return 'mA'
+    jaw = rp.is_length_packet(drive.device_id, PacketId.POSITION)
+    if packet_id == PacketId.VELOCITY_LIMITS:
+        return 'm/s' if jaw else 'rad/s'
+    return 'm' if jaw else 'rad'
+
+
+def expected_limits(drive: Drive) -> dict[int, tuple[float, float]]:
+    """Our [max, min] per limits packet: URDF position and speed, hardware.yaml current."""
+    return {PacketId.POSITION_LIMITS: (drive.position_limits[1], drive.position_limits[0]),
+            PacketId.VELOCITY_LIMITS: (drive.velocity_limit, -drive.velocity_limit),
+            PacketId.CURRENT_LIMITS: (drive.current_limit_ma, -drive.current_limit_ma)}
+
+
+def check_device(drive: Drive, answers: Mapping[int, rp.Packet],
+                 timeout_s: float) -> list[str]:
+    """What is wrong with a device given its answers to the configure requests (empty: fine).
+
+    Each message names the joint, and for a limit both values: the device's and ours.
+    """
+    name = describe(drive)
+    if PacketId.MODEL not in answers:
+        return [f'{name}: silent: no MODEL answer within {timeout_s:g} s']
+    errors = []
+    for packet_id, ours in expected_limits(drive).items():
+        label = PacketId(packet_id).name
+        packet = answers.get(packet_id)
+        if packet is None:
+            errors.append(f'{name}: no {label} answer within {timeout_s:g} s')
+            continue
+        try:
+            values = rp.packet_values_si(packet)
+        except ProtocolError as exc:
+            errors.append(f'{name}: {label}: {exc}')
+            continue
+        unit = _unit(drive, packet_id)
+        if len(values) != 2 or any(abs(a - b) > LIMIT_TOLERANCE for a, b in zip(
+                values, ours, strict=True)):
+            shown = ', '.join(f'{v:.4g}' for v in values)
+            errors.append(f'{name}: {label} [max, min] on the device [{shown}] {unit}, '
+                          f'expected [{ours[0]:.4g}, {ours[1]:.4g}] {unit} (URDF / hardware.yaml)')
+    return errors
+
+
+@dataclass
+class DeviceFeedback:
+    """What a device last reported (SI) and when (s of the node clock)."""
+
+    position: float = math.nan
+    velocity: float = math.nan
+    answer_s: float = -math.inf
+    status: bytes = b''
+    status_s: float = -math.inf
+
+
+class Alpha5Core:
+    """Commands, feedback polling, watchdog and health of one Alpha 5."""
+
+    def __init__(self, arm: Alpha5Hardware, watchdog_timeout_s: float = 0.1,
+                 command_mode: str = 'current', velocity_gain_rad_s_per_n_m: float = 0.1,
+                 silent_timeout_s: float = 0.2) -> None:
+        if command_mode not in COMMAND_MODES:
+            raise ValueError(f'command_mode = {command_mode!r}: one of {", ".join(COMMAND_MODES)}')
+        self.arm = arm
+        self.drives = arm.drives
+        self.command_mode = command_mode
+        self.velocity_gain = velocity_gain_rad_s_per_n_m
+        self.silent_timeout_s = silent_timeout_s
+        self.watchdog = CommandWatchdog(watchdog_timeout_s)
+        self.splitter = rp.FrameSplitter()
+        self.feedback = {d.device_id: DeviceFeedback() for d in self.drives}
+        self._index = {d.joint_name: i for i, d in enumerate(arm.joints)}
+        self._next = 0
+        self._holding = False
+        self._driving = False
+        self._last_hold_s = -math.inf
+        self.rejected_commands = 0
+        self.last_rejection = ''
+
+    # -- commands -----------------------------------------------------------------------------
+    def command(self, t_s: float, joint_names: Sequence[str],
+                torques_n_m: Sequence[float]) -> bytes:
+        """Frames of one ActuatorCommand's joint torques (N m); b'' if it is refused.
+
+        ``joint_names`` empty means the URDF's arm joints in order. A command that names an
+        unknown joint, misses one, or holds a non-finite torque is refused and counted (the
+        watchdog is not fed, so the arm goes neutral if only such commands come).
+        """
+        names = list(joint_names) or [d.joint_name for d in self.arm.joints]
+        problem = ''
+        if len(names) != len(torques_n_m):
+            problem = f'{len(names)} joint names, {len(torques_n_m)} torques'
+        elif set(names) != set(self._index):
+            problem = f'joints {names}, expected {sorted(self._index)}'
+        elif not all(math.isfinite(t) for t in torques_n_m):
+            problem = f'non-finite torque in {list(torques_n_m)}'
+        if problem:
+            self.rejected_commands += 1
+            self.last_rejection = problem
+            return b''
+        self.watchdog.feed(t_s)
+        self._holding, self._driving = False, True
+        by_name = dict(zip(names, torques_n_m, strict=True))
+        return b''.join(self._command_frame(d, float(by_name[d.joint_name]))
+                        for d in self.arm.joints)
+
+    def _command_frame(self, drive: Drive, torque_n_m: float) -> bytes:
+        if self.command_mode == 'current':
+            return rp.encode_current(drive.device_id, drive.current_ma(torque_n_m))
+        limit = drive.velocity_limit
+        velocity = max(-limit, min(limit, self.velocity_gain * torque_n_m))
+        return rp.encode_velocity(drive.device_id, velocity)
+
+    def neutral_frames(self) -> bytes:
+        """VELOCITY 0 to every driven device, one at a time (never a broadcast)."""
+        return b''.join(rp.encode_velocity(d.device_id, 0.0) for d in self.drives)
+
+    def restore_frames(self, modes: Mapping[int, Mode]) -> bytes:
+        """VELOCITY 0 then MODE back to each device's resting mode before activate (Standby)."""
+        return self.neutral_frames() + b''.join(
+            rp.encode_mode(d.device_id, mode if (mode := modes.get(d.device_id, Mode.STANDBY))
+                           in RESTING_MODES else Mode.STANDBY) for d in self.drives)
+
+    def standby_frames(self) -> bytes:
+        """MODE Standby to every driven device (activate)."""
+        return b''.join(rp.encode_mode(d.device_id, Mode.STANDBY) for d in self.drives)
+
+    def stop_driving(self) -> None:
+        """Forget the last command (after deactivate): nothing is driven until a new one."""
+        self._driving = self._holding = False
+
+    # -- the period ---------------------------------------------------------------------------
+    def tick(self, t_s: float) -> tuple[bytes, bool]:
+        """(frames to send now, True when this request starts a new feedback round).
+
+        The frames: VELOCITY 0 to every joint when the watchdog trips and while it holds,
+        then one feedback REQUEST to the next device in turn.
+        """
+        frames = b''
+        if self._driving and self.watchdog.expired(t_s):
+            self._driving, self._holding, self._last_hold_s = False, True, -math.inf
+        if self._holding and t_s - self._last_hold_s >= HOLD_RESEND_S:
+            frames += self.neutral_frames()
+            self._last_hold_s = t_s
+        drive = self.drives[self._next]
+        round_done = self._next == 0
+        self._next = (self._next + 1) % len(self.drives)
+        return frames + rp.encode_request(drive.device_id, FEEDBACK_REQUEST), round_done
+
+    @property
+    def holding(self) -> bool:
+        """True while the watchdog holds the arm at VELOCITY 0."""
+        return self._holding
+
+    def receive(self, chunk: bytes, t_s: float) -> None:
+        """Take the device's bytes: feedback, HARDWARE_STATUS; bad frames are only counted."""
+        for packet in self.splitter.feed(chunk):
+            feedback = self.feedback.get(packet.device_id)
+            if feedback is None:
+                continue
+            if packet.packet_id == PacketId.HARDWARE_STATUS:
+                feedback.status, feedback.status_s = packet.data, t_s
+            elif packet.packet_id in FEEDBACK_REQUEST and len(packet.data) == 4:
+                value = rp.packet_values_si(packet)[0]
+                if packet.packet_id == PacketId.POSITION:
+                    feedback.position = value
+                else:
+                    feedback.velocity = value
+                feedback.answer_s = t_s
+
+    def joint_state(self) -> tuple[list[str], list[float], list[float]]:
+        """(names, positions rad or m, velocities rad/s or m/s) of every driven device."""
+        values = [self.feedback[d.device_id] for d in self.drives]
+        return ([d.joint_name for d in self.drives], [v.position for v in values],
+                [v.velocity for v in values])
+
+    # -- health -------------------------------------------------------------------------------
+    def silent_joints(self, t_s: float) -> list[str]:
+        """Joints that have not answered for ``silent_timeout_s``."""
+        return [d.joint_name for d in self.drives
+                if t_s - self.feedback[d.device_id].answer_s > self.silent_timeout_s]
+
+    def status_errors(self, t_s: float) -> dict[str, str]:
+        """{joint: HARDWARE_STATUS bytes as hex} of devices reporting errors lately."""
+        return {d.joint_name: f.status.hex() for d in self.drives
+                if any((f := self.feedback[d.device_id]).status)
+                and t_s - f.status_s <= STATUS_HOLD_S}
+
+    def report(self, t_s: float) -> tuple[int, str, dict[str, object]]:
+        """(level 0 OK / 1 WARN / 2 ERROR, message, values) for /diagnostics."""
+        silent, status = self.silent_joints(t_s), self.status_errors(t_s)
+        s = self.splitter
+        values: dict[str, object] = {
+            'crc_errors': s.crc_errors, 'length_errors': s.length_errors,
+            'cobs_errors': s.cobs_errors, 'packets': s.packets,
+            'watchdog_trips': self.watchdog.trips, 'holding_velocity_0': self.holding,
+            'rejected_commands': self.rejected_commands, 'silent_joints': ' '.join(silent),
+            **{f'hardware_status.{k}': v for k, v in status.items()}}
+        problems = []
+        if silent:
+            problems.append(f'silent: {", ".join(silent)}')
+        if status:
+            problems.append(f'HARDWARE_STATUS errors: {", ".join(status)}')
+        if problems:
+            return 2, '; '.join(problems), values
+        if s.bad_frames or self.rejected_commands or self.holding:
+            parts = [f'{s.bad_frames} bad frames dropped'] if s.bad_frames else []
+            if self.rejected_commands:
+                parts.append(f'{self.rejected_commands} commands refused ({self.last_rejection})')
+            if self.holding:
+                parts.append('no command: holding at VELOCITY 0')
+            return 1, '; '.join(parts), values
+        return 0, 'running', values

@@ -1,0 +1,228 @@
+"""The ``netft_bridge`` node: an ATI Net F/T's RDT stream as ``wrench`` in ``ft_sensor_link``.
+
+A managed node (``autostart``). configure opens the UDP link to ``address`` and checks that the
+box answers a start request with a record within ``answer_timeout_s`` (then stops it again);
+activate starts real-time streaming (command 2, infinite samples); each record becomes a
+``geometry_msgs/WrenchStamped`` in ``ft_sensor_link`` (the simulator's wrist-sensor topic and
+convention, ``uvms_hardware.netft_core``); ``~/bias`` (std_srvs/Trigger) zeroes the present
+reading (in the bridge: ATI's own bias command is not in the documents). Watchdog: no record
+for ``watchdog_timeout_s`` and publishing stops (there is nothing to publish), /diagnostics
+turns ERROR, and the start request is sent again once a second. deactivate, shutdown, SIGINT
+and SIGTERM send the stop command (command 0). /diagnostics: records, lost records (from
+rdt_sequence gaps), bad datagrams, the status word.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+from geometry_msgs.msg import WrenchStamped
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_srvs.srv import Trigger
+from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
+from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
+from uvms_common.node_main import run_node
+from uvms_common.robot_parameters import declare_robot_name
+
+from uvms_hardware import rdt_protocol as rdt
+from uvms_hardware.address import parse_host_port
+from uvms_hardware.errors import HardwareError
+from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR, NetFtCore
+from uvms_hardware.transport import UdpLink, collect
+
+SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
+_LEVELS = {0: OK, 1: WARN, 2: ERROR}
+#: The frame of the wrist sensor's wrench (robot.urdf).
+FT_SENSOR_LINK = 'ft_sensor_link'
+#: While the stream is stale, the start request is repeated this often (s).
+RESTART_PERIOD_S = 1.0
+
+PARAMETERS: tuple[tuple[str, Any, str], ...] = (
+    ('address', f'127.0.0.1:{rdt.RDT_PORT}', 'HOST[:PORT] of the Net F/T box (RDT over UDP)'),
+    ('counts_per_force', rdt.DEFAULT_COUNTS_PER_FORCE, 'Calibration: counts per N'),
+    ('counts_per_torque', rdt.DEFAULT_COUNTS_PER_TORQUE, 'Calibration: counts per N m'),
+    ('rot_link_from_sensor', list(DEFAULT_ROT_LINK_FROM_SENSOR),
+     'Rotation ft_sensor_link <- sensor axes, row-major (default: sensor z along the jaw)'),
+    ('watchdog_timeout_s', 0.1, 'No record for this long: stop publishing, diagnostics (s)'),
+    ('poll_rate_hz', 500.0, 'How often the socket is read; every record is published (Hz)'),
+    ('answer_timeout_s', 0.5, 'Time the box has to send its first record at configure (s)'),
+)
+
+
+class NetFtBridgeError(HardwareError):
+    """A parameter of the bridge is invalid or the box cannot be configured."""
+
+
+class NetFtBridgeNode(LifecycleNode):
+    """ATI Net F/T bridge: RDT records in, wrench and diagnostics out."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('netft_bridge', **kwargs)
+        self.robot_name = declare_robot_name(self)
+        self.values = {name: self.declare_parameter(
+            name, default, ParameterDescriptor(description=text, read_only=True)).value
+            for name, default, text in PARAMETERS}
+        starting = declare_autostart(self)
+        guard_change_state(self)
+        self.core: NetFtCore | None = None
+        self.link: UdpLink | None = None
+        self.configure_error = ''
+        self._entities: list[Any] = []
+        self._timer: Any = None
+        self._active = False
+        self._restart_s = 0.0
+        self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
+        self._diagnostics.add('netft', self._report)
+        if starting and not autostart(self):
+            message = self.configure_error or 'the bridge cannot configure'
+            self.destroy_node()
+            raise NetFtBridgeError(message)
+
+    def now_s(self) -> float:
+        """The node clock (s)."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Check parameters, open the link, see one record, create publisher and service."""
+        v = self.values
+        try:
+            host, port = parse_host_port(str(v['address']), rdt.RDT_PORT)
+            core = NetFtCore(float(v['counts_per_force']), float(v['counts_per_torque']),
+                             [float(x) for x in v['rot_link_from_sensor']],
+                             float(v['watchdog_timeout_s']))
+            if not float(v['poll_rate_hz']) > 0.0:
+                raise NetFtBridgeError(f'poll_rate_hz = {v["poll_rate_hz"]}: must be > 0')
+            link = UdpLink(host, port)
+        except (HardwareError, ValueError, OSError) as exc:
+            return self._refuse(str(exc))
+        link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
+        timeout_s = float(v['answer_timeout_s'])
+        seen = collect(link, lambda chunk: [1] if chunk and not len(chunk) % rdt.RECORD_BYTES
+                       else [], [1], timeout_s)
+        link.send(rdt.encode_request(rdt.COMMAND_STOP))
+        if not seen:
+            link.close()
+            return self._refuse(f'no RDT record from {host}:{port} within {timeout_s:g} s')
+        self.core, self.link = core, link
+        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        self._wrench_pub = self.create_publisher(WrenchStamped, 'wrench', qos)
+        self._entities = [(self.destroy_publisher, self._wrench_pub),
+                          (self.destroy_service, self.create_service(
+                              Trigger, '~/bias', self._on_bias))]
+        self.get_logger().info(f'Net F/T at {host}:{port} answers; publishing wrench in '
+                               f'{FT_SENSOR_LINK}')
+        return SUCCESS
+
+    def _refuse(self, error: str) -> TransitionCallbackReturn:
+        self.configure_error = error
+        self.get_logger().error(f'configure refused: {error}')
+        return FAILURE
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Start real-time streaming and poll the socket."""
+        assert self.link is not None
+        self.link.read()  # records still in flight from the configure check
+        self.link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
+        self._restart_s = self.now_s()
+        self._timer = self.create_timer(1.0 / float(self.values['poll_rate_hz']), self._on_tick)
+        self._active = True
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Stop the stream."""
+        self._stop()
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Close the link; drop publisher and service."""
+        self._release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Stop the stream from any state, release everything."""
+        self._stop()
+        self._release()
+        return super().on_shutdown(state)
+
+    def destroy_node(self) -> None:
+        """Shut down as rclcpp's lifecycle node does (stream stopped), then destroy."""
+        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
+            self.trigger_shutdown()
+        else:
+            self._stop()
+        self._diagnostics.destroy()
+        super().destroy_node()
+
+    def _stop(self) -> None:
+        if self._timer is not None:
+            self.destroy_timer(self._timer)
+            self._timer = None
+        if self._active and self.link is not None:
+            self.link.send(rdt.encode_request(rdt.COMMAND_STOP))
+        self._active = False
+
+    def _release(self) -> None:
+        for destroy, entity in reversed(self._entities):
+            destroy(entity)
+        self._entities = []
+        if self.link is not None:
+            self.link.close()
+        self.link, self.core = None, None
+
+    def _on_tick(self) -> None:
+        core, link = self.core, self.link
+        if core is None or link is None or not self._active:
+            return
+        t_s = self.now_s()
+        for datagram in link.read_datagrams():
+            wrench = core.receive(datagram, t_s)
+            if wrench is None:
+                self.get_logger().warning(f'bad datagram dropped: {core.last_error}',
+                                          throttle_duration_sec=5.0)
+                continue
+            msg = WrenchStamped()
+            msg.header.stamp = self.get_clock().now().to_msg()
+            msg.header.frame_id = FT_SENSOR_LINK
+            (msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z), (
+                msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z) = wrench
+            self._wrench_pub.publish(msg)
+        if core.stale(t_s) and t_s - self._restart_s >= RESTART_PERIOD_S:
+            self._restart_s = t_s
+            link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
+            self.get_logger().warning(f'no record for {core.age_s(t_s):.2f} s: start requested '
+                                      'again', throttle_duration_sec=5.0)
+
+    def _on_bias(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        if self.core is None or not self.core.bias():
+            response.success, response.message = False, 'no record yet: nothing to bias'
+            return response
+        force, torque = self.core.offset
+        response.success = True
+        response.message = (f'bias force {[round(f, 4) for f in force]} N, torque '
+                            f'{[round(t, 4) for t in torque]} N m (ft_sensor_link)')
+        return response
+
+    def _report(self) -> Report:
+        state = state_label(self)
+        if self.core is None:
+            return Report(ERROR if self.configure_error else WARN,
+                          f'{state}: {self.configure_error or "not configured"}',
+                          {'lifecycle_state': state})
+        if not self._active:
+            return Report(OK, f'{state}: not streaming', {'lifecycle_state': state})
+        level, message, values = self.core.report(self.now_s())
+        return Report(_LEVELS[level], message, {'lifecycle_state': state, **values})
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the netft_bridge node until SIGINT/SIGTERM."""
+    sys.exit(run_node(NetFtBridgeNode, args, 'netft_bridge',
+                      (NetFtBridgeError, HardwareError, ParameterException)))
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,148 @@
+"""The Net F/T bridge's core: RDT datagrams in, a wrench in ft_sensor_link out; no ROS, no I/O.
+
+Per datagram::
+
+    core = NetFtCore(counts_per_force=1e6, counts_per_torque=1e6)
+    wrench = core.receive(datagram, t_s)   # (force N, torque N m) in ft_sensor_link, or None
+    core.bias()                            # the present reading becomes zero
+    core.stale(t_s)                        # no record for timeout_s: nothing is published
+
+Frame and sign: the stack's wrist sensor reports in ft_sensor_link the wrench the end effector
+exerts on the environment, x along the jaw's approach direction, which sensor.yaml takes as
+the sensor's own z (axial) axis. ``rot_link_from_sensor`` turns the box's axes into
+ft_sensor_link; its default maps sensor z to x, sensor x to y and sensor y to z (a right-handed
+cyclic turn). The other two axes and the sign of ATI's reading relative to ours are not in the
+documents: the default is an assumption to check at mounting (press the jaw tip along its
+approach direction: +x must read positive), and the parameter changes it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from uvms_hardware import rdt_protocol as rdt
+from uvms_hardware.errors import ProtocolError
+
+Vector = tuple[float, float, float]
+#: Default rotation ft_sensor_link <- sensor, row-major: x_link = z_sensor, y = x_s, z = y_s.
+DEFAULT_ROT_LINK_FROM_SENSOR = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
+
+
+def _rotate(rot: Sequence[float], v: Vector) -> Vector:
+    return (rot[0] * v[0] + rot[1] * v[1] + rot[2] * v[2],
+            rot[3] * v[0] + rot[4] * v[1] + rot[5] * v[2],
+            rot[6] * v[0] + rot[7] * v[1] + rot[8] * v[2])
+
+
+def check_rotation(rot: Sequence[float]) -> None:
+    """Refuse anything but a proper rotation (9 values, row-major, orthonormal, det +1).
+
+    Raises:
+        ValueError: Naming what is wrong.
+    """
+    if len(rot) != 9 or not all(math.isfinite(x) for x in rot):
+        raise ValueError(f'rot_link_from_sensor: 9 finite values (row-major), got {list(rot)}')
+    rows = [rot[0:3], rot[3:6], rot[6:9]]
+    for i in range(3):
+        for j in range(3):
+            dot = sum(a * b for a, b in zip(rows[i], rows[j], strict=True))
+            if abs(dot - (1.0 if i == j else 0.0)) > 1e-6:
+                raise ValueError(f'rot_link_from_sensor {list(rot)} is not orthonormal')
+    det = (rot[0] * (rot[4] * rot[8] - rot[5] * rot[7]) - rot[1] * (rot[3] * rot[8] - rot[5]
+           * rot[6]) + rot[2] * (rot[3] * rot[7] - rot[4] * rot[6]))
+    if det < 0.0:
+        raise ValueError(f'rot_link_from_sensor {list(rot)} is a reflection (det -1)')
+
+
+class NetFtCore:
+    """Decodes records, counts losses and bad datagrams, biases, watches the stream."""
+
+    def __init__(self, counts_per_force: float = rdt.DEFAULT_COUNTS_PER_FORCE,
+                 counts_per_torque: float = rdt.DEFAULT_COUNTS_PER_TORQUE,
+                 rot_link_from_sensor: Sequence[float] = DEFAULT_ROT_LINK_FROM_SENSOR,
+                 timeout_s: float = 0.1) -> None:
+        if not (counts_per_force > 0.0 and counts_per_torque > 0.0):
+            raise ValueError(f'counts_per_force {counts_per_force} and counts_per_torque '
+                             f'{counts_per_torque} must be > 0')
+        if not timeout_s > 0.0:
+            raise ValueError(f'watchdog_timeout_s = {timeout_s}: must be > 0')
+        check_rotation(rot_link_from_sensor)
+        self.counts_per_force = counts_per_force
+        self.counts_per_torque = counts_per_torque
+        self.rot = tuple(float(x) for x in rot_link_from_sensor)
+        self.timeout_s = timeout_s
+        self.records = 0
+        self.lost = 0
+        self.bad_datagrams = 0
+        self.last_error = ''
+        self.faulted_records = 0
+        self.status = 0
+        self.stale_episodes = 0
+        self._sequence: int | None = None
+        self._record_s = -math.inf
+        self._stale = True
+        self._raw: tuple[Vector, Vector] | None = None
+        self._offset: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+    def receive(self, datagram: bytes, t_s: float) -> tuple[Vector, Vector] | None:
+        """(force N, torque N m) in ft_sensor_link, bias removed; None for a bad datagram."""
+        try:
+            record = rdt.decode_record(datagram)
+        except ProtocolError as exc:
+            self.bad_datagrams += 1
+            self.last_error = str(exc)
+            return None
+        self.lost += rdt.lost_records(self._sequence, record.rdt_sequence)
+        self._sequence = record.rdt_sequence
+        self.records += 1
+        self.status = record.status
+        if record.status:
+            self.faulted_records += 1
+        self._record_s, self._stale = t_s, False
+        force, torque = rdt.wrench_from_counts(record.counts, self.counts_per_force,
+                                               self.counts_per_torque)
+        self._raw = (_rotate(self.rot, force), _rotate(self.rot, torque))
+        (f, tq), (f0, t0) = self._raw, self._offset
+        return ((f[0] - f0[0], f[1] - f0[1], f[2] - f0[2]),
+                (tq[0] - t0[0], tq[1] - t0[1], tq[2] - t0[2]))
+
+    def bias(self) -> bool:
+        """Take the last reading as zero from now on; False when no record has come yet."""
+        if self._raw is None:
+            return False
+        self._offset = self._raw
+        return True
+
+    @property
+    def offset(self) -> tuple[Vector, Vector]:
+        """The bias subtracted (force N, torque N m) in ft_sensor_link."""
+        return self._offset
+
+    def stale(self, t_s: float) -> bool:
+        """True when no record came for ``timeout_s`` (or none yet)."""
+        stale = t_s - self._record_s > self.timeout_s
+        if stale and not self._stale:
+            self.stale_episodes += 1
+        self._stale = stale
+        return stale
+
+    def age_s(self, t_s: float) -> float:
+        """Seconds since the last record (inf before the first)."""
+        return t_s - self._record_s
+
+    def report(self, t_s: float) -> tuple[int, str, dict[str, object]]:
+        """(level 0 OK / 1 WARN / 2 ERROR, message, values) for /diagnostics."""
+        values: dict[str, object] = {
+            'records': self.records, 'lost_records': self.lost,
+            'bad_datagrams': self.bad_datagrams, 'status': f'{self.status:#010x}',
+            'records_with_status_set': self.faulted_records,
+            'stale_episodes': self.stale_episodes, 'record_age_s': self.age_s(t_s)}
+        if self.stale(t_s):
+            return 2, f'no record for more than {self.timeout_s:g} s: not publishing', values
+        if self.status:
+            return 2, f'status word {self.status:#010x} set (meaning: ATI manual)', values
+        if self.lost or self.bad_datagrams:
+            return 1, (f'{self.lost} records lost, {self.bad_datagrams} bad datagrams '
+                       'dropped'), values
+        return 0, 'streaming', values

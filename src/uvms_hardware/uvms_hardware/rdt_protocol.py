@@ -1,0 +1,136 @@
+"""Codec of ATI Net F/T's RDT (raw data transfer) over UDP: bytes in, numbers out.
+
+Source: shared/robots/bluerov2_heavy_alpha5.md, "ATI Net F/T (RDT over UDP)" (ATI's
+NetFTRDTCommand / NetFTRDTPacket sample code). All fields are big-endian::
+
+    request (8 bytes)   uint16 header 0x1234, uint16 command, uint32 sample count (0: infinite)
+    record (36 bytes)   uint32 rdt_sequence, uint32 ft_sequence, uint32 status,
+                        int32 Fx, Fy, Fz, Tx, Ty, Tz (counts)
+
+Force = counts / counts_per_force, torque = counts / counts_per_torque (1,000,000 each by
+default; the box's calibration says). The meaning of the status bits is not in the document:
+they are reported as a number, non-zero taken as a fault (assumed, for docs/hardware.md).
+Whether sequences wrap at 2^32 is not stated either; `lost_records` assumes they do.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+from uvms_hardware.errors import ProtocolError
+
+#: Net F/T's RDT UDP port.
+RDT_PORT = 49152
+#: First field of every request.
+REQUEST_HEADER = 0x1234
+#: Commands of the document (others are in ATI's manual, not used here).
+COMMAND_STOP = 0
+COMMAND_START_REALTIME = 2
+#: Sample count meaning "until stopped".
+INFINITE_SAMPLES = 0
+#: Default calibration (counts per N, counts per N m).
+DEFAULT_COUNTS_PER_FORCE = 1_000_000.0
+DEFAULT_COUNTS_PER_TORQUE = 1_000_000.0
+
+_REQUEST = struct.Struct('>HHI')
+_RECORD = struct.Struct('>III6i')
+REQUEST_BYTES = _REQUEST.size
+RECORD_BYTES = _RECORD.size
+_SEQUENCE_MODULUS = 1 << 32
+
+
+@dataclass(frozen=True)
+class Request:
+    """A decoded request: command and sample count."""
+
+    command: int
+    sample_count: int
+
+
+@dataclass(frozen=True)
+class Record:
+    """One RDT record: sequences, status word and the six raw counts (Fx Fy Fz Tx Ty Tz)."""
+
+    rdt_sequence: int
+    ft_sequence: int
+    status: int
+    counts: tuple[int, int, int, int, int, int]
+
+
+def encode_request(command: int, sample_count: int = INFINITE_SAMPLES) -> bytes:
+    """The 8-byte request: header 0x1234, ``command``, ``sample_count``."""
+    return _REQUEST.pack(REQUEST_HEADER, command, sample_count)
+
+
+def decode_request(datagram: bytes) -> Request:
+    """The request of an 8-byte datagram.
+
+    Raises:
+        ProtocolError: Another length, or a header other than 0x1234.
+    """
+    if len(datagram) != REQUEST_BYTES:
+        raise ProtocolError(f'RDT request of {len(datagram)} bytes, expected {REQUEST_BYTES}')
+    header, command, count = _REQUEST.unpack(datagram)
+    if header != REQUEST_HEADER:
+        raise ProtocolError(f'RDT request header {header:#06x}, expected {REQUEST_HEADER:#06x}')
+    return Request(command, count)
+
+
+def encode_record(record: Record) -> bytes:
+    """The 36-byte datagram of a record (what the box sends; the twin uses it)."""
+    return _RECORD.pack(record.rdt_sequence, record.ft_sequence, record.status, *record.counts)
+
+
+def decode_record(datagram: bytes) -> Record:
+    """The record of a 36-byte datagram.
+
+    Raises:
+        ProtocolError: A datagram shorter or longer than 36 bytes.
+    """
+    if len(datagram) != RECORD_BYTES:
+        raise ProtocolError(f'RDT record of {len(datagram)} bytes, expected {RECORD_BYTES}')
+    rdt, ft, status, *counts = _RECORD.unpack(datagram)
+    fx, fy, fz, tx, ty, tz = counts
+    return Record(rdt, ft, status, (fx, fy, fz, tx, ty, tz))
+
+
+def counts_from_wrench(force_n: tuple[float, float, float], torque_n_m: tuple[float, float, float],
+                       counts_per_force: float = DEFAULT_COUNTS_PER_FORCE,
+                       counts_per_torque: float = DEFAULT_COUNTS_PER_TORQUE,
+                       ) -> tuple[int, int, int, int, int, int]:
+    """Counts of a wrench (rounded to the nearest count), as the box would send it."""
+    fx, fy, fz = (round(f * counts_per_force) for f in force_n)
+    tx, ty, tz = (round(t * counts_per_torque) for t in torque_n_m)
+    return fx, fy, fz, tx, ty, tz
+
+
+def wrench_from_counts(counts: tuple[int, ...], counts_per_force: float = DEFAULT_COUNTS_PER_FORCE,
+                       counts_per_torque: float = DEFAULT_COUNTS_PER_TORQUE,
+                       ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """(force N, torque N m) of six counts Fx Fy Fz Tx Ty Tz, in the sensor's own axes.
+
+    Raises:
+        ProtocolError: Not six counts, or a calibration that is not positive.
+    """
+    if len(counts) != 6:
+        raise ProtocolError(f'{len(counts)} counts, expected 6 (Fx Fy Fz Tx Ty Tz)')
+    if not (counts_per_force > 0.0 and counts_per_torque > 0.0):
+        raise ProtocolError(f'counts per force {counts_per_force} / per torque '
+                            f'{counts_per_torque}: both must be > 0')
+    fx, fy, fz, tx, ty, tz = counts
+    return ((fx / counts_per_force, fy / counts_per_force, fz / counts_per_force),
+            (tx / counts_per_torque, ty / counts_per_torque, tz / counts_per_torque))
+
+
+def lost_records(previous_sequence: int | None, sequence: int) -> int:
+    """Records lost between two received RDT sequence numbers (0 for the first or a repeat).
+
+    >>> lost_records(None, 7), lost_records(7, 8), lost_records(7, 10), lost_records(2**32 - 1, 1)
+    (0, 0, 2, 1)
+    """
+    if previous_sequence is None:
+        return 0
+    step = (sequence - previous_sequence) % _SEQUENCE_MODULUS
+    # A step of half the range or more is a record from the past (reordered): nothing lost.
+    return step - 1 if 0 < step < _SEQUENCE_MODULUS // 2 else 0

@@ -1,0 +1,65 @@
+"""ATI Net F/T RDT codec: requests, records, counts to wrench, lost records."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+from uvms_hardware.errors import ProtocolError
+
+from uvms_hardware import rdt_protocol as rdt
+
+
+def test_start_request_is_the_documented_eight_bytes() -> None:
+    """Start real-time streaming, infinite samples: 12 34 00 02 00 00 00 00."""
+    assert rdt.encode_request(rdt.COMMAND_START_REALTIME) == bytes.fromhex('1234000200000000')
+    assert rdt.encode_request(rdt.COMMAND_STOP) == bytes.fromhex('1234000000000000')
+
+
+def test_request_decodes_back() -> None:
+    """A request with a sample count of 100 decodes to command and count."""
+    assert rdt.decode_request(bytes.fromhex('1234000200000064')) == rdt.Request(2, 100)
+
+
+def test_request_with_another_header_is_refused() -> None:
+    """A header other than 0x1234 is a ProtocolError."""
+    with pytest.raises(ProtocolError, match='header'):
+        rdt.decode_request(bytes.fromhex('4321000200000000'))
+
+
+def test_record_with_known_counts_gives_the_known_wrench() -> None:
+    """Counts 1.5e6, -2e6, 0.25e6, 1e5, -3e5, 7 at 1e6 per unit are 1.5 N ... 7e-6 N m."""
+    datagram = struct.pack('>III6i', 10, 20, 0, 1_500_000, -2_000_000, 250_000, 100_000,
+                           -300_000, 7)
+    record = rdt.decode_record(datagram)
+    assert (record.rdt_sequence, record.ft_sequence, record.status) == (10, 20, 0)
+    force, torque = rdt.wrench_from_counts(record.counts)
+    assert force == pytest.approx((1.5, -2.0, 0.25))
+    assert torque == pytest.approx((0.1, -0.3, 7e-6))
+
+
+def test_calibration_divides_the_counts() -> None:
+    """At 1e5 counts per N and 2e5 per N m the same counts give 10x and 5x."""
+    force, torque = rdt.wrench_from_counts((1_000_000, 0, 0, 1_000_000, 0, 0), 1e5, 2e5)
+    assert force[0] == pytest.approx(10.0) and torque[0] == pytest.approx(5.0)
+
+
+@pytest.mark.parametrize('size', [0, 8, 35, 37, 72])
+def test_short_or_long_datagram_is_a_protocol_error(size: int) -> None:
+    """Only a 36-byte datagram is a record."""
+    with pytest.raises(ProtocolError, match='36'):
+        rdt.decode_record(bytes(size))
+
+
+def test_record_round_trips() -> None:
+    """encode_record then decode_record gives the record back."""
+    record = rdt.Record(2**32 - 1, 5, 0x80000000, (1, -2, 3, -4, 5, -2**31))
+    assert rdt.decode_record(rdt.encode_record(record)) == record
+
+
+@pytest.mark.parametrize(('previous', 'current', 'lost'), [
+    (None, 5, 0), (5, 6, 0), (5, 9, 3), (5, 5, 0), (9, 5, 0), (2**32 - 2, 1, 2)])
+def test_lost_records_count_the_sequence_gaps(previous: int | None, current: int,
+                                              lost: int) -> None:
+    """A gap of n in rdt_sequence is n - 1 lost records; repeats and reorders lose none."""
+    assert rdt.lost_records(previous, current) == lost

@@ -1,0 +1,156 @@
+"""The Alpha 5 bridge core: configure checks, commands, feedback in turn, watchdog, health."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from uvms_hardware.alpha5_core import Alpha5Core, check_device
+from uvms_hardware.hardware_config import load_alpha5
+from uvms_hardware.reach_protocol import Mode, PacketId
+from uvms_hardware.twins.alpha5_twin import Alpha5Twin
+
+from uvms_hardware import reach_protocol as rp
+
+ARM = load_alpha5('bluerov2_alpha5')
+
+
+def packets(frames: bytes) -> list[rp.Packet]:
+    """Every packet of a byte string of frames."""
+    splitter = rp.FrameSplitter()
+    out = list(splitter.feed(frames))
+    assert splitter.bad_frames == 0
+    return out
+
+
+def configure_answers(twin: Alpha5Twin, device_id: int) -> dict[int, rp.Packet]:
+    """A device's answers to the bridge's configure requests, by packet id."""
+    request = rp.encode_request(device_id, [PacketId.MODEL, PacketId.MODE, *(
+        PacketId.POSITION_LIMITS, PacketId.VELOCITY_LIMITS, PacketId.CURRENT_LIMITS)])
+    return {p.packet_id: p for p in packets(twin.handle(rp.decode_frame(request)))}
+
+
+def test_device_matching_the_urdf_passes() -> None:
+    """The twin's limits are the URDF's: no error for any joint."""
+    twin = Alpha5Twin(ARM, port=0)
+    for drive in ARM.joints:
+        assert check_device(drive, configure_answers(twin, drive.device_id), 0.2) == []
+
+
+def test_limit_mismatch_names_the_joint_and_both_values() -> None:
+    """A shoulder limited to 0..3.8 rad is refused, naming joint_2, 3.8 and 3.49."""
+    twin = Alpha5Twin(ARM, port=0)
+    twin.set_position_limits(0x04, 0.0, 3.8)
+    (error,) = check_device(ARM.joints[1], configure_answers(twin, 0x04), 0.2)
+    assert 'joint_2' in error and '3.8' in error and '3.49' in error
+
+
+def test_silent_device_is_named() -> None:
+    """No MODEL answer: 'joint_4 ... silent'."""
+    (error,) = check_device(ARM.joints[3], {}, 0.2)
+    assert error.startswith('joint_4 (device 0x02, B): silent')
+
+
+def test_torques_become_currents_per_joint_in_device_order() -> None:
+    """1 N m on every joint is CURRENT 1/(Kt ratio eff) mA to each of devices 5, 4, 3, 2."""
+    core = Alpha5Core(ARM)
+    names = ['joint_4', 'joint_3', 'joint_2', 'joint_1']
+    sent = packets(core.command(0.0, names, [1.0, 1.0, 1.0, 1.0]))
+    assert [(p.device_id, p.packet_id) for p in sent] == [(d, PacketId.CURRENT)
+                                                         for d in (5, 4, 3, 2)]
+    assert sent[0].floats()[0] == pytest.approx(1000.0 / (0.0134 * 1754.4 * 0.86), rel=1e-6)
+    assert sent[3].floats()[0] == pytest.approx(1000.0 / (0.0271 * 340.4 * 0.77), rel=1e-6)
+
+
+def test_velocity_fallback_sends_gain_times_torque_clamped() -> None:
+    """In velocity mode 2 N m at gain 0.1 is 0.2 rad/s; 10 N m is clamped at 0.5 rad/s."""
+    core = Alpha5Core(ARM, command_mode='velocity', velocity_gain_rad_s_per_n_m=0.1)
+    sent = packets(core.command(0.0, [], [2.0, 10.0, 0.0, 0.0]))
+    assert [p.packet_id for p in sent] == [PacketId.VELOCITY] * 4
+    assert [p.floats()[0] for p in sent[:2]] == pytest.approx([0.2, 0.5])
+
+
+@pytest.mark.parametrize(('names', 'torques'), [
+    (['joint_1', 'joint_2'], [0.0, 0.0]), ([], [0.0, math.nan, 0.0, 0.0]),
+    (['joint_1', 'joint_2', 'joint_3', 'jaw'], [0.0] * 4)])
+def test_bad_command_is_refused_and_counted(names: list[str], torques: list[float]) -> None:
+    """Missing joints, NaN torques or unknown names send nothing and count one refusal."""
+    core = Alpha5Core(ARM)
+    assert core.command(0.0, names, torques) == b''
+    assert core.rejected_commands == 1
+
+
+def test_feedback_asks_one_device_at_a_time_in_turn() -> None:
+    """Each tick requests POSITION and VELOCITY of the next device; never 0xFF."""
+    core = Alpha5Core(ARM)
+    ticks = [core.tick(0.001 * i) for i in range(8)]
+    requests = [packets(frames)[-1] for frames, _ in ticks]
+    assert [r.device_id for r in requests] == [5, 4, 3, 2, 5, 4, 3, 2]
+    assert all(r.data == bytes((PacketId.POSITION, PacketId.VELOCITY)) for r in requests)
+    assert [done for _, done in ticks] == [True, False, False, False] * 2
+
+
+def test_watchdog_sends_velocity_0_to_every_joint_and_holds() -> None:
+    """No command for 0.1 s: VELOCITY 0 to devices 5-2, repeated while no command comes."""
+    core = Alpha5Core(ARM, watchdog_timeout_s=0.1)
+    core.command(0.0, [], [1.0] * 4)
+    assert [p.packet_id for p in packets(core.tick(0.05)[0])] == [PacketId.REQUEST]
+    tripped = packets(core.tick(0.11)[0])[:-1]
+    assert [(p.device_id, p.packet_id, p.floats()) for p in tripped] == [
+        (d, PacketId.VELOCITY, (0.0,)) for d in (5, 4, 3, 2)]
+    assert len(packets(core.tick(0.15)[0])) == 1  # not yet resent
+    assert len(packets(core.tick(0.22)[0])) == 5  # resent after HOLD_RESEND_S
+    core.command(0.3, [], [1.0] * 4)
+    assert not core.holding and len(packets(core.tick(0.31)[0])) == 1
+
+
+def test_no_neutral_before_the_first_command() -> None:
+    """Before any command nothing but feedback requests is sent."""
+    core = Alpha5Core(ARM)
+    assert [len(packets(core.tick(t)[0])) for t in (0.0, 0.5, 1.0)] == [1, 1, 1]
+
+
+def test_restore_is_velocity_0_then_the_resting_mode() -> None:
+    """Deactivate: VELOCITY 0, then MODE Standby (Disable kept if the device was disabled)."""
+    core = Alpha5Core(ARM)
+    sent = packets(core.restore_frames({5: Mode.DISABLE, 4: Mode.VELOCITY}))
+    assert [p.packet_id for p in sent[:4]] == [PacketId.VELOCITY] * 4
+    assert [(p.device_id, p.data[0]) for p in sent[4:]] == [
+        (5, Mode.DISABLE), (4, Mode.STANDBY), (3, Mode.STANDBY), (2, Mode.STANDBY)]
+
+
+def test_jaw_feedback_is_in_metres() -> None:
+    """The jaw answering 10 mm is 0.01 m in the joint state."""
+    arm = load_alpha5('bluerov2_alpha5', jaw_joint='jaw')
+    core, twin = Alpha5Core(arm), Alpha5Twin(arm, port=0)
+    twin.set_joint_state([0.1, 0.2, 0.3, 0.4, 0.01], [0.0] * 5)
+    for _ in range(5):
+        frames, _ = core.tick(0.0)
+        for packet in packets(frames):
+            core.receive(twin.handle(packet), 0.0)
+    names, q, _ = core.joint_state()
+    assert names[-1] == 'jaw' and q == pytest.approx([0.1, 0.2, 0.3, 0.4, 0.01])
+
+
+def test_bad_frames_are_counted_and_survived() -> None:
+    """A corrupted answer is dropped and counted; the next good one is taken."""
+    core = Alpha5Core(ARM)
+    good = rp.encode_position(0x05, 1.25)
+    bad = bytearray(good)
+    bad[2] ^= 0x40
+    core.receive(bytes(bad) + good, 1.0)
+    assert core.splitter.bad_frames == 1 and core.feedback[5].position == pytest.approx(1.25)
+    level, message, values = core.report(1.0)
+    assert values['packets'] == 1 and 'silent' in message and level == 2
+
+
+def test_hardware_status_error_is_an_error_in_the_report() -> None:
+    """A non-zero HARDWARE_STATUS from the elbow makes the report an ERROR naming joint_3."""
+    core = Alpha5Core(ARM)
+    for d in (5, 4, 3, 2):
+        core.receive(rp.encode_position(d, 0.5), 1.0)
+    core.receive(rp.encode_packet(0x03, PacketId.HARDWARE_STATUS, b'\x04\x00'), 1.0)
+    level, message, _ = core.report(1.1)
+    assert level == 2 and 'joint_3' in message
+    assert core.report(5.0)[0] == 2  # silent by then, the status itself expired
+    assert core.status_errors(5.0) == {}
