@@ -40,6 +40,7 @@ from uvms_hardware.alpha5_core import (
     Alpha5Core,
     check_device,
 )
+from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Drive, load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId
@@ -76,6 +77,7 @@ class Alpha5BridgeNode(LifecycleNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('alpha5_bridge', **kwargs)
+        self._device_clock = DeviceClock(self)
         self.robot_name = declare_robot_name(self)
         self.values = {name: self.declare_parameter(
             name, default, ParameterDescriptor(description=text, read_only=True)).value
@@ -97,8 +99,8 @@ class Alpha5BridgeNode(LifecycleNode):
             raise Alpha5BridgeError(message)
 
     def now_s(self) -> float:
-        """The node clock (s)."""
-        return self.get_clock().now().nanoseconds * 1e-9
+        """The steady clock (s): the device's times (``uvms_hardware.device_clock``)."""
+        return self._device_clock.now_s()
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Open the link, check every device in turn, create publisher and subscription."""
@@ -160,7 +162,7 @@ class Alpha5BridgeNode(LifecycleNode):
         assert self.core is not None and self.link is not None
         self.link.send(self.core.standby_frames())
         period_s = 1.0 / (float(self.values['feedback_rate_hz']) * len(self.core.drives))
-        self._timer = self.create_timer(period_s, self._on_tick)
+        self._timer = self._device_clock.timer(period_s, self._on_tick)
         self._active = True
         return super().on_activate(state)
 

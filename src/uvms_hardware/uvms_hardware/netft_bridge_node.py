@@ -30,6 +30,7 @@ from uvms_common.robot_parameters import declare_robot_name
 
 from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import parse_host_port
+from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR, NetFtCore
 from uvms_hardware.transport import UdpLink, collect
@@ -62,6 +63,7 @@ class NetFtBridgeNode(LifecycleNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('netft_bridge', **kwargs)
+        self._device_clock = DeviceClock(self)
         self.robot_name = declare_robot_name(self)
         self.values = {name: self.declare_parameter(
             name, default, ParameterDescriptor(description=text, read_only=True)).value
@@ -83,8 +85,8 @@ class NetFtBridgeNode(LifecycleNode):
             raise NetFtBridgeError(message)
 
     def now_s(self) -> float:
-        """The node clock (s)."""
-        return self.get_clock().now().nanoseconds * 1e-9
+        """The steady clock (s): the device's times (``uvms_hardware.device_clock``)."""
+        return self._device_clock.now_s()
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Check parameters, open the link, see one record, create publisher and service."""
@@ -128,7 +130,8 @@ class NetFtBridgeNode(LifecycleNode):
         self.link.read()  # records still in flight from the configure check
         self.link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
         self._restart_s = self.now_s()
-        self._timer = self.create_timer(1.0 / float(self.values['poll_rate_hz']), self._on_tick)
+        period_s = 1.0 / float(self.values['poll_rate_hz'])
+        self._timer = self._device_clock.timer(period_s, self._on_tick)
         self._active = True
         return super().on_activate(state)
 
