@@ -25,17 +25,18 @@ import numpy as np
 import pinocchio as pin
 
 ROOT = Path(__file__).resolve().parents[1]
-for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model',
-               'test/unit/control'):
+for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'src/uvms_thrusters',
+               'test/unit/model',
+               'test/unit/control', 'test/unit/thrusters'):
     sys.path.insert(0, str(ROOT / folder))
 
 from reference_allocator import ReferenceAllocator  # noqa: E402
 from reference_model import ReferenceModel  # noqa: E402
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
 from uvms_control.core.parameter_specs import CONTROLLER_PARAMETER_SPECS  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
 from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
 
 from uvms_description.robots import (  # noqa: E402
     RobotFolderError,

@@ -23,7 +23,7 @@ from std_msgs.msg import Header
 from uvms_common.lifecycle import state_label
 from uvms_common.node_main import make_executor
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
+from uvms_thrusters.thruster_allocator_node import ThrusterAllocatorNode
 
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 

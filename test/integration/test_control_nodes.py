@@ -24,7 +24,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from uvms_control.controller_node import ControllerNode
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
+from uvms_thrusters.thruster_allocator_node import ThrusterAllocatorNode
 
 from uvms_model import UvmsModel
 from uvms_msgs.msg import ActuatorCommand, ControllerState, GeneralizedForce, ThrusterState

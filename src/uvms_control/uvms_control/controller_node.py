@@ -43,6 +43,7 @@ from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
 from uvms_common.raw_clock import take_clock_raw
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
+from uvms_common.unconfigured import answer_while_unconfigured, controller_zero_answer
 
 from uvms_common import robot_parameters as robots
 from uvms_control import raw_conversions, task_conversions
@@ -62,7 +63,6 @@ from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
-from uvms_control.unconfigured import answer_while_unconfigured, controller_zero_answer
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 

@@ -7,7 +7,6 @@ import re
 
 import numpy as np
 import pytest
-from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.contact_task import (
     ContactTaskGoal,
     SafetyLimits,
@@ -20,12 +19,9 @@ from uvms_control.core.parameter_specs import (
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )
-from uvms_control.core.parameters import (
-    ControllerParameters,
-    spd_matrix,
-    thruster_parameters_from_flat_dict,
-    validate_node_parameters,
-)
+from uvms_control.core.parameters import ControllerParameters, spd_matrix, validate_node_parameters
+from uvms_thrusters.parameter_specs import ALLOCATOR_PARAMETER_SPECS
+from uvms_thrusters.parameters import thruster_parameters_from_flat_dict
 
 
 def test_defaults_are_valid() -> None:

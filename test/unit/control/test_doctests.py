@@ -8,9 +8,9 @@ import importlib
 import pytest
 
 MODULES = [
-    'uvms_control.core.allocation',
-    'uvms_control.core.fault_detection',
-    'uvms_control.core.thruster_faults',
+    'uvms_thrusters.allocation',
+    'uvms_thrusters.fault_detection',
+    'uvms_thrusters.thruster_faults',
     'uvms_control.core.filters',
     'uvms_control.core.force_figures',
     'uvms_control.core.fuzzy_sets',
@@ -19,7 +19,7 @@ MODULES = [
     'uvms_control.core.impedance',
     'uvms_control.core.reference',
     'uvms_control.core.task_space',
-    'uvms_control.core.thruster_dynamics',
+    'uvms_thrusters.thruster_dynamics',
     'uvms_control.core.unified_controller',
 ]
 

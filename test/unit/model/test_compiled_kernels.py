@@ -25,7 +25,7 @@ PROBE = textwrap.dedent("""
     from uvms_control.core.unified_controller import UnifiedForceController
     from uvms_model.integration import rk4_stage_input
     from uvms_model.thrusters import ThrusterLayout
-    from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
+    from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
 
     rng = np.random.default_rng(3)
     model = UvmsModel()
@@ -50,7 +50,7 @@ PROBE = textwrap.dedent("""
                 *terms.J_dot_q_dot, *result.tau_b, result.W, *output.thrust,
                 *output.joint_torques, *output.propeller_speed, *output.motor_current,
                 output.allocation.saturation_scale, output.allocation.joint_scale]
-    from uvms_control.core.thruster_kernels import euler_step_bank
+    from uvms_thrusters.thruster_kernels import euler_step_bank
     compiled = hasattr(rk4_stage_input, 'py_func') and hasattr(euler_step_bank, 'py_func')
     json.dump({'values': out, 'compiled': compiled},
               sys.stdout)
