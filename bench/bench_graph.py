@@ -83,13 +83,13 @@ from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noq
 from uvms_common.robot_parameters import robot_model_values  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.controller_node import safety_limits  # noqa: E402
+from uvms_control.core.law.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_control.core.parameter_specs import (  # noqa: E402
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
-from uvms_control.core.task_supervisor import TaskSupervisor  # noqa: E402
-from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
+from uvms_control.core.task.task_supervisor import TaskSupervisor  # noqa: E402
 from uvms_control.task_conversions import contact_task_goal  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402

@@ -32,9 +32,9 @@ for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'sr
 
 from reference_allocator import ReferenceAllocator  # noqa: E402
 from reference_model import ReferenceModel  # noqa: E402
+from uvms_control.core.law.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_control.core.parameter_specs import CONTROLLER_PARAMETER_SPECS  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
-from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
 

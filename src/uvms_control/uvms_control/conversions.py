@@ -23,7 +23,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 
 from uvms_control.core.errors import ControlInputError
-from uvms_control.core.unified_controller import ControllerResult
+from uvms_control.core.law.unified_controller import ControllerResult
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 
 FloatArray = npt.NDArray[np.float64]

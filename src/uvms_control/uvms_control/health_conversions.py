@@ -13,8 +13,8 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_thrusters.health_conversions import HEALTH_TOPIC
 
-from uvms_control.core.contact_task import TaskCode
-from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
+from uvms_control.core.task.contact_task import TaskCode
+from uvms_control.core.task.task_supervisor import TaskEvent, TaskSupervisor
 from uvms_msgs.msg import ThrusterHealth
 
 

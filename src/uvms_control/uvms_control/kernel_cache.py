@@ -14,8 +14,8 @@ import time
 import numpy as np
 from uvms_model.kernel_cache import compile_model_kernels, robot_models, warm_state
 
+from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.unified_controller import UnifiedForceController
 
 
 def compile_control_kernels() -> None:

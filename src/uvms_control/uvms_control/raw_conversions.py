@@ -4,9 +4,10 @@ A reader takes a payload of a raw subscription: our simulator's layout is read i
 `struct` (the allocator's topics: ``uvms_thrusters.raw_conversions``); any other layout (a
 frame id of '', joints in another order, from another publisher) is deserialized by rclpy
 and judged by the typed readers of `uvms_control.conversions`, which stay the reference; a
-payload that is no message of the type raises `MalformedPayloadError` (counted in ``decoder.malformed``). Writers fill
-preallocated payloads (`uvms_common.cdr_codecs.PayloadWriter`) with the values the typed
-builders of `uvms_control.conversions` put in their messages.
+payload that is no message of the type raises `MalformedPayloadError` (counted in
+``decoder.malformed``). Writers fill preallocated payloads
+(`uvms_common.cdr_codecs.PayloadWriter`) with the values the typed builders of
+`uvms_control.conversions` put in their messages.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from uvms_common.hot_messages import (
 from uvms_control import conversions
 from uvms_control.conversions import FloatArray
 from uvms_control.core.errors import ControlInputError
-from uvms_control.core.unified_controller import ControllerResult
+from uvms_control.core.law.unified_controller import ControllerResult
 
 _STATE_FIELDS = ('weight', 'phase', 'contact_force', 'desired_force', 'position',
                  'desired_position', 'velocity', 'desired_velocity', 'normal_velocity',

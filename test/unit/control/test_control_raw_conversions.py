@@ -15,7 +15,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from uvms_control.core.errors import ControlInputError
-from uvms_control.core.unified_controller import ControllerResult, Phase
+from uvms_control.core.law.unified_controller import ControllerResult, Phase
 from uvms_thrusters.allocation import AllocationResult, AllocatorOutput
 from uvms_thrusters.errors import ThrusterInputError
 

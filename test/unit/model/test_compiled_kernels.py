@@ -22,7 +22,7 @@ PROBE = textwrap.dedent("""
     import numpy as np
     from uvms_model import UvmsModel
     from uvms_control.core.parameters import ControllerParameters
-    from uvms_control.core.unified_controller import UnifiedForceController
+    from uvms_control.core.law.unified_controller import UnifiedForceController
     from uvms_model.integration import rk4_stage_input
     from uvms_model.thrusters import ThrusterLayout
     from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
