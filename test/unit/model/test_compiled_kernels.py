@@ -59,7 +59,10 @@ PROBE = textwrap.dedent("""
 
 def probe(no_jit: bool) -> tuple[np.ndarray, bool]:
     """The probe's values and whether its kernels were compiled, from a child process."""
-    env = {**os.environ, 'UVMS_NO_JIT': '1' if no_jit else '0'}
+    # The child imports the modules this test does (pytest's pythonpath: the checkout's
+    # sources), not whatever an editable install of another checkout puts on its path.
+    env = {**os.environ, 'UVMS_NO_JIT': '1' if no_jit else '0',
+           'PYTHONPATH': os.pathsep.join(sys.path)}
     process = subprocess.run([sys.executable, '-c', PROBE], capture_output=True, text=True,
                              env=env, timeout=120)
     assert process.returncode == 0, process.stderr
