@@ -5,7 +5,7 @@ of several rounds (microseconds per call) of ``uvms_model.UvmsModel`` and of the
 pure-Python implementation (``test/unit/model/reference_model.py``, the tests' oracle), in
 the same run, and their ratio: mass matrix, bias, forward dynamics, one RK4 step, the
 controller's model set, one controller step (the same control law on either model) and one
-allocator step (the previous numpy allocator, ``test/unit/control/reference_allocator.py``);
+allocator step (the previous numpy allocator, ``test/unit/thrusters/reference_allocator.py``);
 then Pinocchio's plain ABA for scale. Targets (issue 10): an RK4 step of the full model and a
 controller step at most 40 us each. The machine is shared: figures move with its load,
 ratios much less. A benchmark prints figures; it never asserts on time.
