@@ -23,17 +23,18 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model'):
+for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'src/uvms_thrusters',
+               'test/unit/model'):
     sys.path.insert(0, str(ROOT / folder))
 
 from reference_model import ReferenceModel  # noqa: E402
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
-from uvms_control.core.fuzzy_switch import FuzzySwitch  # noqa: E402
+from uvms_control.core.law.fuzzy_switch import FuzzySwitch  # noqa: E402
+from uvms_control.core.law.task_space import task_space_model_from_terms  # noqa: E402
+from uvms_control.core.law.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
-from uvms_control.core.task_space import task_space_model_from_terms  # noqa: E402
-from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters  # noqa: E402
-from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_thrusters.thruster_dynamics import ThrusterBank, ThrusterModelParameters  # noqa: E402
 
 from uvms_model import UvmsModel  # noqa: E402
 

@@ -34,6 +34,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 for package in ('uvms_common', 'uvms_description', 'uvms_model', 'uvms_sim', 'uvms_control',
+                'uvms_thrusters',
                 'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 

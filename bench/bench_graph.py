@@ -65,7 +65,8 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup'):
+for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_thrusters',
+                'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 
 from bench_middleware_floor import run_floor  # noqa: E402
@@ -82,18 +83,13 @@ from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noq
 from uvms_common.robot_parameters import robot_model_values  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.controller_node import safety_limits  # noqa: E402
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
-from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS  # noqa: E402
+from uvms_control.core.law.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_control.core.parameter_specs import (  # noqa: E402
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )
-from uvms_control.core.parameters import (  # noqa: E402
-    ControllerParameters,
-    thruster_parameters_from_flat_dict,
-)
-from uvms_control.core.task_supervisor import TaskSupervisor  # noqa: E402
-from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
+from uvms_control.core.parameters import ControllerParameters  # noqa: E402
+from uvms_control.core.task.task_supervisor import TaskSupervisor  # noqa: E402
 from uvms_control.task_conversions import contact_task_goal  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402
@@ -105,6 +101,9 @@ from uvms_sim.parameters import (  # noqa: E402
 from uvms_sim.plant import Plant, initial_coordinates  # noqa: E402
 from uvms_tasks.goals import goal_from_task  # noqa: E402
 from uvms_tasks.task_file import TaskSpec  # noqa: E402
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_thrusters.parameter_specs import ALLOCATOR_PARAMETER_SPECS  # noqa: E402
+from uvms_thrusters.parameters import thruster_parameters_from_flat_dict  # noqa: E402
 
 from uvms_model import (  # noqa: E402
     PARAMETER_SPECS,

@@ -5,7 +5,7 @@ of several rounds (microseconds per call) of ``uvms_model.UvmsModel`` and of the
 pure-Python implementation (``test/unit/model/reference_model.py``, the tests' oracle), in
 the same run, and their ratio: mass matrix, bias, forward dynamics, one RK4 step, the
 controller's model set, one controller step (the same control law on either model) and one
-allocator step (the previous numpy allocator, ``test/unit/control/reference_allocator.py``);
+allocator step (the previous numpy allocator, ``test/unit/thrusters/reference_allocator.py``);
 then Pinocchio's plain ABA for scale. Targets (issue 10): an RK4 step of the full model and a
 controller step at most 40 us each. The machine is shared: figures move with its load,
 ratios much less. A benchmark prints figures; it never asserts on time.
@@ -25,17 +25,18 @@ import numpy as np
 import pinocchio as pin
 
 ROOT = Path(__file__).resolve().parents[1]
-for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'test/unit/model',
-               'test/unit/control'):
+for folder in ('src/uvms_description', 'src/uvms_model', 'src/uvms_control', 'src/uvms_thrusters',
+               'test/unit/model',
+               'test/unit/control', 'test/unit/thrusters'):
     sys.path.insert(0, str(ROOT / folder))
 
 from reference_allocator import ReferenceAllocator  # noqa: E402
 from reference_model import ReferenceModel  # noqa: E402
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
+from uvms_control.core.law.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_control.core.parameter_specs import CONTROLLER_PARAMETER_SPECS  # noqa: E402
 from uvms_control.core.parameters import ControllerParameters  # noqa: E402
-from uvms_control.core.unified_controller import UnifiedForceController  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator  # noqa: E402
 
 from uvms_description.robots import (  # noqa: E402
     RobotFolderError,

@@ -49,7 +49,8 @@ from typing import Any
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup'):
+for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_thrusters',
+                'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 
 from uvms_bringup.launch_helpers import (  # noqa: E402

@@ -40,7 +40,8 @@ from typing import IO
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO_DIR = REPO / 'config' / 'scenarios'
 SOURCES = [str(REPO / 'src' / package) for package in
-           ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_bringup')]
+           ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_thrusters',
+            'uvms_bringup')]
 sys.path.insert(0, SOURCES[0])
 
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402

@@ -3,7 +3,7 @@
 Usage: ``.venv/bin/python tools/t200_step_response.py [--step N ...] [--plot FILE.png]``
 
 The stack's thruster model (Healey et al. 1995, paper eq. 11-15, ``ThrusterBank`` of
-``uvms_control.core.thruster_dynamics``) runs with the constants of
+``uvms_thrusters.thruster_dynamics``) runs with the constants of
 ``robots/bluerov2_alpha5/thrusters.yaml`` from rest under a step of the desired thrust. Beside
 it, von Benzon et al. 2022 (J. Mar. Sci. Eng. 10, 1898) identified the T200's thrust dynamics
 as the unit-gain transfer function
@@ -30,16 +30,13 @@ import yaml
 from scipy import signal
 
 REPO = Path(__file__).resolve().parent.parent
-for _package in ('uvms_control', 'uvms_model'):
+for _package in ('uvms_control', 'uvms_thrusters', 'uvms_model'):
     _source = REPO / 'src' / _package
     if str(_source) not in sys.path:
         sys.path.insert(0, str(_source))
 
-from uvms_control.core.parameters import thruster_parameters_from_flat_dict  # noqa: E402
-from uvms_control.core.thruster_dynamics import (  # noqa: E402
-    ThrusterBank,
-    ThrusterModelParameters,
-)
+from uvms_thrusters.parameters import thruster_parameters_from_flat_dict  # noqa: E402
+from uvms_thrusters.thruster_dynamics import ThrusterBank, ThrusterModelParameters  # noqa: E402
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -60,15 +60,14 @@ setup(
     maintainer='UVMS developers',
     maintainer_email='dev@uvms.local',
     description=(
-        'Unified force controller (impedance + hybrid position/force, fuzzy switching) and '
-        'thruster allocation with thruster dynamics, as pure cores and ROS 2 nodes.'
+        'Unified force controller (impedance + hybrid position/force, fuzzy switching) and its '
+        'contact tasks, as pure cores and a ROS 2 node.'
     ),
     license='Apache-2.0',
     cmdclass={'install': InstallWithKernels, 'develop': DevelopWithKernels},
     entry_points={
         'console_scripts': [
             'controller = uvms_control.entry_points:controller',
-            'thruster_allocator = uvms_control.entry_points:thruster_allocator',
         ],
     },
 )

@@ -22,8 +22,8 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Header
 from uvms_common.lifecycle import state_label
 from uvms_common.node_main import make_executor
-from uvms_control.core.errors import ControlParameterError
-from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
+from uvms_thrusters.errors import ThrusterParameterError
+from uvms_thrusters.thruster_allocator_node import ThrusterAllocatorNode
 
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterState
 
@@ -281,7 +281,7 @@ def test_an_invalid_parameter_fails_configure_and_is_logged(
 
 def test_an_invalid_parameter_under_autostart_stops_the_node(graph: Graph) -> None:
     """Autostart raises the configure error from the constructor, as before the lifecycle."""
-    with pytest.raises(ControlParameterError, match=r'allocator\.max_joint_torque_n_m'):
+    with pytest.raises(ThrusterParameterError, match=r'allocator\.max_joint_torque_n_m'):
         graph.allocator(**{'allocator.max_joint_torque_n_m': [1.0, 2.0]})
 
 

@@ -24,7 +24,8 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 from uvms_control.controller_node import ControllerNode
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
+from uvms_thrusters.errors import ThrusterParameterError
+from uvms_thrusters.thruster_allocator_node import ThrusterAllocatorNode
 
 from uvms_model import UvmsModel
 from uvms_msgs.msg import ActuatorCommand, ControllerState, GeneralizedForce, ThrusterState
@@ -542,13 +543,13 @@ def test_timer_allocator_zeroes_a_stale_command(harness: Harness) -> None:
 
 def test_too_small_current_limit_stops_the_allocator(harness: Harness) -> None:
     """A motor current limit that cannot hold the thrust limit raises, naming the parameter."""
-    with pytest.raises(ControlParameterError, match=r'thruster\.max_motor_current_a'):
+    with pytest.raises(ThrusterParameterError, match=r'thruster\.max_motor_current_a'):
         harness.add(ThrusterAllocatorNode, **{'thruster.max_motor_current_a': 5.0})
 
 
 def test_wrong_parameter_type_stops_the_allocator(harness: Harness) -> None:
     """An integer where a double is declared is a start-up error naming the parameter."""
-    with pytest.raises(ControlParameterError, match=r'thruster\.propeller_diameter_m'):
+    with pytest.raises(ThrusterParameterError, match=r'thruster\.propeller_diameter_m'):
         harness.add(ThrusterAllocatorNode, **{'thruster.propeller_diameter_m': 1})
 
 

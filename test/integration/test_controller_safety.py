@@ -22,7 +22,7 @@ from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from test_control_nodes import ARM, MS, Harness, set_sim_time, stamp_ns, tau_of
 from uvms_control.controller_node import ControllerNode
-from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
+from uvms_thrusters.thruster_allocator_node import ThrusterAllocatorNode
 
 from uvms_model import UvmsModel
 from uvms_msgs.action import ContactTask

@@ -70,7 +70,7 @@ def test_node_actions_take_package_and_executable_from_the_graph_spec() -> None:
     ('name', 'package', 'executable'),
     [('simulator', 'uvms_sim', 'simulator'),
      ('controller', 'uvms_control', 'controller'),
-     ('thruster_allocator', 'uvms_control', 'thruster_allocator'),
+     ('thruster_allocator', 'uvms_thrusters', 'thruster_allocator'),
      ('recorder', 'uvms_recording', 'recorder'),
      ('visualizer', 'uvms_viz', 'visualizer'),
      ('foxglove_server', 'uvms_viz', 'foxglove_server')],

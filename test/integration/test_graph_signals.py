@@ -19,7 +19,8 @@ from mcap.stream_reader import StreamReader
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
-           ('uvms_common', 'uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control')]
+           ('uvms_common', 'uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control',
+            'uvms_thrusters')]
 
 
 def start_cli(*args: str) -> subprocess.Popen[str]:

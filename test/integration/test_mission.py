@@ -18,7 +18,7 @@ from rclpy.context import Context
 from rclpy.node import Node
 from uvms_common.node_main import make_executor
 from uvms_common.stop_event import StopEvent
-from uvms_control.core.reference import HalfCircleReference
+from uvms_control.core.law.reference import HalfCircleReference
 from uvms_tasks.client import ContactTaskClient
 from uvms_tasks.goals import goal_from_task, goal_waypoints
 from uvms_tasks.mission_node import MissionNode, mission_goal_uuid

@@ -33,7 +33,8 @@ from uvms_recording import replay, rerun
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in
-           ('uvms_common', 'uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control')]
+           ('uvms_common', 'uvms_bringup', 'uvms_model', 'uvms_sim', 'uvms_control',
+            'uvms_thrusters')]
 
 
 def _start_recorder(*parameters: str) -> subprocess.Popen[str]:

@@ -15,7 +15,7 @@ import rclpy
 from rclpy.context import Context
 from rclpy.parameter import Parameter
 from uvms_common.robot_parameters import RobotParameterError
-from uvms_control.thruster_allocator_node import ThrusterAllocatorNode
+from uvms_thrusters.thruster_allocator_node import ThrusterAllocatorNode
 
 import uvms_description
 

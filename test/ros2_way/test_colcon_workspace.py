@@ -49,7 +49,7 @@ REPO = Path(__file__).resolve().parents[2]
 #: The packages of src/, each built by colcon (interfaces/tf2_msgs carries a COLCON_IGNORE).
 PACKAGES = ('uvms_analysis', 'uvms_bringup', 'uvms_cli', 'uvms_common', 'uvms_control',
             'uvms_description', 'uvms_model', 'uvms_msgs', 'uvms_recording', 'uvms_sim',
-            'uvms_navigation', 'uvms_sweep', 'uvms_tasks', 'uvms_viz')
+            'uvms_navigation', 'uvms_sweep', 'uvms_tasks', 'uvms_thrusters', 'uvms_viz')
 #: Longest time the build may take (s); the packages build in about 40 s on 2 cores.
 BUILD_TIMEOUT_S = 600.0
 #: colcon on this interpreter (as the venv's ``colcon`` script would): colcon runs setup.py
@@ -60,7 +60,7 @@ COLCON = (sys.executable, '-c',
 EXECUTABLES = (
     ('uvms_sim', 'simulator'),
     ('uvms_control', 'controller'),
-    ('uvms_control', 'thruster_allocator'),
+    ('uvms_thrusters', 'thruster_allocator'),
     ('uvms_recording', 'recorder'),
     ('uvms_viz', 'visualizer'),
     ('uvms_viz', 'foxglove_server'),
@@ -216,7 +216,7 @@ def node_command(workspace: Workspace, name: str, recording: Path) -> list[str]:
     arguments = {
         'simulator': ('uvms_sim', [*robot, '-p', 'mode:=realtime']),
         'controller': ('uvms_control', control),
-        'thruster_allocator': ('uvms_control', control),
+        'thruster_allocator': ('uvms_thrusters', control),
         'recorder': ('uvms_recording', ['-p', f'output_path:={recording}']),
     }
     package, ros_args = arguments[name]
@@ -366,7 +366,7 @@ def test_sourced_workspace_runs_its_own_packages_on_the_underlay(workspace: Work
         'modules = {name: importlib.import_module(name).__file__ for name in (',
         "    'uvms_common', 'uvms_description', 'uvms_model', 'uvms_sim', 'uvms_control',",
         "    'uvms_bringup', 'uvms_recording', 'uvms_analysis', 'uvms_viz', 'uvms_sweep',",
-        "    'uvms_cli', 'uvms_navigation',",
+        "    'uvms_cli', 'uvms_navigation', 'uvms_thrusters',",
         "    'uvms_msgs.msg')}",
         "prefixes = {name: get_package_prefix(name) for name in ('uvms_bringup', 'uvms_msgs',",
         "                                                        'rclpy')}",
@@ -398,11 +398,14 @@ def test_build_compiles_the_kernels_of_the_installed_packages(workspace: Workspa
     Numba keys its cache by the module's path, so the copies in install/ need caches of their
     own; the build fills them before any node started (this test runs before the graph).
     """
-    for package, folder in (('uvms_model', 'uvms_model'), ('uvms_control', 'uvms_control/core')):
+    for package, folder in (('uvms_model', 'uvms_model'),
+                            ('uvms_control', 'uvms_control/core/law'),
+                            ('uvms_thrusters', 'uvms_thrusters')):
         lib = next((workspace.install / package / 'lib').glob('python3*/site-packages'))
         indexes = list((lib / folder / '__pycache__').glob('*.nbi'))
         assert indexes, f'no Numba cache under {lib / folder}'
     assert 'uvms_control: kernels compiled and cached' in workspace.build_output
+    assert 'uvms_thrusters: kernels compiled and cached' in workspace.build_output
 
 
 def test_installed_controller_publishes_within_5_s_of_its_first_start(

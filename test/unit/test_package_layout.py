@@ -119,3 +119,60 @@ def test_test_modules_have_unique_basenames() -> None:
             clashes.append((seen[path.name], path))
         seen.setdefault(path.name, path)
     assert not clashes, f'test modules with the same basename: {clashes}'
+
+
+#: The pure cores of uvms_control: ``law`` and ``task`` sub-packages over shared modules.
+CONTROL_CORE = SRC / 'uvms_control' / 'uvms_control' / 'core'
+#: What each part of ``uvms_control.core`` may import of the others: task -> law -> shared.
+CORE_ALLOWED = {'shared': set(), 'law': {'shared'}, 'task': {'shared', 'law'}}
+#: The one import of uvms_thrusters in uvms_control: the controller reads thrusters/health.
+CONTROL_READS_THRUSTERS = {
+    'uvms_control/health_conversions.py': {'uvms_thrusters.health_conversions'},
+}
+
+
+def imported_modules(path: Path) -> set[str]:
+    """Every absolute module a file imports (``from a.b import c`` also counts ``a.b.c``)."""
+    modules = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            modules.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            modules.add(node.module)
+            modules.update(f'{node.module}.{alias.name}' for alias in node.names)
+    return modules
+
+
+def core_part(module: str) -> str | None:
+    """'law', 'task' or 'shared' for a module of uvms_control.core, else None."""
+    parts = module.split('.')
+    if parts[:2] != ['uvms_control', 'core'] or len(parts) < 3:
+        return None
+    return parts[2] if parts[2] in ('law', 'task') else 'shared'
+
+
+def test_control_core_parts_import_downwards_only() -> None:
+    """core.task imports core.law, core.law never core.task, the shared modules neither."""
+    wrong = []
+    for path in sorted(CONTROL_CORE.rglob('*.py')):
+        relative = path.relative_to(CONTROL_CORE).parts
+        part = relative[0] if len(relative) > 1 else 'shared'
+        for module in imported_modules(path):
+            target = core_part(module)
+            if target is not None and target != part and target not in CORE_ALLOWED[part]:
+                wrong.append(f'{path.relative_to(SRC)} ({part}) imports {module} ({target})')
+    assert not wrong, wrong
+
+
+def test_control_and_thrusters_import_each_other_only_for_the_health_reading() -> None:
+    """uvms_thrusters imports no uvms_control; uvms_control only the health topic's module."""
+    wrong = [f'{path.relative_to(SRC)} imports uvms_control'
+             for path in python_files('uvms_thrusters')
+             if 'uvms_control' in imported_uvms_packages(path)]
+    for path in python_files('uvms_control'):
+        name = str(path.relative_to(SRC / 'uvms_control'))
+        used = {m for m in imported_modules(path) if m.split('.')[0] == 'uvms_thrusters'}
+        allowed = CONTROL_READS_THRUSTERS.get(name, set())
+        wrong.extend(f'{name} imports {module}' for module in sorted(used)
+                     if not any(module == a or module.startswith(f'{a}.') for a in allowed))
+    assert not wrong, wrong

@@ -15,6 +15,13 @@ PURE_MODULES = sorted(
         *(SRC / 'uvms_model' / 'uvms_model').rglob('*.py'),
         *(SRC / 'uvms_control' / 'uvms_control' / 'core').rglob('*.py'),
         *(
+            SRC / 'uvms_thrusters' / 'uvms_thrusters' / f'{name}.py'
+            for name in ('allocation', 'errors', 'fault_detection', 'fault_parameters',
+                         'parameter_specs', 'parameters', 'thruster_dynamics',
+                         'thruster_faults', 'thruster_kernels')
+        ),
+        SRC / 'uvms_common' / 'uvms_common' / 'parameter_spec.py',
+        *(
             path
             for path in (SRC / 'uvms_sim' / 'uvms_sim').rglob('*.py')
             if not path.name.endswith('_node.py')
@@ -48,7 +55,8 @@ def imported_roots(path: Path) -> set[str]:
 def test_pure_core_modules_exist() -> None:
     """The model and controller cores are where the layout says they are."""
     names = {path.relative_to(SRC).parts[0] for path in PURE_MODULES if path.exists()}
-    assert {'uvms_model', 'uvms_control', 'uvms_sim', 'uvms_analysis', 'uvms_recording'} <= names
+    assert {'uvms_model', 'uvms_control', 'uvms_thrusters', 'uvms_sim', 'uvms_analysis',
+            'uvms_recording'} <= names
 
 
 @pytest.mark.parametrize('path', PURE_MODULES, ids=lambda p: str(p.relative_to(SRC)))

@@ -14,12 +14,12 @@ from uvms_analysis.figure_style import FIGSIZE_TALL, _figure, _save
 
 if TYPE_CHECKING:
     from uvms_control.core.fuzzy_sets import Trapezoid
-    from uvms_control.core.fuzzy_switch import FuzzySwitch
+    from uvms_control.core.law.fuzzy_switch import FuzzySwitch
 
 
 def _default_switch() -> FuzzySwitch:
     """The controller's fuzzy switch with its default parameters."""
-    from uvms_control.core.fuzzy_switch import FuzzySwitch
+    from uvms_control.core.law.fuzzy_switch import FuzzySwitch
 
     return FuzzySwitch()
 

@@ -1,7 +1,7 @@
 """The paper's performance metrics of a run: pure functions on numpy arrays, and RunMetrics.
 
 The metric functions are pure: numpy arrays in, numbers out. The force figures (contact time,
-peak, settling, RMS error) come from ``uvms_control.core.force_figures.force_figures``, the
+peak, settling, RMS error) come from ``uvms_control.core.task.force_figures.force_figures``, the
 function the ContactTask result uses too (re-exported here). The contact force along the wall
 normal is the x component of ``F_e`` in ``map_ned`` (the wall is a plane normal to x), signed
 so that pushing towards the desired force is positive.
@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
-from uvms_control.core.force_figures import (  # noqa: F401 (re-exported: the metric functions)
+from uvms_control.core.task.force_figures import (  # noqa: F401 (re-exported: the metric functions)
     IMPACT_WINDOW_S,
     SETTLING_BAND,
     SETTLING_MIN_HOLD_S,

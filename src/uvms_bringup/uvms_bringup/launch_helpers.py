@@ -72,8 +72,8 @@ CONTROLLER = NodeSpec(
     'ControllerNode', ('robot.yaml', 'controller.yaml'), takes_robot=True,
 )
 THRUSTER_ALLOCATOR = NodeSpec(
-    'thruster_allocator', 'uvms_control', 'thruster_allocator',
-    'uvms_control.thruster_allocator_node', 'ThrusterAllocatorNode',
+    'thruster_allocator', 'uvms_thrusters', 'thruster_allocator',
+    'uvms_thrusters.thruster_allocator_node', 'ThrusterAllocatorNode',
     ('robot.yaml', 'controller.yaml'), takes_robot=True,
 )
 VISUALIZER = NodeSpec(

@@ -50,10 +50,10 @@ from typing import Any, TypeAlias
 
 import numpy as np
 import yaml
-from uvms_control.core.thruster_faults import PARAMETER as FAULT_PARAMETER
-from uvms_control.core.thruster_faults import check_fault, format_faults
 from uvms_tasks.errors import TaskFileError
 from uvms_tasks.task_file import TaskSpec, Yaml12Loader, parse_mission
+from uvms_thrusters.thruster_faults import PARAMETER as FAULT_PARAMETER
+from uvms_thrusters.thruster_faults import check_fault, format_faults
 
 #: A ROS 2 parameter value as a scenario may give it.
 ParameterValue: TypeAlias = (

@@ -43,26 +43,26 @@ from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
 from uvms_common.raw_clock import take_clock_raw
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
+from uvms_common.unconfigured import answer_while_unconfigured, controller_zero_answer
 
 from uvms_common import robot_parameters as robots
 from uvms_control import raw_conversions, task_conversions
 from uvms_control.controller_reports import ControllerReports
 from uvms_control.controller_safety import ControllerSafety, safety_limits
-from uvms_control.core.contact_task import TaskCode, TaskGoalError
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameter_specs import (
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )
 from uvms_control.core.parameters import ControllerParameters, topic_for, validate_node_parameters
-from uvms_control.core.task_supervisor import TaskSupervisor
-from uvms_control.core.unified_controller import UnifiedForceController
+from uvms_control.core.task.contact_task import TaskCode, TaskGoalError
+from uvms_control.core.task.task_supervisor import TaskSupervisor
 from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
 from uvms_control.pending_stamps import Input, PendingStamps
 from uvms_control.ros_parameters import declare_parameters
 from uvms_control.task_server import ContactTaskServer
-from uvms_control.unconfigured import answer_while_unconfigured, controller_zero_answer
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ControllerState, GeneralizedForce
 

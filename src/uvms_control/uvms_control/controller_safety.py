@@ -16,9 +16,9 @@ from typing import Any
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.parameter import Parameter
 
-from uvms_control.core.contact_task import SafetyLimits, TaskCode
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.parameters import ControllerParameters
+from uvms_control.core.task.contact_task import SafetyLimits, TaskCode
 from uvms_control.node_safety import AllocatorWatch, guarded
 
 

@@ -1,10 +1,11 @@
-"""Messages to numpy and back for the controller and allocator nodes (the only such place).
+"""Messages to numpy and back for the controller node (the only such place).
 
 Frames: vehicle pose in ``map_ned`` (NED, z down), vehicle twist in ``base_link_frd``, the
 wrist wrench in ``ft_sensor_link`` (axes of ``ee_link``), the generalized force command in
-``base_link_frd``. Array fields are filled with ``array.array('d')``, which the rosidl
-classes take without a per-element check. Every reader validates sizes, frames and finiteness
-and raises `ControlInputError` naming the field.
+``base_link_frd`` (the allocator's messages: ``uvms_thrusters.conversions``). Array fields are
+filled with ``array.array('d')``, which the rosidl classes take without a per-element check.
+Every reader validates sizes, frames and finiteness and raises `ControlInputError` naming the
+field.
 """
 
 from __future__ import annotations
@@ -21,10 +22,9 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Header
 
-from uvms_control.core.allocation import AllocatorOutput
 from uvms_control.core.errors import ControlInputError
-from uvms_control.core.unified_controller import ControllerResult
-from uvms_msgs.msg import ActuatorCommand, ControllerState, GeneralizedForce, ThrusterState
+from uvms_control.core.law.unified_controller import ControllerResult
+from uvms_msgs.msg import ControllerState, GeneralizedForce
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -151,10 +151,6 @@ def _set_xyz(target: Vector3 | Point, v: npt.ArrayLike) -> None:
     target.x, target.y, target.z = np.asarray(v, dtype=np.float64).tolist()
 
 
-def _floats(values: npt.ArrayLike) -> array.array[float]:
-    return array.array('d', np.asarray(values, dtype=np.float64).tolist())
-
-
 # The message builders take ``out``, a message an earlier call returned, to refill instead of
 # building a new one: rclpy serializes at publish, so a node may keep
 # one message per publisher. Frames and joint names are set when the message is built.
@@ -180,40 +176,6 @@ def generalized_force_message(
     return msg
 
 
-def generalized_force_arrays(
-    msg: GeneralizedForce, joint_names: Sequence[str]
-) -> tuple[int, FloatArray]:
-    """Stamp (ns) and tau_b (6 + n,) of a command, joint torques in the model's order.
-
-    Raises:
-        ControlInputError: for another frame, wrong joint names or sizes, non-finite values.
-    """
-    _check_frame('command header.frame_id', msg.header.frame_id, ('', BASE_LINK_FRD))
-    torques = np.asarray(msg.joint_torques, dtype=np.float64)
-    names = list(msg.joint_names)
-    n = len(joint_names)
-    if torques.size != n:
-        raise ControlInputError(
-            f'joint_torques has {torques.size} values, expected {n} ({", ".join(joint_names)})'
-        )
-    if names and names != list(joint_names):
-        if sorted(names) != sorted(joint_names):
-            raise ControlInputError(
-                f'joint_names {names} do not match the arm joints {list(joint_names)}'
-            )
-        torques = torques[[names.index(name) for name in joint_names]]
-    wrench = msg.vehicle_wrench
-    tau_b = np.empty(6 + n)
-    tau_b[:6] = (
-        wrench.force.x,
-        wrench.force.y,
-        wrench.force.z,
-        wrench.torque.x,
-        wrench.torque.y,
-        wrench.torque.z,
-    )
-    tau_b[6:] = torques
-    return stamp_ns(msg.header.stamp), _finite('generalized force', tau_b)
 
 
 def controller_state_message(
@@ -234,41 +196,4 @@ def controller_state_message(
     _set_xyz(msg.impedance_force, result.F_IP)
     _set_xyz(msg.hybrid_force, result.F_H)
     _set_xyz(msg.command_force, result.F_c)
-    return msg
-
-
-def actuator_command_message(
-    t_ns: int,
-    thrust: FloatArray,
-    joint_names: Sequence[str],
-    joint_torques: FloatArray,
-    out: ActuatorCommand | None = None,
-) -> ActuatorCommand:
-    """uvms_msgs/ActuatorCommand: actual thrusts (N) and motor torques (N m)."""
-    msg = out
-    if msg is None:
-        msg = ActuatorCommand(header=Header(frame_id=BASE_LINK_FRD))
-        msg.joint_names = list(joint_names)
-    msg.header.stamp = time_from_ns(t_ns)
-    msg.thrust = _floats(thrust)
-    msg.joint_torques = _floats(joint_torques)
-    return msg
-
-
-def thruster_state_message(
-    t_ns: int, output: AllocatorOutput, out: ThrusterState | None = None
-) -> ThrusterState:
-    """uvms_msgs/ThrusterState of one allocator step."""
-    allocation = output.allocation
-    msg = out if out is not None else ThrusterState(header=Header(frame_id=BASE_LINK_FRD))
-    msg.header.stamp = time_from_ns(t_ns)
-    msg.desired_thrust = _floats(allocation.thrust)
-    msg.actual_thrust = _floats(output.thrust)
-    msg.propeller_speed = _floats(output.propeller_speed)
-    msg.reference_speed = _floats(output.reference_speed)
-    msg.motor_current = _floats(output.motor_current)
-    achieved = np.asarray(allocation.achieved_wrench, dtype=np.float64)
-    _set_xyz(msg.achieved_wrench.force, achieved[0:3])
-    _set_xyz(msg.achieved_wrench.torque, achieved[3:6])
-    msg.saturation_scale = float(allocation.saturation_scale)
     return msg

@@ -7,7 +7,3 @@ def controller() -> None:
     """The unified force controller node (``uvms_control.controller_node``)."""
     run_node_module('uvms_control.controller_node')
 
-
-def thruster_allocator() -> None:
-    """The thruster allocator node (``uvms_control.thruster_allocator_node``)."""
-    run_node_module('uvms_control.thruster_allocator_node')

@@ -1,8 +1,9 @@
-"""Compile the controller's and allocator's Numba kernels: ``python -m uvms_control.kernel_cache``.
+"""Compile the controller's Numba kernels: ``python -m uvms_control.kernel_cache``.
 
 As ``uvms_model.kernel_cache`` for the model: run by ``setup.py install`` on the installed
 copy of the package (its cache lives beside the installed modules), so that an installed
-controller or allocator starts on machine code at its first start.
+controller starts on machine code at its first start. The allocator's are compiled by
+``uvms_thrusters.kernel_cache``.
 """
 
 from __future__ import annotations
@@ -12,16 +13,13 @@ import time
 
 import numpy as np
 from uvms_model.kernel_cache import compile_model_kernels, robot_models, warm_state
-from uvms_model.thrusters import ThrusterLayout
 
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
-from uvms_control.core.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
+from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.unified_controller import UnifiedForceController
 
 
 def compile_control_kernels() -> None:
-    """Call every controller and allocator kernel once with the types the nodes use."""
+    """Call every controller kernel once with the types the node uses."""
     for model in robot_models():
         compile_model_kernels(model)
         q, zeros = warm_state(model), np.zeros(model.n_dof)
@@ -31,12 +29,6 @@ def compile_control_kernels() -> None:
         controller = UnifiedForceController(gains, model)
         controller.step_from_sensors(0.0, q, zeros, np.zeros(3))
         controller.step(0.002, q, zeros, np.array([100.0, 0.0, 0.0]))
-        layout = ThrusterLayout.from_parameters()
-        allocator = ThrusterAllocator(AllocatorParameters(
-            layout.thrust_matrix(), layout.max_thrust_n, np.full(model.n_joints, 100.0)))
-        allocator.step(np.ones(model.n_dof), 0.002)
-        equip(allocator, fault_settings({s.name: s.default for s in FAULT_PARAMETER_SPECS},
-                                        layout.count))  # compiles the fault detector's kernel
 
 
 def main() -> int:

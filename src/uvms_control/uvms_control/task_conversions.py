@@ -9,9 +9,9 @@ import numpy as np
 from geometry_msgs.msg import Point, PointStamped, Vector3
 
 from uvms_control.conversions import stamp_ns
-from uvms_control.core.contact_task import ContactTaskGoal, TaskGoalError, TaskResult
-from uvms_control.core.task_supervisor import TaskProgress
-from uvms_control.core.unified_controller import ControllerResult
+from uvms_control.core.law.unified_controller import ControllerResult
+from uvms_control.core.task.contact_task import ContactTaskGoal, TaskGoalError, TaskResult
+from uvms_control.core.task.task_supervisor import TaskProgress
 from uvms_msgs.action import ContactTask
 from uvms_msgs.msg import ContactTaskRecord
 

@@ -24,8 +24,13 @@ from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 
-from uvms_control.core.contact_task import ContactTaskGoal, TaskCode, TaskGoalError, TaskResult
-from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
+from uvms_control.core.task.contact_task import (
+    ContactTaskGoal,
+    TaskCode,
+    TaskGoalError,
+    TaskResult,
+)
+from uvms_control.core.task.task_supervisor import TaskEvent, TaskSupervisor
 from uvms_control.health_conversions import ActuationWatch
 from uvms_control.task_conversions import (
     contact_task_feedback,

@@ -29,7 +29,7 @@ A task gives either ``path`` with ``time_from_start_s`` or ``half_circle``. The 
 starts at X0: its ``start`` when given (the controller then reaches it by a transit first,
 wherever it holds), else the controller's hold target when the goal is sent, so it becomes
 waypoints only then (``TaskSpec.expanded``): positions with their exact velocities and
-accelerations, sampled from ``uvms_control.core.reference.HalfCircleReference``. Integers
+accelerations, sampled from ``uvms_control.core.law.reference.HalfCircleReference``. Integers
 are accepted where numbers are expected; ``1e4`` reads as a number (YAML 1.2, as ROS 2
 parameter files).
 Each error is one line naming the file, the key (``mission[1].half_circle.radius_m``) and
@@ -49,7 +49,7 @@ import numpy as np
 import numpy.typing as npt
 import yaml
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.reference import HalfCircleReference
+from uvms_control.core.law.reference import HalfCircleReference
 
 from uvms_tasks.errors import TaskFileError
 

@@ -1,1 +1,5 @@
-"""Thruster allocation (eq. 10), Healey thruster dynamics (eq. 11-15) and their kernels, fault injection and detection, and the thruster_allocator node."""
+"""uvms_thrusters: thruster allocation (eq. 10), thruster dynamics (eq. 11-15), faults.
+
+The allocation and Healey thruster dynamics with their kernels, fault injection and
+detection (pure cores), and the thruster_allocator node around them.
+"""

@@ -12,7 +12,7 @@ import pytest
 from rclpy.serialization import serialize_message
 from uvms_analysis.metrics import task_metrics
 from uvms_analysis.series import load_run
-from uvms_control.core.contact_task import ContactTaskGoal, TaskCode, TaskFigures, TaskResult
+from uvms_control.core.task.contact_task import ContactTaskGoal, TaskCode, TaskFigures, TaskResult
 from uvms_control.task_conversions import contact_task_record, unit_normal
 from uvms_recording.mcap_writer import McapRecorder
 from uvms_recording.typestore import uvms_typestore

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 from uvms_bringup.scenario import ScenarioError, parse_scenario
-from uvms_control.core.thruster_faults import ThrusterFault, parse_faults
+from uvms_thrusters.thruster_faults import ThrusterFault, parse_faults
 
 PATH = Path('x.yaml')
 

@@ -7,10 +7,10 @@ wall normal to map_ned +x (no friction), read by an ideal wrist sensor (ee axes)
 from __future__ import annotations
 
 import numpy as np
-from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits
+from uvms_control.core.law.unified_controller import ControllerResult, UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.task_supervisor import TaskEvent, TaskSupervisor
-from uvms_control.core.unified_controller import ControllerResult, UnifiedForceController
+from uvms_control.core.task.contact_task import ContactTaskGoal, SafetyLimits
+from uvms_control.core.task.task_supervisor import TaskEvent, TaskSupervisor
 
 from uvms_model import UvmsModel
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.unified_controller import UnifiedForceController
 
 from uvms_model import UvmsModel
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from uvms_control.core.contact_task import (
+from uvms_control.core.task.contact_task import (
     ContactTaskGoal,
     SafetyLimits,
     TaskCode,

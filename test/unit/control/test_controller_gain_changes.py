@@ -10,11 +10,11 @@ from typing import Any
 
 import numpy as np
 import pytest
-from uvms_control.core.contact_task import ContactTaskGoal
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.gain_ramp import GAIN_RAMP_PERIODS
+from uvms_control.core.law.gain_ramp import GAIN_RAMP_PERIODS
+from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.unified_controller import UnifiedForceController
+from uvms_control.core.task.contact_task import ContactTaskGoal
 
 from uvms_model import UvmsModel
 

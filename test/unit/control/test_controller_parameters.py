@@ -7,25 +7,21 @@ import re
 
 import numpy as np
 import pytest
-from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
-from uvms_control.core.contact_task import (
-    ContactTaskGoal,
-    SafetyLimits,
-    TaskGoalError,
-    validate_goal,
-)
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.parameter_specs import (
     CONTROLLER_NODE_PARAMETER_SPECS,
     CONTROLLER_PARAMETER_SPECS,
     SAFETY_PARAMETER_SPECS,
 )
-from uvms_control.core.parameters import (
-    ControllerParameters,
-    spd_matrix,
-    thruster_parameters_from_flat_dict,
-    validate_node_parameters,
+from uvms_control.core.parameters import ControllerParameters, spd_matrix, validate_node_parameters
+from uvms_control.core.task.contact_task import (
+    ContactTaskGoal,
+    SafetyLimits,
+    TaskGoalError,
+    validate_goal,
 )
+from uvms_thrusters.parameter_specs import ALLOCATOR_PARAMETER_SPECS
+from uvms_thrusters.parameters import thruster_parameters_from_flat_dict
 
 
 def test_defaults_are_valid() -> None:

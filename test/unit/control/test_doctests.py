@@ -8,19 +8,19 @@ import importlib
 import pytest
 
 MODULES = [
-    'uvms_control.core.allocation',
-    'uvms_control.core.fault_detection',
-    'uvms_control.core.thruster_faults',
-    'uvms_control.core.filters',
-    'uvms_control.core.force_figures',
+    'uvms_thrusters.allocation',
+    'uvms_thrusters.fault_detection',
+    'uvms_thrusters.thruster_faults',
+    'uvms_control.core.law.filters',
+    'uvms_control.core.task.force_figures',
     'uvms_control.core.fuzzy_sets',
-    'uvms_control.core.fuzzy_switch',
-    'uvms_control.core.hybrid',
-    'uvms_control.core.impedance',
-    'uvms_control.core.reference',
-    'uvms_control.core.task_space',
-    'uvms_control.core.thruster_dynamics',
-    'uvms_control.core.unified_controller',
+    'uvms_control.core.law.fuzzy_switch',
+    'uvms_control.core.law.hybrid',
+    'uvms_control.core.law.impedance',
+    'uvms_control.core.law.reference',
+    'uvms_control.core.law.task_space',
+    'uvms_thrusters.thruster_dynamics',
+    'uvms_control.core.law.unified_controller',
 ]
 
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from uvms_control.core.filters import DirtyDerivative
+from uvms_control.core.law.filters import DirtyDerivative
 
 
 def test_dirty_derivative_of_a_ramp_converges_to_its_slope() -> None:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.fuzzy_sets import FuzzySwitchParameters, Trapezoid
-from uvms_control.core.fuzzy_switch import FuzzySwitch
+from uvms_control.core.law.fuzzy_switch import FuzzySwitch
 
 RATIOS = np.linspace(-0.2, 1.6, 361)
 VELOCITIES = np.linspace(-0.3, 0.4, 281)

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 import yaml
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.gain_stability import (
+from uvms_control.core.law.gain_stability import (
     check_gain_stability,
     loop_radii,
     null_space_radius,
     spectral_radius,
 )
+from uvms_control.core.law.task_space import task_space_model_from_terms
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.task_space import task_space_model_from_terms
 
 from uvms_model import UvmsModel
 

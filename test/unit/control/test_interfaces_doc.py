@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from uvms_control.core.contact_task import TaskCode
 from uvms_control.core.parameter_specs import CONTROLLER_PARAMETER_SPECS, SAFETY_PARAMETER_SPECS
+from uvms_control.core.task.contact_task import TaskCode
 
 DOC = (Path(__file__).resolve().parents[3] / 'docs' / 'interfaces.md').read_text()
 RUNTIME = [spec.name for spec in [*CONTROLLER_PARAMETER_SPECS, *SAFETY_PARAMETER_SPECS]

@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.reference import (
+from uvms_control.core.law.reference import (
     ForcePhase,
     ForceSetpoint,
     HalfCircleReference,

@@ -34,8 +34,8 @@ from closed_loop_plant import X_A, Loop
 from hypothesis import HealthCheck, Phase, event, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, rule
-from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
-from uvms_control.core.task_supervisor import SupervisorState, TaskEvent, with_limits
+from uvms_control.core.task.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.task.task_supervisor import SupervisorState, TaskEvent, with_limits
 
 DT = 0.01  # control period (s)
 THRESHOLD_N = 5.0  # the paper robot's force.contact_threshold_n
@@ -274,7 +274,7 @@ def _inactive() -> TaskResultLike:
 
 
 # The result type itself: the task server answers a goal to an inactive node with it.
-from uvms_control.core.contact_task import TaskResult as TaskResultLike  # noqa: E402
+from uvms_control.core.task.contact_task import TaskResult as TaskResultLike  # noqa: E402
 
 SupervisorInClosedLoop.TestCase.settings = PROFILE
 TestSupervisorInClosedLoop = SupervisorInClosedLoop.TestCase

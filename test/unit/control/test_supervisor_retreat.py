@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 from closed_loop_plant import X_A, Loop
-from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.law.unified_controller import ControllerResult, UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.task_supervisor import SupervisorState, TaskEvent, TaskSupervisor
-from uvms_control.core.unified_controller import ControllerResult, UnifiedForceController
+from uvms_control.core.task.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.task.task_supervisor import SupervisorState, TaskEvent, TaskSupervisor
 
 from uvms_model import UvmsModel
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uvms_control.core.reference import HalfCircleReference
-from uvms_control.core.task_path import TaskPath
+from uvms_control.core.law.reference import HalfCircleReference
+from uvms_control.core.law.task_path import TaskPath
 
 H = 1e-4  # finite-difference step (s)
 

@@ -6,10 +6,10 @@ import itertools
 
 import numpy as np
 import pytest
-from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.law.unified_controller import ControllerResult, UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.task_supervisor import TaskEvent, TaskState, TaskSupervisor
-from uvms_control.core.unified_controller import ControllerResult, UnifiedForceController
+from uvms_control.core.task.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.task.task_supervisor import TaskEvent, TaskState, TaskSupervisor
 
 from uvms_model import UvmsModel
 

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from uvms_control.core.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.task_supervisor import TaskSupervisor
-from uvms_control.core.unified_controller import UnifiedForceController
+from uvms_control.core.task.contact_task import ContactTaskGoal, SafetyLimits, TaskCode
+from uvms_control.core.task.task_supervisor import TaskSupervisor
 
 from uvms_model import UvmsModel
 

@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 import pytest
-from uvms_control.core.contact_task import ContactTaskGoal
 from uvms_control.core.errors import ControlInputError
+from uvms_control.core.law.reference import ForcePhase, HalfCircleReference
+from uvms_control.core.law.unified_controller import Phase, UnifiedForceController
 from uvms_control.core.parameters import ControllerParameters
-from uvms_control.core.reference import ForcePhase, HalfCircleReference
-from uvms_control.core.unified_controller import Phase, UnifiedForceController
+from uvms_control.core.task.contact_task import ContactTaskGoal
 
 from uvms_model import UvmsModel
 

@@ -22,10 +22,10 @@ PROBE = textwrap.dedent("""
     import numpy as np
     from uvms_model import UvmsModel
     from uvms_control.core.parameters import ControllerParameters
-    from uvms_control.core.unified_controller import UnifiedForceController
+    from uvms_control.core.law.unified_controller import UnifiedForceController
     from uvms_model.integration import rk4_stage_input
     from uvms_model.thrusters import ThrusterLayout
-    from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
+    from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
 
     rng = np.random.default_rng(3)
     model = UvmsModel()
@@ -50,7 +50,7 @@ PROBE = textwrap.dedent("""
                 *terms.J_dot_q_dot, *result.tau_b, result.W, *output.thrust,
                 *output.joint_torques, *output.propeller_speed, *output.motor_current,
                 output.allocation.saturation_scale, output.allocation.joint_scale]
-    from uvms_control.core.thruster_kernels import euler_step_bank
+    from uvms_thrusters.thruster_kernels import euler_step_bank
     compiled = hasattr(rk4_stage_input, 'py_func') and hasattr(euler_step_bank, 'py_func')
     json.dump({'values': out, 'compiled': compiled},
               sys.stdout)
@@ -59,7 +59,10 @@ PROBE = textwrap.dedent("""
 
 def probe(no_jit: bool) -> tuple[np.ndarray, bool]:
     """The probe's values and whether its kernels were compiled, from a child process."""
-    env = {**os.environ, 'UVMS_NO_JIT': '1' if no_jit else '0'}
+    # The child imports the modules this test does (pytest's pythonpath: the checkout's
+    # sources), not whatever an editable install of another checkout puts on its path.
+    env = {**os.environ, 'UVMS_NO_JIT': '1' if no_jit else '0',
+           'PYTHONPATH': os.pathsep.join(sys.path)}
     process = subprocess.run([sys.executable, '-c', PROBE], capture_output=True, text=True,
                              env=env, timeout=120)
     assert process.returncode == 0, process.stderr

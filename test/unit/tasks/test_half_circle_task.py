@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uvms_control.core.reference import HalfCircleReference
+from uvms_control.core.law.reference import HalfCircleReference
 from uvms_tasks.task_file import HalfCircle, parse_task_document
 
 X0S = [(1.6, 0.0, 0.2), (0.0, 0.0, 0.0), (-2.0, 3.5, 10.0)]

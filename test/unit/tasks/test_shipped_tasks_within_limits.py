@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from uvms_control.core.contact_task import (
+from uvms_control.core.task.contact_task import (
     ContactTaskGoal,
     SafetyLimits,
     planned_goal,

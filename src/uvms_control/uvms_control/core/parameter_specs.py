@@ -1,27 +1,13 @@
 """ROS parameter specs of the controller: names, defaults, units, ranges.
 
-The thruster allocator's are in ``allocator_parameter_specs``.
+The thruster allocator's are in ``uvms_thrusters.parameter_specs``; `ParameterSpec` and the
+allocator's TRIGGER_MODES in ``uvms_common.parameter_spec``.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from uvms_common.parameter_spec import TRIGGER_MODES, ParameterSpec
 
-ParameterValue = float | int | bool | str | list[float]
-
-
-class ParameterSpec(NamedTuple):
-    """One ROS parameter: name, default, description with unit, range, read-only flag."""
-
-    name: str
-    default: ParameterValue
-    description: str
-    min_value: float | None = None
-    max_value: float | None = None
-    read_only: bool = True
-
-
-TRIGGER_MODES = ('lockstep', 'timer')
 #: The controller's trigger modes: the allocator's and 'odometry' (a step per vehicle state).
 CONTROLLER_TRIGGER_MODES = (*TRIGGER_MODES, 'odometry')
 STATE_SOURCES = ('truth', 'estimate')

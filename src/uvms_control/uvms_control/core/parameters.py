@@ -1,4 +1,4 @@
-"""Validated parameters of the controller and the allocator, checked against their specs.
+"""Validated parameters of the controller, checked against their specs.
 
 Each ``*_PARAMETER_SPECS`` list of `uvms_control.core.parameter_specs` is the single source
 of the names, defaults, units and ranges that the nodes declare (with descriptors) and that
@@ -8,14 +8,13 @@ raise `ControlParameterError` naming the parameter, the value and the valid rang
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from uvms_common.parameter_spec import TRIGGER_MODES, ParameterSpec, merged_values
 
-from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.fuzzy_sets import FuzzySwitchParameters, Trapezoid
 from uvms_control.core.parameter_specs import (
@@ -23,65 +22,14 @@ from uvms_control.core.parameter_specs import (
     CONTROLLER_TRIGGER_MODES,
     STATE_SOURCES,
     SWITCH_MODES,
-    TRIGGER_MODES,
-    ParameterSpec,
-    ParameterValue,
 )
-from uvms_control.core.thruster_dynamics import ThrusterModelParameters
 
 FloatArray = npt.NDArray[np.float64]
 
 
-def _spec_defaults(specs: Sequence[ParameterSpec]) -> dict[str, ParameterValue]:
-    return {spec.name: spec.default for spec in specs}
-
-
 def _merged(specs: Sequence[ParameterSpec], values: Mapping[str, object]) -> dict[str, object]:
     """Defaults overridden by ``values``; unknown names and out-of-range numbers raise."""
-    known = {spec.name: spec for spec in specs}
-    merged: dict[str, object] = dict(_spec_defaults(specs))
-    for name, value in values.items():
-        if name not in known:
-            raise ControlParameterError(
-                name, value, f'one of the known parameters {sorted(known)}'
-            )
-        merged[name] = value
-    for name, spec in known.items():
-        value = merged[name]
-        kind = type(spec.default)
-        if kind is bool:
-            if not isinstance(value, bool):
-                raise ControlParameterError(name, value, 'a bool')
-        elif kind is str:
-            if not isinstance(value, str):
-                raise ControlParameterError(name, value, 'a string')
-        elif kind is float:
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ControlParameterError(name, value, 'a number')
-        elif kind is list:
-            if isinstance(value, (str, bytes)) or not hasattr(value, '__iter__'):
-                raise ControlParameterError(name, value, 'a list of numbers')
-            items = list(value)
-            if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
-                raise ControlParameterError(name, value, 'a list of numbers')
-            merged[name] = [float(v) for v in items]
-        numbers: list[float] = []
-        current = merged[name]
-        if isinstance(current, list):
-            numbers = [float(v) for v in current]
-        elif isinstance(current, (int, float)) and not isinstance(current, bool):
-            numbers = [float(current)]
-        for number in numbers:
-            if not math.isfinite(number):
-                raise ControlParameterError(name, current, 'finite values')
-            lo, hi = spec.min_value, spec.max_value
-            if (lo is not None and number < lo) or (hi is not None and number > hi):
-                raise ControlParameterError(
-                    name,
-                    current,
-                    f'values in [{"-inf" if lo is None else lo}, {"inf" if hi is None else hi}]',
-                )
-    return merged
+    return merged_values(specs, values, ControlParameterError)
 
 
 def spd_matrix(name: str, values: Sequence[float]) -> FloatArray:
@@ -252,45 +200,6 @@ class ControllerParameters:
             null_space_damping=per_coordinate('null_space.damping_1_s'),
             max_environment_stiffness=number('stability.max_environment_stiffness_n_m'),
         )
-
-
-def thruster_parameters_from_flat_dict(
-    values: Mapping[str, object], water_density: float = 1025.0
-) -> ThrusterModelParameters:
-    """Thruster model constants from the ``thruster.*`` names of ALLOCATOR_PARAMETER_SPECS.
-
-    Args:
-        values: flat dotted names to values; missing names keep their defaults.
-        water_density: ρ (kg/m³), the robot's ``hydrodynamics.water_density_kg_m3``.
-
-    Raises:
-        ControlParameterError: for an unknown name or a value out of range.
-    """
-    specs = [s for s in ALLOCATOR_PARAMETER_SPECS if s.name.startswith('thruster.')]
-    v = _merged(specs, values)
-
-    def number(name: str) -> float:
-        value = v[name]
-        assert isinstance(value, (int, float))
-        return float(value)
-
-    return ThrusterModelParameters(
-        water_density=water_density,
-        propeller_diameter=number('thruster.propeller_diameter_m'),
-        thrust_coefficient=number('thruster.thrust_coefficient'),
-        reverse_thrust_ratio=number('thruster.reverse_thrust_ratio'),
-        pitch_angle=number('thruster.pitch_angle_rad'),
-        lift_coefficient_max=number('thruster.lift_coefficient_max'),
-        drag_coefficient_max=number('thruster.drag_coefficient_max'),
-        duct_length=number('thruster.duct_length_m'),
-        duct_added_mass_ratio=number('thruster.duct_added_mass_ratio'),
-        momentum_flux_coefficient=number('thruster.momentum_flux_coefficient'),
-        motor_inertia=number('thruster.motor_inertia_kg_m2'),
-        motor_torque_constant=number('thruster.motor_torque_constant_n_m_a'),
-        motor_viscous_friction=number('thruster.motor_viscous_friction_n_m_s'),
-        speed_feedback_gain=number('thruster.speed_feedback_gain_a_s'),
-        max_motor_current=number('thruster.max_motor_current_a'),
-    )
 
 
 def validate_node_parameters(

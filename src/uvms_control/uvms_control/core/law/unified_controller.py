@@ -14,7 +14,7 @@ effector exerts on the environment, in map_ned):
    forces Bᵀ; the paper prints τ = B τ_b under eq. 18, which violates it.
 
 Null space: the paper drops the null-space part of eq. 24; ``null_space_enabled`` applies the
-joint-space law it derives from instead (why and how: ``uvms_control.core.null_space``).
+joint-space law it derives from instead (why and how: ``uvms_control.core.law.null_space``).
 """
 
 from __future__ import annotations
@@ -25,23 +25,23 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.contact_task import ContactTaskGoal
-from uvms_control.core.controller_result import ControllerResult, Phase
 from uvms_control.core.errors import ControlInputError
-from uvms_control.core.fuzzy_switch import FuzzySwitch
-from uvms_control.core.gain_ramp import GainRamp
-from uvms_control.core.gain_stability import check_gain_stability
-from uvms_control.core.hybrid import HybridLaw
-from uvms_control.core.impedance import ImpedanceLaw
-from uvms_control.core.null_space import null_space_torque
-from uvms_control.core.parameters import ControllerParameters, null_space_gains
-from uvms_control.core.reference import ForcePhase
-from uvms_control.core.task_reference import TaskReference
-from uvms_control.core.task_space import (
+from uvms_control.core.law.controller_result import ControllerResult, Phase
+from uvms_control.core.law.fuzzy_switch import FuzzySwitch
+from uvms_control.core.law.gain_ramp import GainRamp
+from uvms_control.core.law.gain_stability import check_gain_stability
+from uvms_control.core.law.hybrid import HybridLaw
+from uvms_control.core.law.impedance import ImpedanceLaw
+from uvms_control.core.law.null_space import null_space_torque
+from uvms_control.core.law.reference import ForcePhase
+from uvms_control.core.law.task_goal import ContactTaskGoal
+from uvms_control.core.law.task_reference import TaskReference
+from uvms_control.core.law.task_space import (
     TaskSpaceModel,
     inverse_3x3,
     task_space_model_from_terms,
 )
+from uvms_control.core.parameters import ControllerParameters, null_space_gains
 from uvms_model import ModelError, TaskSpaceTerms, UvmsModel
 
 FloatArray = npt.NDArray[np.float64]

@@ -20,15 +20,15 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.contact_task import SafetyLimits, TaskCode
-from uvms_control.core.controller_result import ControllerResult
-from uvms_control.core.safety_checks import (
+from uvms_control.core.law.controller_result import ControllerResult
+from uvms_control.core.law.task_reference import TaskReference
+from uvms_control.core.task.contact_task import SafetyLimits, TaskCode
+from uvms_control.core.task.safety_checks import (
     RETREAT_FORCE_MARGIN,
     Breach,
     Release,
     force_direction,
 )
-from uvms_control.core.task_reference import TaskReference
 
 FloatArray = npt.NDArray[np.float64]
 

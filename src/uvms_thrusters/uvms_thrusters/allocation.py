@@ -16,7 +16,7 @@ reverse for the same thrust, and the start-up check makes sure the motor current
 hold each limit in both directions.
 
 Accommodation of thruster faults: with an estimated effectiveness η̂ (p,) in [0, 1] per
-thruster (``uvms_control.core.fault_detection``), the allocation runs on T diag(η̂) by its
+thruster (``uvms_thrusters.fault_detection``), the allocation runs on T diag(η̂) by its
 pseudo-inverse u = (T diag(η̂))⁺ tau_v = diag(η̂) Tᵀ (T diag(η̂²) Tᵀ)⁻¹ tau_v, the weighted
 minimum-norm solution: a thruster at η̂ = 0 has its column out and is commanded zero, a weak
 one is used less. The rank of T diag(η̂) is checked: below 6 the vehicle is no longer fully
@@ -32,10 +32,10 @@ import numpy as np
 import numpy.typing as npt
 from uvms_model.jit import kernel
 
-from uvms_control.core.errors import ControlInputError, ControlParameterError
-from uvms_control.core.fault_detection import ThrusterFaultDetector
-from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
-from uvms_control.core.thruster_faults import (
+from uvms_thrusters.errors import ThrusterInputError, ThrusterParameterError
+from uvms_thrusters.fault_detection import ThrusterFaultDetector
+from uvms_thrusters.thruster_dynamics import ThrusterBank, ThrusterModelParameters
+from uvms_thrusters.thruster_faults import (
     EscFeedback,
     EscSensor,
     ThrusterFaultInjector,
@@ -142,13 +142,13 @@ class AllocatorParameters:
     def __post_init__(self) -> None:
         t = np.asarray(self.thrust_matrix, dtype=np.float64)
         if t.ndim != 2 or t.shape[0] != 6 or t.shape[1] < 6 or not np.all(np.isfinite(t)):
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'thrusters.positions_m/directions',
                 t.shape,
                 'a finite thrust matrix T of shape (6, p >= 6)',
             )
         if np.linalg.matrix_rank(t) < 6:
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'thrusters.positions_m/directions',
                 'rank < 6',
                 'a thrust matrix of full row rank 6',
@@ -159,7 +159,7 @@ class AllocatorParameters:
             or not np.all(np.isfinite(limits))
             or np.any(limits <= 0.0)
         ):
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'thrusters.max_thrust_n', limits.tolist(), f'{t.shape[1]} values in (0, inf) N'
             )
         torques = np.asarray(self.max_joint_torque, dtype=np.float64)
@@ -169,7 +169,7 @@ class AllocatorParameters:
             or not np.all(np.isfinite(torques))
             or np.any(torques <= 0.0)
         ):
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'allocator.max_joint_torque_n_m',
                 torques.tolist(),
                 'one value in (0, inf) N m per joint',
@@ -282,7 +282,7 @@ class ThrusterAllocator:
         )
         largest = float(np.max(params.max_thrust))
         if reachable < largest:
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'thruster.max_motor_current_a',
                 params.thruster.max_motor_current,
                 f'a current that holds the largest thrust limit {largest} N forward and '
@@ -320,11 +320,11 @@ class ThrusterAllocator:
         """Allocate on T diag(η̂) from now on (module docstring); returns its rank.
 
         Raises:
-            ControlInputError: if η̂ is not p values in [0, 1].
+            ThrusterInputError: if η̂ is not p values in [0, 1].
         """
         eta = np.asarray(effectiveness, dtype=np.float64)
         if eta.shape != (self._p,) or not np.all((eta >= 0.0) & (eta <= 1.0)):
-            raise ControlInputError(
+            raise ThrusterInputError(
                 f'effectiveness must be {self._p} values in [0, 1], got {np.ravel(eta).tolist()}'
             )
         if np.array_equal(eta, self._effectiveness):
@@ -349,7 +349,7 @@ class ThrusterAllocator:
         """Desired thrusts and motor torques for tau_b (6 + n,) (eq. 10), saturated by scaling.
 
         Raises:
-            ControlInputError: if tau_b is not a finite (6 + n,) vector.
+            ThrusterInputError: if tau_b is not a finite (6 + n,) vector.
         """
         tau = np.asarray(tau_b, dtype=np.float64)
         if tau.shape == (6 + self._n,):
@@ -366,7 +366,7 @@ class ThrusterAllocator:
                     saturation_scale=scale,
                     joint_scale=joint_scale,
                 )
-        raise ControlInputError(
+        raise ThrusterInputError(
             f'tau_b must be {6 + self._n} finite values, got {np.ravel(tau).tolist()}'
         )
 
@@ -378,7 +378,7 @@ class ThrusterAllocator:
         model and, under ``accommodate``, the next allocation runs on its η̂.
 
         Raises:
-            ControlInputError: if tau_b is not a finite (6 + n,) vector or dt is negative.
+            ThrusterInputError: if tau_b is not a finite (6 + n,) vector or dt is negative.
         """
         allocation = self.allocate(tau_b)
         bank = self.thrusters

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from reference_allocator import ReferenceAllocator
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
 from uvms_model.thrusters import ThrusterLayout
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
 
 LAYOUT = ThrusterLayout.from_parameters()
 PARAMS = AllocatorParameters(LAYOUT.thrust_matrix(), LAYOUT.max_thrust_n,

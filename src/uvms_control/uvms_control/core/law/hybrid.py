@@ -8,7 +8,7 @@ import numpy as np
 import numpy.typing as npt
 
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.filters import DirtyDerivative
+from uvms_control.core.law.filters import DirtyDerivative
 
 FloatArray = npt.NDArray[np.float64]
 

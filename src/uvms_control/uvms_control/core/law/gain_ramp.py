@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.fuzzy_switch import FuzzySwitch
+from uvms_control.core.law.fuzzy_switch import FuzzySwitch
 
 FloatArray = npt.NDArray[np.float64]
 ForceGains = tuple[float, float, float, float]

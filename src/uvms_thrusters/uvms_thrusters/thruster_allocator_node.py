@@ -43,27 +43,24 @@ from uvms_common.robot_parameters import (
     robot_model_values,
     with_robot_source,
 )
+from uvms_common.unconfigured import allocator_zero_answer, answer_while_unconfigured
 from uvms_model.thrusters import ThrusterLayout
 
-from uvms_control import raw_conversions
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
-from uvms_control.core.allocator_parameter_specs import ALLOCATOR_PARAMETER_SPECS
-from uvms_control.core.errors import ControlInputError, ControlParameterError
-from uvms_control.core.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
-from uvms_control.core.parameters import (
-    thruster_parameters_from_flat_dict,
-    validate_node_parameters,
-)
-from uvms_control.health_conversions import (
+from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
+from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterHealth, ThrusterState
+from uvms_thrusters import raw_conversions
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
+from uvms_thrusters.errors import ThrusterInputError, ThrusterParameterError
+from uvms_thrusters.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
+from uvms_thrusters.health_conversions import (
     HEALTH_TOPIC,
     health_message,
     health_report,
     on_set_fault_parameters,
 )
-from uvms_control.ros_parameters import declare_parameters
-from uvms_control.unconfigured import allocator_zero_answer, answer_while_unconfigured
-from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
-from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterHealth, ThrusterState
+from uvms_thrusters.parameter_specs import ALLOCATOR_PARAMETER_SPECS
+from uvms_thrusters.parameters import thruster_parameters_from_flat_dict, validate_node_parameters
+from uvms_thrusters.ros_parameters import declare_parameters
 
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
@@ -76,7 +73,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         """Declare the parameters and, under ``autostart``, configure and activate.
 
         Raises:
-            ControlParameterError: A parameter of the wrong type or, under ``autostart``, one
+            ThrusterParameterError: A parameter of the wrong type or, under ``autostart``, one
                 that configure refused (named, with its value and valid range).
         """
         super().__init__('thruster_allocator', **kwargs)
@@ -170,7 +167,7 @@ class ThrusterAllocatorNode(LifecycleNode):
                 uvms.description.urdf_path, uvms.description.hydrodynamics_path
             )
         except ModelError as error:
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'robot parameters', with_robot_source(str(error), self._robot_files),
                 f'valid values (robot {self.robot_name!r})'
             ) from error
@@ -181,7 +178,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         )
         torque_limits = np.asarray(values['allocator.max_joint_torque_n_m'], dtype=float)
         if torque_limits.size != len(joint_names):
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'allocator.max_joint_torque_n_m',
                 torque_limits.tolist(),
                 f'{len(joint_names)} values, one per arm joint',
@@ -218,7 +215,7 @@ class ThrusterAllocatorNode(LifecycleNode):
             'never_fresh': 'no generalized force command since start-up: thrusters and '
                            'motors set to zero',
             'resumed': 'fresh generalized force commands: resumed'})
-        # Raw CDR through the robot's fixed layouts (uvms_control.raw_conversions).
+        # Raw CDR through the robot's fixed layouts (uvms_thrusters.raw_conversions).
         self._actuator_writer = raw_conversions.ActuatorCommandWriter(layout.count, joint_names)
         self._state_writer = raw_conversions.ThrusterStateWriter(layout.count)
         self._reader = raw_conversions.generalized_force_reader(joint_names)
@@ -262,7 +259,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         """Keep the error for the constructor, or log it: a transition never fails silently."""
         self._transition_error = error
         if self._log_transition_errors:
-            reason = str(error) if isinstance(error, ControlParameterError) else (
+            reason = str(error) if isinstance(error, ThrusterParameterError) else (
                 f'{type(error).__name__}: {error}')
             self.get_logger().error(f'{transition} failed: {reason}')
         return FAILURE
@@ -294,7 +291,7 @@ class ThrusterAllocatorNode(LifecycleNode):
             return
         try:
             tau_b = self._reader.value(decoded)
-        except ControlInputError as error:
+        except ThrusterInputError as error:
             self._rejected += 1
             self.get_logger().error(
                 f'rejected generalized force, holding the last safe command: {error}',
@@ -412,7 +409,7 @@ class ThrusterAllocatorNode(LifecycleNode):
 def main(args: list[str] | None = None) -> None:
     """Run the thruster allocator node until SIGINT/SIGTERM."""
     sys.exit(run_node(ThrusterAllocatorNode, args, 'thruster_allocator',
-                      (ControlParameterError, ParameterException)))
+                      (ThrusterParameterError, ParameterException)))
 
 if __name__ == '__main__':
     main()

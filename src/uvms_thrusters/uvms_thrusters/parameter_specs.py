@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from uvms_control.core.parameter_specs import ParameterSpec
+from uvms_common.parameter_spec import ParameterSpec
 
 ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [
     ParameterSpec(

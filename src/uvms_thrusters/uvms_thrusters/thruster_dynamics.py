@@ -39,8 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.errors import ControlInputError, ControlParameterError
-from uvms_control.core.thruster_kernels import (
+from uvms_thrusters.errors import ThrusterInputError, ThrusterParameterError
+from uvms_thrusters.thruster_kernels import (
     blade_element,
     euler_step_bank,
     state_derivative,
@@ -105,19 +105,19 @@ class ThrusterModelParameters:
         }
         for name, (unit, value) in positive.items():
             if not (math.isfinite(value) and value > 0.0):
-                raise ControlParameterError(name, value, f'(0, inf) {unit}')
+                raise ThrusterParameterError(name, value, f'(0, inf) {unit}')
         for name, value in (
             ('thruster.motor_viscous_friction_n_m_s', self.motor_viscous_friction),
             ('thruster.speed_feedback_gain_a_s', self.speed_feedback_gain),
         ):
             if not (math.isfinite(value) and value >= 0.0):
-                raise ControlParameterError(name, value, '[0, inf)')
+                raise ThrusterParameterError(name, value, '[0, inf)')
         if not (0.0 < self.reverse_thrust_ratio <= 1.0):
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'thruster.reverse_thrust_ratio', self.reverse_thrust_ratio, '(0, 1]'
             )
         if not (0.0 < self.pitch_angle < math.pi / 2.0):
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 'thruster.pitch_angle_rad', self.pitch_angle, '(0, pi/2) rad'
             )
 
@@ -156,7 +156,7 @@ def calibrate(params: ThrusterModelParameters) -> ThrusterCalibration:
     """Derive blade area, reverse lift factor, α_1, α_2 from the bollard law T = K_T ρ D⁴ n².
 
     Raises:
-        ControlParameterError: if the pitch is too small for the requested K_T (the blade
+        ThrusterParameterError: if the pitch is too small for the requested K_T (the blade
             would need a non-positive area).
     """
     p = params
@@ -173,7 +173,7 @@ def calibrate(params: ThrusterModelParameters) -> ThrusterCalibration:
     s2a, c2a, cb, sb = _lift_drag_terms(p.pitch_angle, k_fwd)
     force_term = p.lift_coefficient_max * s2a * cb - p.drag_coefficient_max * c2a * sb
     if force_term <= 0.0:
-        raise ControlParameterError(
+        raise ThrusterParameterError(
             'thruster.pitch_angle_rad',
             p.pitch_angle,
             f'a pitch larger than the bollard flow angle atan({k_fwd:.3f}) with positive lift',
@@ -240,7 +240,7 @@ def _with_max_step(
         for lam in np.linalg.eigvals(jac):
             sigma, mag = -float(lam.real), float(abs(lam))
             if sigma <= 0.0:
-                raise ControlParameterError(
+                raise ThrusterParameterError(
                     'thruster constants', params, 'a stable bollard equilibrium at full current'
                 )
             steps.append(sigma / (mag * mag))
@@ -273,7 +273,7 @@ class ThrusterBank:
         calibration: ThrusterCalibration | None = None,
     ) -> None:
         if count < 1:
-            raise ControlParameterError('thruster count', count, '>= 1')
+            raise ThrusterParameterError('thruster count', count, '>= 1')
         self.params = params
         self.count = count
         self.calibration = calibration if calibration is not None else calibrate(params)
@@ -367,16 +367,16 @@ class ThrusterBank:
         The returned array is the bank's own buffer of actual thrusts F_t,act (eq. 15).
 
         Raises:
-            ControlInputError: if f_td has the wrong size or is not finite, or dt < 0.
+            ThrusterInputError: if f_td has the wrong size or is not finite, or dt < 0.
         """
         f_td = np.asarray(f_td, dtype=np.float64)
         if not (math.isfinite(dt) and dt >= 0.0):
-            raise ControlInputError(f'time step dt = {dt} s must be finite and >= 0')
+            raise ThrusterInputError(f'time step dt = {dt} s must be finite and >= 0')
         if f_td.shape != (self.count,) or not euler_step_bank(
             self.constants, f_td, float(dt), self.calibration.max_step, self.omega, self.u_p,
             self.omega_r, self.motor_current, self.thrust, self.torque,
         ):
-            raise ControlInputError(
+            raise ThrusterInputError(
                 f'desired thrusts must be {self.count} finite values, got {f_td.tolist()}'
             )
         return self.thrust

@@ -4,29 +4,29 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
-from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.fault_detection import (
+from uvms_model.thrusters import ThrusterLayout
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
+from uvms_thrusters.errors import ThrusterParameterError
+from uvms_thrusters.fault_detection import (
     STATUS_DEGRADED,
     STATUS_FAILED,
     STATUS_OK,
     DetectionParameters,
     ThrusterFaultDetector,
 )
-from uvms_control.core.fault_parameters import (
+from uvms_thrusters.fault_parameters import (
     FAULT_PARAMETER_SPECS,
     equip,
     fault_settings,
     set_accommodation,
 )
-from uvms_control.core.thruster_faults import (
+from uvms_thrusters.thruster_faults import (
     EscSensor,
     ThrusterFault,
     ThrusterFaultInjector,
     format_faults,
     parse_faults,
 )
-from uvms_model.thrusters import ThrusterLayout
 
 LAYOUT = ThrusterLayout.from_parameters()
 DT = 0.002
@@ -78,7 +78,7 @@ def test_fault_text_round_trips() -> None:
 ])
 def test_bad_fault_is_refused_naming_the_parameter(text: str, match: str) -> None:
     """A malformed fault names fault_injection.thrusters and what is valid."""
-    with pytest.raises(ControlParameterError, match=r'fault_injection\.thrusters') as info:
+    with pytest.raises(ThrusterParameterError, match=r'fault_injection\.thrusters') as info:
         parse_faults(text, 8)
     assert info.match(match)
 
@@ -193,5 +193,5 @@ def test_accommodation_switched_at_run_time_moves_the_allocation() -> None:
 
 def test_out_of_range_detection_parameter_is_refused_by_name() -> None:
     """A negative persistence names fault_detection.persistence_s and its range."""
-    with pytest.raises(ControlParameterError, match=r'fault_detection\.persistence_s'):
+    with pytest.raises(ThrusterParameterError, match=r'fault_detection\.persistence_s'):
         fault_settings({**defaults(), 'fault_detection.persistence_s': -1.0}, LAYOUT.count)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.errors import ControlParameterError
+from uvms_thrusters.errors import ThrusterParameterError
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -105,7 +105,7 @@ def parse_faults(text: str, count: int | None = None) -> tuple[ThrusterFault, ..
         count: Number of thrusters, to check the indices (None: unchecked).
 
     Raises:
-        ControlParameterError: naming the parameter, the entry and what is valid.
+        ThrusterParameterError: naming the parameter, the entry and what is valid.
     """
     faults = []
     for n, entry in enumerate(part.strip() for part in text.split(';')):
@@ -115,7 +115,7 @@ def parse_faults(text: str, count: int | None = None) -> tuple[ThrusterFault, ..
         for item in entry.split():
             key, sep, raw = item.partition('=')
             if not sep or key not in _FIELDS or key in fields:
-                raise ControlParameterError(
+                raise ThrusterParameterError(
                     PARAMETER, text, f'entries "index=I kind=K [value=V] at_s=T" joined by ";" '
                     f'(entry {n}: {item!r})')
             fields[key] = raw
@@ -125,9 +125,9 @@ def parse_faults(text: str, count: int | None = None) -> tuple[ThrusterFault, ..
             at_s = float(fields['at_s']) if 'at_s' in fields else None
             fault = check_fault(index, fields.get('kind'), value, at_s, f'entry {n}')
         except ValueError as error:
-            raise ControlParameterError(PARAMETER, text, str(error)) from error
+            raise ThrusterParameterError(PARAMETER, text, str(error)) from error
         if count is not None and fault.index >= count:
-            raise ControlParameterError(
+            raise ThrusterParameterError(
                 PARAMETER, text, f'entry {n}: index in [0, {count - 1}] ({count} thrusters)')
         faults.append(fault)
     return tuple(sorted(faults, key=lambda f: f.at_s))
@@ -153,7 +153,7 @@ class ThrusterFaultInjector:
     def __init__(self, faults: tuple[ThrusterFault, ...], count: int) -> None:
         for fault in faults:
             if fault.index >= count:
-                raise ControlParameterError(PARAMETER, format_faults(faults),
+                raise ThrusterParameterError(PARAMETER, format_faults(faults),
                                             f'indices in [0, {count - 1}] ({count} thrusters)')
         self.faults = tuple(sorted(faults, key=lambda f: f.at_s))
         self.count = count

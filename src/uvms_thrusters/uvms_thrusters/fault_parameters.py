@@ -10,12 +10,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from uvms_common.parameter_spec import ParameterSpec
 
-from uvms_control.core.allocation import ThrusterAllocator
-from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.fault_detection import DetectionParameters, ThrusterFaultDetector
-from uvms_control.core.parameter_specs import ParameterSpec
-from uvms_control.core.thruster_faults import (
+from uvms_thrusters.allocation import ThrusterAllocator
+from uvms_thrusters.errors import ThrusterParameterError
+from uvms_thrusters.fault_detection import DetectionParameters, ThrusterFaultDetector
+from uvms_thrusters.thruster_faults import (
     PARAMETER,
     EscSensor,
     ThrusterFaultInjector,
@@ -88,13 +88,13 @@ def fault_settings(values: Mapping[str, object], count: int) -> FaultSettings:
     """Check the values (as declared) against the specs and the thruster count.
 
     Raises:
-        ControlParameterError: naming the parameter, its value and the valid range.
+        ThrusterParameterError: naming the parameter, its value and the valid range.
     """
     for spec in FAULT_PARAMETER_SPECS:
         value = values[spec.name]
         if spec.min_value is not None and spec.max_value is not None and not (
                 isinstance(value, int | float) and spec.min_value <= value <= spec.max_value):
-            raise ControlParameterError(spec.name, value,
+            raise ThrusterParameterError(spec.name, value,
                                         f'[{spec.min_value}, {spec.max_value}]')
     text = str(values[PARAMETER])
     parse_faults(text, count)

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.contact_task import SafetyLimits, TaskCode
-from uvms_control.core.task_reference import TaskReference
-from uvms_control.core.unified_controller import ControllerResult
+from uvms_control.core.law.task_reference import TaskReference
+from uvms_control.core.law.unified_controller import ControllerResult
+from uvms_control.core.task.contact_task import SafetyLimits, TaskCode
 
 FloatArray = npt.NDArray[np.float64]
 

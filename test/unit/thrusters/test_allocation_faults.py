@@ -6,13 +6,13 @@ import itertools
 
 import numpy as np
 import pytest
-from uvms_control.core.allocation import (
+from uvms_model.thrusters import ThrusterLayout
+from uvms_thrusters.allocation import (
     AllocatorParameters,
     ThrusterAllocator,
     weighted_pseudo_inverse,
 )
-from uvms_control.core.errors import ControlInputError
-from uvms_model.thrusters import ThrusterLayout
+from uvms_thrusters.errors import ThrusterInputError
 
 from uvms_description.robots import robot_parameters
 from uvms_model import UvmsParameters
@@ -126,5 +126,5 @@ def test_effectiveness_outside_zero_one_is_rejected(eta: list[float]) -> None:
     layout = ThrusterLayout.from_parameters()
     allocator = ThrusterAllocator(AllocatorParameters(
         layout.thrust_matrix(), layout.max_thrust_n, np.full(3, 50.0)))
-    with pytest.raises(ControlInputError, match='effectiveness'):
+    with pytest.raises(ThrusterInputError, match='effectiveness'):
         allocator.set_effectiveness(eta)

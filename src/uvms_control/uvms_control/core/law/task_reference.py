@@ -15,9 +15,9 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.contact_task import ContactTaskGoal
-from uvms_control.core.reference import ForcePhase, ForceSetpoint, ForceSetpointSample
-from uvms_control.core.task_path import TaskPath
+from uvms_control.core.law.reference import ForcePhase, ForceSetpoint, ForceSetpointSample
+from uvms_control.core.law.task_goal import ContactTaskGoal
+from uvms_control.core.law.task_path import TaskPath
 
 FloatArray = npt.NDArray[np.float64]
 

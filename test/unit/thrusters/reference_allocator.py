@@ -3,7 +3,7 @@
 Allocation F_td = T⁺ tau_v (eq. 10, T⁺ here by ``numpy.linalg.pinv``) with direction-
 preserving saturation, and the thruster dynamics of eq. 11-15 vectorised over the thrusters
 with numpy, as ``uvms_control`` computed them before the per-thruster kernels
-(``uvms_control.core.thruster_kernels``) took over. The calibration (``calibrate``) is shared:
+(``uvms_thrusters.thruster_kernels``) took over. The calibration (``calibrate``) is shared:
 it runs once at start-up, not in the step this oracle checks. ``bench/bench_model.py`` times
 it as the allocator's "previous" implementation.
 """
@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
-from uvms_control.core.allocation import AllocatorParameters
-from uvms_control.core.thruster_dynamics import calibrate
+from uvms_thrusters.allocation import AllocatorParameters
+from uvms_thrusters.thruster_dynamics import calibrate
 
 FloatArray = NDArray[np.float64]
 

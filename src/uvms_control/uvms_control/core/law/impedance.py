@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.task_space import inverse_3x3
+from uvms_control.core.law.task_space import inverse_3x3
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -29,8 +29,8 @@ import numpy as np
 import numpy.typing as npt
 from uvms_model.jit import kernel
 
-from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.thruster_dynamics import ThrusterBank, ThrusterModelParameters
+from uvms_thrusters.errors import ThrusterParameterError
+from uvms_thrusters.thruster_dynamics import ThrusterBank, ThrusterModelParameters
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -93,7 +93,7 @@ class DetectionParameters:
             ('failed_below', self.failed_below, 0.0, 1.0),
         ):
             if not (math.isfinite(value) and lo <= value <= hi):
-                raise ControlParameterError(f'fault_detection.{name}', value, f'[{lo}, {hi}]')
+                raise ThrusterParameterError(f'fault_detection.{name}', value, f'[{lo}, {hi}]')
 
 
 class ThrusterFaultDetector:

@@ -6,12 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from uvms_control.core.errors import ControlInputError, ControlParameterError
-from uvms_control.core.thruster_dynamics import (
-    ThrusterBank,
-    ThrusterModelParameters,
-    calibrate,
-)
+from uvms_thrusters.errors import ThrusterInputError, ThrusterParameterError
+from uvms_thrusters.thruster_dynamics import ThrusterBank, ThrusterModelParameters, calibrate
 
 PARAMS = ThrusterModelParameters()
 
@@ -127,14 +123,14 @@ def test_current_limit_caps_the_motor_current() -> None:
 def test_non_finite_desired_thrust_is_rejected() -> None:
     """A NaN command raises instead of corrupting the propeller state."""
     bank = ThrusterBank(PARAMS, 2)
-    with pytest.raises(ControlInputError):
+    with pytest.raises(ThrusterInputError):
         bank.step(np.array([1.0, math.nan]), 1e-3)
     assert np.all(bank.omega == 0.0)
 
 
 def test_pitch_below_the_bollard_flow_angle_is_rejected() -> None:
     """A pitch too flat for the requested K_T cannot be calibrated: the error names the pitch."""
-    with pytest.raises(ControlParameterError, match=r'thruster\.pitch_angle'):
+    with pytest.raises(ThrusterParameterError, match=r'thruster\.pitch_angle'):
         calibrate(ThrusterModelParameters(pitch_angle=0.2))
 
 

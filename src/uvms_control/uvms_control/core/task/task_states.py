@@ -10,12 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.contact_task import (
-    ContactTaskGoal,
-    TaskCode,
-    TaskFigures,
-    TaskResult,
-)
+from uvms_control.core.task.contact_task import ContactTaskGoal, TaskCode, TaskFigures, TaskResult
 
 FloatArray = npt.NDArray[np.float64]
 

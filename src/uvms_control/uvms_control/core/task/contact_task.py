@@ -16,13 +16,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.force_figures import force_figures
-from uvms_control.core.task_path import (
+from uvms_control.core.law.task_goal import ContactTaskGoal
+from uvms_control.core.law.task_path import (
     QUINTIC_PEAK_SPEED,
     TaskPath,
     transit_duration,
     with_transit,
 )
+from uvms_control.core.task.force_figures import force_figures
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -55,33 +56,6 @@ class TaskGoalError(ValueError):
     def __init__(self, field: str, value: object, expected: str) -> None:
         self.field = field
         super().__init__(f'{field} = {value}: {expected}')
-
-
-@dataclass(frozen=True)
-class ContactTaskGoal:
-    """A ContactTask goal as arrays (map_ned, SI units).
-
-    Attributes:
-        path: waypoints X_d (n, 3) (m).
-        times: time of each waypoint from the path's start (n,) (s).
-        velocities: Ẋ_d at each waypoint (n, 3) (m/s), or None (chosen by the path).
-        accelerations: Ẍ_d at each waypoint (n, 3) (m/s²), or None (zero).
-        normal: force direction into the surface (3,) (-), not necessarily unit.
-        force_n: F_d along the normal while in contact (N); 0: motion only.
-        force_ramp_s: ramp of F_d after first contact and down at release (s).
-        require_contact: end with NO_CONTACT if the path ends without contact.
-        start_time_s: when the path's time 0 is on the controller's clock (s); None: at once.
-    """
-
-    path: FloatArray
-    times: FloatArray
-    velocities: FloatArray | None
-    accelerations: FloatArray | None
-    normal: FloatArray
-    force_n: float
-    force_ramp_s: float
-    require_contact: bool = False
-    start_time_s: float | None = None
 
 
 @dataclass(frozen=True)

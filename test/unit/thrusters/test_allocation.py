@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from uvms_control.core.allocation import AllocatorParameters, ThrusterAllocator
-from uvms_control.core.errors import ControlInputError, ControlParameterError
-from uvms_control.core.thruster_dynamics import ThrusterModelParameters
 from uvms_model.thrusters import ThrusterLayout
+from uvms_thrusters.allocation import AllocatorParameters, ThrusterAllocator
+from uvms_thrusters.errors import ThrusterInputError, ThrusterParameterError
+from uvms_thrusters.thruster_dynamics import ThrusterModelParameters
 
 LAYOUT = ThrusterLayout.from_parameters()
 JOINT_LIMITS = np.array([100.0, 80.0, 50.0])
@@ -127,8 +127,8 @@ def test_joint_torques_are_scaled_together(allocator: ThrusterAllocator) -> None
 def test_malformed_generalized_force_is_rejected(
     allocator: ThrusterAllocator, tau: np.ndarray
 ) -> None:
-    """A wrongly sized or non-finite tau_b raises ControlInputError and leaves the thrusters."""
-    with pytest.raises(ControlInputError):
+    """A wrongly sized or non-finite tau_b raises ThrusterInputError and leaves the thrusters."""
+    with pytest.raises(ThrusterInputError):
         allocator.step(tau, 1e-3)
     assert np.all(allocator.thrusters.omega == 0.0)
 
@@ -145,7 +145,7 @@ def test_actual_thrust_follows_the_allocation(allocator: ThrusterAllocator) -> N
 
 def test_too_small_motor_current_is_rejected_at_start_up() -> None:
     """A current limit that cannot hold the thrust limit stops the allocator, naming it."""
-    with pytest.raises(ControlParameterError, match=r'thruster\.max_motor_current_a'):
+    with pytest.raises(ThrusterParameterError, match=r'thruster\.max_motor_current_a'):
         ThrusterAllocator(
             AllocatorParameters(
                 LAYOUT.thrust_matrix(),
@@ -160,5 +160,5 @@ def test_rank_deficient_layout_is_rejected() -> None:
     """Thrusters that cannot produce every vehicle wrench are a parameter error."""
     t = LAYOUT.thrust_matrix().copy()
     t[5, :] = 0.0
-    with pytest.raises(ControlParameterError, match='rank'):
+    with pytest.raises(ThrusterParameterError, match='rank'):
         AllocatorParameters(t, LAYOUT.max_thrust_n, JOINT_LIMITS)

@@ -23,7 +23,8 @@ from dataclasses import replace
 import numpy as np
 import numpy.typing as npt
 
-from uvms_control.core.contact_task import (
+from uvms_control.core.law.unified_controller import ControllerResult, UnifiedForceController
+from uvms_control.core.task.contact_task import (
     ContactTaskGoal,
     SafetyLimits,
     TaskCode,
@@ -32,8 +33,8 @@ from uvms_control.core.contact_task import (
     planned_goal,
     validate_goal,
 )
-from uvms_control.core.retreat import Retreat
-from uvms_control.core.safety_checks import (
+from uvms_control.core.task.retreat import Retreat
+from uvms_control.core.task.safety_checks import (
     MAX_MOTION_STEP_S,
     SATURATION_SHARE,
     Breach,
@@ -41,7 +42,7 @@ from uvms_control.core.safety_checks import (
     check_limits,
     force_direction,
 )
-from uvms_control.core.task_states import (
+from uvms_control.core.task.task_states import (
     TASK_STATE,
     RunningTask,
     SupervisorState,
@@ -50,7 +51,6 @@ from uvms_control.core.task_states import (
     TaskState,
     empty_result,
 )
-from uvms_control.core.unified_controller import ControllerResult, UnifiedForceController
 
 __all__ = ['SATURATION_SHARE', 'SupervisorState', 'TaskEvent', 'TaskProgress', 'TaskState',
            'TaskSupervisor', 'with_limits']

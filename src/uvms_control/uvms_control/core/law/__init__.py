@@ -1,0 +1,1 @@
+"""The unified force controller: laws, fuzzy switch, references (imports no ``core.task``)."""

@@ -1,0 +1,1 @@
+"""Contact tasks around the control step: goal, checks, limits, supervisor and results."""
