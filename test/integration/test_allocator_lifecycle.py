@@ -317,3 +317,17 @@ def test_state_ids_match_lifecycle_msgs(graph: Graph) -> None:
     graph.allocator()
     state = graph.call(GetState, 'get_state', GetState.Request()).current_state
     assert (state.id, state.label) == (State.PRIMARY_STATE_ACTIVE, 'active')
+
+
+def test_desired_output_sends_the_allocated_thrusts_without_the_dynamics(graph: Graph) -> None:
+    """thruster_output desired (hardware): the first answer already carries the full thrust."""
+    graph.allocator(thruster_output='desired')
+    answers = [graph.exchange(k * PERIOD_NS) for k in range(3)]
+    assert np.all(np.abs(answers[0].thrust) > 0.0)
+    np.testing.assert_allclose(answers[0].thrust, answers[2].thrust)
+
+
+def test_an_unknown_thruster_output_is_refused_naming_it(graph: Graph) -> None:
+    """A typo in thruster_output stops the node at start-up with the name and the choices."""
+    with pytest.raises(ThrusterParameterError, match=r"thruster_output.*'actual', 'desired'"):
+        graph.allocator(thruster_output='desire')

@@ -13,6 +13,14 @@ ALLOCATOR_PARAMETER_SPECS: list[ParameterSpec] = [
         "'lockstep': answer each command with the same stamp, integrating the thrusters over "
         "the time between command stamps; 'timer': step at rate_hz on the latest command.",
     ),
+    ParameterSpec(
+        'thruster_output',
+        'actual',
+        "What command/actuators carries: 'actual' thrusts after the thruster dynamics "
+        "(eq. 11-15; the simulator's input), or 'desired' thrusts as allocated (eq. 10), for "
+        'a vehicle whose propellers do the dynamics (uvms launch --hardware: the bridges '
+        'turn them into PWM).',
+    ),
     ParameterSpec('rate_hz', 500.0, 'Allocator rate in timer mode (Hz).', 1.0, 10000.0),
     ParameterSpec(
         'state_rate_hz', 0.0,

@@ -15,6 +15,9 @@ from uvms_thrusters.errors import ThrusterParameterError
 from uvms_thrusters.parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_thrusters.thruster_dynamics import ThrusterModelParameters
 
+#: What the allocator's command/actuators carries (parameter ``thruster_output``).
+THRUSTER_OUTPUTS = ('actual', 'desired')
+
 
 def thruster_parameters_from_flat_dict(
     values: Mapping[str, object], water_density: float = 1025.0
@@ -64,6 +67,10 @@ def validate_node_parameters(
         ThrusterParameterError: for a value out of range or an unknown trigger mode.
     """
     merged = merged_values(specs, values, ThrusterParameterError)
+    output = merged.get('thruster_output')
+    if output is not None and output not in THRUSTER_OUTPUTS:
+        raise ThrusterParameterError('thruster_output', output,
+                                     f'one of {list(THRUSTER_OUTPUTS)}')
     mode = merged.get('trigger_mode')
     if mode is not None and mode not in TRIGGER_MODES:
         raise ThrusterParameterError('trigger_mode', mode, f'one of {list(TRIGGER_MODES)}')

@@ -192,6 +192,7 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._diagnostics.hardware_id = robot_name(description.urdf_text)
         self._joint_names = joint_names
         self._trigger_mode = str(values['trigger_mode'])
+        self._desired_output = values['thruster_output'] == 'desired'
         self._lockstep = self._trigger_mode == 'lockstep'
         self._watchdog_ns = round(float(values['watchdog_timeout_s']) * 1e9)
         self._max_step_ns = round(float(values['max_step_s']) * 1e9)
@@ -349,8 +350,9 @@ class ThrusterAllocatorNode(LifecycleNode):
         output = self.core.step(tau_b, dt, t_ns * 1e-9)
         self._published += 1
         self._saturated += output.allocation.saturation_scale < 1.0
+        thrust = output.allocation.thrust if self._desired_output else output.thrust
         self._actuator_pub.publish(
-            self._actuator_writer.payload(t_ns, output.thrust, output.joint_torques))
+            self._actuator_writer.payload(t_ns, thrust, output.joint_torques))
         if self._state_gate.due(t_ns):
             self._state_pub.publish(self._state_writer.payload(t_ns, output))
         self._publish_health(t_ns, output)
