@@ -118,8 +118,8 @@ def hardware_section(robot_name: str, section: str) -> tuple[Path, Mapping[str, 
     return path, tree[section]
 
 
-def urdf_joint_limits(robot_name: str) -> dict[str, tuple[float, float, float]]:
-    """{joint: (lower, upper, velocity)} of the robot URDF's revolute and prismatic joints.
+def urdf_joint_limits(robot_name: str) -> dict[str, tuple[float, float, float, float]]:
+    """{joint: (lower, upper, velocity, effort)} of the URDF's revolute and prismatic joints.
 
     Raises:
         HardwareConfigError: The URDF cannot be read.
@@ -134,7 +134,7 @@ def urdf_joint_limits(robot_name: str) -> dict[str, tuple[float, float, float]]:
         if joint.get('type') in ('revolute', 'prismatic') and limit is not None:
             limits[str(joint.get('name'))] = (
                 float(limit.get('lower', 0.0)), float(limit.get('upper', 0.0)),
-                float(limit.get('velocity', 0.0)))
+                float(limit.get('velocity', 0.0)), float(limit.get('effort', 0.0)))
     return limits
 
 
@@ -179,7 +179,7 @@ def load_alpha5(robot_name: str, jaw_joint: str = '') -> Alpha5Hardware:
         where = f'alpha5.joints.{name}'
         if name not in urdf_limits:
             raise HardwareConfigError(f'{path}: {where}: the URDF has no such moving joint')
-        lower, upper, velocity = urdf_limits[name]
+        lower, upper, velocity, _ = urdf_limits[name]
         per_ma = (_number(path, where, item, 'kt_n_m_per_a') * _number(
             path, where, item, 'gear_ratio') * _number(path, where, item, 'efficiency')
             / _MA_PER_A)

@@ -1,0 +1,113 @@
+"""The physical side of the twins: PWM to thrust, motor current to joint torque.
+
+A real vehicle turns the autopilot's PWM into thrust through its ESCs and propellers, and a
+real arm turns a current setpoint into torque through its motors and gears. The twins stand
+for those devices, so this module stands for that physics, from the same robot folder the
+bridges read (no ROS)::
+
+    thrusters = ThrusterTwin.for_robot('bluerov2_alpha5')
+    thrust_n = thrusters.step(twin.servo_outputs_us(), voltage_v=16.0, dt_s=0.002)
+    torques = joint_torques(arm.joint_commands(), arm.joint_torques_n_m(), state, limits)
+
+PWM to thrust: Blue Robotics' published T200 curve (``t200_curve``, the same the bridge
+inverts) gives the thrust each ESC is told to make, and the Healey model of the robot's
+thrusters (``uvms_thrusters``, eq. 11-15) the thrust the propeller then makes. An output
+with no pulse (0) is a stopped ESC: zero thrust.
+
+Current to torque: a joint in Current mode makes I Kt N eta (``hardware_config.Drive``). The
+other modes are not in Reach's documents beyond their names, so the twin assumes, and says
+so: Velocity and Position are followed by a stiff servo saturating at the joint's effort limit
+(the URDF's); Standby, Disable and Passive make no torque (the arm is limp).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from uvms_thrusters.robot_thrusters import robot_thrusters
+from uvms_thrusters.thruster_dynamics import ThrusterBank
+
+from uvms_hardware.hardware_config import hardware_section, urdf_joint_limits
+from uvms_hardware.reach_protocol import Mode
+from uvms_hardware.t200_curve import T200Curve
+
+#: Velocity servo of the twin's joints: torque per speed error (N m s/rad), assumed (a joint
+#: at rest reaches the effort limit at the Alpha's 0.5 rad/s speed limit for 9 N m).
+VELOCITY_GAIN_N_M_S = 18.0
+#: Position servo of the twin's joints: stiffness (N m/rad) and damping (N m s/rad), assumed.
+POSITION_GAINS = (60.0, 6.0)
+
+
+@dataclass
+class ThrusterTwin:
+    """The vehicle's ESCs and propellers: servo outputs (PWM) to actual thrusts (N)."""
+
+    curve: T200Curve
+    channels: tuple[int, ...]
+    directions: tuple[float, ...]
+    bank: ThrusterBank
+
+    @classmethod
+    def for_robot(cls, robot_name: str) -> ThrusterTwin:
+        """From the robot folder: hardware.yaml's ardusub section, thrusters.yaml's model."""
+        _, section = hardware_section(robot_name, 'ardusub')
+        layout, model = robot_thrusters(robot_name)
+        channels = tuple(int(c) for c in section['thruster_channels'])
+        directions = tuple(float(d) for d in section['thruster_directions'])
+        if len(channels) != layout.count or len(directions) != layout.count:
+            raise ValueError(f'{robot_name} hardware.yaml ardusub: {len(channels)} channels '
+                             f'and {len(directions)} directions for {layout.count} thrusters')
+        return cls(T200Curve.from_section(section['t200']), channels, directions,
+                   ThrusterBank(model, layout.count))
+
+    def desired_thrust_n(self, outputs_us: Sequence[int], voltage_v: float) -> np.ndarray:
+        """What each ESC is told: thrust along our positive direction (N)."""
+        desired = np.zeros(len(self.channels))
+        for i, (channel, direction) in enumerate(zip(self.channels, self.directions,
+                                                     strict=True)):
+            pwm = outputs_us[channel - 1]
+            if pwm > 0:
+                desired[i] = direction * self.curve.thrust_from_pwm(float(pwm), voltage_v)
+        return desired
+
+    def step(self, outputs_us: Sequence[int], voltage_v: float, dt_s: float) -> np.ndarray:
+        """Actual thrusts (N) after ``dt_s`` of the propellers' dynamics (eq. 11-15)."""
+        return self.bank.step(self.desired_thrust_n(outputs_us, voltage_v), dt_s)
+
+
+def effort_limits_n_m(robot_name: str) -> dict[str, float]:
+    """joint -> the URDF's effort limit (N m; inf where the URDF gives none)."""
+    return {joint: limits[3] if limits[3] > 0.0 else math.inf
+            for joint, limits in urdf_joint_limits(robot_name).items()}
+
+
+def joint_torques(commands: Mapping[str, tuple[Mode, float]],
+                  current_torques: Mapping[str, float | None],
+                  positions: Mapping[str, float], velocities: Mapping[str, float],
+                  effort_limits: Mapping[str, float]) -> dict[str, float]:
+    """Torque (N m) each arm joint makes for its device's mode and setpoint.
+
+    Args:
+        commands: joint -> (mode, setpoint) from the arm twin (rad, rad/s or mA).
+        current_torques: joint -> torque of a Current-mode setpoint (I Kt N eta), else None.
+        positions: joint -> angle (rad). velocities: joint -> rate (rad/s).
+        effort_limits: joint -> the URDF's effort limit (N m).
+    """
+    torques = {}
+    for joint, (mode, setpoint) in commands.items():
+        limit = effort_limits.get(joint, math.inf)
+        if mode == Mode.CURRENT:
+            torque = current_torques.get(joint) or 0.0
+        elif mode == Mode.VELOCITY:
+            torque = VELOCITY_GAIN_N_M_S * (setpoint - velocities.get(joint, 0.0))
+        elif mode == Mode.POSITION:
+            stiffness, damping = POSITION_GAINS
+            torque = (stiffness * (setpoint - positions.get(joint, 0.0))
+                      - damping * velocities.get(joint, 0.0))
+        else:
+            torque = 0.0
+        torques[joint] = float(np.clip(torque, -limit, limit))
+    return torques

@@ -1,0 +1,199 @@
+"""The ``hardware_twins`` node: the robot's four devices as protocol twins, on the simulator.
+
+``uvms launch --hardware twin`` runs the simulator with its device-side topics under
+``/plant`` (``uvms_bringup.hardware_plan``); this node serves the twins where the bridges
+connect (``<bridge>.connection``: the bridge's own connection string) and moves the physics
+between them and the simulator:
+
+- ``/plant/joint_states`` -> the Alpha 5 twin's joint positions and rates;
+- ``/plant/wrench`` (ft_sensor_link) -> the Net F/T twin, in the sensor's axes;
+- ``/plant/imu``, ``/plant/depth`` -> the ArduSub twin's attitude, rates, specific force and
+  pressure; ``/plant/dvl`` -> the DVL twin's velocity report (no report for ``dvl_lost_s``:
+  ``velocity_valid`` false, as a DVL that lost the bottom);
+- at ``rate_hz`` on the steady clock: the ArduSub twin's servo outputs (PWM) -> thrusts through
+  the T200 curve and the thrusters' dynamics, the arm twin's modes and setpoints -> joint
+  torques (``twins.plant_side``), published as ``/plant/command/actuators``.
+
+Real devices need no such node; it is the test stand. Everything binds where the hardware
+file says (127.0.0.1 in ``config/hardware/twin.yaml``).
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import numpy as np
+from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped, WrenchStamped
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu, JointState
+from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, Report
+from uvms_common.node_main import run_node
+from uvms_common.robot_parameters import declare_robot_name
+
+from uvms_hardware.address import parse_host_port
+from uvms_hardware.device_clock import DeviceClock
+from uvms_hardware.errors import AddressError, HardwareError
+from uvms_hardware.hardware_config import hardware_section, load_alpha5, load_netft
+from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR
+from uvms_hardware.transport import parse_connection
+from uvms_hardware.twins.alpha5_twin import Alpha5Twin
+from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_hardware.twins.dvl_twin import DvlTwin
+from uvms_hardware.twins.netft_twin import NetFtTwin
+from uvms_hardware.twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
+from uvms_msgs.msg import ActuatorCommand
+
+#: Parameters: name -> (default, description).
+PARAMETERS: dict[str, tuple[Any, str]] = {
+    'plant_namespace': ('/plant', 'Where the simulator publishes its device-side topics'),
+    'rate_hz': (500.0, 'Rate of the actuator command to the simulator (Hz, steady clock)'),
+    'battery_voltage_v': (16.0, 'Battery voltage the ArduSub twin reports and the T200 curve '
+                                'is read at (V)'),
+    'dvl_lost_s': (0.5, 'No DVL reading from the simulator for this long: no bottom lock (s)'),
+    'ardusub_bridge.connection': ('udpout:127.0.0.1:14551', 'Where the ArduSub bridge '
+                                  'connects (the twin listens there)'),
+    'dvl_bridge.connection': ('127.0.0.1:16171', 'Where the DVL bridge connects'),
+    'alpha5_bridge.connection': ('udp:127.0.0.1:6789', 'Where the Alpha 5 bridge connects'),
+    'netft_bridge.connection': ('127.0.0.1:49152', 'Where the Net F/T bridge connects'),
+}
+
+
+def ardusub_listen_address(url: str) -> tuple[str, int]:
+    """The address the twin listens on for a bridge's ``udpout:HOST:PORT``.
+
+    Raises:
+        AddressError: Another kind of URL (the twin serves UDP only).
+    """
+    kind, _, rest = url.partition(':')
+    if kind != 'udpout':
+        raise AddressError(f'ardusub_bridge.mavlink_url = {url!r}: the ArduSub twin serves a '
+                           'bridge on udpout:HOST:PORT only')
+    host, port = parse_host_port(rest, 14550, 'ardusub_bridge.mavlink_url')
+    return host, port
+
+
+class TwinsNode(Node):
+    """Serves the four twins and moves the plant's measurements and commands."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__('hardware_twins', **kwargs)
+        robot = declare_robot_name(self)
+        v = {name: self.declare_parameter(name, default).value
+             for name, (default, _) in PARAMETERS.items()}
+        self._voltage_v = float(v['battery_voltage_v'])
+        self._dvl_lost_s = float(v['dvl_lost_s'])
+        _, ardusub = hardware_section(robot, 'ardusub')
+        self._rho = float(ardusub['depth']['water_density_kg_m3'])
+        self._surface_pa = float(ardusub['depth']['surface_pressure_pa'])
+        host, port = ardusub_listen_address(str(v['ardusub_bridge.connection']))
+        self.ardusub = ArduSubTwin(port=port, host=host)
+        host, port = parse_host_port(str(v['dvl_bridge.connection']), 16171)
+        self.dvl = DvlTwin(host=host, port=port)
+        arm = load_alpha5(robot)
+        link = parse_connection(str(v['alpha5_bridge.connection']), 6789,
+                                'alpha5_bridge.connection')
+        if link.kind != 'udp':
+            raise AddressError(f'alpha5_bridge.connection = {link}: the Alpha 5 twin serves '
+                               'UDP only (a serial bridge needs the real arm)')
+        self.arm = Alpha5Twin(arm, host=link.target, port=link.number)
+        host, port = parse_host_port(str(v['netft_bridge.connection']), load_netft(robot).port)
+        self.netft = NetFtTwin(host=host, port=port)
+        for twin in (self.ardusub, self.dvl, self.arm, self.netft):
+            twin.start()
+        self._joints = tuple(d.joint_name for d in arm.drives)
+        self._effort = effort_limits_n_m(robot)
+        self._thrusters = ThrusterTwin.for_robot(robot)
+        self._rot_sensor_from_link = np.array(DEFAULT_ROT_LINK_FROM_SENSOR).reshape(3, 3).T
+        self._positions = dict.fromkeys(self._joints, 0.0)
+        self._velocities = dict.fromkeys(self._joints, 0.0)
+        self._joint_names_out: list[str] = list(self._joints)
+        self._clock = DeviceClock(self)
+        self._last_tick_s: float | None = None
+        self._last_dvl_s = -float('inf')
+        self._ticks = 0
+        plant = str(v['plant_namespace']).rstrip('/')
+        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        self.create_subscription(JointState, f'{plant}/joint_states', self._on_joints, qos)
+        self.create_subscription(WrenchStamped, f'{plant}/wrench', self._on_wrench, qos)
+        self.create_subscription(Imu, f'{plant}/imu', self._on_imu, qos)
+        self.create_subscription(PoseWithCovarianceStamped, f'{plant}/depth', self._on_depth, qos)
+        self.create_subscription(TwistWithCovarianceStamped, f'{plant}/dvl', self._on_dvl, qos)
+        self._command_pub = self.create_publisher(ActuatorCommand, f'{plant}/command/actuators',
+                                                  qos)
+        self._clock.timer(1.0 / float(v['rate_hz']), self._on_tick)
+        self._diagnostics = DiagnosticsPublisher(self, robot)
+        self._diagnostics.add('twins', self._report)
+        self.get_logger().info(
+            f'twins of {robot}: ArduSub udpin:{self.ardusub.address[0]}:'
+            f'{self.ardusub.address[1]}, DVL {v["dvl_bridge.connection"]}, Alpha 5 '
+            f'{v["alpha5_bridge.connection"]}, Net F/T {v["netft_bridge.connection"]}')
+
+    def _on_joints(self, msg: JointState) -> None:
+        for name, p, w in zip(msg.name, msg.position, msg.velocity, strict=False):
+            if name in self._positions:
+                self._positions[name], self._velocities[name] = float(p), float(w)
+        self.arm.set_joint_state([self._positions[j] for j in self._joints],
+                                 [self._velocities[j] for j in self._joints])
+
+    def _on_wrench(self, msg: WrenchStamped) -> None:
+        f, t = msg.wrench.force, msg.wrench.torque
+        force = self._rot_sensor_from_link @ np.array([f.x, f.y, f.z])
+        torque = self._rot_sensor_from_link @ np.array([t.x, t.y, t.z])
+        self.netft.set_wrench(tuple(force.tolist()), tuple(torque.tolist()))
+
+    def _on_imu(self, msg: Imu) -> None:
+        q, w, a = msg.orientation, msg.angular_velocity, msg.linear_acceleration
+        self.ardusub.set_plant_state(quaternion_wxyz=(q.w, q.x, q.y, q.z),
+                                     rates_rad_s=(w.x, w.y, w.z),
+                                     specific_force_m_s2=(a.x, a.y, a.z),
+                                     voltage_v=self._voltage_v)
+
+    def _on_depth(self, msg: PoseWithCovarianceStamped) -> None:
+        depth_m = msg.pose.pose.position.z
+        self.ardusub.set_plant_state(pressure_pa=self._surface_pa + self._rho * 9.80665 * depth_m)
+
+    def _on_dvl(self, msg: TwistWithCovarianceStamped) -> None:
+        v = msg.twist.twist.linear
+        self._last_dvl_s = self._clock.now_s()
+        self.dvl.set_velocity((v.x, v.y, v.z), True, 0.002, 1.0)
+
+    def _on_tick(self) -> None:
+        now_s = self._clock.now_s()
+        dt_s = 0.0 if self._last_tick_s is None else min(now_s - self._last_tick_s, 0.1)
+        self._last_tick_s = now_s
+        if now_s - self._last_dvl_s > self._dvl_lost_s:
+            self.dvl.set_velocity((0.0, 0.0, 0.0), False, 10.0, -1.0)
+        thrust = self._thrusters.step(self.ardusub.servo_outputs_us(), self._voltage_v, dt_s)
+        torques = joint_torques(self.arm.joint_commands(), self.arm.joint_torques_n_m(),
+                                self._positions, self._velocities, self._effort)
+        msg = ActuatorCommand()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = 'base_link_frd'
+        msg.thrust = thrust.tolist()
+        msg.joint_names = self._joint_names_out
+        msg.joint_torques = [torques[j] for j in self._joints]
+        self._command_pub.publish(msg)
+        self._ticks += 1
+
+    def _report(self) -> Report:
+        level = OK if self._ticks else WARN
+        return Report(level, 'serving' if self._ticks else 'starting',
+                      {'ticks': self._ticks, 'armed': self.ardusub.armed})
+
+    def destroy_node(self) -> None:
+        """Stop the twins, then destroy the node."""
+        for twin in (self.ardusub, self.dvl, self.arm, self.netft):
+            twin.stop()
+        self._diagnostics.destroy()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run the twins until SIGINT/SIGTERM."""
+    sys.exit(run_node(TwinsNode, args, 'hardware_twins', (HardwareError, ValueError, OSError)))
+
+
+if __name__ == '__main__':
+    main()
