@@ -21,12 +21,15 @@ thrusts (the propellers, or the twins' thruster model, do the dynamics).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import yaml
+
+from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, HARDWARE_TWINS, SIMULATOR, NodeSpec
+from uvms_bringup.scenario import Scenario
 
 #: The bridges a hardware file may name, in start order.
 BRIDGES = ('ardusub_bridge', 'dvl_bridge', 'alpha5_bridge', 'netft_bridge')
@@ -42,6 +45,8 @@ PLANT_TOPICS = ('joint_states', 'wrench', 'imu', 'dvl', 'depth', 'position_fix',
 PLACEHOLDER = 'SET-ME'
 #: The shipped hardware file that ``--hardware twin`` names.
 TWIN = 'twin'
+#: Depth of the twins' pool (m): a flat bottom for the DVL where the scenario has none.
+TWIN_POOL_DEPTH_M = 2.0
 
 
 class HardwareFileError(ValueError):
@@ -133,3 +138,52 @@ def load_hardware_plan(path: Path) -> HardwarePlan:
     if not plan:
         raise HardwareFileError(f'{path}: bridges: names no bridge')
     return HardwarePlan(path, twins, plan)
+
+
+def hardware_scenario(scenario: Scenario, plan: HardwarePlan) -> Scenario:
+    """The scenario as it runs on the hardware of ``plan``.
+
+    The controller runs on the estimate (a robot has no ground truth); the allocator sends
+    desired thrusts (the propellers do the dynamics); with twins, the simulator measures
+    with its navigation sensors, over a flat bottom ``TWIN_POOL_DEPTH_M`` down unless the
+    scenario sets one.
+    """
+    overrides = {node: dict(values) for node, values in scenario.overrides.items()}
+    overrides.setdefault('controller', {})['state_source'] = 'estimate'
+    overrides.setdefault('thruster_allocator', {})['thruster_output'] = 'desired'
+    if plan.twins:
+        simulator = overrides.setdefault('simulator', {})
+        simulator['navigation.enabled'] = True
+        if not simulator.get('world.seabed_depth_m'):
+            simulator['world.seabed_depth_m'] = TWIN_POOL_DEPTH_M
+    return replace(scenario, overrides=overrides)
+
+
+def hardware_nodes(nodes: Sequence[NodeSpec], plan: HardwarePlan) -> list[NodeSpec]:
+    """The launch's nodes on hardware: the bridges where the simulator stood.
+
+    With twins the simulator stays, followed by the twins and the bridges; without, the
+    bridges replace it (the robot is the plant).
+    """
+    out: list[NodeSpec] = []
+    for spec in nodes:
+        if spec is SIMULATOR:
+            out += [SIMULATOR, HARDWARE_TWINS] if plan.twins else []
+            out += [HARDWARE_BRIDGES[name] for name in plan.bridges]
+        else:
+            out.append(spec)
+    return out
+
+
+def hardware_parameters(nodes: Sequence[NodeSpec], plan: HardwarePlan
+                        ) -> dict[str, dict[str, Any]]:
+    """Parameters per node name that the hardware adds: connections, and the clock.
+
+    Without twins there is no simulator and so no ``/clock``: every node runs on wall time.
+    """
+    values: dict[str, dict[str, Any]] = {name: dict(p) for name, p in plan.bridges.items()}
+    values[HARDWARE_TWINS.name] = plan.twin_parameters()
+    for spec in nodes:
+        if spec.name in values or spec.uses_sim_time:
+            values.setdefault(spec.name, {})['use_sim_time'] = plan.twins
+    return values

@@ -92,6 +92,19 @@ ESTIMATOR = NodeSpec(
     'estimator', 'uvms_navigation', 'estimator', 'uvms_navigation.estimator_node',
     'EstimatorNode', (), takes_robot=True,
 )
+#: The hardware bridges (uvms_hardware; ``uvms launch --hardware``), by node name.
+HARDWARE_BRIDGES = {
+    name: NodeSpec(name, 'uvms_hardware', name, f'uvms_hardware.{name}_node', class_name, (),
+                   takes_robot=True)
+    for name, class_name in (('ardusub_bridge', 'ArduSubBridgeNode'),
+                             ('dvl_bridge', 'DvlBridgeNode'),
+                             ('alpha5_bridge', 'Alpha5BridgeNode'),
+                             ('netft_bridge', 'NetFtBridgeNode'))}
+#: The protocol twins on the simulator (``uvms launch --hardware twin``).
+HARDWARE_TWINS = NodeSpec(
+    'hardware_twins', 'uvms_hardware', 'hardware_twins', 'uvms_hardware.twins_node',
+    'TwinsNode', (), takes_robot=True,
+)
 #: What the recorder records beside its defaults when the estimator runs.
 NAVIGATION_TOPICS = (
     'imu:sensor_msgs/msg/Imu',

@@ -22,6 +22,12 @@ from typing import Any
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
+from uvms_bringup.hardware_plan import (
+    HardwarePlan,
+    hardware_nodes,
+    hardware_parameters,
+    hardware_scenario,
+)
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     MISSION,
@@ -69,9 +75,12 @@ def ros_arguments(
     namespace: str,
     parameter_files: Iterable[Path],
     log_level: str | None = None,
+    remaps: Iterable[tuple[str, str]] = (),
 ) -> list[str]:
-    """``--ros-args`` of a node: its name and namespace remapped, its parameter files."""
+    """``--ros-args`` of a node: its name, namespace and topics remapped, its parameter files."""
     args = ['--ros-args', '-r', f'__node:={spec.name}', '-r', f'__ns:=/{namespace.strip("/")}']
+    for source, target in remaps:
+        args += ['-r', f'{source}:={target}']
     for path in parameter_files:
         args += ['--params-file', str(path)]
     if log_level is not None:
@@ -92,6 +101,7 @@ def plan_launch(
     extra_overrides: Mapping[str, Mapping[str, Any]] | None = None,
     bin_dir: Path | None = None,
     foxglove: tuple[str, int] | None = None,
+    hardware: HardwarePlan | None = None,
 ) -> list[NodeProcessSpec]:
     """The node processes of a launch, with one generated parameter file each.
 
@@ -107,6 +117,8 @@ def plan_launch(
         extra_overrides: Further parameters per node name (tests, benchmarks).
         bin_dir: Directory of the console scripts (that of ``sys.executable`` if None).
         foxglove: Host and port of a Foxglove live view (``foxglove_server``); None: none.
+        hardware: The hardware file's plan (``--hardware``): bridges, twins; None: the
+            simulator alone. The scenario must already be ``hardware_scenario``'s.
 
     Returns:
         The processes in start order: simulator, controller, thruster allocator,
@@ -121,8 +133,16 @@ def plan_launch(
     run_values: dict[str, dict[str, Any]] = {}
     plans: list[NodeProcessSpec] = []
     mission = scenario is not None and bool(scenario.mission)
-    for spec in graph_nodes(record=output is not None, foxglove=foxglove is not None,
-                            mission=mission, estimator=uses_estimator(scenario)):
+    nodes = graph_nodes(record=output is not None, foxglove=foxglove is not None,
+                        mission=mission, estimator=uses_estimator(scenario))
+    remaps: list[tuple[str, str]] = []
+    if hardware is not None:
+        nodes = tuple(hardware_nodes(nodes, hardware))
+        added = hardware_parameters(nodes, hardware)
+        extra_overrides = {name: {**added.get(name, {}), **(extra_overrides or {}).get(name, {})}
+                           for name in {*added, *(extra_overrides or {})}}
+        remaps = hardware.simulator_remaps()
+    for spec in nodes:
         if spec is MISSION:
             assert scenario is not None
             plans.append(_mission_process(scenario, namespace, parameters_dir, log_level,
@@ -150,7 +170,8 @@ def plan_launch(
         generated.write_text(parameters_file_text({f'{fq_prefix}/{spec.name}': overrides}),
                              encoding='utf-8')
         command = [*node_executable(spec, bin_dir),
-                   *ros_arguments(spec, namespace, [*files, generated], log_level)]
+                   *ros_arguments(spec, namespace, [*files, generated], log_level,
+                                  remaps if spec is SIMULATOR else ())]
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated))
     return plans
@@ -184,6 +205,7 @@ def launch_graph(
     config: Path | None = None,
     foxglove: tuple[str, int] | None = None,
     robot: str | None = None,
+    hardware: HardwarePlan | None = None,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -203,6 +225,9 @@ def launch_graph(
         foxglove: Host and port of a Foxglove live view (a ``foxglove_server`` process);
             None starts none.
         robot: Robot folder (``robot_name`` of the nodes); None: the scenario's or default.
+        hardware: A hardware file's plan (``--hardware``): the bridges stand where the
+            simulator's device topics were, with the twins on the simulator or on the
+            robot (docs/hardware.md); None: the simulator alone.
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -218,6 +243,10 @@ def launch_graph(
     """
     ros_environment_defaults()
     extra: dict[str, dict[str, Any]] = {}
+    if hardware is not None:
+        if scenario is None:
+            raise LaunchError('--hardware needs a scenario (its robot, its mission)')
+        scenario = hardware_scenario(scenario, hardware)
     if scenario is not None:
         scenario = _check_overrides(scenario.with_changes(robot=robot), namespace, config)
     elif robot is not None:
@@ -233,9 +262,11 @@ def launch_graph(
             plans = plan_launch(scenario, mode, Path(parameters_dir), duration_s=duration_s,
                                 output_path=output_path, namespace=namespace, config=config,
                                 log_level='warn' if quiet else None, foxglove=foxglove,
-                                extra_overrides=extra)
+                                extra_overrides=extra, hardware=hardware)
             launcher = Launcher(plans)
-            return _run(launcher, stop, mode, duration_s, quiet)
+            # On the robot no simulator ends the run: it runs until Ctrl-C or a failure.
+            plant = hardware is None or hardware.twins
+            return _run(launcher, stop, mode, duration_s if plant else None, quiet)
     finally:
         if own_stop is not None:
             own_stop.restore()

@@ -163,6 +163,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="robot folder of uvms_description (default: the scenario's "
                              'robot:, else paper_uvms; uvms doctor lists them)')
     launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
+    launch.add_argument(
+        '--hardware', metavar='twin|FILE',
+        help='drive the hardware bridges (ArduSub, DVL, Alpha 5, Net F/T) named by a hardware '
+             'file (config/hardware/NAME.yaml or a path): "twin" runs them against protocol '
+             'twins fed by the simulator (docs/hardware.md)')
     _add_foxglove_arguments(launch)
     for name, (_, help_text) in DELEGATED.items():
         sub.add_parser(name, help=help_text, add_help=False)
@@ -237,9 +242,16 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             scenario = scenario.with_changes(duration_s=duration)
             if args.duration is None:
                 duration = scenario.duration_s
+        hardware = None
+        if args.hardware is not None:
+            from uvms_bringup.hardware_plan import hardware_file_path, load_hardware_plan
+            from uvms_bringup.launch_helpers import config_dir
+
+            hardware = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
         return launch_graph(scenario, args.mode, duration_s=duration,
                             output_path=args.output, quiet=args.quiet, stop=stop,
-                            foxglove=_foxglove_address(args), robot=args.robot)
+                            foxglove=_foxglove_address(args), robot=args.robot,
+                            hardware=hardware)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))
         return EXIT_USAGE
