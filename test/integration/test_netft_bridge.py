@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -21,6 +22,7 @@ from uvms_hardware.twins.netft_twin import NetFtTwin
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
 FAILURE = TransitionCallbackReturn.FAILURE
+SUCCESS = TransitionCallbackReturn.SUCCESS
 
 
 class Rig:
@@ -147,8 +149,25 @@ def test_deactivate_stops_the_stream(rig: Rig) -> None:
 
 
 def test_absent_box_is_refused_at_configure(rig: Rig) -> None:
-    """Nothing at the address: configure fails naming it."""
+    """Nothing at the address for startup_wait_s: configure fails naming it."""
     rig.twin.stop()
-    bridge = rig.start_bridge(autostart=False, answer_timeout_s=0.2)
+    bridge = rig.start_bridge(autostart=False, answer_timeout_s=0.2, startup_wait_s=0.5)
+    started = time.monotonic()
     assert bridge.trigger_configure() == FAILURE
+    assert time.monotonic() - started >= 0.5
     assert f'127.0.0.1:{rig.twin.port}' in bridge.configure_error
+
+
+def test_a_box_that_comes_up_after_the_bridge_is_found(rig: Rig) -> None:
+    """Launch order: the box answers 1 s after configure began; configure waits for it."""
+    port = rig.twin.port
+    rig.twin.stop()
+    late = NetFtTwin(port=port, rate_hz=200.0)
+    timer = threading.Timer(1.0, late.start)
+    timer.start()
+    try:
+        bridge = rig.start_bridge(autostart=False, answer_timeout_s=0.2, startup_wait_s=5.0)
+        assert bridge.trigger_configure() == SUCCESS
+    finally:
+        timer.join()
+        late.stop()

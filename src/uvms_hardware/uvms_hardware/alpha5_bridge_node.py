@@ -64,6 +64,9 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
     ('velocity_gain_rad_s_per_n_m', 0.1, 'Admittance of the velocity fallback (rad/s per N m)'),
     ('jaw_joint', '', "The jaws' joint name; empty: the jaws are not driven (no URDF joint)"),
     ('answer_timeout_s', 0.2, 'Time a device has to answer at configure (s)'),
+    ('startup_wait_s', 10.0,
+     'While no device answers at all, configure asks again for this long (s): the arm or its '
+     'link may come up after the bridge (launch order); 0 asks once'),
     ('silent_timeout_s', 0.2, 'A joint without an answer this long is silent (s)'),
 )
 
@@ -115,7 +118,14 @@ class Alpha5BridgeNode(LifecycleNode):
             link = open_link(parse_connection(str(v['connection']), arm.udp_port))
         except (HardwareError, ValueError) as exc:
             return self._refuse([str(exc)])
-        errors = [e for drive in arm.drives for e in self._check(link, core, drive)]
+        deadline_s = self.now_s() + float(v['startup_wait_s'])
+        while True:
+            errors = [e for drive in arm.drives for e in self._check(link, core, drive)]
+            if not self.modes_before and errors and self.now_s() < deadline_s:
+                self.get_logger().info(f'no device answers on {v["connection"]} yet: asking '
+                                       'again', throttle_duration_sec=2.0)
+                continue
+            break
         if errors:
             link.close()
             return self._refuse(errors)

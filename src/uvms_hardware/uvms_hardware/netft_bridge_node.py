@@ -51,6 +51,9 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
     ('watchdog_timeout_s', 0.1, 'No record for this long: stop publishing, diagnostics (s)'),
     ('poll_rate_hz', 500.0, 'How often the socket is read; every record is published (Hz)'),
     ('answer_timeout_s', 0.5, 'Time the box has to send its first record at configure (s)'),
+    ('startup_wait_s', 10.0,
+     'While the box sends nothing, configure asks again for this long (s): it may come up '
+     'after the bridge (launch order); 0 asks once'),
 )
 
 
@@ -101,11 +104,17 @@ class NetFtBridgeNode(LifecycleNode):
             link = UdpLink(host, port)
         except (HardwareError, ValueError, OSError) as exc:
             return self._refuse(str(exc))
-        link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
         timeout_s = float(v['answer_timeout_s'])
-        seen = collect(link, lambda chunk: [1] if chunk and not len(chunk) % rdt.RECORD_BYTES
-                       else [], [1], timeout_s)
-        link.send(rdt.encode_request(rdt.COMMAND_STOP))
+        deadline_s = self.now_s() + float(v['startup_wait_s'])
+        while True:
+            link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
+            seen = collect(link, lambda chunk: [1] if chunk and not len(chunk) % rdt.RECORD_BYTES
+                           else [], [1], timeout_s)
+            link.send(rdt.encode_request(rdt.COMMAND_STOP))
+            if seen or self.now_s() >= deadline_s:
+                break
+            self.get_logger().info(f'no record from {host}:{port} yet: asking again',
+                                   throttle_duration_sec=2.0)
         if not seen:
             link.close()
             return self._refuse(f'no RDT record from {host}:{port} within {timeout_s:g} s')

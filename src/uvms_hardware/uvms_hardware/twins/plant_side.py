@@ -79,7 +79,7 @@ class ThrusterTwin:
 
 
 def effort_limits_n_m(robot_name: str) -> dict[str, float]:
-    """joint -> the URDF's effort limit (N m; inf where the URDF gives none)."""
+    """The URDF's effort limit of each joint (N m; inf where the URDF gives none)."""
     return {joint: limits[3] if limits[3] > 0.0 else math.inf
             for joint, limits in urdf_joint_limits(robot_name).items()}
 
@@ -93,7 +93,8 @@ def joint_torques(commands: Mapping[str, tuple[Mode, float]],
     Args:
         commands: joint -> (mode, setpoint) from the arm twin (rad, rad/s or mA).
         current_torques: joint -> torque of a Current-mode setpoint (I Kt N eta), else None.
-        positions: joint -> angle (rad). velocities: joint -> rate (rad/s).
+        positions: joint -> angle (rad).
+        velocities: joint -> rate (rad/s).
         effort_limits: joint -> the URDF's effort limit (N m).
     """
     torques = {}
