@@ -1,0 +1,1 @@
+"""Protocol twins of the robot's devices (no ROS): what the bridges are tested against."""
