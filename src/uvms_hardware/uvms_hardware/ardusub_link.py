@@ -199,7 +199,8 @@ class ArduSubLink:
                 seen = ', '.join(f'system {s} type {t} autopilot {a}' for s, t, a in others)
                 raise DeviceCheckError(
                     f'{url}: no ArduSub: heartbeats from {seen}, none of MAV_TYPE_SUBMARINE '
-                    f'({MAV.MAV_TYPE_SUBMARINE}) with ArduPilot ({MAV.MAV_AUTOPILOT_ARDUPILOTMEGA})')
+                    f'({MAV.MAV_TYPE_SUBMARINE}) with ArduPilot '
+                    f'({MAV.MAV_AUTOPILOT_ARDUPILOTMEGA})')
             raise DeviceCheckError(f'{url}: no vehicle HEARTBEAT within {timeout_s:g} s')
 
     def read_param(self, name: str) -> float | None:
@@ -245,7 +246,7 @@ class ArduSubLink:
                                'check that the vehicle obeys our RC overrides')
 
     def failsafe_warnings(self) -> list[str]:
-        """What leaves a lost link unprotected (FS_GCS_ENABLE, FS_PILOT_INPUT, RC_OVERRIDE_TIME)."""
+        """Where a lost link is unprotected: FS_GCS_ENABLE, FS_PILOT_INPUT, RC_OVERRIDE_TIME."""
         fs_gcs, fs_pilot = self.read_param('FS_GCS_ENABLE'), self.read_param('FS_PILOT_INPUT')
         override_s = self.read_param('RC_OVERRIDE_TIME')
         warnings = []
@@ -336,12 +337,19 @@ class ArduSubLink:
 
     # -- the running path --------------------------------------------------------------
     def pwm_for(self, thrusts_n: Sequence[float]) -> dict[int, int]:
-        """Channel -> PWM (µs) of each thruster's thrust (N), direction applied here once."""
+        """Channel -> PWM (µs) of each thruster's thrust (N), direction applied here once.
+
+        Raises:
+            ValueError: not one thrust per thruster.
+        """
         s, voltage_v = self.settings, self.vehicle.voltage_v
+        if len(thrusts_n) != len(s.thruster_channels):
+            raise ValueError(f'{len(thrusts_n)} thrusts for {len(s.thruster_channels)} '
+                             'thrusters')
         return {channel: clamp_pwm(self.curve.pwm_from_thrust(direction * thrust, voltage_v),
                                    self.curve.min_pwm_us, self.curve.max_pwm_us)
-                for channel, direction, thrust in zip(s.thruster_channels,
-                                                      s.thruster_directions, thrusts_n)}
+                for channel, direction, thrust in zip(
+                    s.thruster_channels, s.thruster_directions, thrusts_n, strict=True)}
 
     def send_override(self, pwm_by_channel: dict[int, int], others_1_8: int = IGNORE_1_8
                       ) -> None:

@@ -327,8 +327,8 @@ class ArduSubTwin:
             if m == MAV.MAVLINK_MSG_ID_ATTITUDE_QUATERNION:
                 mav.attitude_quaternion_send(boot_ms, *plant.quaternion_wxyz, *plant.rates_rad_s)
             elif m == MAV.MAVLINK_MSG_ID_RAW_IMU:
-                acc = [int(round(a / 9.80665 * 1000.0)) for a in plant.specific_force_m_s2]
-                gyro = [int(round(w * 1000.0)) for w in plant.rates_rad_s]
+                acc = [round(a / 9.80665 * 1000.0) for a in plant.specific_force_m_s2]
+                gyro = [round(w * 1000.0) for w in plant.rates_rad_s]
                 mav.raw_imu_send(boot_ms * 1000, *acc, *gyro, 0, 0, 0)
             elif m == MAV.MAVLINK_MSG_ID_SCALED_PRESSURE2:
                 mav.scaled_pressure2_send(boot_ms, plant.pressure_pa / 100.0, 0.0, 1500)
