@@ -24,6 +24,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
+            'ardusub_bridge = uvms_hardware.entry_points:ardusub_bridge',
+            'dvl_bridge = uvms_hardware.entry_points:dvl_bridge',
         ],
     },
 )

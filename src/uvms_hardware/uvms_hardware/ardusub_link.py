@@ -62,6 +62,7 @@ class LinkSettings:
         gcs_component_id: Our component id (MAV_COMP_ID_MISSIONPLANNER, as a GCS).
         reply_timeout_s: Wait for one parameter or command answer (s).
         retries: Tries of a parameter read or command.
+        silent_after_s: No vehicle HEARTBEAT this long: restore without waiting for answers.
     """
 
     url: str
@@ -71,6 +72,7 @@ class LinkSettings:
     gcs_component_id: int = MAV.MAV_COMP_ID_MISSIONPLANNER
     reply_timeout_s: float = 0.5
     retries: int = 3
+    silent_after_s: float = 1.0
 
     def __post_init__(self) -> None:
         """Check channels 1-8, distinct, and one direction of +-1 per thruster."""
@@ -256,9 +258,6 @@ class ArduSubLink:
             warnings.append(f'FS_PILOT_INPUT = {fs_pilot}: no pilot-input failsafe')
         if override_s is None or override_s < 0:
             warnings.append(f'RC_OVERRIDE_TIME = {override_s}: overrides never expire')
-        warnings.append('in RC passthrough a failsafe disarm does not stop the thrusters and '
-                        'what an output does after its override expires is unknown: only '
-                        "this bridge's watchdog (neutral after 0.1 s) protects them")
         return warnings
 
     def request_telemetry(self, rates_hz: dict[str, float]) -> None:
@@ -318,15 +317,19 @@ class ArduSubLink:
         Every step is tried even when one fails (a vehicle gone silent); what could not be
         done is returned, one line each, for the node to log.
         """
-        problems = []
+        problems: list[str] = []
         if self.conn is None:
             return ['no connection']
+        if self.link_age_s() > self.settings.silent_after_s:
+            return self._restore_blind()
         for _ in range(3):
             self.neutral()
         try:
             self.arm(False)
         except DeviceCheckError as exc:
             problems.append(str(exc))
+            if self.link_age_s() > self.settings.silent_after_s:
+                return problems + self._restore_blind()
         for channel, value in list(self.changed_functions.items()):
             if self.set_param(f'SERVO{channel}_FUNCTION', value) == value:
                 del self.changed_functions[channel]
@@ -334,6 +337,21 @@ class ArduSubLink:
                 problems.append(f'SERVO{channel}_FUNCTION not restored to {value:g}')
         self.release()
         return problems
+
+    def _restore_blind(self) -> list[str]:
+        """Restore without waiting for answers: the vehicle has gone silent."""
+        v = self.vehicle
+        self.neutral()
+        self.conn.mav.command_long_send(v.system_id, v.component_id,
+                                        MAV.MAV_CMD_COMPONENT_ARM_DISARM, 0, *[0.0] * 7)
+        for channel, value in self.changed_functions.items():
+            self.conn.mav.param_set_send(v.system_id, v.component_id,
+                                         f'SERVO{channel}_FUNCTION'.encode(), value,
+                                         MAV.MAV_PARAM_TYPE_INT16)
+        self.release()
+        return [f'vehicle silent for {self.link_age_s():.1f} s: neutral, disarm, '
+                f'SERVOn_FUNCTION of outputs {sorted(self.changed_functions)} and release '
+                'sent without confirmation; check the vehicle']
 
     # -- the running path --------------------------------------------------------------
     def pwm_for(self, thrusts_n: Sequence[float]) -> dict[int, int]:
