@@ -196,7 +196,7 @@ def test_a_vehicle_that_stops_answering_is_an_error_on_diagnostics(rig: Rig) -> 
 
 
 def test_telemetry_is_published_as_the_simulator_publishes_it(rig: Rig) -> None:
-    """imu in base_link_frd (FRD, -g on z), depth in map_ned (z down), battery in volts."""
+    """Imu in base_link_frd (FRD, -g on z), depth in map_ned (z down), battery in volts."""
     imu, depth = rig.collect('imu', Imu), rig.collect('depth', PoseWithCovarianceStamped)
     battery = rig.collect('battery', BatteryState)
     half = math.sqrt(0.5)

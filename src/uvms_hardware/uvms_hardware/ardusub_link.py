@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from pymavlink import mavutil
+from pymavlink import mavutil  # type: ignore[import-untyped]
 
 from uvms_hardware.errors import DeviceCheckError
 from uvms_hardware.t200_curve import T200Curve, clamp_pwm

@@ -40,7 +40,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
-from pymavlink import mavutil
+from pymavlink import mavutil  # type: ignore[import-untyped]
 
 from uvms_hardware.address import LOOPBACK
 
