@@ -23,6 +23,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import BatteryState, Imu
+from std_srvs.srv import Trigger
 from uvms_hardware.ardusub_bridge_node import ArduSubBridgeNode
 from uvms_hardware.t200_curve import robot_curve
 from uvms_hardware.twins.ardusub_twin import ArduSubTwin
@@ -213,6 +214,23 @@ def test_telemetry_is_published_as_the_simulator_publishes_it(rig: Rig) -> None:
     assert depth[-1].pose.pose.position.z == pytest.approx(2.0, abs=1e-3)
     assert depth[-1].pose.covariance[14] < 1.0 < depth[-1].pose.covariance[0]
     assert battery[-1].voltage == pytest.approx(15.2, abs=1e-3)
+
+
+def test_zero_depth_takes_the_pressure_now_as_the_surface(rig: Rig) -> None:
+    """~/zero_depth at 0.5 m of plant depth: depth reads 0 there and 0.5 m deeper reads 0.5."""
+    depth = rig.collect('depth', PoseWithCovarianceStamped)
+    rig.twin.set_plant_state(depth_m=0.5)
+    rig.start_bridge()
+    rig.spin_until(lambda: bool(depth), 5.0, 'depth')
+    client = rig.probe.create_client(Trigger, 'ardusub_bridge/zero_depth')
+    future = client.call_async(Trigger.Request())
+    rig.spin_until(future.done, 5.0, 'the zero_depth answer')
+    assert future.result().success, future.result().message
+    rig.twin.set_plant_state(depth_m=1.0)
+    depth.clear()
+    rig.spin_until(lambda: bool(depth) and depth[-1].pose.pose.position.z > 0.4, 5.0,
+                   'the deeper depth')
+    assert depth[-1].pose.pose.position.z == pytest.approx(0.5, abs=1e-3)
 
 
 def _bridge_process(twin: ArduSubTwin) -> subprocess.Popen[str]:

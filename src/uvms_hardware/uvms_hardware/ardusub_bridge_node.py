@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass
 from typing import Any
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
@@ -42,23 +41,14 @@ from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
 from uvms_hardware.errors import DeviceCheckError, HardwareError
-from uvms_hardware.hardware_config import hardware_section, robot_folder
+from uvms_hardware.hardware_config import Spec, hardware_section, robot_folder
 from uvms_hardware.t200_curve import T200Curve
 from uvms_hardware.watchdog import CommandWatchdog
 from uvms_msgs.msg import ActuatorCommand
 
 SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
-
-
-@dataclass(frozen=True)
-class Spec:
-    """A parameter: name, default, description with unit, range."""
-
-    name: str
-    default: Any
-    description: str
-    min_value: float | None = None
-    max_value: float | None = None
+#: Telemetry intervals are asked for again this often (s), as RDML's ardusub_manager does.
+TELEMETRY_REQUEST_PERIOD_S = 20.0
 
 
 SPECS = (
@@ -122,6 +112,8 @@ class ArduSubBridgeNode(LifecycleNode):
         self._dirty = False  # activate changed the vehicle: put it back once
         self._link_lost = False
         self._pressure_pa = math.nan
+        self.telemetry_rates_hz: dict[str, float] = {}
+        self._next_request_s = math.inf
         self._entities: list[Any] = []
         self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
         self._diagnostics.add('vehicle', self._report)
@@ -147,9 +139,12 @@ class ArduSubBridgeNode(LifecycleNode):
             name, gcs_id = self.link.check_gcs_id()
             self.warnings = self.link.failsafe_warnings()
             imu_hz = float(v['imu_rate_hz'])
-            self.link.request_telemetry({'ATTITUDE_QUATERNION': imu_hz, 'RAW_IMU': imu_hz,
-                                         'SCALED_PRESSURE2': float(v['depth_rate_hz']),
-                                         'SYS_STATUS': float(v['battery_rate_hz'])})
+            self.telemetry_rates_hz = {
+                'ATTITUDE_QUATERNION': imu_hz, 'RAW_IMU': imu_hz,
+                'SCALED_PRESSURE2': float(v['depth_rate_hz']),
+                'SYS_STATUS': float(v['battery_rate_hz'])}
+            self.link.request_telemetry(self.telemetry_rates_hz)
+            self._next_request_s = self._now_s() + TELEMETRY_REQUEST_PERIOD_S
         except (DeviceCheckError, ValueError, OSError) as exc:
             self.get_logger().error(f'configure failed: {exc}')
             self._close_link()
@@ -261,6 +256,10 @@ class ArduSubBridgeNode(LifecycleNode):
             link.service()
         except OSError as exc:
             self.get_logger().error(f'MAVLink: {exc}', throttle_duration_sec=1.0)
+        if self._now_s() >= self._next_request_s:
+            # A rebooted autopilot forgets the intervals: asked again, without waiting.
+            self._next_request_s = self._now_s() + TELEMETRY_REQUEST_PERIOD_S
+            link.request_telemetry(self.telemetry_rates_hz, wait=False)
         lost = link.link_age_s() > float(self.values['link_timeout_s'])
         if lost != self._link_lost:
             self._link_lost = lost

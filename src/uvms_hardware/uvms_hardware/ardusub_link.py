@@ -260,11 +260,21 @@ class ArduSubLink:
             warnings.append(f'RC_OVERRIDE_TIME = {override_s}: overrides never expire')
         return warnings
 
-    def request_telemetry(self, rates_hz: dict[str, float]) -> None:
-        """MAV_CMD_SET_MESSAGE_INTERVAL (511) for each message (name -> Hz; 0 stops)."""
+    def request_telemetry(self, rates_hz: dict[str, float], wait: bool = True) -> None:
+        """MAV_CMD_SET_MESSAGE_INTERVAL (511) for each message (name -> Hz; 0 stops).
+
+        ``wait`` False sends each once without waiting for its COMMAND_ACK (from a loop that
+        must not stall).
+        """
+        v = self.vehicle
         for name, rate_hz in rates_hz.items():
             interval_us = 1e6 / rate_hz if rate_hz > 0 else -1.0
-            self.command(MAV.MAV_CMD_SET_MESSAGE_INTERVAL, TELEMETRY[name], interval_us)
+            if wait:
+                self.command(MAV.MAV_CMD_SET_MESSAGE_INTERVAL, TELEMETRY[name], interval_us)
+            else:
+                self.conn.mav.command_long_send(v.system_id, v.component_id,
+                                                MAV.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                                TELEMETRY[name], interval_us, 0, 0, 0, 0, 0)
 
     def command(self, command: int, *params: float) -> int | None:
         """COMMAND_LONG; the COMMAND_ACK's result (None when not answered)."""

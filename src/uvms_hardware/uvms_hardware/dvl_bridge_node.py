@@ -29,11 +29,10 @@ from uvms_common.robot_parameters import declare_robot_name
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.address import LOOPBACK, parse_host_port
-from uvms_hardware.ardusub_bridge_node import Spec
 from uvms_hardware.dvl_link import DvlLink
 from uvms_hardware.dvl_protocol import report_in_link, rot_link_from_dvl
 from uvms_hardware.errors import AddressError, DeviceCheckError, HardwareError
-from uvms_hardware.hardware_config import hardware_section, robot_folder
+from uvms_hardware.hardware_config import Spec, hardware_section, robot_folder
 
 SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 DEFAULT_PORT = 16171

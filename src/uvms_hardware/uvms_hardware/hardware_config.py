@@ -6,6 +6,7 @@ here and turns it into its parameters' defaults; ``-p`` and parameter files stil
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -39,3 +40,14 @@ def hardware_section(robot_name: str, section: str, folder: Path | None = None) 
     if not isinstance(tree, dict) or not isinstance(tree.get(section), dict):
         raise HardwareError(f'{path}: no mapping {section!r} at the top level')
     return dict(tree[section])
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A bridge parameter: name, default, description with its unit, valid range."""
+
+    name: str
+    default: Any
+    description: str
+    min_value: float | None = None
+    max_value: float | None = None

@@ -161,3 +161,18 @@ def test_direction_is_applied_once_per_thruster(link: ArduSubLink) -> None:
     link.settings = LinkSettings(link.settings.url, (1, 2), (1, -1))
     pwm = link.pwm_for([10.0, 10.0])
     assert pwm[1] > 1528 and pwm[2] < 1472
+
+
+def test_a_silent_vehicle_is_restored_without_waiting(twin: ArduSubTwin) -> None:
+    """The vehicle stops answering while active: restore sends everything blind, at once."""
+    link = ArduSubLink(LinkSettings(twin.url, ALL, silent_after_s=0.3), robot_curve())
+    link.open()
+    link.wait_vehicle(3.0)
+    link.enable_passthrough()
+    twin.silent = True
+    time.sleep(0.5)
+    start = time.monotonic()
+    problems = link.restore()
+    assert time.monotonic() - start < 0.2
+    assert len(problems) == 1 and 'without confirmation' in problems[0]
+    link.close()
