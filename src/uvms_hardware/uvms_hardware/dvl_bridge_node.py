@@ -59,8 +59,9 @@ class DvlBridgeNode(LifecycleNode):
         try:
             section = hardware_section(self.robot_name, 'dvl')
             source = robot_folder(self.robot_name) / 'hardware.yaml'
-            link_rpy = robot_parameters(self.robot_name, 'estimator')[
-                'navigation.dvl.orientation_rpy'].value
+            navigation = robot_parameters(self.robot_name, 'estimator')
+            link_rpy = navigation['navigation.dvl.orientation_rpy'].value
+            link_position_m = [float(x) for x in navigation['navigation.dvl.position_m'].value]
         except (HardwareError, ValueError, KeyError) as exc:
             raise DvlBridgeError(f'robot {self.robot_name!r}: {exc}') from exc
         robot = {name: RobotParameter(section[key], source) for name, key in (
@@ -71,6 +72,12 @@ class DvlBridgeNode(LifecycleNode):
             f'invalid parameter {spec.name!r}: {exc}'))
         self.rot = rot_link_from_dvl([float(a) for a in self.values['mounting_rpy_rad']],
                                      [float(a) for a in link_rpy])
+        mounted_m = [float(x) for x in section.get('mounting_position_m', link_position_m)]
+        if mounted_m != link_position_m:
+            # The estimator's lever arm is navigation.yaml's: a DVL elsewhere biases it.
+            self.get_logger().warning(
+                f'hardware.yaml dvl.mounting_position_m {mounted_m} differs from navigation.yaml '
+                f'navigation.dvl.position_m {link_position_m}, the lever arm the estimator uses')
         starting = declare_autostart(self)
         guard_change_state(self)
         self.link: DvlLink | None = None

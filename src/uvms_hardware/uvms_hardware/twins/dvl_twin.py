@@ -12,6 +12,7 @@ sends none). Binds 127.0.0.1, port 0 = a free one.
 
 from __future__ import annotations
 
+import argparse
 import json
 import socket
 import threading
@@ -147,3 +148,22 @@ class DvlTwin:
             if now_s >= next_position_s:
                 next_position_s += 1.0
                 self.send_raw(self.position_line(time.time()))
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Run the twin on 127.0.0.1 until interrupted: ``python -m ...dvl_twin --port N``."""
+    parser = argparse.ArgumentParser(description='A Water Linked DVL twin (TCP JSON).')
+    parser.add_argument('--port', type=int, default=16171)
+    parser.add_argument('--rate-hz', type=float, default=10.0)
+    args = parser.parse_args(argv)
+    with DvlTwin(port=args.port, rate_hz=args.rate_hz) as twin:
+        print(f'dvl twin on {twin.url}', flush=True)
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            pass
+
+
+if __name__ == '__main__':
+    main()
