@@ -113,10 +113,15 @@ class T200Curve:
                    float(section.get('neutral_pwm_us', 1500.0)))
 
     @functools.cached_property
-    def _grid(self) -> tuple[FloatArray, FloatArray]:
+    def _knots(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         x, y = np.asarray(self.pwm_us, float), np.asarray(self.thrust_n, float)
+        return x, y, pchip_slopes(x, y)
+
+    @functools.cached_property
+    def _grid(self) -> tuple[FloatArray, FloatArray]:
+        x, y, d = self._knots
         grid = np.arange(x[0], x[-1] + GRID_STEP_US / 2, GRID_STEP_US)
-        return grid, pchip_eval(x, y, pchip_slopes(x, y), grid)
+        return grid, pchip_eval(x, y, d, grid)
 
     @property
     def min_pwm_us(self) -> float:
@@ -137,9 +142,9 @@ class T200Curve:
 
     def thrust_from_pwm(self, pwm_us: float, voltage_v: float | None = None) -> float:
         """Thrust (N) of a pulse (µs, clamped to the table) at ``voltage_v`` (V)."""
-        x, y = np.asarray(self.pwm_us, float), np.asarray(self.thrust_n, float)
+        x, y, d = self._knots
         p = min(max(float(pwm_us), x[0]), x[-1])
-        thrust = float(pchip_eval(x, y, pchip_slopes(x, y), np.array([p]))[0])
+        thrust = float(pchip_eval(x, y, d, np.array([p]))[0])
         return thrust * self.voltage_scale(voltage_v)
 
     def pwm_from_thrust(self, thrust_n: float, voltage_v: float | None = None) -> float:
