@@ -26,6 +26,9 @@ setup(
         'console_scripts': [
             'alpha5_bridge = uvms_hardware.entry_points:alpha5_bridge',
             'netft_bridge = uvms_hardware.entry_points:netft_bridge',
+            'ardusub_bridge = uvms_hardware.entry_points:ardusub_bridge',
+            'dvl_bridge = uvms_hardware.entry_points:dvl_bridge',
+            'hardware_twins = uvms_hardware.entry_points:hardware_twins',
         ],
     },
 )

@@ -37,6 +37,17 @@ class HardwareConfigError(HardwareError, ValueError):
 
 
 @dataclass(frozen=True)
+class Spec:
+    """A bridge parameter: name, default, description with its unit, valid range."""
+
+    name: str
+    default: Any
+    description: str
+    min_value: float | None = None
+    max_value: float | None = None
+
+
+@dataclass(frozen=True)
 class Drive:
     """One Alpha 5 device as a joint of the robot.
 
@@ -95,17 +106,25 @@ class NetFtHardware:
     counts_per_torque: float
 
 
+def robot_folder(robot_name: str) -> Path:
+    """The folder of robot ``robot_name`` (uvms_description's robots/<name>/).
+
+    Raises:
+        HardwareConfigError: No such robot.
+    """
+    try:
+        return robot_files(robot_name).directory
+    except RobotFolderError as exc:
+        raise HardwareConfigError(str(exc)) from exc
+
+
 def hardware_section(robot_name: str, section: str) -> tuple[Path, Mapping[str, Any]]:
     """The ``section`` mapping of the robot's ``hardware.yaml`` and the file's path.
 
     Raises:
         HardwareConfigError: The robot, the file or the section is missing or malformed.
     """
-    try:
-        folder = robot_files(robot_name).directory
-    except RobotFolderError as exc:
-        raise HardwareConfigError(str(exc)) from exc
-    path = folder / HARDWARE_FILE
+    path = robot_folder(robot_name) / HARDWARE_FILE
     try:
         tree = yaml.safe_load(path.read_text(encoding='utf-8'))
     except OSError as exc:

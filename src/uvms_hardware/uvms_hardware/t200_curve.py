@@ -1,0 +1,200 @@
+"""The T200 thrust curve: thrust (N) <-> ESC pulse width (µs) at a battery voltage.
+
+Pure (numpy only). The table is data of the robot folder (``hardware.yaml``, ``ardusub.t200``:
+Blue Robotics' T200 public performance data at 16 V, its dead band and extremes); between its
+points the thrust is interpolated by PCHIP (Fritsch-Carlson monotone cubic, as
+``scipy.interpolate.PchipInterpolator`` computes it), so the curve is monotone wherever the
+table is and flat (zero) across the dead band. Other voltages scale the thrust by
+``(V / V_table) ** voltage_exponent`` (an assumption stated in ``hardware.yaml``).
+
+The sign of each thruster on the frame is not applied here: the caller multiplies its thrust
+by the thruster's direction (+1/-1) once, before ``pwm_from_thrust``::
+
+    curve = T200Curve.from_section(hardware_section('bluerov2_alpha5', 'ardusub')[1]['t200'])
+    pwm_us = curve.pwm_from_thrust(direction * thrust_n, voltage_v)   # 1100..1900
+    thrust_n = direction * curve.thrust_from_pwm(pwm_us, voltage_v)    # the twin's inverse
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Standard gravity (m/s^2): kgf -> N.
+KGF_N = 9.80665
+#: Step of the dense table the inverse interpolates on (µs).
+GRID_STEP_US = 0.25
+
+
+def pchip_slopes(x: FloatArray, y: FloatArray) -> FloatArray:
+    """Knot derivatives of the monotone PCHIP interpolant (Fritsch-Carlson, scipy's rule).
+
+    Interior: weighted harmonic mean of the adjacent secants, 0 where they differ in sign or
+    one is 0; ends: the three-point formula, limited so that monotonicity is kept.
+    """
+    h = np.diff(x)
+    delta = np.diff(y) / h
+    d = np.zeros_like(y)
+    for k in range(1, len(x) - 1):
+        if delta[k - 1] * delta[k] > 0.0:
+            w1, w2 = 2.0 * h[k] + h[k - 1], h[k] + 2.0 * h[k - 1]
+            d[k] = (w1 + w2) / (w1 / delta[k - 1] + w2 / delta[k])
+    for end, (h0, h1, d0, d1) in ((0, (h[0], h[1], delta[0], delta[1])),
+                                  (-1, (h[-1], h[-2], delta[-1], delta[-2]))):
+        slope = ((2.0 * h0 + h1) * d0 - h0 * d1) / (h0 + h1)
+        if np.sign(slope) != np.sign(d0):
+            slope = 0.0
+        elif np.sign(d0) != np.sign(d1) and abs(slope) > abs(3.0 * d0):
+            slope = 3.0 * d0
+        d[end] = slope
+    return d
+
+
+def pchip_eval(x: FloatArray, y: FloatArray, d: FloatArray, xq: FloatArray) -> FloatArray:
+    """The cubic Hermite interpolant of knots (x, y) with slopes d at ``xq`` (inside x)."""
+    k = np.clip(np.searchsorted(x, xq, side='right') - 1, 0, len(x) - 2)
+    h = x[k + 1] - x[k]
+    t = (xq - x[k]) / h
+    h00, h10 = (1 + 2 * t) * (1 - t) ** 2, t * (1 - t) ** 2
+    h01, h11 = t * t * (3 - 2 * t), t * t * (t - 1)
+    result: FloatArray = h00 * y[k] + h10 * h * d[k] + h01 * y[k + 1] + h11 * h * d[k + 1]
+    return result
+
+
+@dataclass(frozen=True)
+class T200Curve:
+    """A thrust-vs-PWM table at one voltage and its voltage scaling.
+
+    Attributes:
+        pwm_us: Table pulse widths (µs), increasing, from ``min_pwm_us`` to ``max_pwm_us``.
+        thrust_n: Thrust at each (N), non-decreasing, zero across the dead band.
+        table_voltage_v: Voltage of the table (V).
+        voltage_exponent: Thrust scales as (V / table_voltage_v) ** voltage_exponent.
+        min_voltage_v, max_voltage_v: Range the scaling is used in (V); outside, clamped.
+        neutral_pwm_us: Zero thrust (µs).
+    """
+
+    pwm_us: tuple[float, ...]
+    thrust_n: tuple[float, ...]
+    table_voltage_v: float = 16.0
+    voltage_exponent: float = 1.5
+    min_voltage_v: float = 10.0
+    max_voltage_v: float = 20.0
+    neutral_pwm_us: float = 1500.0
+
+    def __post_init__(self) -> None:
+        """Check the table: increasing PWM, non-decreasing thrust, zero at neutral."""
+        pwm, thrust = np.asarray(self.pwm_us), np.asarray(self.thrust_n)
+        if len(pwm) < 3 or len(pwm) != len(thrust):
+            raise ValueError(f'T200 table: {len(pwm)} pulse widths, {len(thrust)} thrusts '
+                             '(expected the same number, at least 3)')
+        if not (np.all(np.diff(pwm) > 0) and np.all(np.diff(thrust) >= 0)):
+            raise ValueError('T200 table: pulse widths must increase and thrusts not decrease')
+        if not pwm[0] < self.neutral_pwm_us < pwm[-1]:
+            raise ValueError(f'T200 table: neutral {self.neutral_pwm_us} µs outside the table')
+
+    @classmethod
+    def from_section(cls, section: Mapping[str, Any]) -> T200Curve:
+        """From ``hardware.yaml``'s ``ardusub.t200`` (thrust in kgf there)."""
+        return cls(tuple(float(p) for p in section['pwm_us']),
+                   tuple(float(f) * KGF_N for f in section['thrust_kgf']),
+                   float(section.get('table_voltage_v', 16.0)),
+                   float(section.get('voltage_exponent', 1.5)),
+                   float(section.get('min_voltage_v', 10.0)),
+                   float(section.get('max_voltage_v', 20.0)),
+                   float(section.get('neutral_pwm_us', 1500.0)))
+
+    @functools.cached_property
+    def _knots(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        x, y = np.asarray(self.pwm_us, float), np.asarray(self.thrust_n, float)
+        return x, y, pchip_slopes(x, y)
+
+    @functools.cached_property
+    def _grid(self) -> tuple[FloatArray, FloatArray]:
+        x, y, d = self._knots
+        grid = np.arange(x[0], x[-1] + GRID_STEP_US / 2, GRID_STEP_US)
+        return grid, pchip_eval(x, y, d, grid)
+
+    @property
+    def min_pwm_us(self) -> float:
+        """Shortest pulse (µs): full reverse."""
+        return self.pwm_us[0]
+
+    @property
+    def max_pwm_us(self) -> float:
+        """Longest pulse (µs): full forward."""
+        return self.pwm_us[-1]
+
+    def voltage_scale(self, voltage_v: float | None) -> float:
+        """Thrust at ``voltage_v`` over thrust at the table's voltage (None/NaN: 1)."""
+        if voltage_v is None or not math.isfinite(voltage_v):
+            return 1.0
+        clamped = min(max(voltage_v, self.min_voltage_v), self.max_voltage_v)
+        return float((clamped / self.table_voltage_v) ** self.voltage_exponent)
+
+    def thrust_from_pwm(self, pwm_us: float, voltage_v: float | None = None) -> float:
+        """Thrust (N) of a pulse (µs, clamped to the table) at ``voltage_v`` (V)."""
+        x, y, d = self._knots
+        p = min(max(float(pwm_us), x[0]), x[-1])
+        thrust = float(pchip_eval(x, y, d, np.array([p]))[0])
+        return thrust * self.voltage_scale(voltage_v)
+
+    def pwm_from_thrust(self, thrust_n: float, voltage_v: float | None = None) -> float:
+        """Pulse (µs) giving ``thrust_n`` (N) at ``voltage_v`` (V), clamped to the table.
+
+        Zero (and NaN) gives neutral; a thrust of either sign starts at the dead band's edge,
+        so a small command is not lost in it.
+        """
+        if not math.isfinite(thrust_n) or thrust_n == 0.0:
+            return self.neutral_pwm_us
+        grid, thrust = self._grid
+        target = thrust_n / self.voltage_scale(voltage_v)
+        # Each branch runs from the dead band's edge outwards, where the curve is strictly
+        # increasing (PCHIP of increasing points), so np.interp inverts it and clamps at ends.
+        if target > 0.0:
+            start = int(np.flatnonzero(thrust <= 0.0)[-1])
+            g, f = grid[start:], thrust[start:]
+        else:
+            stop = int(np.flatnonzero(thrust >= 0.0)[0])
+            g, f = grid[:stop + 1], thrust[:stop + 1]
+        return float(np.interp(target, f, g))
+
+
+def clamp_pwm(pwm_us: float, low_us: float = 1100.0, high_us: float = 1900.0) -> int:
+    """A pulse width rounded to whole µs within [low_us, high_us] (NaN: neutral 1500)."""
+    if not math.isfinite(pwm_us):
+        return 1500
+    return round(min(max(pwm_us, low_us), high_us))
+
+
+@functools.lru_cache(maxsize=4)
+def robot_curve(robot_name: str = 'bluerov2_alpha5') -> T200Curve:
+    """The T200 curve of a robot folder's ``hardware.yaml`` (``ardusub.t200``)."""
+    from uvms_hardware.hardware_config import hardware_section
+
+    return T200Curve.from_section(hardware_section(robot_name, 'ardusub')[1]['t200'])
+
+
+def pwm_from_thrust(thrust_n: float, voltage_v: float | None,
+                    curve: T200Curve | None = None) -> float:
+    """Pulse (µs) for ``thrust_n`` (N) at ``voltage_v`` (V); the default robot's curve."""
+    return (curve or robot_curve()).pwm_from_thrust(thrust_n, voltage_v)
+
+
+def thrust_from_pwm(pwm_us: float, voltage_v: float | None,
+                    curve: T200Curve | None = None) -> float:
+    """Thrust (N) of ``pwm_us`` (µs) at ``voltage_v`` (V); the default robot's curve."""
+    return (curve or robot_curve()).thrust_from_pwm(pwm_us, voltage_v)
+
+
+def curve_from_table(pwm_us: Sequence[float], thrust_kgf: Sequence[float]) -> T200Curve:
+    """A 16 V curve from a table in kgf (for tests and tools)."""
+    return T200Curve.from_section({'pwm_us': list(pwm_us), 'thrust_kgf': list(thrust_kgf)})
