@@ -1,8 +1,8 @@
 """The T200 thrust curve: thrust (N) <-> ESC pulse width (µs) at a battery voltage.
 
-Pure (numpy only). The table is data of the robot folder (``hardware.yaml``, ``ardusub.t200``:
+Pure (numpy, scipy). The table is data of the robot folder (``hardware.yaml``, ``ardusub.t200``:
 Blue Robotics' T200 public performance data at 16 V, its dead band and extremes); between its
-points the thrust is interpolated by PCHIP (Fritsch-Carlson monotone cubic, as
+points the thrust is interpolated by PCHIP (Fritsch-Carlson monotone cubic,
 ``scipy.interpolate.PchipInterpolator`` computes it), so the curve is monotone wherever the
 table is and flat (zero) across the dead band. Other voltages scale the thrust by
 ``(V / V_table) ** voltage_exponent`` (an assumption stated in ``hardware.yaml``).
@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from scipy.interpolate import PchipInterpolator
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -32,41 +33,6 @@ FloatArray = npt.NDArray[np.float64]
 KGF_N = 9.80665
 #: Step of the dense table the inverse interpolates on (µs).
 GRID_STEP_US = 0.25
-
-
-def pchip_slopes(x: FloatArray, y: FloatArray) -> FloatArray:
-    """Knot derivatives of the monotone PCHIP interpolant (Fritsch-Carlson, scipy's rule).
-
-    Interior: weighted harmonic mean of the adjacent secants, 0 where they differ in sign or
-    one is 0; ends: the three-point formula, limited so that monotonicity is kept.
-    """
-    h = np.diff(x)
-    delta = np.diff(y) / h
-    d = np.zeros_like(y)
-    for k in range(1, len(x) - 1):
-        if delta[k - 1] * delta[k] > 0.0:
-            w1, w2 = 2.0 * h[k] + h[k - 1], h[k] + 2.0 * h[k - 1]
-            d[k] = (w1 + w2) / (w1 / delta[k - 1] + w2 / delta[k])
-    for end, (h0, h1, d0, d1) in ((0, (h[0], h[1], delta[0], delta[1])),
-                                  (-1, (h[-1], h[-2], delta[-1], delta[-2]))):
-        slope = ((2.0 * h0 + h1) * d0 - h0 * d1) / (h0 + h1)
-        if np.sign(slope) != np.sign(d0):
-            slope = 0.0
-        elif np.sign(d0) != np.sign(d1) and abs(slope) > abs(3.0 * d0):
-            slope = 3.0 * d0
-        d[end] = slope
-    return d
-
-
-def pchip_eval(x: FloatArray, y: FloatArray, d: FloatArray, xq: FloatArray) -> FloatArray:
-    """The cubic Hermite interpolant of knots (x, y) with slopes d at ``xq`` (inside x)."""
-    k = np.clip(np.searchsorted(x, xq, side='right') - 1, 0, len(x) - 2)
-    h = x[k + 1] - x[k]
-    t = (xq - x[k]) / h
-    h00, h10 = (1 + 2 * t) * (1 - t) ** 2, t * (1 - t) ** 2
-    h01, h11 = t * t * (3 - 2 * t), t * t * (t - 1)
-    result: FloatArray = h00 * y[k] + h10 * h * d[k] + h01 * y[k + 1] + h11 * h * d[k + 1]
-    return result
 
 
 @dataclass(frozen=True)
@@ -113,15 +79,14 @@ class T200Curve:
                    float(section.get('neutral_pwm_us', 1500.0)))
 
     @functools.cached_property
-    def _knots(self) -> tuple[FloatArray, FloatArray, FloatArray]:
-        x, y = np.asarray(self.pwm_us, float), np.asarray(self.thrust_n, float)
-        return x, y, pchip_slopes(x, y)
+    def _interpolant(self) -> PchipInterpolator:
+        """Monotone cubic (PCHIP) through the table: no overshoot between its points."""
+        return PchipInterpolator(np.asarray(self.pwm_us, float), np.asarray(self.thrust_n, float))
 
     @functools.cached_property
     def _grid(self) -> tuple[FloatArray, FloatArray]:
-        x, y, d = self._knots
-        grid = np.arange(x[0], x[-1] + GRID_STEP_US / 2, GRID_STEP_US)
-        return grid, pchip_eval(x, y, d, grid)
+        grid = np.arange(self.pwm_us[0], self.pwm_us[-1] + GRID_STEP_US / 2, GRID_STEP_US)
+        return grid, np.asarray(self._interpolant(grid), float)
 
     @property
     def min_pwm_us(self) -> float:
@@ -142,10 +107,8 @@ class T200Curve:
 
     def thrust_from_pwm(self, pwm_us: float, voltage_v: float | None = None) -> float:
         """Thrust (N) of a pulse (µs, clamped to the table) at ``voltage_v`` (V)."""
-        x, y, d = self._knots
-        p = min(max(float(pwm_us), x[0]), x[-1])
-        thrust = float(pchip_eval(x, y, d, np.array([p]))[0])
-        return thrust * self.voltage_scale(voltage_v)
+        p = min(max(float(pwm_us), self.pwm_us[0]), self.pwm_us[-1])
+        return float(self._interpolant(p)) * self.voltage_scale(voltage_v)
 
     def pwm_from_thrust(self, thrust_n: float, voltage_v: float | None = None) -> float:
         """Pulse (µs) giving ``thrust_n`` (N) at ``voltage_v`` (V), clamped to the table.

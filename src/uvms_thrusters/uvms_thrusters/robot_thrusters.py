@@ -9,10 +9,10 @@ physical thrusters of a robot, builds the same from the robot folder alone::
 
 from __future__ import annotations
 
-from uvms_description.robots import robot_parameters, with_description_paths
-from uvms_model import UvmsParameters
 from uvms_model.thrusters import ThrusterLayout
 
+from uvms_description.robots import robot_parameters, with_description_paths
+from uvms_model import UvmsParameters
 from uvms_thrusters.parameter_specs import ALLOCATOR_PARAMETER_SPECS
 from uvms_thrusters.parameters import thruster_parameters_from_flat_dict
 from uvms_thrusters.thruster_dynamics import ThrusterModelParameters
