@@ -40,6 +40,7 @@ from uvms_common.robot_parameters import declare_robot_name
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
+from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import DeviceCheckError, HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
 from uvms_hardware.t200_curve import T200Curve
@@ -55,7 +56,8 @@ SPECS = (
     Spec('mavlink_url', 'udpout:127.0.0.1:14550', 'pymavlink URL of the vehicle: '
          'udpout:HOST:PORT, udpin:HOST:PORT or tcp:HOST:PORT'),
     Spec('gcs_system_id', 255, 'Our MAVLink system id; must equal MAV_GCS_SYSID', 1, 255),
-    Spec('heartbeat_timeout_s', 5.0, 'Wait for the vehicle at configure (s)', 0.1, 60.0),
+    Spec('heartbeat_timeout_s', 10.0, 'Wait for the vehicle at configure (s): it may come up '
+         'after the bridge (launch order)', 0.1, 120.0),
     Spec('reply_timeout_s', 0.5, 'Wait for a parameter or command answer (s)', 0.05, 10.0),
     Spec('link_timeout_s', 1.0, 'Vehicle silent this long: ERROR on /diagnostics (s)', 0.1, 30.0),
     Spec('watchdog_timeout_s', 0.1, 'No command this long: thrusters neutral (s)', 0.01, 1.0),
@@ -80,6 +82,7 @@ class ArduSubBridgeNode(LifecycleNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('ardusub_bridge', **kwargs)
+        self._device_clock = DeviceClock(self)
         self.robot_name = declare_robot_name(self)
         try:
             source, section = hardware_section(self.robot_name, 'ardusub')
@@ -121,7 +124,8 @@ class ArduSubBridgeNode(LifecycleNode):
             raise DeviceCheckError('ardusub_bridge: cannot configure and activate (logged)')
 
     def _now_s(self) -> float:
-        return float(self.get_clock().now().nanoseconds) * 1e-9
+        """The steady clock (s): the link's times (``uvms_hardware.device_clock``)."""
+        return self._device_clock.now_s()
 
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Find ArduSub, check its GCS id and failsafes, ask for telemetry, make publishers."""
@@ -163,8 +167,8 @@ class ArduSubBridgeNode(LifecycleNode):
                                                                 self._battery)]
         self._entities += [
             (self.destroy_service, self.create_service(Trigger, '~/zero_depth', self._zero)),
-            (self.destroy_timer, self.create_timer(1.0 / float(v['override_rate_hz']),
-                                                   self._period))]
+            (self.destroy_timer, self._device_clock.timer(1.0 / float(v['override_rate_hz']),
+                                                          self._period))]
         self.get_logger().info(f'ArduSub system {self.link.vehicle.system_id} at '
                                f'{settings.url}; {name} = {gcs_id} as ours')
         return SUCCESS

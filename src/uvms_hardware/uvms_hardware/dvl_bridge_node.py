@@ -29,6 +29,7 @@ from uvms_common.robot_parameters import declare_robot_name
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.address import LOOPBACK, parse_host_port
+from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.dvl_link import DvlLink
 from uvms_hardware.dvl_protocol import report_in_link, rot_link_from_dvl
 from uvms_hardware.errors import AddressError, DeviceCheckError, HardwareError
@@ -39,7 +40,8 @@ DEFAULT_PORT = 16171
 
 SPECS = (
     Spec('address', LOOPBACK, 'The DVL: HOST[:PORT] (TCP; port 16171 when not given)'),
-    Spec('connect_timeout_s', 3.0, 'Wait for the connection at configure (s)', 0.1, 60.0),
+    Spec('connect_timeout_s', 10.0, 'Wait for the connection at configure (s): the DVL may '
+         'come up after the bridge (launch order)', 0.1, 120.0),
     Spec('reconnect_period_s', 1.0, 'Between connection attempts (s)', 0.05, 60.0),
     Spec('timeout_s', 1.0, 'No report this long: the DVL is silent, ERROR (s)', 0.1, 30.0),
     Spec('mounting_rpy_rad', [0.0, 0.0, 0.0], "The DVL's own frame in base_link_frd (rad)"),
@@ -55,6 +57,7 @@ class DvlBridgeNode(LifecycleNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('dvl_bridge', **kwargs)
+        self._device_clock = DeviceClock(self)
         self.robot_name = declare_robot_name(self)
         try:
             source, section = hardware_section(self.robot_name, 'dvl')
@@ -106,7 +109,7 @@ class DvlBridgeNode(LifecycleNode):
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._dvl = self.create_publisher(TwistWithCovarianceStamped, 'dvl', qos)
         self._entities = [(self.destroy_publisher, self._dvl),
-                          (self.destroy_timer, self.create_timer(0.01, self._drain))]
+                          (self.destroy_timer, self._device_clock.timer(0.01, self._drain))]
         self.get_logger().info(f'DVL at {address.host}:{address.port}; publishing dvl')
         return SUCCESS
 
