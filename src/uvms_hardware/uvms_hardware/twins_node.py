@@ -20,6 +20,7 @@ file says (127.0.0.1 in ``config/hardware/twin.yaml``).
 
 from __future__ import annotations
 
+import math
 import sys
 from typing import Any
 
@@ -52,6 +53,8 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     'battery_voltage_v': (16.0, 'Battery voltage the ArduSub twin reports and the T200 curve '
                                 'is read at (V)'),
     'dvl_lost_s': (0.5, 'No DVL reading from the simulator for this long: no bottom lock (s)'),
+    'dvl_altitude_m': (1.85, 'Altitude the DVL twin reports (m; the simulated reading has '
+                              'none)'),
     'ardusub_bridge.connection': ('udpout:127.0.0.1:14551', 'Where the ArduSub bridge '
                                   'connects (the twin listens there)'),
     'dvl_bridge.connection': ('127.0.0.1:16171', 'Where the DVL bridge connects'),
@@ -84,6 +87,7 @@ class TwinsNode(Node):
              for name, (default, _) in PARAMETERS.items()}
         self._voltage_v = float(v['battery_voltage_v'])
         self._dvl_lost_s = float(v['dvl_lost_s'])
+        self._altitude_m = float(v['dvl_altitude_m'])
         _, ardusub = hardware_section(robot, 'ardusub')
         self._rho = float(ardusub['depth']['water_density_kg_m3'])
         self._surface_pa = float(ardusub['depth']['surface_pressure_pa'])
@@ -157,7 +161,9 @@ class TwinsNode(Node):
     def _on_dvl(self, msg: TwistWithCovarianceStamped) -> None:
         v = msg.twist.twist.linear
         self._last_dvl_s = self._clock.now_s()
-        self.dvl.set_velocity((v.x, v.y, v.z), True, 0.002, 1.0)
+        # The simulated reading's sigma as the figure of merit (the bridge's variance: fom^2).
+        self.dvl.set_velocity((v.x, v.y, v.z), True, math.sqrt(msg.twist.covariance[0]),
+                              self._altitude_m)
 
     def _on_tick(self) -> None:
         now_s = self._clock.now_s()
