@@ -165,7 +165,7 @@ def test_limit_mismatch_is_refused_naming_the_joint(rig: Rig) -> None:
 def test_silent_joint_is_refused(rig: Rig) -> None:
     """The wrist answering nothing: configure fails naming joint_4 as silent."""
     rig.twin.set_silent(0x02)
-    bridge = rig.start_bridge(autostart=False, answer_timeout_s=0.1)
+    bridge = rig.start_bridge(autostart=False, answer_timeout_s=0.1, startup_wait_s=0.5)
     assert bridge.trigger_configure() == FAILURE
     assert bridge.configure_errors == ['joint_4 (device 0x02, B): silent: no MODEL answer '
                                        'within 0.1 s']

@@ -40,7 +40,7 @@ from uvms_hardware.alpha5_core import (
     Alpha5Core,
     check_device,
 )
-from uvms_hardware.device_clock import DeviceClock
+from uvms_hardware.device_clock import DeviceClock, stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Drive, load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId
@@ -120,12 +120,13 @@ class Alpha5BridgeNode(LifecycleNode):
             return self._refuse([str(exc)])
         deadline_s = self.now_s() + float(v['startup_wait_s'])
         while True:
+            self.modes_before.clear()
             errors = [e for drive in arm.drives for e in self._check(link, core, drive)]
-            if not self.modes_before and errors and self.now_s() < deadline_s:
-                self.get_logger().info(f'no device answers on {v["connection"]} yet: asking '
-                                       'again', throttle_duration_sec=2.0)
-                continue
-            break
+            answered = all(d.device_id in self.modes_before for d in arm.drives)
+            if answered or self.now_s() >= deadline_s or stop_requested():
+                break
+            self.get_logger().info(f'not every device answers on {v["connection"]} yet: '
+                                   'asking again', throttle_duration_sec=2.0)
         if errors:
             link.close()
             return self._refuse(errors)

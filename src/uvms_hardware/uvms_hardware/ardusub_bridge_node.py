@@ -40,7 +40,7 @@ from uvms_common.robot_parameters import declare_robot_name
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
-from uvms_hardware.device_clock import DeviceClock
+from uvms_hardware.device_clock import DeviceClock, stop_requested
 from uvms_hardware.errors import DeviceCheckError, HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
 from uvms_hardware.t200_curve import T200Curve
@@ -137,6 +137,7 @@ class ArduSubBridgeNode(LifecycleNode):
                 reply_timeout_s=float(v['reply_timeout_s']),
                 silent_after_s=float(v['link_timeout_s']))
             self.link = ArduSubLink(settings, self.curve)
+            self.link.stop_requested = stop_requested
             self.link.open()
             self.link.wait_vehicle(float(v['heartbeat_timeout_s']))
             name, gcs_id = self.link.check_gcs_id()

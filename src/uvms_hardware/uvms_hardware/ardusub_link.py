@@ -118,6 +118,8 @@ class ArduSubLink:
         self._next_heartbeat_s = -math.inf
         #: Telemetry callback: called with each message of TELEMETRY as it arrives.
         self.on_telemetry: Callable[[str, Any], None] | None = None
+        #: True ends any wait at once (SIGINT/SIGTERM of the bridge while it waits).
+        self.stop_requested: Callable[[], bool] = lambda: False
 
     # -- link --------------------------------------------------------------------------
     def open(self) -> None:
@@ -171,9 +173,18 @@ class ArduSubLink:
             if self.on_telemetry is not None:
                 self.on_telemetry(kind, msg)
 
-    def _wait(self, match: Callable[[Any], bool], timeout_s: float) -> Any:
+    def _wait(self, match: Callable[[Any], bool], timeout_s: float,
+              interruptible: bool = False) -> Any:
+        """The first message that matches, or None after ``timeout_s``.
+
+        ``interruptible``: a stop request ends the wait (finding the vehicle at configure);
+        the restore's waits at a stop run to their end.
+        """
         end_s = self.clock() + timeout_s
         while self.clock() < end_s:
+            if interruptible and self.stop_requested():
+                raise DeviceCheckError(f'{self.settings.url}: stopped (a signal) while waiting '
+                                       'for the vehicle')
             for msg in self.service():
                 if match(msg):
                     return msg
@@ -195,7 +206,7 @@ class ArduSubLink:
             return bool(msg.get_type() == 'HEARTBEAT' and self.vehicle.system_id and
                         msg.get_srcSystem() == self.vehicle.system_id)
 
-        if self._wait(is_sub, timeout_s) is None:
+        if self._wait(is_sub, timeout_s, interruptible=True) is None:
             url = self.settings.url
             if others:
                 seen = ', '.join(f'system {s} type {t} autopilot {a}' for s, t, a in others)

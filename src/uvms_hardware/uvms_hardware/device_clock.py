@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from uvms_common.stop_event import active_stop_event
 
 
 class DeviceClock:
@@ -32,3 +33,9 @@ class DeviceClock:
     def timer(self, period_s: float, callback: object) -> object:
         """A timer of the node on the steady clock."""
         return self._node.create_timer(period_s, callback, clock=self.clock)  # type: ignore[arg-type]
+
+
+def stop_requested() -> bool:
+    """Whether SIGINT/SIGTERM asked this process to stop: a bridge's waits end at once."""
+    event = active_stop_event()
+    return event is not None and event.is_set()

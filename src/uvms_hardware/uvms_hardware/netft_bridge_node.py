@@ -30,7 +30,7 @@ from uvms_common.robot_parameters import declare_robot_name
 
 from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import parse_host_port
-from uvms_hardware.device_clock import DeviceClock
+from uvms_hardware.device_clock import DeviceClock, stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR, NetFtCore
 from uvms_hardware.transport import UdpLink, collect
@@ -111,7 +111,7 @@ class NetFtBridgeNode(LifecycleNode):
             seen = collect(link, lambda chunk: [1] if chunk and not len(chunk) % rdt.RECORD_BYTES
                            else [], [1], timeout_s)
             link.send(rdt.encode_request(rdt.COMMAND_STOP))
-            if seen or self.now_s() >= deadline_s:
+            if seen or self.now_s() >= deadline_s or stop_requested():
                 break
             self.get_logger().info(f'no record from {host}:{port} yet: asking again',
                                    throttle_duration_sec=2.0)

@@ -113,7 +113,7 @@ class TwinsNode(Node):
         self._positions = dict.fromkeys(self._joints, 0.0)
         self._velocities = dict.fromkeys(self._joints, 0.0)
         self._joint_names_out: list[str] = list(self._joints)
-        self._clock = DeviceClock(self)
+        self._device_clock = DeviceClock(self)
         self._last_tick_s: float | None = None
         self._last_dvl_s = -float('inf')
         self._ticks = 0
@@ -126,7 +126,7 @@ class TwinsNode(Node):
         self.create_subscription(TwistWithCovarianceStamped, f'{plant}/dvl', self._on_dvl, qos)
         self._command_pub = self.create_publisher(ActuatorCommand, f'{plant}/command/actuators',
                                                   qos)
-        self._clock.timer(1.0 / float(v['rate_hz']), self._on_tick)
+        self._device_clock.timer(1.0 / float(v['rate_hz']), self._on_tick)
         self._diagnostics = DiagnosticsPublisher(self, robot)
         self._diagnostics.add('twins', self._report)
         self.get_logger().info(
@@ -160,13 +160,13 @@ class TwinsNode(Node):
 
     def _on_dvl(self, msg: TwistWithCovarianceStamped) -> None:
         v = msg.twist.twist.linear
-        self._last_dvl_s = self._clock.now_s()
+        self._last_dvl_s = self._device_clock.now_s()
         # The simulated reading's sigma as the figure of merit (the bridge's variance: fom^2).
         self.dvl.set_velocity((v.x, v.y, v.z), True, math.sqrt(msg.twist.covariance[0]),
                               self._altitude_m)
 
     def _on_tick(self) -> None:
-        now_s = self._clock.now_s()
+        now_s = self._device_clock.now_s()
         dt_s = 0.0 if self._last_tick_s is None else min(now_s - self._last_tick_s, 0.1)
         self._last_tick_s = now_s
         if now_s - self._last_dvl_s > self._dvl_lost_s:
