@@ -183,7 +183,10 @@ def hardware_parameters(nodes: Sequence[NodeSpec], plan: HardwarePlan
     """
     values: dict[str, dict[str, Any]] = {name: dict(p) for name, p in plan.bridges.items()}
     values[HARDWARE_TWINS.name] = plan.twin_parameters()
+    # The simulator's measurement topics go to the twins, not to the recorder: it does not
+    # wait for the recorder on them (it still holds its first state until the loop closes).
+    values[SIMULATOR.name] = {'startup.recorder': ''}
     for spec in nodes:
-        if spec.name in values or spec.uses_sim_time:
+        if spec.uses_sim_time:
             values.setdefault(spec.name, {})['use_sim_time'] = plan.twins
     return values

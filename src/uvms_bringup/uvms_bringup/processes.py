@@ -25,7 +25,7 @@ from typing import IO, Protocol
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED
 
-from uvms_bringup.launch_helpers import RECORDER, SIMULATOR, NodeSpec
+from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, RECORDER, SIMULATOR, NodeSpec
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -294,10 +294,16 @@ class Launcher:
                 if p.plan.spec.finishes and p.status == EXIT_MISSION_FAILED]
 
     def stop(self) -> None:
-        """Stop every running node, the recorder last; escalate SIGINT, SIGTERM, SIGKILL."""
-        others = [p for p in self.processes if p.plan.spec is not RECORDER]
+        """Stop every running node; escalate SIGINT, SIGTERM, SIGKILL.
+
+        The hardware bridges first, while their devices (or twins) still answer as they put
+        back what they changed; the recorder last, so that it records the others' last
+        messages and then closes its file.
+        """
+        bridges = [p for p in self.processes if p.plan.spec in HARDWARE_BRIDGES.values()]
         recorders = [p for p in self.processes if p.plan.spec is RECORDER]
-        for group in (others, recorders):
+        others = [p for p in self.processes if p not in bridges and p not in recorders]
+        for group in (bridges, others, recorders):
             self._stop_group(group)
         for thread in self._threads:
             thread.join(timeout=1.0)

@@ -9,8 +9,13 @@ from uvms_bringup.hardware_plan import (
     BRIDGES,
     HardwareFileError,
     hardware_file_path,
+    hardware_nodes,
+    hardware_parameters,
+    hardware_scenario,
     load_hardware_plan,
 )
+from uvms_bringup.launch_helpers import graph_nodes
+from uvms_bringup.scenario import load_scenario
 
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 
@@ -57,3 +62,39 @@ def test_a_bad_file_is_refused_naming_its_key(tmp_path: Path, text: str, key: st
     path.write_text(text)
     with pytest.raises(HardwareFileError, match=key.replace('[', r'\[').replace('.', r'\.')):
         load_hardware_plan(path)
+
+
+def test_with_twins_every_node_but_the_simulator_runs_on_its_clock() -> None:
+    """The simulator is the clock: it alone keeps wall time; the bridges stamp with /clock."""
+    plan = load_hardware_plan(hardware_file_path('twin', CONFIG))
+    nodes = hardware_nodes(graph_nodes(record=True, mission=True, estimator=True), plan)
+    values = hardware_parameters(nodes, plan)
+    assert 'use_sim_time' not in values['simulator']
+    assert values['simulator']['startup.recorder'] == ''
+    assert all(values[name]['use_sim_time'] for name in (*BRIDGES, 'hardware_twins'))
+    names = [spec.name for spec in nodes]
+    assert names[:6] == ['simulator', 'hardware_twins', *BRIDGES]
+
+
+def test_on_the_robot_the_bridges_replace_the_simulator_and_nothing_waits_for_clock(
+        tmp_path: Path) -> None:
+    """twins: false: no simulator, so no /clock: every node on wall time."""
+    path = tmp_path / 'robot.yaml'
+    path.write_text('twins: false\nbridges: {alpha5_bridge: {connection: "udp:10.0.0.2:6789"}}')
+    plan = load_hardware_plan(path)
+    nodes = hardware_nodes(graph_nodes(record=True, estimator=True), plan)
+    assert [spec.name for spec in nodes][:2] == ['alpha5_bridge', 'estimator']
+    values = hardware_parameters(nodes, plan)
+    assert not any(v.get('use_sim_time') for v in values.values())
+
+
+def test_the_scenario_on_hardware_runs_the_controller_on_the_estimate() -> None:
+    """A robot has no ground truth; the propellers do the thruster dynamics."""
+    scenario = load_scenario(CONFIG / 'scenarios' / 'bluerov2_alpha5_contact.yaml')
+    plan = load_hardware_plan(hardware_file_path('twin', CONFIG))
+    changed = hardware_scenario(scenario, plan)
+    assert changed.overrides['controller']['state_source'] == 'estimate'
+    assert changed.overrides['thruster_allocator']['thruster_output'] == 'desired'
+    assert changed.overrides['simulator']['navigation.enabled'] is True
+    assert changed.overrides['simulator']['world.seabed_depth_m'] == 2.0
+    assert 'state_source' not in scenario.overrides.get('controller', {})
