@@ -173,7 +173,7 @@ class TwinsNode(Node):
             self.dvl.set_velocity((0.0, 0.0, 0.0), False, 10.0, -1.0)
         thrust = self._thrusters.step(self.ardusub.servo_outputs_us(), self._voltage_v, dt_s)
         torques = joint_torques(self.arm.joint_commands(), self.arm.joint_torques_n_m(),
-                                self._positions, self._velocities, self._effort)
+                                self._effort)
         msg = ActuatorCommand()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.header.frame_id = 'base_link_frd'

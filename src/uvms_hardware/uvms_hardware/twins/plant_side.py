@@ -14,10 +14,13 @@ inverts) gives the thrust each ESC is told to make, and the Healey model of the 
 thrusters (``uvms_thrusters``, eq. 11-15) the thrust the propeller then makes. An output
 with no pulse (0) is a stopped ESC: zero thrust.
 
-Current to torque: a joint in Current mode makes I Kt N eta (``hardware_config.Drive``). The
-other modes are not in Reach's documents beyond their names, so the twin assumes, and says
-so: Velocity and Position are followed by a stiff servo saturating at the joint's effort limit
-(the URDF's); Standby, Disable and Passive make no torque (the arm is limp).
+Current to torque: a joint in Current mode makes I Kt N eta (``hardware_config.Drive``),
+within the URDF's effort limit. How the arm's own servo follows a Velocity or Position
+setpoint is not in Reach's documents, and a servo emulated here, stepped at this node's rate
+(500 Hz, slower on a busy machine) on the light wrist links, went unstable (a joint at 50
+rad/s within a second of the bridge's watchdog sending VELOCITY 0). So the twin makes no
+torque in any mode but Current: the arm goes limp when the bridge stops driving it, which is
+what the twin can honestly show; what the real arm does then is for the pool to tell.
 """
 
 from __future__ import annotations
@@ -33,12 +36,6 @@ from uvms_thrusters.thruster_dynamics import ThrusterBank
 from uvms_hardware.hardware_config import hardware_section, urdf_joint_limits
 from uvms_hardware.reach_protocol import Mode
 from uvms_hardware.t200_curve import T200Curve
-
-#: Velocity servo of the twin's joints: torque per speed error (N m s/rad), assumed (a joint
-#: at rest reaches the effort limit at the Alpha's 0.5 rad/s speed limit for 9 N m).
-VELOCITY_GAIN_N_M_S = 18.0
-#: Position servo of the twin's joints: stiffness (N m/rad) and damping (N m s/rad), assumed.
-POSITION_GAINS = (60.0, 6.0)
 
 
 @dataclass
@@ -86,29 +83,17 @@ def effort_limits_n_m(robot_name: str) -> dict[str, float]:
 
 def joint_torques(commands: Mapping[str, tuple[Mode, float]],
                   current_torques: Mapping[str, float | None],
-                  positions: Mapping[str, float], velocities: Mapping[str, float],
                   effort_limits: Mapping[str, float]) -> dict[str, float]:
-    """Torque (N m) each arm joint makes for its device's mode and setpoint.
+    """Torque (N m) each arm joint makes: its Current-mode torque, else none (limp).
 
     Args:
         commands: joint -> (mode, setpoint) from the arm twin (rad, rad/s or mA).
         current_torques: joint -> torque of a Current-mode setpoint (I Kt N eta), else None.
-        positions: joint -> angle (rad).
-        velocities: joint -> rate (rad/s).
         effort_limits: joint -> the URDF's effort limit (N m).
     """
     torques = {}
-    for joint, (mode, setpoint) in commands.items():
+    for joint, (mode, _) in commands.items():
+        torque = (current_torques.get(joint) or 0.0) if mode == Mode.CURRENT else 0.0
         limit = effort_limits.get(joint, math.inf)
-        if mode == Mode.CURRENT:
-            torque = current_torques.get(joint) or 0.0
-        elif mode == Mode.VELOCITY:
-            torque = VELOCITY_GAIN_N_M_S * (setpoint - velocities.get(joint, 0.0))
-        elif mode == Mode.POSITION:
-            stiffness, damping = POSITION_GAINS
-            torque = (stiffness * (setpoint - positions.get(joint, 0.0))
-                      - damping * velocities.get(joint, 0.0))
-        else:
-            torque = 0.0
         torques[joint] = float(np.clip(torque, -limit, limit))
     return torques
