@@ -33,18 +33,16 @@ from uvms_common.lifecycle import autostart, declare_autostart, guard_change_sta
 from uvms_common.node_main import run_node
 from uvms_common.robot_parameters import declare_robot_name
 
-from uvms_hardware import reach_protocol as rp
 from uvms_hardware.alpha5_core import (
-    IDENTITY_REQUEST,
-    LIMITS_REQUEST,
     Alpha5Core,
     check_device,
 )
+from uvms_hardware.alpha5_probe import probe_device
 from uvms_hardware.device_clock import DeviceClock, stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Drive, load_alpha5
-from uvms_hardware.reach_protocol import Mode, PacketId
-from uvms_hardware.transport import Link, collect, open_link, parse_connection
+from uvms_hardware.reach_protocol import Mode
+from uvms_hardware.transport import Link, open_link, parse_connection
 from uvms_msgs.msg import ActuatorCommand
 
 SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
@@ -143,21 +141,8 @@ class Alpha5BridgeNode(LifecycleNode):
         return SUCCESS
 
     def _check(self, link: Link, core: Alpha5Core, drive: Drive) -> list[str]:
-        answers: dict[int, rp.Packet] = {}
-
-        def feed(chunk: bytes) -> list[int]:
-            found = [p for p in core.splitter.feed(chunk) if p.device_id == drive.device_id]
-            answers.update((p.packet_id, p) for p in found)
-            return [p.packet_id for p in found]
-
         timeout_s = float(self.values['answer_timeout_s'])
-        for request in (IDENTITY_REQUEST, LIMITS_REQUEST):
-            link.send(rp.encode_request(drive.device_id, request))
-            collect(link, feed, request, timeout_s)
-            if PacketId.MODEL not in answers:
-                break
-        answer = answers.get(PacketId.MODE)
-        mode = rp.mode_of(answer.data[0]) if answer is not None and answer.data else None
+        answers, mode = probe_device(link, core.splitter, drive, timeout_s)
         if mode is not None:
             self.modes_before[drive.device_id] = mode
         return check_device(drive, answers, timeout_s)

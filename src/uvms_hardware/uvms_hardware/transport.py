@@ -163,3 +163,4 @@ def collect(link: Link, feed: Callable[[bytes], Collection[int]], wanted: Collec
         if link.wait(remaining):
             seen |= set(feed(link.read())) & set(wanted)
     return seen
+
