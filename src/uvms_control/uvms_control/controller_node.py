@@ -169,6 +169,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._staleness = StalenessMonitor()
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._misses = MissCounter(round(1e9 / float(node['control_rate_hz'])))
+        self._period_ns = self._misses.period_ns
         self._staleness_log = EventLogger(self.get_logger(), {
             'waiting': 'waiting for fresh joint_states, odometry and wrench (start-up): '
                        'publishing zero generalized force',
@@ -386,6 +387,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._last_tau_b = result.tau_b
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
+        self.tasks.count_step(t_ns, self._steady.now().nanoseconds, self._period_ns)
         if self._state_gate.due(t_ns):
             self._state_pub.publish(self._state_writer.payload(t_ns, result))
         self.tasks.finish(events)

@@ -32,6 +32,7 @@ from uvms_control.core.contact_task import (
     planned_goal,
     validate_goal,
 )
+from uvms_control.core.force_figures import SETTLING_BAND, SETTLING_MIN_HOLD_S
 from uvms_control.core.retreat import Retreat
 from uvms_control.core.safety_checks import (
     MAX_MOTION_STEP_S,
@@ -86,7 +87,6 @@ class TaskSupervisor:
         self._safe_hold_reason: str | None = None
         self._capturing = True  # the hold point is captured at the next step
 
-
     @property
     def goal_id(self) -> Hashable | None:
         """The running goal's id, or None."""
@@ -115,7 +115,6 @@ class TaskSupervisor:
         return TaskProgress(running.goal_id, TASK_STATE[self.state], share,
                             float(running.normal @ last.F_e), float(running.normal @ last.F_d),
                             running.transit_s, in_transit)
-
 
     def submit(self, goal_id: Hashable, goal: ContactTaskGoal, now_s: float) -> list[TaskEvent]:
         """Take a new goal at time now_s (s); return the tasks that ended by it.
@@ -253,7 +252,6 @@ class TaskSupervisor:
         self.breach = self._safe_hold_reason = None
         self.controller.task.hold()
         return events
-
 
     def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
              f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
@@ -404,18 +402,23 @@ class TaskSupervisor:
         return self._end_running(retreat.code, retreat.outcome(result.F_e))
 
     def _finish_goal(self, released: bool) -> list[TaskEvent]:
-        """The end of a released goal: SUCCEEDED or NO_CONTACT, then hold X_d."""
+        """End a released goal by its criterion (NO_CONTACT, FORCE_NOT_SETTLED, SUCCEEDED)."""
         running = self._running
         assert running is not None and self._last is not None
         self.controller.task.hold(self._last.X_d.tolist())
         self.state = SupervisorState.HOLD
-        if running.goal.require_contact and running.figures.first_contact_s is None:
+        figures = running.figures  # FORCE_NOT_SETTLED: contact made, F never in its band
+        if running.goal.require_contact and figures.first_contact_s is None:
             return self._end_running(TaskCode.NO_CONTACT, 'the path ended without contact')
-        if released:
-            return self._end_running(TaskCode.SUCCEEDED, 'path done, contact released')
-        return self._end_running(TaskCode.SUCCEEDED, (
-            f'path done; |F_e| = {float(np.linalg.norm(self._last.F_e)):.1f} N left after '
-            'backing off the whole release distance'))
+        left = ('contact released' if released else f'|F_e| = '
+                f'{float(np.linalg.norm(self._last.F_e)):.1f} N left after backing off the '
+                'whole release distance')
+        if running.goal.force_n > 0.0 and figures.first_contact_s is not None \
+                and math.isnan(figures.result(TaskCode.SUCCEEDED, '').settling_time_s):
+            return self._end_running(TaskCode.FORCE_NOT_SETTLED, (
+                f'path done, {left}; the force never stayed within {SETTLING_BAND:.0%} of '
+                f'F_d = {running.goal.force_n:g} N for {SETTLING_MIN_HOLD_S:g} s'))
+        return self._end_running(TaskCode.SUCCEEDED, f'path done, {left}')
 
     def _at_setpoint(self, result: ControllerResult, running: RunningTask) -> bool:
         """F_d has reached force_n (the ramp is over)."""

@@ -1,0 +1,57 @@
+"""A task's result code says whether it did its job (issue 42, item 1).
+
+The supervisor runs at a fixed configuration with chosen sensor forces (as
+test_supervisor_findings.py does): a press whose force never enters its band ends
+FORCE_NOT_SETTLED with its figures; one that settles ends SUCCEEDED.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from test_supervisor_findings import DT, N, Run, goal
+from uvms_control.core.contact_task import TaskCode
+from uvms_control.core.task_states import TaskEvent
+
+
+def press(force_n: float, seconds: float = 3.0) -> TaskEvent:
+    """F_d = 100 N over a 1 s path; the sensor reads force_n along N until the path's end."""
+    run = Run()
+    run.step()
+    run.supervisor.submit('press', goal(force_n=100.0), run.t)
+    run.run(0.1)
+    run.run(1.0, force_n * N)
+    for _ in range(round(seconds / DT)):
+        run.step()
+        if run.events:
+            break
+    assert len(run.events) == 1, run.codes()
+    return run.events[0][1]
+
+
+def test_press_whose_force_never_enters_its_band_ends_force_not_settled() -> None:
+    """60 N against F_d = 100 N: contact made, never within 5 %: not SUCCEEDED."""
+    result = press(60.0).result
+    assert result.code == TaskCode.FORCE_NOT_SETTLED, result.message
+    assert 'never stayed within 5% of F_d = 100 N' in result.message
+    assert math.isnan(result.settling_time_s)
+    assert result.contact_time_s > 0.9
+    np.testing.assert_allclose(result.peak_force_n, 60.0)
+
+
+def test_press_whose_force_settles_succeeds() -> None:
+    """100 N from first contact: settled at once, SUCCEEDED."""
+    result = press(100.0).result
+    assert result.code == TaskCode.SUCCEEDED, result.message
+    assert result.settling_time_s == 0.0
+
+
+def test_motion_only_task_with_contact_succeeds_without_settling() -> None:
+    """force_n = 0: no band to settle in; a path done is the task done."""
+    run = Run()
+    run.step()
+    run.supervisor.submit('move', goal(force_n=0.0), run.t)
+    run.run(1.2, 20.0 * N)
+    run.run(2.0)
+    assert run.codes() == [('move', TaskCode.SUCCEEDED)]
