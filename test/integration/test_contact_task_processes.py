@@ -94,6 +94,24 @@ def test_press_whose_force_cannot_settle_ends_force_not_settled(
     assert 'control periods missed' in result.stdout, result.stdout
 
 
+def test_uvms_lifecycle_resets_the_controller_through_its_services(
+        launch: subprocess.Popen[str]) -> None:
+    """``uvms lifecycle controller reset``: deactivate then activate, on change_state."""
+    def lifecycle(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([str(BIN / 'uvms'), 'lifecycle', 'controller', *args],
+                              capture_output=True, text=True, env=environment(),
+                              timeout=TASK_TIMEOUT_S, check=False)
+
+    got = lifecycle('get', '--timeout', str(START_TIMEOUT_S))
+    assert (got.returncode, got.stdout) == (0, '/uvms/controller: active\n'), got.stderr
+    reset = lifecycle('reset')
+    assert reset.returncode == 0, reset.stderr
+    assert reset.stdout == '/uvms/controller: active -> inactive -> active\n'
+    refused = lifecycle('activate')  # active already: no such transition from there
+    assert refused.returncode == 1
+    assert 'refused activate (it is active)' in refused.stderr
+
+
 def test_uvms_task_prints_why_the_controller_rejected_a_goal(
         launch: subprocess.Popen[str], tmp_path: Path) -> None:
     """A goal over safety.max_contact_force_n: rejected, the reason printed, exit 1."""

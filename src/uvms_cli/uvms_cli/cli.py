@@ -34,6 +34,8 @@ DELEGATED = {
     'sweep': ('uvms_sweep.cli', 'run a parameter sweep of a scenario on Ray and map '
                                         'its metrics'),
     'task': ('uvms_tasks.cli', 'send a task or mission file to the controller of a running graph'),
+    'lifecycle': ('uvms_cli.lifecycle', "get or change a managed node's lifecycle state "
+                                        '(reset: deactivate + activate, clears a safe hold)'),
     'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '
                                       'messages'),
 }

@@ -393,7 +393,10 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self.tasks.finish(events)
         self.tasks.publish_feedback(self.supervisor, t)
         breach = self.supervisor.breach
-        if breach is not None and self._breach is None:  # once per breach, not per step
+        if self.supervisor.safe_hold and breach != self._breach:  # latched: said once
+            self.get_logger().error(f'{breach}: goals are refused until `uvms lifecycle '
+                                    f'{self.get_name()} reset` (deactivate, activate)')
+        elif breach is not None and self._breach is None:  # once per breach, not per step
             self.get_logger().error(f'safety limit: {breach}')
         self._breach = breach
 

@@ -138,7 +138,7 @@ class TaskSupervisor:
         if self.state == SupervisorState.SAFE_HOLD:
             return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
                 f'refused: the controller is in safe hold ({self._safe_hold_reason}); '
-                'deactivate and activate it to clear the safe hold')))]
+                'clear it with `uvms lifecycle controller reset` (deactivate, activate)')))]
         try:
             self.check(goal, now_s)
         except TaskGoalError as error:
