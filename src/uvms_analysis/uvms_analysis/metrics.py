@@ -229,10 +229,12 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
 def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto') -> RunMetrics:
     """The metrics of one contact task of a run: its samples from first to last step.
 
-    F_d is the goal's force_n. With ``force_source`` 'auto' or 'controller' the force figures
-    come from the samples the task's result was computed from (the controller's F_e along the
-    task's normal, contact at the controller's threshold) through the same ``force_figures``,
-    so they equal the result's; with 'contact' from the ground truth along the normal.
+    F_d is the goal's force_n. With ``force_source`` 'auto' the force figures come from the
+    simulator's ground truth along the task's normal when it was recorded, as the plots' and
+    docs/results.md's do (one set of figures per run), else as 'controller': from the samples
+    the task's result was computed from (the controller's F_e along the task's normal, contact
+    at the controller's threshold) through the same ``force_figures``, so they equal the
+    result's; 'contact' always takes the ground truth.
     Position and vehicle metrics are over the task's samples too.
     """
     part = run_window(run, task.t_start - TASK_WINDOW_TOLERANCE_S,
@@ -251,11 +253,13 @@ def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto')
 
 def task_normal_force(run: Run, task: TaskRecord,
                       source: ForceSource = 'auto') -> NormalForce | None:
-    """The normal force of a task: as its result saw it ('auto', 'controller'), or ground truth.
+    """The normal force of a task: ground truth ('contact'; 'auto' when recorded), or its result's.
 
     The controller's force is ``normal @ F_e`` per sample, the product the task supervisor
     takes at each step, in contact at or above the task's threshold.
     """
+    if source == 'auto' and run.contact is not None and run.contact.t.size:
+        source = 'contact'
     if source == 'contact':
         if run.contact is None or run.contact.t.size == 0:
             return None

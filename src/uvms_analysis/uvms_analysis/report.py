@@ -110,7 +110,8 @@ _LEFT_ALIGNED = ('run', 'file', 'task')
 LEGEND = (
     'run: scenario of the recording (else its file name); file: the recording as given.',
     'task: goal id of a contact task (first 8 hex digits; all 32 in CSV): one row per task,',
-    "   from its first to its last control step, F_d its force_n; force metrics as its result's.",
+    '   from its first to its last control step, F_d its force_n; --force-source controller:',
+    "   force metrics as its result's.",
     "F: contact force along the wall normal (map_ned x; a task's normal); force from: contact =",
     "   simulator ground truth (/uvms/contact), controller = the controller's measured F_e.",
     'F_d: a run without tasks: median force set-point while in contact. overshoot: (peak F - F_d)',
@@ -217,9 +218,9 @@ def build_parser() -> argparse.ArgumentParser:
         choices=('auto', 'contact', 'controller'),
         default='auto',
         help='force for the force metrics: simulator ground truth (contact), the '
-        "controller's measured F_e (controller), or auto: for a task the force its result "
-        "used (the controller's, so the row equals the result), for a run without tasks "
-        'ground truth when recorded',
+        "controller's measured F_e (controller: a task's row then equals its result), or "
+        "auto (default): ground truth when recorded, as uvms plot's figures and "
+        "docs/results.md use it, else the controller's; the column 'force from' says which",
     )
     return parser
 
