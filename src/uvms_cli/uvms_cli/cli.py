@@ -33,7 +33,7 @@ EXIT_STATUSES = (
     'exit status, every subcommand: 0 success; 1 the run, the task or the tool failed (a node '
     'failed, a task did not succeed, a recording could not be read, no controller '
     'answered); 2 bad usage: a bad option, file, scenario, task file, or robot, found '
-    'before anything started; 3 uvms launch only: the scenario\'s mission failed; 130 '
+    "before anything started; 3 uvms launch only: the scenario's mission failed; 130 "
     'interrupted (Ctrl-C/SIGTERM).')
 
 #: Subcommands handed over whole to another module's ``main(argv) -> int``.
