@@ -55,3 +55,29 @@ def test_motion_only_task_with_contact_succeeds_without_settling() -> None:
     run.run(1.2, 20.0 * N)
     run.run(2.0)
     assert run.codes() == [('move', TaskCode.SUCCEEDED)]
+
+
+def test_a_task_waiting_for_its_stamp_counts_no_figures_before_it_starts() -> None:
+    """A goal stamped 1 s ahead, sent while the arm still presses: its figures start at t0.
+
+    The force of the task it preempts (still on while it waits) is not its contact: its
+    contact time and settling count from its own start (issue 42: a preempting task
+    reported "settled in 7.70 s").
+    """
+    run = Run()
+    run.step()
+    run.supervisor.submit('a', goal(force_n=100.0, duration_s=3.0), run.t)
+    run.run(1.0, 100.0 * N)
+    t0 = run.t + 1.0
+    [preempted] = run.supervisor.submit('b', goal(start_time_s=t0, force_n=100.0), run.t)
+    assert (preempted.goal_id, preempted.result.code) == ('a', TaskCode.PREEMPTED)
+    run.run(1.0, 100.0 * N)  # b waits for its stamp; a's force is still measured
+    run.run(1.0, 100.0 * N)  # b follows its path, pressing from its start
+    for _ in range(round(3.0 / DT)):
+        run.step()
+        if run.events:
+            break
+    [(_, b)] = run.events
+    assert (b.goal_id, b.result.code) == ('b', TaskCode.SUCCEEDED), b.result.message
+    assert b.result.start_s >= t0 - 1e-9
+    assert b.result.contact_time_s < 1.0 + 2 * DT

@@ -356,7 +356,7 @@ class TaskSupervisor:
         normal = running.normal if running is not None else self.controller.n
         f_normal = float(normal @ result.F_e)
         breach = check_limits(result, f_sensor, f_normal, self.limits)
-        if running is not None:
+        if running is not None and state != SupervisorState.WAITING:  # from its start
             running.figures.update(t, dt, f_normal, f_normal >= task.contact_threshold_n,
                                    task.force_active and self._at_setpoint(result, running))
         if state == SupervisorState.SAFE_HOLD:
