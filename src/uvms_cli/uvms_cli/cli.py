@@ -288,13 +288,13 @@ def _run_in_process(
 
     command = args.command
     scenario = None
+    warning = None
     try:
         if args.scenario is not None:
             scenario = load_scenario(resolve_scenario_path(args.scenario))
             scenario = scenario.with_changes(duration_s=args.duration,
                                              seed=getattr(args, 'seed', None))
-            if warning := short_duration_warning(scenario, scenario.duration_s):
-                print(f'uvms {command}: warning: {warning}', file=sys.stderr)
+            warning = short_duration_warning(scenario, scenario.duration_s)
         duration = args.duration if scenario is None else scenario.duration_s
         _check_robot(args.robot or (scenario.robot if scenario is not None else None))
         if args.quiet:
@@ -307,6 +307,8 @@ def _run_in_process(
     except GraphError as exc:
         _error(command, str(exc))
         return EXIT_FAILURE
+    if warning:  # after the scenario's keys were checked: a typo's error comes alone
+        print(f'uvms {command}: warning: {warning}', file=sys.stderr)
     return _run_graph_and_report(args, graph, mode, stop, progress)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -96,3 +97,16 @@ def test_top_level_help_gives_every_subcommands_exit_statuses(
     assert 'exit status, every subcommand: 0 success; 1' in text
     for status in ('2 bad usage', '3 uvms launch only', '130 interrupted'):
         assert status in text
+
+
+def test_scenario_key_typo_is_the_only_line_of_uvms_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A mistyped override with a short --duration: the key's error, no duration warning."""
+    scenario = Path(__file__).resolve().parents[3] / 'config' / 'scenarios' / 'case1_ke1e4.yaml'
+    typo = tmp_path / 'typo.yaml'
+    typo.write_text(scenario.read_text().replace('stiffness_n_m', 'stifness_n_m', 1))
+    assert cli.main(['run', str(typo), '--duration', '0.1']) == 2
+    err = capsys.readouterr().err
+    assert 'stifness_n_m' in err
+    assert 'warning' not in err
