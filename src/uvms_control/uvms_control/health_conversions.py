@@ -95,7 +95,7 @@ def health_change(before: tuple[Any, ...] | None, after: tuple[Any, ...],
     detector, names = allocator.detector, ('recovered', 'declared degraded', 'declared failed')
     old = np.zeros(0, np.uint8) if before[2] is None else np.frombuffer(before[2], np.uint8)
     new = np.zeros(0, np.uint8) if after[2] is None else np.frombuffer(after[2], np.uint8)
-    parts = [f'thruster {i} {names[int(new[i])]}' + (
+    parts = [f'thruster {i} (T{i + 1}) {names[int(new[i])]}' + (
         f' at {detector.detected_at_s[i]:.3f} s (eta_hat {detector.effectiveness[i]:.3f})'
         if detector is not None and new[i] else '')
         for i in np.flatnonzero(old != new)] if old.size == new.size else []

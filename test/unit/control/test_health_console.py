@@ -31,13 +31,13 @@ FAILED = allocator([2] + [0] * 7)
 def test_a_thruster_declared_failed_is_one_warn_line() -> None:
     """Thruster 0 failed: WARN naming it, when and that the allocation goes around it."""
     assert health_change(key(HEALTHY), key(FAILED), FAILED) == (
-        WARN, 'thruster 0 declared failed at 11.100 s (eta_hat 0.000) (allocating around it)')
+        WARN, 'thruster 0 (T1) declared failed at 11.100 s (eta_hat 0.000) (allocating around it)')
 
 
 def test_a_recovered_thruster_is_one_warn_line() -> None:
     """Back to OK: WARN 'recovered'."""
     assert health_change(key(FAILED), key(HEALTHY), HEALTHY) == (
-        WARN, 'thruster 0 recovered (allocating around it)')
+        WARN, 'thruster 0 (T1) recovered (allocating around it)')
 
 
 def test_a_rank_loss_is_one_error_line() -> None:
@@ -45,7 +45,7 @@ def test_a_rank_loss_is_one_error_line() -> None:
     lost = allocator([2, 2] + [0] * 6, rank=5)
     level, text = health_change(key(FAILED), key(lost), lost) or ('', '')
     assert level == ERROR
-    assert text.startswith('thruster 1 declared failed')
+    assert text.startswith('thruster 1 (T2) declared failed')
     assert 'rank 5 < 6: the vehicle cannot produce every wrench' in text
 
 
