@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
+import yaml
 from uvms_control.core.force_figures import (  # noqa: F401 (re-exported: the metric functions)
     IMPACT_WINDOW_S,
     SETTLING_BAND,
@@ -129,6 +130,7 @@ class RunMetrics:
     name: str
     file: str | None = None
     task: str | None = None
+    robot: str | None = None
     force_source: str | None = None
     desired_force: float | None = None
     first_contact_time: float | None = None
@@ -211,9 +213,30 @@ def normal_force(run: Run, source: ForceSource = 'auto') -> NormalForce | None:
     return NormalForce('controller', ctrl.t, sign * ctrl.F_e[:, 0], controller_contact_mask(run))
 
 
+def run_robot(metadata: dict[str, dict[str, str]]) -> str | None:
+    """The robot a recorded run used: ``robot_name`` of its parameters, None if not recorded.
+
+    The simulator's if it has one, else any node's (all load the same robot folder).
+    """
+    text = metadata.get('uvms', {}).get('parameters', '')
+    try:
+        nodes = yaml.safe_load(text) if text else None
+    except yaml.YAMLError:
+        return None
+    if not isinstance(nodes, dict):
+        return None
+    names = sorted(nodes, key=lambda node: 'simulator' not in str(node))
+    for node in names:
+        section = nodes[node]
+        values = section.get('ros__parameters') if isinstance(section, dict) else None
+        if isinstance(values, dict) and values.get('robot_name'):
+            return str(values['robot_name'])
+    return None
+
+
 def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
     """All metrics of a run (see RunMetrics); force metrics are None for a run without contact."""
-    values: dict[str, Any] = {'name': run.name}
+    values: dict[str, Any] = {'name': run.name, 'robot': run_robot(run.metadata)}
     if run.path is not None:
         values['file'] = str(run.path)
     f_d = desired_normal_force(run)
@@ -240,7 +263,8 @@ def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto')
     part = run_window(run, task.t_start - TASK_WINDOW_TOLERANCE_S,
                       task.t_end + TASK_WINDOW_TOLERANCE_S)
     values: dict[str, Any] = {'name': run.name, 'task': task.goal_id,
-                              'desired_force': task.force_n}
+                              'desired_force': task.force_n,
+                              'robot': run_robot(run.metadata)}
     if run.path is not None:
         values['file'] = str(run.path)
     force = task_normal_force(part, task, force_source)

@@ -102,13 +102,15 @@ COLUMNS = (
     Column('current\nmax', 'm/s', 'current_speed_max_m_s', _attr('current_speed_max'), 3),
     Column('thrust\nscale', '', 'saturation_scale_min', _attr('saturation_scale_min'), 3),
     Column('force\nfrom', '', 'force_source', _attr('force_source')),
+    Column('robot', '', 'robot', _attr('robot')),
 )
 #: Columns that name a run rather than measure it (left-aligned; no sweep metric).
-LABEL_KEYS = ('run', 'file', 'task', 'force_source')
-_LEFT_ALIGNED = ('run', 'file', 'task')
+LABEL_KEYS = ('run', 'robot', 'file', 'task', 'force_source')
+_LEFT_ALIGNED = ('run', 'robot', 'file', 'task')
 
 LEGEND = (
     'run: scenario of the recording (else its file name); file: the recording as given.',
+    'robot: the robot folder the run used (its name, or the path given with --robot).',
     'task: goal id of a contact task (first 8 hex digits; all 32 in CSV): one row per task,',
     '   from its first to its last control step, F_d its force_n; --force-source controller:',
     "   force metrics as its result's.",
