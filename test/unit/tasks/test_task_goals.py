@@ -123,8 +123,8 @@ def test_client_reads_the_controllers_rejection_line_without_importing_the_contr
     from uvms_tasks.client import REJECTED_PREFIX
 
     assert REJECTED_PREFIX == SERVER_PREFIX
-    code = ('import sys, uvms_tasks.cli, uvms_tasks.client; '
-            "print(sorted(m for m in sys.modules if m.startswith(('uvms_control.task', 'scipy'))))")
+    code = ('import sys, uvms_tasks.cli, uvms_tasks.client; heavy = ("uvms_control.task", '
+            '"scipy"); print(sorted(m for m in sys.modules if m.startswith(heavy)))')
     env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p)}
     loaded = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                             check=True, env=env)
