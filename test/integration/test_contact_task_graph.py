@@ -363,9 +363,12 @@ def two_presses(tmp_path_factory: pytest.TempPathFactory) -> tuple[Probe, Path]:
 
 def test_recording_of_two_tasks_reports_each_tasks_result_figures(
         two_presses: tuple[Probe, Path], capsys: pytest.CaptureFixture[str]) -> None:
-    """`uvms report`: one row per task, its goal id and F_d, the figures of its result."""
+    """`uvms report`: one row per task, ground truth by default; the result's from F_e."""
     probe, path = two_presses
     assert report.main([str(path), '--format', 'csv']) == 0
+    default = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    assert [row['force_source'] for row in default] == ['contact', 'contact']  # as the plots
+    assert report.main([str(path), '--format', 'csv', '--force-source', 'controller']) == 0
     rows = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
     assert len(rows) == 2
     for row, name, force_n in zip(rows, ('first', 'second'), (100.0, 60.0), strict=True):

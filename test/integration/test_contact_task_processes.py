@@ -44,6 +44,8 @@ def environment() -> dict[str, str]:
     """The environment of every process here: the project's defaults, our domain."""
     env = dict(os.environ)
     env['ROS_DOMAIN_ID'] = str(DOMAIN_ID)
+    # This checkout's sources first (pytest's pythonpath), not the venv's installed ones.
+    env['PYTHONPATH'] = os.pathsep.join(p for p in sys.path if p)
     return env
 
 
@@ -76,6 +78,38 @@ def test_uvms_task_presses_on_the_wall_of_a_launched_graph(
     assert result.returncode == 0, result.stdout + result.stderr
     assert 'SUCCEEDED' in result.stdout
     assert 'peak' in result.stdout
+
+
+def test_press_whose_force_cannot_settle_ends_force_not_settled(
+        launch: subprocess.Popen[str], tmp_path: Path) -> None:
+    """F_d ramped over 20 s on a 2 s press: the force never reaches its band (issue 42)."""
+    task = tmp_path / 'unsettled.yaml'
+    task.write_text(TASK.replace('force_ramp_s: 0.5', 'force_ramp_s: 20.0'), encoding='utf-8')
+    result = subprocess.run(
+        [str(BIN / 'uvms'), 'task', str(task), '--timeout', str(START_TIMEOUT_S)],
+        capture_output=True, text=True, env=environment(), timeout=TASK_TIMEOUT_S, check=False)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert 'FORCE_NOT_SETTLED' in result.stdout, result.stdout
+    assert 'SUCCEEDED' not in result.stdout, result.stdout
+    assert 'control periods missed' in result.stdout, result.stdout
+
+
+def test_uvms_lifecycle_resets_the_controller_through_its_services(
+        launch: subprocess.Popen[str]) -> None:
+    """``uvms lifecycle controller reset``: deactivate then activate, on change_state."""
+    def lifecycle(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([str(BIN / 'uvms'), 'lifecycle', 'controller', *args],
+                              capture_output=True, text=True, env=environment(),
+                              timeout=TASK_TIMEOUT_S, check=False)
+
+    got = lifecycle('get', '--timeout', str(START_TIMEOUT_S))
+    assert (got.returncode, got.stdout) == (0, '/uvms/controller: active\n'), got.stderr
+    reset = lifecycle('reset')
+    assert reset.returncode == 0, reset.stderr
+    assert reset.stdout == '/uvms/controller: active -> inactive -> active\n'
+    refused = lifecycle('activate')  # active already: no such transition from there
+    assert refused.returncode == 1
+    assert 'refused activate (it is active)' in refused.stderr
 
 
 def test_uvms_task_prints_why_the_controller_rejected_a_goal(

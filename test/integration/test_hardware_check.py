@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from uvms_bringup.hardware_cli import main
+from uvms_cli.hardware import main
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.twins.alpha5_twin import Alpha5Twin
 from uvms_hardware.twins.ardusub_twin import ArduSubTwin

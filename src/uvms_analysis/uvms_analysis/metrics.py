@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
+import yaml
 from uvms_control.core.task.force_figures import (  # noqa: F401 (re-exported: the metric functions)
     IMPACT_WINDOW_S,
     SETTLING_BAND,
@@ -129,6 +130,7 @@ class RunMetrics:
     name: str
     file: str | None = None
     task: str | None = None
+    robot: str | None = None
     force_source: str | None = None
     desired_force: float | None = None
     first_contact_time: float | None = None
@@ -211,9 +213,30 @@ def normal_force(run: Run, source: ForceSource = 'auto') -> NormalForce | None:
     return NormalForce('controller', ctrl.t, sign * ctrl.F_e[:, 0], controller_contact_mask(run))
 
 
+def run_robot(metadata: dict[str, dict[str, str]]) -> str | None:
+    """The robot a recorded run used: ``robot_name`` of its parameters, None if not recorded.
+
+    The simulator's if it has one, else any node's (all load the same robot folder).
+    """
+    text = metadata.get('uvms', {}).get('parameters', '')
+    try:
+        nodes = yaml.safe_load(text) if text else None
+    except yaml.YAMLError:
+        return None
+    if not isinstance(nodes, dict):
+        return None
+    names = sorted(nodes, key=lambda node: 'simulator' not in str(node))
+    for node in names:
+        section = nodes[node]
+        values = section.get('ros__parameters') if isinstance(section, dict) else None
+        if isinstance(values, dict) and values.get('robot_name'):
+            return str(values['robot_name'])
+    return None
+
+
 def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
     """All metrics of a run (see RunMetrics); force metrics are None for a run without contact."""
-    values: dict[str, Any] = {'name': run.name}
+    values: dict[str, Any] = {'name': run.name, 'robot': run_robot(run.metadata)}
     if run.path is not None:
         values['file'] = str(run.path)
     f_d = desired_normal_force(run)
@@ -229,16 +252,19 @@ def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:
 def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto') -> RunMetrics:
     """The metrics of one contact task of a run: its samples from first to last step.
 
-    F_d is the goal's force_n. With ``force_source`` 'auto' or 'controller' the force figures
-    come from the samples the task's result was computed from (the controller's F_e along the
-    task's normal, contact at the controller's threshold) through the same ``force_figures``,
-    so they equal the result's; with 'contact' from the ground truth along the normal.
+    F_d is the goal's force_n. With ``force_source`` 'auto' the force figures come from the
+    simulator's ground truth along the task's normal when it was recorded, as the plots' and
+    docs/results.md's do (one set of figures per run), else as 'controller': from the samples
+    the task's result was computed from (the controller's F_e along the task's normal, contact
+    at the controller's threshold) through the same ``force_figures``, so they equal the
+    result's; 'contact' always takes the ground truth.
     Position and vehicle metrics are over the task's samples too.
     """
     part = run_window(run, task.t_start - TASK_WINDOW_TOLERANCE_S,
                       task.t_end + TASK_WINDOW_TOLERANCE_S)
     values: dict[str, Any] = {'name': run.name, 'task': task.goal_id,
-                              'desired_force': task.force_n}
+                              'desired_force': task.force_n,
+                              'robot': run_robot(run.metadata)}
     if run.path is not None:
         values['file'] = str(run.path)
     force = task_normal_force(part, task, force_source)
@@ -251,11 +277,13 @@ def task_metrics(run: Run, task: TaskRecord, force_source: ForceSource = 'auto')
 
 def task_normal_force(run: Run, task: TaskRecord,
                       source: ForceSource = 'auto') -> NormalForce | None:
-    """The normal force of a task: as its result saw it ('auto', 'controller'), or ground truth.
+    """The normal force of a task: ground truth ('contact'; 'auto' when recorded), or its result's.
 
     The controller's force is ``normal @ F_e`` per sample, the product the task supervisor
     takes at each step, in contact at or above the task's threshold.
     """
+    if source == 'auto' and run.contact is not None and run.contact.t.size:
+        source = 'contact'
     if source == 'contact':
         if run.contact is None or run.contact.t.size == 0:
             return None

@@ -337,7 +337,9 @@ def figure_thrusters(run: Run) -> Figure | None:
     ax_w.set_ylabel('propeller speed Ω (rad/s)')
     axes[-1].set_xlabel('time t (s)')
     ax_f.set_title(f'Thrusters, actual (with markers) and allocated (faint): {run.name}')
-    fig.legend(*ax_f.get_legend_handles_labels(), loc='outside right upper', fontsize='small')
+    # Under the time axis: beside the axes at the top right the legend covered the title's end.
+    fig.legend(*ax_f.get_legend_handles_labels(), loc='outside lower center', fontsize='small',
+               ncols=min(count + 1, 9))
     for ax in axes:
         ax.grid(True, alpha=0.4)
     return fig

@@ -102,15 +102,18 @@ COLUMNS = (
     Column('current\nmax', 'm/s', 'current_speed_max_m_s', _attr('current_speed_max'), 3),
     Column('thrust\nscale', '', 'saturation_scale_min', _attr('saturation_scale_min'), 3),
     Column('force\nfrom', '', 'force_source', _attr('force_source')),
+    Column('robot', '', 'robot', _attr('robot')),
 )
 #: Columns that name a run rather than measure it (left-aligned; no sweep metric).
-LABEL_KEYS = ('run', 'file', 'task', 'force_source')
-_LEFT_ALIGNED = ('run', 'file', 'task')
+LABEL_KEYS = ('run', 'robot', 'file', 'task', 'force_source')
+_LEFT_ALIGNED = ('run', 'robot', 'file', 'task')
 
 LEGEND = (
     'run: scenario of the recording (else its file name); file: the recording as given.',
+    'robot: the robot folder the run used (its name, or the path given with --robot).',
     'task: goal id of a contact task (first 8 hex digits; all 32 in CSV): one row per task,',
-    "   from its first to its last control step, F_d its force_n; force metrics as its result's.",
+    '   from its first to its last control step, F_d its force_n; --force-source controller:',
+    "   force metrics as its result's.",
     "F: contact force along the wall normal (map_ned x; a task's normal); force from: contact =",
     "   simulator ground truth (/uvms/contact), controller = the controller's measured F_e.",
     'F_d: a run without tasks: median force set-point while in contact. overshoot: (peak F - F_d)',
@@ -217,9 +220,9 @@ def build_parser() -> argparse.ArgumentParser:
         choices=('auto', 'contact', 'controller'),
         default='auto',
         help='force for the force metrics: simulator ground truth (contact), the '
-        "controller's measured F_e (controller), or auto: for a task the force its result "
-        "used (the controller's, so the row equals the result), for a run without tasks "
-        'ground truth when recorded',
+        "controller's measured F_e (controller: a task's row then equals its result), or "
+        "auto (default): ground truth when recorded, as uvms plot's figures and "
+        "docs/results.md use it, else the controller's; the column 'force from' says which",
     )
     return parser
 

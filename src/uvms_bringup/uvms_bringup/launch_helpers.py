@@ -315,9 +315,20 @@ def config_dir() -> Path:
 
 
 def resolve_scenario_path(name_or_path: str, directory: Path | None = None) -> Path:
-    """A scenario given as a file path, or as a name of ``config/scenarios/NAME.yaml``."""
+    """A scenario given as a file path, or as a name of ``config/scenarios/NAME.yaml``.
+
+    Raises:
+        FileNotFoundError: no such file; the message lists the scenarios there are.
+    """
     path = Path(name_or_path)
-    if path.suffix in ('.yaml', '.yml') or path.exists():
-        return path
     base = directory if directory is not None else config_dir()
-    return base / 'scenarios' / f'{name_or_path}.yaml'
+    if path.exists():
+        return path
+    if path.suffix not in ('.yaml', '.yml'):
+        path = base / 'scenarios' / f'{name_or_path}.yaml'
+        if path.exists():
+            return path
+    names = sorted(p.stem for p in (base / 'scenarios').glob('*.yaml'))
+    msg = (f'no scenario {name_or_path!r}: {path} does not exist; the scenarios in '
+           f'{base / "scenarios"} are {", ".join(names) if names else "(none)"}')
+    raise FileNotFoundError(msg)

@@ -24,6 +24,17 @@ EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+#: Help of ``--robot`` (run and launch).
+ROBOT_HELP = ("a robot folder of uvms_description by name (uvms doctor lists them) or a path "
+              "to a robot folder of your own (any name with a /: ./my_robot; docs/robots.md); "
+              "default: the scenario's robot:, else paper_uvms")
+#: Exit statuses of every subcommand (``uvms --help``; README "Exit statuses").
+EXIT_STATUSES = (
+    'exit status, every subcommand: 0 success; 1 the run, the task or the tool failed (a node '
+    'failed, a task did not succeed, a recording could not be read, no controller '
+    'answered); 2 bad usage: a bad option, file, scenario, task file, or robot, found '
+    "before anything started; 3 uvms launch only: the scenario's mission failed; 130 "
+    'interrupted (Ctrl-C/SIGTERM).')
 
 #: Subcommands handed over whole to another module's ``main(argv) -> int``.
 DELEGATED = {
@@ -34,8 +45,10 @@ DELEGATED = {
     'sweep': ('uvms_sweep.cli', 'run a parameter sweep of a scenario on Ray and map '
                                         'its metrics'),
     'task': ('uvms_tasks.cli', 'send a task or mission file to the controller of a running graph'),
-    'hardware': ('uvms_bringup.hardware_cli', 'check the devices of a hardware file (uvms '
+    'hardware': ('uvms_cli.hardware', 'check the devices of a hardware file (uvms '
                                               'hardware check twin|FILE), changing nothing'),
+    'lifecycle': ('uvms_cli.lifecycle', "get or change a managed node's lifecycle state "
+                                        '(reset: deactivate + activate, clears a safe hold)'),
     'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '
                                       'messages'),
 }
@@ -54,9 +67,14 @@ def _positive_seconds(text: str) -> float:
 
 def _seconds_or_zero(text: str) -> float:
     """Argparse type: a finite number of seconds >= 0 (0: no limit)."""
-    if text.strip() in ('0', '0.0'):
-        return 0.0
-    return _positive_seconds(text)
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number of seconds, got {text!r}') from None
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(
+            f'expected a number of seconds >= 0 (0: run until Ctrl-C), got {text!r}')
+    return value
 
 
 def _seed(text: str) -> int:
@@ -113,6 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog='uvms',
         description='UVMS unified force control stack: run the node graph on a scenario, '
                     'launch it in real time, and analyse recordings.',
+        epilog=EXIT_STATUSES,
     )
     sub = parser.add_subparsers(dest='command', metavar='COMMAND')
     run = sub.add_parser(
@@ -129,8 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument('--seed', type=_seed, metavar='N',
                      help="sensor noise seed (default: the scenario's)")
     run.add_argument('--robot', metavar='NAME',
-                     help="robot folder of uvms_description (default: the scenario's robot:, "
-                          'else paper_uvms; uvms doctor lists them)')
+                     help=ROBOT_HELP)
     run.add_argument('--quiet', '-q', action='store_true',
                      help='no progress bar, only warnings, errors and the summary line')
     _add_foxglove_arguments(run)
@@ -162,8 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     launch.add_argument('--mode', choices=('realtime', 'lockstep'), default='realtime',
                         help='execution mode (default: realtime)')
     launch.add_argument('--robot', metavar='NAME',
-                        help="robot folder of uvms_description (default: the scenario's "
-                             'robot:, else paper_uvms; uvms doctor lists them)')
+                        help=ROBOT_HELP)
     launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
     launch.add_argument(
         '--hardware', metavar='twin|FILE',
@@ -224,6 +241,18 @@ def _error(command: str, message: str) -> None:
     print(f'uvms {command}: error: {message}', file=sys.stderr)
 
 
+def _check_robot(robot: str | None) -> None:
+    """A robot folder that is not there is bad usage (exit 2), found before any node starts.
+
+    Raises:
+        ValueError: ``RobotFolderError``, naming the folder or listing the robots there are.
+    """
+    if robot is not None:
+        from uvms_description.robots import robot_files
+
+        robot_files(robot)
+
+
 def _run(args: argparse.Namespace, stop: StopEvent) -> int:
     """``uvms run``: lockstep run of a scenario in this process."""
     return _run_in_process(args, 'lockstep', stop, progress=not args.quiet)
@@ -250,6 +279,7 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             from uvms_bringup.launch_helpers import config_dir
 
             hardware = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
+        _check_robot(args.robot or (scenario.robot if scenario is not None else None))
         return launch_graph(scenario, args.mode, duration_s=duration,
                             output_path=args.output, quiet=args.quiet, stop=stop,
                             foxglove=_foxglove_address(args), robot=args.robot,
@@ -272,14 +302,15 @@ def _run_in_process(
 
     command = args.command
     scenario = None
+    warning = None
     try:
         if args.scenario is not None:
             scenario = load_scenario(resolve_scenario_path(args.scenario))
             scenario = scenario.with_changes(duration_s=args.duration,
                                              seed=getattr(args, 'seed', None))
-            if warning := short_duration_warning(scenario, scenario.duration_s):
-                print(f'uvms {command}: warning: {warning}', file=sys.stderr)
+            warning = short_duration_warning(scenario, scenario.duration_s)
         duration = args.duration if scenario is None else scenario.duration_s
+        _check_robot(args.robot or (scenario.robot if scenario is not None else None))
         if args.quiet:
             _quiet_logs()
         graph = build_graph(scenario, mode, output_path=args.output, duration_s=duration,
@@ -290,6 +321,8 @@ def _run_in_process(
     except GraphError as exc:
         _error(command, str(exc))
         return EXIT_FAILURE
+    if warning:  # after the scenario's keys were checked: a typo's error comes alone
+        print(f'uvms {command}: warning: {warning}', file=sys.stderr)
     return _run_graph_and_report(args, graph, mode, stop, progress)
 
 

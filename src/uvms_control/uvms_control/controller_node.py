@@ -169,6 +169,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._staleness = StalenessMonitor()
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._misses = MissCounter(round(1e9 / float(node['control_rate_hz'])))
+        self._period_ns = self._misses.period_ns
         self._staleness_log = EventLogger(self.get_logger(), {
             'waiting': 'waiting for fresh joint_states, odometry and wrench (start-up): '
                        'publishing zero generalized force',
@@ -386,12 +387,16 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._last_tau_b = result.tau_b
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
+        self.tasks.count_step(t_ns, self._steady.now().nanoseconds, self._period_ns)
         if self._state_gate.due(t_ns):
             self._state_pub.publish(self._state_writer.payload(t_ns, result))
         self.tasks.finish(events)
         self.tasks.publish_feedback(self.supervisor, t)
         breach = self.supervisor.breach
-        if breach is not None and self._breach is None:  # once per breach, not per step
+        if self.supervisor.safe_hold and breach != self._breach:  # latched: said once
+            self.get_logger().error(f'{breach}: goals are refused until `uvms lifecycle '
+                                    f'{self.get_name()} reset` (deactivate, activate)')
+        elif breach is not None and self._breach is None:  # once per breach, not per step
             self.get_logger().error(f'safety limit: {breach}')
         self._breach = breach
 

@@ -81,5 +81,7 @@ class ControllerReports:
                   'goals_received': self.tasks.goals_received,
                   'last_result': self.tasks.last_outcome}
         if self._breach is not None:
-            return Report(ERROR, f'safety limit: {self._breach}', values)
+            clear = (f'; clear it: uvms lifecycle {self.get_name()} reset'
+                     if supervisor is not None and supervisor.safe_hold else '')
+            return Report(ERROR, f'safety limit: {self._breach}{clear}', values)
         return Report(OK, 'holding' if progress is None else 'running a contact task', values)

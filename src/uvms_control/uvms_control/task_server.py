@@ -77,6 +77,11 @@ class ContactTaskServer:
         # One record per task that ran, so that a recording tells its tasks apart.
         self._records = node.create_publisher(ContactTaskRecord, 'controller/task_record', 10)
         self._last_feedback_s = -float('inf')
+        # Real-time health: control periods, missed periods, late steps since start-up; a
+        # goal's are the difference between its end and its acceptance (``count_step``).
+        self._health = [0, 0, 0]
+        self._health_at: dict[bytes, tuple[int, ...]] = {}
+        self._last_step_ns: tuple[int, int] | None = None
         self.goals_received = 0
         self.goals_rejected = 0
         self.last_outcome = 'none'
@@ -99,6 +104,23 @@ class ContactTaskServer:
     def open_goal_forces(self) -> list[float]:
         """force_n of every goal not ended yet (N)."""
         return [float(handle.request.force_n) for handle in self._handles.values()]
+
+    def count_step(self, t_ns: int, steady_ns: int, period_ns: int) -> None:
+        """Count one control step at t_ns (controller clock) run at steady_ns (steady clock).
+
+        A step k periods after the last (controller clock) missed k - 1 periods (states not
+        answered); a step run more than 1.5 periods (steady clock) after the last, for a
+        one-period advance of the controller clock, is late: in real time its command reaches
+        the simulator a physics step or more after its state (in lockstep the simulator
+        waits for it, so lateness only slows the run).
+        """
+        last, self._last_step_ns = self._last_step_ns, (t_ns, steady_ns)
+        if last is None or t_ns <= last[0]:
+            return
+        elapsed = max(1, round((t_ns - last[0]) / period_ns))
+        self._health[0] += elapsed
+        self._health[1] += elapsed - 1
+        self._health[2] += (steady_ns - last[1]) - (t_ns - last[0]) > period_ns // 2
 
     def _check(self, request: ContactTask.Goal) -> GoalResponse:
         """Reject a goal that fails the checks, logging why; accept the rest.
@@ -150,6 +172,7 @@ class ContactTaskServer:
                                          float('nan'), float('nan')))
             return
         self._goals[key] = (goal, supervisor.controller.task.contact_threshold_n)
+        self._health_at[key] = tuple(self._health)
         self.finish(supervisor.submit(key, goal, self._now_s()))
         if key in self._handles:
             self._node.get_logger().info(
@@ -201,7 +224,11 @@ class ContactTaskServer:
             record = contact_task_record(key, accepted[0], result, threshold)
             if record is not None:
                 self._records.publish(record)
-        self._results[key] = contact_task_result(result)
+        message = self._results[key] = contact_task_result(result)
+        since = self._health_at.pop(key, None)
+        if since is not None:
+            message.control_periods, message.missed_periods, message.late_steps = (
+                now - then for now, then in zip(self._health, since, strict=True))
         self.last_outcome = f'{result.code.name}: {result.message}'
         text = f'contact task ended {result.code.name}: {result.message}'
         if result.code == TaskCode.SUCCEEDED:  # rclpy wants one severity per call site

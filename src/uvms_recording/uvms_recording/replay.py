@@ -182,22 +182,62 @@ class ReplayNode(Node):
         now: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
         should_stop: Callable[[], bool] = lambda: False,
+        on_published: Callable[[RecordedMessage], None] | None = None,
     ) -> int:
         """Replay the selected topics as options say; return the number of messages published.
 
-        Stops early when the node's context shuts down or should_stop() turns True.
+        Stops early when the node's context shuts down or should_stop() turns True;
+        ``on_published`` is told of each message published (a progress line).
         """
         start_ns = self.recording.start_time_ns + round(options.start_s * 1e9)
         topics = self.topics
+
+        def publish(message: RecordedMessage) -> None:
+            self.publish_recorded(message)
+            if on_published is not None:
+                on_published(message)
+
         return play_messages(
             lambda: self.recording.messages(topics, start_ns=start_ns),
-            self.publish_recorded,
+            publish,
             rate=options.rate,
             loop=options.loop,
             now=now,
             sleep=sleep,
             keep_going=lambda: self.context.ok() and not should_stop(),
         )
+
+
+class ReplayProgress:
+    """``replayed 5.0 / 20.0 s of the recording`` from log times start_ns to end_ns (ns).
+
+    On a terminal one line redrawn every 0.5 s of wall time (``now``, s); else one every 5 s.
+    """
+
+    def __init__(self, start_ns: int, end_ns: int, file: Any = None,
+                 now: Callable[[], float] = time.monotonic) -> None:
+        self.start_ns = start_ns
+        self.total_s = max(end_ns - start_ns, 0) * 1e-9
+        self.file = sys.stderr if file is None else file
+        self.now = now
+        self.tty = bool(getattr(self.file, 'isatty', lambda: False)())
+        self._next_s = -float('inf')
+
+    def __call__(self, message: RecordedMessage) -> None:
+        """Note one published message; write the line when it is due."""
+        t = self.now()
+        if t < self._next_s:
+            return
+        self._next_s = t + (0.5 if self.tty else 5.0)
+        done = max(message.log_time_ns - self.start_ns, 0) * 1e-9
+        text = f'replayed {done:.1f} / {self.total_s:.1f} s of the recording'
+        self.file.write(f'\r{text}' if self.tty else f'{text}\n')
+        self.file.flush()
+
+    def end(self) -> None:
+        """End a redrawn line."""
+        if self.tty:
+            self.file.write('\n')
 
 
 class StopOnSignal:
@@ -337,7 +377,10 @@ def _replay(recording: McapRecording, args: argparse.Namespace, ros_args: list[s
         node = ReplayNode(recording, topics, context=context)
         print(f'replaying {recording.path} ({len(topics)} topics, rate {options.rate:g}'
               f'{", loop" if options.loop else ""})', file=sys.stderr)
-        count = node.play(options, should_stop=should_stop)
+        progress = ReplayProgress(recording.start_time_ns + round(options.start_s * 1e9),
+                                  recording.end_time_ns)
+        count = node.play(options, should_stop=should_stop, on_published=progress)
+        progress.end()
         stopped = ' (stopped)' if should_stop() else ''
         print(f'published {count} messages{stopped}', file=sys.stderr)
         return 0

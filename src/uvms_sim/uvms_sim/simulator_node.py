@@ -159,7 +159,8 @@ class SimulatorNode(Node):
         self._diagnostics.add('simulation', self._report)
         self._meters = (RateMeter(), RateMeter(), RateMeter())  # steps, sim seconds, timeouts
         self.get_logger().info(
-            f'{cfg.mode} simulation at {1e9 / cfg.physics_dt_ns:g} Hz, state published every '
+            f'{cfg.mode} simulation of robot {self.robot_name} at '
+            f'{1e9 / cfg.physics_dt_ns:g} Hz, state published every '
             f'{cfg.steps_per_publish} steps, wall {"on" if cfg.wall_enabled else "off"}')
 
     @property

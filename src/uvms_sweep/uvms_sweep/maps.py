@@ -101,10 +101,36 @@ def log_scale(axis: Axis) -> bool:
                 and values.max() >= _DECADE * values.min())
 
 
+#: Unit suffixes of parameter names (longest first) and how a label writes them.
+_UNITS = (('_n_s_m', 'N s/m'), ('_m_s2', 'm/s²'), ('_m_s', 'm/s'), ('_n_m', 'N/m'),
+          ('_rad', 'rad'), ('_deg', 'deg'), ('_hz', 'Hz'), ('_n', 'N'), ('_m', 'm'),
+          ('_s', 's'))
+
+
+def parameter_label(name: str) -> str:
+    """A parameter key in words, its unit in brackets: the last two parts of the key.
+
+    Example:
+        >>> parameter_label('simulator.contact.stiffness_n_m')
+        'contact stiffness (N/m)'
+        >>> parameter_label('controller.model.mass_scale')
+        'model mass scale'
+    """
+    parts = name.split('.')
+    last, unit = parts[-1], ''
+    for suffix, text in _UNITS:
+        if last.endswith(suffix) and len(last) > len(suffix):
+            last, unit = last[:-len(suffix)], f' ({text})'
+            break
+    words = ' '.join([*parts[-2:-1], last]).replace('_', ' ')
+    return words + unit
+
+
 def _axis_label(axis: Axis, length_in: float) -> str:
-    """An axis's full name wrapped to ``length_in`` inches, with its spacing if logarithmic."""
+    """An axis in words over its full key (wrapped to ``length_in`` inches), log spacing said."""
     name = axis.name + (' (log spaced)' if axis.spacing == 'logspace' else '')
-    return wrap_name(name, max(12, int(length_in * _LABEL_CHARS_PER_IN)))
+    return (parameter_label(axis.name) + '\n'
+            + wrap_name(name, max(12, int(length_in * _LABEL_CHARS_PER_IN))))
 
 
 def _legend(fig: Figure, marks: Sequence[tuple[str, str, str, str]]) -> None:
@@ -173,8 +199,8 @@ def metric_figure(
 
 
 def _title(sweep: Sweep, metric: str) -> str:
-    """Figure title: metric and sweep."""
-    return f'{metric} over {sweep.name}'
+    """Figure title: the metric as ``uvms report`` names it, and the sweep."""
+    return f'{metric_label(metric)} over {sweep.name}'
 
 
 def _heatmap(
@@ -185,7 +211,7 @@ def _heatmap(
     x_axis, y_axis = sweep.axes
     nx, ny = mean.shape
     width_in = max(1.2 + 0.9 * nx + 1.5, _MIN_FIGSIZE_IN[0])
-    height_in = max(1.2 + 0.6 * ny + 0.8, _MIN_FIGSIZE_IN[1])
+    height_in = max(1.2 + 0.6 * ny + 0.8, _MIN_FIGSIZE_IN[1]) + 0.3  # two-line x label
     fig = Figure(figsize=(width_in, height_in))
     ax = fig.subplots()
     grid = np.ma.masked_invalid(mean.T)

@@ -348,11 +348,11 @@ def _scenario_path(scenario: str, path: Path) -> Path:
         beside = path.parent / candidate
         if beside.is_file():
             return beside
-    resolved = resolve_scenario_path(scenario)
-    if not resolved.is_file():
-        msg = f"{path}: key 'scenario': no scenario file {resolved} (a path or a name)"
-        raise SweepError(msg)
-    return resolved
+    try:
+        return resolve_scenario_path(scenario)
+    except FileNotFoundError as error:
+        msg = f"{path}: key 'scenario': {error} (a path or a name)"
+        raise SweepError(msg) from None
 
 
 def _positive(value: Any, key: str, path: Path) -> float:

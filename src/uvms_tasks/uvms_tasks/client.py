@@ -47,7 +47,6 @@ from rclpy.serialization import deserialize_message
 from rclpy.task import Future
 from unique_identifier_msgs.msg import UUID
 from uvms_common.node_main import make_executor
-from uvms_control.task_server import REJECTED_PREFIX
 
 from uvms_msgs.action import ContactTask
 from uvms_msgs.msg import ControllerState
@@ -63,6 +62,10 @@ STATE_TOPIC = 'controller/state'
 #: and a client that sends at once after discovery then waits for an answer forever. Nodes of
 #: one context share a participant and match at once: no wait is needed there.
 DISCOVERY_SETTLE_S = 0.5
+#: Start of the controller's log line of a rejected goal (``uvms_control.task_server``'s
+#: REJECTED_PREFIX, kept equal by a test): importing it took the controller's core and scipy
+#: along, a second of every ``uvms task`` (issue 42).
+REJECTED_PREFIX = 'contact task goal rejected: '
 #: Longest single executor turn of the blocking methods (s): Ctrl-C is seen this fast.
 SPIN_TURN_S = 0.1
 #: Wall time to wait, after a rejection, for the controller's log line that says why (s).

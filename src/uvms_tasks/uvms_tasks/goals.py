@@ -29,9 +29,9 @@ NS_PER_S = 1_000_000_000
 ERROR_CODE_NAMES = {
     getattr(ContactTask.Result, name): name
     for name in ('SUCCEEDED', 'INVALID_GOAL', 'NO_CONTACT', 'FORCE_LIMIT', 'TRACKING_LIMIT',
-                 'PREEMPTED', 'CANCELED', 'INACTIVE')
+                 'PREEMPTED', 'CANCELED', 'INACTIVE', 'INPUTS_STALE', 'ACTUATION_LOST',
+                 'FORCE_NOT_SETTLED')
 }
-ERROR_CODE_NAMES[ContactTask.Result.ACTUATION_LOST] = 'ACTUATION_LOST'  # thruster faults
 #: ContactTask.Feedback.phase -> name (the fuzzy switch's phase, paper sec. 4.3).
 PHASE_NAMES = {
     ContactTask.Feedback.PHASE_FREE: 'free',
@@ -175,7 +175,9 @@ def describe_result(status: int, result: ContactTask.Result | None,
     detail = f': {result.error_string}' if result.error_string else ''
     transit = (f'; transit to path[0] first: {result.transit_s:.2f} s'
                if result.transit_s > 0.0 else '')
-    return f'{text}{detail}; {numbers}{transit}'
+    health = (f'; real time: {result.missed_periods} of {result.control_periods} control '
+              f'periods missed, {result.late_steps} steps late' if result.control_periods else '')
+    return f'{text}{detail}; {numbers}{transit}{health}'
 
 
 def describe_feedback(feedback: ContactTask.Feedback) -> str:

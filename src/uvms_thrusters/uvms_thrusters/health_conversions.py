@@ -77,6 +77,35 @@ def health_report(allocator: ThrusterAllocator | None) -> Report:
     return Report(OK, 'all thrusters healthy', values)
 
 
+def health_change(before: tuple[Any, ...] | None, after: tuple[Any, ...],
+                  allocator: ThrusterAllocator) -> tuple[str, str] | None:
+    """The console line of a health change: (``WARN`` or ``ERROR``, text), None if none.
+
+    ``before`` and ``after`` are the allocator node's health keys (rank, accommodating,
+    detector status bytes). A thruster declared degraded or failed, or recovered, is WARN; a
+    rank below 6 (the vehicle cannot produce every wrench) is ERROR, its return WARN.
+    """
+    if before is None or before == after:
+        return None
+    detector, names = allocator.detector, ('recovered', 'declared degraded', 'declared failed')
+    old = np.zeros(0, np.uint8) if before[2] is None else np.frombuffer(before[2], np.uint8)
+    new = np.zeros(0, np.uint8) if after[2] is None else np.frombuffer(after[2], np.uint8)
+    parts = [f'thruster {i} (T{i + 1}) {names[int(new[i])]}' + (
+        f' at {detector.detected_at_s[i]:.3f} s (eta_hat {detector.effectiveness[i]:.3f})'
+        if detector is not None and new[i] else '')
+        for i in np.flatnonzero(old != new)] if old.size == new.size else []
+    if not allocator.fully_actuated:
+        return ERROR, '; '.join([*parts, f'rank {allocator.rank} < 6: the vehicle cannot '
+                                 'produce every wrench (a running task ends ACTUATION_LOST)'])
+    if before[0] != after[0]:
+        parts.append(f'rank {allocator.rank}: every vehicle wrench again')
+    if not parts:
+        return None
+    accommodating = ('allocating around it' if allocator.accommodate
+                     else 'accommodation off')
+    return WARN, '; '.join(parts) + f' ({accommodating})'
+
+
 def on_set_fault_parameters(allocator: ThrusterAllocator | None,
                             parameters: list[Parameter]) -> SetParametersResult:
     """Apply ``fault_injection.thrusters`` and ``fault_detection.accommodate`` at run time."""

@@ -30,7 +30,15 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.cdr_codecs import MalformedPayloadError
-from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
+from uvms_common.diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    DiagnosticsPublisher,
+    RateMeter,
+    Report,
+    robot_name,
+)
 from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
@@ -54,6 +62,7 @@ from uvms_thrusters.errors import ThrusterInputError, ThrusterParameterError
 from uvms_thrusters.fault_parameters import FAULT_PARAMETER_SPECS, equip, fault_settings
 from uvms_thrusters.health_conversions import (
     HEALTH_TOPIC,
+    health_change,
     health_message,
     health_report,
     on_set_fault_parameters,
@@ -364,6 +373,11 @@ class ThrusterAllocatorNode(LifecycleNode):
         key = (self.core.rank, self.core.accommodate,
                None if detector is None else detector.status.tobytes())
         if self._health_gate.due(t_ns) or key != self._health_key:
+            change = health_change(self._health_key, key, self.core)  # one console line
+            if change is not None and change[0] == ERROR:
+                self.get_logger().error(change[1])
+            elif change is not None:
+                self.get_logger().warning(change[1])
             self._health_key = key
             self._health_msg = health_message(t_ns, self.core, output, self._health_msg)
             self._health_pub.publish(self._health_msg)

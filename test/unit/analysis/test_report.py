@@ -146,3 +146,16 @@ def test_truncated_recording_is_reported_with_a_warning(
     assert status == 0
     assert list(csv_rows(out)) == ['case1_synthetic']
     assert 'warning' in err and 'cut short' in err
+
+
+def test_report_names_the_robot_a_run_used() -> None:
+    """The simulator's robot_name from the recorded parameters, a path as it was given."""
+    from uvms_analysis.metrics import run_robot
+    from uvms_analysis.report import COLUMNS
+
+    parameters = ('/uvms/controller:\n  ros__parameters:\n    robot_name: paper_uvms\n'
+                  '/uvms/simulator:\n  ros__parameters:\n    robot_name: ./my_robot\n')
+    assert run_robot({'uvms': {'parameters': parameters}}) == './my_robot'
+    assert run_robot({}) is None
+    assert run_robot({'uvms': {'parameters': ': not yaml ['}}) is None
+    assert 'robot' in [column.key for column in COLUMNS]

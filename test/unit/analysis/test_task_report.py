@@ -173,3 +173,29 @@ def test_task_metrics_equal_the_result_beyond_the_printed_digits(
         assert metrics.settling_time == pytest.approx(result.settling_time_s, rel=1e-9)
         assert metrics.force_rms_error == pytest.approx(result.rms_force_error_n, rel=1e-12)
         assert 0.05 < result.settling_time_s < RAMP_S
+
+
+def test_task_row_takes_the_ground_truth_by_default_as_the_figures_do(
+    two_tasks: tuple[Path, list[TaskResult]]
+) -> None:
+    """Ground truth recorded: 'auto' is 'contact' (one set of figures); 'controller' = result."""
+    from dataclasses import replace
+
+    from uvms_analysis.series import ContactSeries
+
+    path, results = two_tasks
+    run = load_run(path)
+    t = run.controller.t
+    # A wall that measures 10 % more than the controller's F_e: a figure tells them apart.
+    force = 1.1 * run.controller.F_e
+    contact = ContactSeries(t, force[:, 0] >= THRESHOLD_N, force, np.zeros(t.size),
+                            np.zeros(t.size), np.zeros(t.size))
+    run = replace(run, contact=contact)
+    for record, result in zip(run.tasks, results, strict=True):
+        default = task_metrics(run, record)
+        truth = task_metrics(run, record, 'contact')
+        assert (default.force_source, default.peak_force) == ('contact', truth.peak_force)
+        assert default.peak_force == pytest.approx(1.1 * result.peak_force_n)
+        controller = task_metrics(run, record, 'controller')
+        assert (controller.force_source, controller.peak_force) == ('controller',
+                                                                    result.peak_force_n)

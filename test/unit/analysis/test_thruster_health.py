@@ -66,3 +66,19 @@ def test_thruster_figure_gains_a_health_panel() -> None:
     labels = with_health.axes[2].get_legend_handles_labels()[1]
     assert {'fault injected', 'fault detected'} <= set(labels)
     assert health.effectiveness[-1].tolist() == [1.0, 0.0]
+
+
+def test_thruster_figure_legend_leaves_the_title_clear() -> None:
+    """The legend's box and the title's box do not overlap once drawn (issue 42)."""
+    t = np.linspace(0.0, 1.0, 11)
+    thrust = np.ones((11, 8))
+    thrusters = ThrusterSeries(t, thrust, thrust, thrust, thrust, thrust, np.ones(11))
+    fig = figure_thrusters(Run('bluerov2_alpha5_thruster_fault', thrusters=thrusters))
+    assert fig is not None
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    title = fig.axes[0].title.get_window_extent(renderer)
+    [legend] = fig.legends
+    assert not title.overlaps(legend.get_window_extent(renderer))

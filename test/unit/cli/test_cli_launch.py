@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -50,3 +51,62 @@ def test_launch_refuses_a_negative_duration(
     assert cli.main(['launch', 'free_motion', '--duration', '-1']) == 2
     assert not launched
     assert '--duration' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('command', ['run', 'launch'])
+def test_unknown_scenario_name_lists_the_scenarios_and_is_bad_usage(
+    launched: dict[str, Any], command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`uvms launch nosuch_scenario`: exit 2, the scenarios there are named."""
+    assert cli.main([command, 'nosuch_scenario']) == 2
+    err = capsys.readouterr().err
+    assert "no scenario 'nosuch_scenario'" in err
+    assert 'case1_ke1e4' in err and 'idle_wall' in err
+
+
+@pytest.mark.parametrize('command', ['run', 'launch'])
+def test_unknown_robot_is_bad_usage_before_anything_starts(
+    launched: dict[str, Any], command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`--robot nosuch`: exit 2 (not 1, "a node failed"), the robots listed, nothing launched."""
+    assert cli.main([command, 'free_motion', '--robot', 'nosuch']) == 2
+    assert "unknown robot 'nosuch'" in capsys.readouterr().err
+    assert launched == {}
+
+
+def test_negative_launch_duration_says_zero_is_valid(capsys: pytest.CaptureFixture[str]) -> None:
+    """`--duration -5`: the message says >= 0 (0 runs until Ctrl-C), not > 0."""
+    assert cli.main(['launch', 'free_motion', '--duration', '-5']) == 2
+    assert 'expected a number of seconds >= 0 (0: run until Ctrl-C)' in capsys.readouterr().err
+
+
+def test_robot_help_says_a_path_works(capsys: pytest.CaptureFixture[str]) -> None:
+    """`uvms launch --help`: --robot takes a name or a path to a robot folder."""
+    with pytest.raises(SystemExit):
+        cli.build_parser().parse_args(['launch', '--help'])
+    assert 'or a path to a robot folder' in ' '.join(capsys.readouterr().out.split())
+
+
+def test_top_level_help_gives_every_subcommands_exit_statuses(
+    capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`uvms --help`: 0, 1, 2, 3 and 130 for every subcommand."""
+    with pytest.raises(SystemExit):
+        cli.build_parser().parse_args(['--help'])
+    text = ' '.join(capsys.readouterr().out.split())
+    assert 'exit status, every subcommand: 0 success; 1' in text
+    for status in ('2 bad usage', '3 uvms launch only', '130 interrupted'):
+        assert status in text
+
+
+def test_scenario_key_typo_is_the_only_line_of_uvms_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A mistyped override with a short --duration: the key's error, no duration warning."""
+    scenario = Path(__file__).resolve().parents[3] / 'config' / 'scenarios' / 'case1_ke1e4.yaml'
+    typo = tmp_path / 'typo.yaml'
+    typo.write_text(scenario.read_text().replace('stiffness_n_m', 'stifness_n_m', 1))
+    assert cli.main(['run', str(typo), '--duration', '0.1']) == 2
+    err = capsys.readouterr().err
+    assert 'stifness_n_m' in err
+    assert 'warning' not in err

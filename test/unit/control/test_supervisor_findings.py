@@ -218,6 +218,7 @@ def test_f4_breach_during_a_retreat_goes_to_safe_hold_until_reset() -> None:
     assert run.supervisor.breach is not None and run.supervisor.breach.startswith('safe hold')
     [refused] = run.supervisor.submit('b', goal(), run.t)
     assert 'safe hold' in refused.result.message
+    assert 'clear it with `uvms lifecycle controller reset`' in refused.result.message
     run.supervisor.reset()
     run.step()
     assert run.supervisor.state == SupervisorState.HOLD and run.supervisor.breach is None

@@ -182,3 +182,22 @@ def test_report_fails_above_tolerance_and_with_missing_outputs(tmp_path: Path) -
     clean = RerunReport(recording=tmp_path / 'r.mcap', tolerance=1e-6, compared=3,
                         missing=[('/uvms/command/generalized_force', 0)])
     assert not clean.passed
+
+
+def test_replay_progress_says_how_far_it_is_every_five_seconds_off_a_terminal() -> None:
+    """Not a terminal: a line at the first message, then one per 5 s of wall time."""
+    import io
+    from types import SimpleNamespace
+
+    from uvms_recording.replay import ReplayProgress
+
+    out, clock = io.StringIO(), [0.0]
+    progress = ReplayProgress(0, 20 * 10**9, file=out, now=lambda: clock[0])
+    for k in range(21):  # one message per recorded second, played at rate 1
+        clock[0] = float(k)
+        progress(SimpleNamespace(log_time_ns=k * 10**9))  # type: ignore[arg-type]
+    progress.end()
+    lines = out.getvalue().splitlines()
+    assert lines[0] == 'replayed 0.0 / 20.0 s of the recording'
+    assert lines[-1] == 'replayed 20.0 / 20.0 s of the recording'
+    assert len(lines) == 5

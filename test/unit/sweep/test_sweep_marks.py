@@ -110,7 +110,7 @@ def test_older_table_of_a_nine_second_point_reads_as_ended_before_settling(
 
 
 def test_two_by_one_map_shows_full_wrapped_axis_labels_and_units(tmp_path: Path) -> None:
-    """2 x 1 grid: the y label is the whole parameter name, inside the figure; units shown."""
+    """2 x 1 grid: labels in words over the whole parameter name, inside the figure; units."""
     sweep = load_sweep(write_sweep(tmp_path))
     points = sweep.points('case2_noise', 9.0, 1)
     rows = {point.point_id: outcome_row(sweep, point.values, 1,
@@ -119,10 +119,16 @@ def test_two_by_one_map_shows_full_wrapped_axis_labels_and_units(tmp_path: Path)
     fig = metric_figure(sweep, points, rows, 'overshoot_percent')
     ax, colorbar = fig.axes
     x_label, y_label = ax.xaxis.label, ax.yaxis.label
-    assert x_label.get_text().replace('\n', '') == 'simulator.sensor.noise_fraction'
-    assert y_label.get_text().replace('\n', '') == 'controller.hybrid.force_derivative_cutoff_hz'
+    x_words, *x_key = x_label.get_text().split('\n')
+    y_words, *y_key = y_label.get_text().split('\n')
+    assert (x_words, ''.join(x_key)) == ('sensor noise fraction',
+                                         'simulator.sensor.noise_fraction')
+    assert (y_words, ''.join(y_key)) == ('hybrid force derivative cutoff (Hz)',
+                                         'controller.hybrid.force_derivative_cutoff_hz')
     assert colorbar.get_ylabel() == 'overshoot (%)'
+    assert ax.get_title().startswith('overshoot (%) over ')  # not the raw key
     renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)  # where the labels are in the saved file
     figure_box = fig.bbox
     for label in (x_label, y_label, colorbar.yaxis.label):
         box = label.get_window_extent(renderer)

@@ -111,3 +111,21 @@ def test_task_summary_line() -> None:
     """What a task asks, in a line of the log."""
     (task,) = parse_task_document({**PATH_TASK, 'start_time_s': 2}, 'test.yaml')
     assert describe_task(task) == 'task: 3 waypoints over 4 s, F_d 80 N, starting at t = 2 s'
+
+
+def test_client_reads_the_controllers_rejection_line_without_importing_the_controller() -> None:
+    """The client's REJECTED_PREFIX is the server's; importing the client loads no core."""
+    import os
+    import subprocess
+    import sys
+
+    from uvms_control.task_server import REJECTED_PREFIX as SERVER_PREFIX
+    from uvms_tasks.client import REJECTED_PREFIX
+
+    assert REJECTED_PREFIX == SERVER_PREFIX
+    code = ('import sys, uvms_tasks.cli, uvms_tasks.client; heavy = ("uvms_control.task", '
+            '"scipy"); print(sorted(m for m in sys.modules if m.startswith(heavy)))')
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p)}
+    loaded = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                            check=True, env=env)
+    assert loaded.stdout.strip() == '[]', loaded.stdout

@@ -48,6 +48,7 @@ class TaskCode(enum.IntEnum):
     INACTIVE = 7
     INPUTS_STALE = 8
     ACTUATION_LOST = 9
+    FORCE_NOT_SETTLED = 10
 
 
 class TaskGoalError(ValueError):

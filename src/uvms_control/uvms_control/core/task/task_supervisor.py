@@ -33,6 +33,7 @@ from uvms_control.core.task.contact_task import (
     planned_goal,
     validate_goal,
 )
+from uvms_control.core.task.force_figures import SETTLING_BAND, SETTLING_MIN_HOLD_S
 from uvms_control.core.task.retreat import Retreat
 from uvms_control.core.task.safety_checks import (
     MAX_MOTION_STEP_S,
@@ -86,7 +87,6 @@ class TaskSupervisor:
         self._safe_hold_reason: str | None = None
         self._capturing = True  # the hold point is captured at the next step
 
-
     @property
     def goal_id(self) -> Hashable | None:
         """The running goal's id, or None."""
@@ -116,7 +116,6 @@ class TaskSupervisor:
                             float(running.normal @ last.F_e), float(running.normal @ last.F_d),
                             running.transit_s, in_transit)
 
-
     def submit(self, goal_id: Hashable, goal: ContactTaskGoal, now_s: float) -> list[TaskEvent]:
         """Take a new goal at time now_s (s); return the tasks that ended by it.
 
@@ -139,7 +138,7 @@ class TaskSupervisor:
         if self.state == SupervisorState.SAFE_HOLD:
             return [TaskEvent(goal_id, empty_result(TaskCode.INVALID_GOAL, (
                 f'refused: the controller is in safe hold ({self._safe_hold_reason}); '
-                'deactivate and activate it to clear the safe hold')))]
+                'clear it with `uvms lifecycle controller reset` (deactivate, activate)')))]
         try:
             self.check(goal, now_s)
         except TaskGoalError as error:
@@ -254,7 +253,6 @@ class TaskSupervisor:
         self.controller.task.hold()
         return events
 
-
     def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
              f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
         """One control step at t (s) from the sensors (``step_from_sensors``) and its events."""
@@ -358,7 +356,7 @@ class TaskSupervisor:
         normal = running.normal if running is not None else self.controller.n
         f_normal = float(normal @ result.F_e)
         breach = check_limits(result, f_sensor, f_normal, self.limits)
-        if running is not None:
+        if running is not None and state != SupervisorState.WAITING:  # from its start
             running.figures.update(t, dt, f_normal, f_normal >= task.contact_threshold_n,
                                    task.force_active and self._at_setpoint(result, running))
         if state == SupervisorState.SAFE_HOLD:
@@ -404,18 +402,23 @@ class TaskSupervisor:
         return self._end_running(retreat.code, retreat.outcome(result.F_e))
 
     def _finish_goal(self, released: bool) -> list[TaskEvent]:
-        """The end of a released goal: SUCCEEDED or NO_CONTACT, then hold X_d."""
+        """End a released goal by its criterion (NO_CONTACT, FORCE_NOT_SETTLED, SUCCEEDED)."""
         running = self._running
         assert running is not None and self._last is not None
         self.controller.task.hold(self._last.X_d.tolist())
         self.state = SupervisorState.HOLD
-        if running.goal.require_contact and running.figures.first_contact_s is None:
+        figures = running.figures  # FORCE_NOT_SETTLED: contact made, F never in its band
+        if running.goal.require_contact and figures.first_contact_s is None:
             return self._end_running(TaskCode.NO_CONTACT, 'the path ended without contact')
-        if released:
-            return self._end_running(TaskCode.SUCCEEDED, 'path done, contact released')
-        return self._end_running(TaskCode.SUCCEEDED, (
-            f'path done; |F_e| = {float(np.linalg.norm(self._last.F_e)):.1f} N left after '
-            'backing off the whole release distance'))
+        left = ('contact released' if released else f'|F_e| = '
+                f'{float(np.linalg.norm(self._last.F_e)):.1f} N left after backing off the '
+                'whole release distance')
+        if running.goal.force_n > 0.0 and figures.first_contact_s is not None \
+                and math.isnan(figures.result(TaskCode.SUCCEEDED, '').settling_time_s):
+            return self._end_running(TaskCode.FORCE_NOT_SETTLED, (
+                f'path done, {left}; the force never stayed within {SETTLING_BAND:.0%} of '
+                f'F_d = {running.goal.force_n:g} N for {SETTLING_MIN_HOLD_S:g} s'))
+        return self._end_running(TaskCode.SUCCEEDED, f'path done, {left}')
 
     def _at_setpoint(self, result: ControllerResult, running: RunningTask) -> bool:
         """F_d has reached force_n (the ramp is over)."""

@@ -11,10 +11,9 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from uvms_hardware.hardware_check import check_hardware
-
 from uvms_bringup.hardware_plan import HardwareFileError, hardware_file_path, load_hardware_plan
 from uvms_bringup.launch_helpers import config_dir
+from uvms_hardware.hardware_check import check_hardware
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
 
