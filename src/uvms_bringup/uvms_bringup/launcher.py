@@ -12,7 +12,9 @@ fills it. ``uvms_bringup.processes`` starts, watches and stops the processes.
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import re
 import sys
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -59,9 +61,29 @@ def node_executable(spec: NodeSpec, bin_dir: Path | None = None) -> list[str]:
         bin_dir: Directory of the console scripts (that of ``sys.executable`` if None).
     """
     script = (bin_dir if bin_dir is not None else Path(sys.executable).parent) / spec.executable
-    if script.is_file() and os.access(script, os.X_OK):
+    if script.is_file() and os.access(script, os.X_OK) and _script_imports(script):
         return [str(script)]
     return [sys.executable, '-m', spec.module]
+
+
+def _script_imports(script: Path) -> bool:
+    """Whether the module a console script imports exists in this tree.
+
+    An install older or newer than the sources (a node moved to another package, its
+    script regenerated) leaves a script that fails with ModuleNotFoundError; ``-m`` of the
+    node module then starts it as the tree has it.
+    """
+    try:
+        head = script.read_text(encoding='utf-8', errors='replace')[:2000]
+    except OSError:
+        return True
+    match = re.search(r'^from ([\w.]+) import', head, re.MULTILINE)
+    if match is None:
+        return True
+    try:
+        return importlib.util.find_spec(match.group(1)) is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def ros_arguments(
