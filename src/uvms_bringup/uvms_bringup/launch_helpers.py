@@ -109,6 +109,11 @@ MISSION = NodeSpec(
     uses_sim_time=False, finishes=True,
 )
 
+#: The processes of the control loop, given SCHED_FIFO by ``uvms launch`` (DESIGN.md, "Real
+#: time on a busy computer"); the hardware bridges join them when they exist. The recorder,
+#: visualizer, mission and Foxglove server stay at normal priority.
+LOOP_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, ESTIMATOR)
+
 #: The nodes that always run, in start order; the Foxglove server joins for a live view and
 #: the recorder, last, when there is an output.
 CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, VISUALIZER)

@@ -22,10 +22,12 @@ from pathlib import Path
 from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling, fifo_refusal
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
+    LOOP_NODES,
     MISSION,
     RECORDER,
     SIMULATOR,
@@ -91,11 +93,22 @@ def ros_arguments(
     namespace: str,
     parameter_files: Iterable[Path],
     log_level: str | None = None,
+    scheduling: Scheduling | None = None,
 ) -> list[str]:
-    """``--ros-args`` of a node: its name and namespace remapped, its parameter files."""
+    """``--ros-args`` of a node: name and namespace remapped, parameter files, scheduling.
+
+    The scheduling goes on the command line (``-p rt_priority:=50``), not into the generated
+    parameter file, so that the recorder's ``run.parameters`` holds only the graph's own.
+    """
     args = ['--ros-args', '-r', f'__node:={spec.name}', '-r', f'__ns:=/{namespace.strip("/")}']
     for path in parameter_files:
         args += ['--params-file', str(path)]
+    if scheduling is not None and scheduling.asks:
+        args += ['-p', f'rt_priority:={scheduling.priority}']
+        if scheduling.cpus:
+            args += ['-p', f"rt_cpus:='{','.join(map(str, scheduling.cpus))}'"]
+        if scheduling.lock_memory:
+            args += ['-p', 'rt_lock_memory:=true']
     if log_level is not None:
         args += ['--log-level', log_level]
     return args
@@ -114,6 +127,7 @@ def plan_launch(
     extra_overrides: Mapping[str, Mapping[str, Any]] | None = None,
     bin_dir: Path | None = None,
     foxglove: tuple[str, int] | None = None,
+    scheduling: Scheduling | None = None,
 ) -> list[NodeProcessSpec]:
     """The node processes of a launch, with one generated parameter file each.
 
@@ -129,6 +143,7 @@ def plan_launch(
         extra_overrides: Further parameters per node name (tests, benchmarks).
         bin_dir: Directory of the console scripts (that of ``sys.executable`` if None).
         foxglove: Host and port of a Foxglove live view (``foxglove_server``); None: none.
+        scheduling: What the loop processes (``LOOP_NODES``) ask for; None: nothing.
 
     Returns:
         The processes in start order: simulator, controller, thruster allocator,
@@ -172,7 +187,8 @@ def plan_launch(
         generated.write_text(parameters_file_text({f'{fq_prefix}/{spec.name}': overrides}),
                              encoding='utf-8')
         command = [*node_executable(spec, bin_dir),
-                   *ros_arguments(spec, namespace, [*files, generated], log_level)]
+                   *ros_arguments(spec, namespace, [*files, generated], log_level,
+                                  scheduling if spec in LOOP_NODES else None)]
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated))
     return plans
@@ -206,6 +222,9 @@ def launch_graph(
     config: Path | None = None,
     foxglove: tuple[str, int] | None = None,
     robot: str | None = None,
+    rt_priority: int = DEFAULT_RT_PRIORITY,
+    cpus: tuple[int, ...] = (),
+    lock_memory: bool = False,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -225,6 +244,10 @@ def launch_graph(
         foxglove: Host and port of a Foxglove live view (a ``foxglove_server`` process);
             None starts none.
         robot: Robot folder (``robot_name`` of the nodes); None: the scenario's or default.
+        rt_priority: SCHED_FIFO priority of the loop processes (``LOOP_NODES``); 0: none.
+            Where the system refuses it, one warning line and the graph runs on.
+        cpus: CPUs the loop processes are pinned to; empty: every CPU.
+        lock_memory: The loop processes lock their memory (``mlockall``).
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -245,6 +268,7 @@ def launch_graph(
     elif robot is not None:
         extra = {spec.name: {'robot_name': robot}
                  for spec in graph_nodes(record=True, foxglove=True) if spec.takes_robot}
+    scheduling = _scheduling(rt_priority, cpus, lock_memory)
     own_stop = None
     if stop is None:
         from uvms_common.stop_event import StopEvent
@@ -255,12 +279,26 @@ def launch_graph(
             plans = plan_launch(scenario, mode, Path(parameters_dir), duration_s=duration_s,
                                 output_path=output_path, namespace=namespace, config=config,
                                 log_level='warn' if quiet else None, foxglove=foxglove,
-                                extra_overrides=extra)
+                                extra_overrides=extra, scheduling=scheduling)
             launcher = Launcher(plans)
-            return _run(launcher, stop, mode, duration_s, quiet)
+            return _run(launcher, stop, mode, duration_s, quiet, _describe(scheduling, plans))
     finally:
         if own_stop is not None:
             own_stop.restore()
+
+
+def _scheduling(priority: int, cpus: tuple[int, ...], lock_memory: bool) -> Scheduling:
+    """What the loop processes ask for: the priority only where a child may have it.
+
+    Tried once here (``fifo_refusal``): where it is refused, one warning line names what to
+    change and the nodes do not ask (instead of each repeating the warning).
+    """
+    refusal = fifo_refusal(priority) if priority else ''
+    if refusal:
+        sys.stderr.write(f'uvms launch: warning: {refusal}\n')
+        sys.stderr.flush()
+        priority = 0
+    return Scheduling(priority, cpus, lock_memory)
 
 
 def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) -> Scenario:
@@ -274,15 +312,26 @@ def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) ->
         raise LaunchError(str(exc)) from exc
 
 
+def _describe(scheduling: Scheduling, plans: Iterable[NodeProcessSpec]) -> str:
+    """The loop processes' scheduling on the launch line: ``; simulator, ...: SCHED_FIFO 50``."""
+    asked = [f'SCHED_FIFO {scheduling.priority}' if scheduling.priority else 'normal priority']
+    if scheduling.cpus:
+        asked.append('on CPUs ' + ','.join(map(str, scheduling.cpus)))
+    if scheduling.lock_memory:
+        asked.append('memory locked')
+    loop = [plan.spec.name for plan in plans if plan.spec in LOOP_NODES]
+    return '; ' + ', '.join(loop) + ': ' + ', '.join(asked)
+
+
 def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
-         quiet: bool) -> int:
+         quiet: bool, scheduling: str = '') -> int:
     """Start, watch and stop a launch; report its outcome in one line."""
     launcher.start()
     if not quiet:
         started = ', '.join(f'{p.plan.label} (pid {p.popen.pid})' for p in launcher.processes)
         until = f'until {duration_s:g} s simulated or Ctrl-C' if duration_s else 'until Ctrl-C'
-        launcher.report(f'uvms launch: {mode} graph, one process per node: {started}; '
-                        f'running {until}')
+        launcher.report(f'uvms launch: {mode} graph, one process per node: {started}'
+                        f'{scheduling}; running {until}')
     told: list[NodeProcess] = []
 
     def tell_failed_job(process: NodeProcess) -> None:
