@@ -128,6 +128,7 @@ def plan_launch(
     bin_dir: Path | None = None,
     foxglove: tuple[str, int] | None = None,
     scheduling: Scheduling | None = None,
+    compose: str | None = None,
 ) -> list[NodeProcessSpec]:
     """The node processes of a launch, with one generated parameter file each.
 
@@ -144,6 +145,8 @@ def plan_launch(
         bin_dir: Directory of the console scripts (that of ``sys.executable`` if None).
         foxglove: Host and port of a Foxglove live view (``foxglove_server``); None: none.
         scheduling: What the loop processes (``LOOP_NODES``) ask for; None: nothing.
+        compose: A composition of ``uvms_bringup.composed`` (``control``) to run in one
+            process; None: one process per node.
 
     Returns:
         The processes in start order: simulator, controller, thruster allocator,
@@ -191,6 +194,10 @@ def plan_launch(
                                   scheduling if spec in LOOP_NODES else None)]
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated))
+    if compose is not None:
+        from uvms_bringup.composed import COMPOSED, compose_plans
+
+        return compose_plans(plans, compose, node_executable(COMPOSED, bin_dir))
     return plans
 
 
@@ -225,6 +232,7 @@ def launch_graph(
     rt_priority: int = DEFAULT_RT_PRIORITY,
     cpus: tuple[int, ...] = (),
     lock_memory: bool = False,
+    compose: str | None = None,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -248,6 +256,8 @@ def launch_graph(
             Where the system refuses it, one warning line and the graph runs on.
         cpus: CPUs the loop processes are pinned to; empty: every CPU.
         lock_memory: The loop processes lock their memory (``mlockall``).
+        compose: ``control`` runs controller, allocator and estimator in one process
+            (``uvms_bringup.composed``); None: one process per node.
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -279,7 +289,8 @@ def launch_graph(
             plans = plan_launch(scenario, mode, Path(parameters_dir), duration_s=duration_s,
                                 output_path=output_path, namespace=namespace, config=config,
                                 log_level='warn' if quiet else None, foxglove=foxglove,
-                                extra_overrides=extra, scheduling=scheduling)
+                                extra_overrides=extra, scheduling=scheduling,
+                                compose=compose)
             launcher = Launcher(plans)
             return _run(launcher, stop, mode, duration_s, quiet, _describe(scheduling, plans))
     finally:
@@ -319,8 +330,16 @@ def _describe(scheduling: Scheduling, plans: Iterable[NodeProcessSpec]) -> str:
         asked.append('on CPUs ' + ','.join(map(str, scheduling.cpus)))
     if scheduling.lock_memory:
         asked.append('memory locked')
-    loop = [plan.spec.name for plan in plans if plan.spec in LOOP_NODES]
+    loop = [plan.spec.name for plan in plans
+            if plan.spec in LOOP_NODES or _composed_nodes(plan)]
     return '; ' + ', '.join(loop) + ': ' + ', '.join(asked)
+
+
+def _composed_nodes(plan: NodeProcessSpec) -> str:
+    """The nodes a composed process runs (``controller+thruster_allocator``), else ''."""
+    command = list(plan.command)
+    names = [arg.split(':=', 1)[1] for arg in command if arg.startswith('__node:=')]
+    return '+'.join(names) if len(names) > 1 else ''
 
 
 def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
@@ -329,9 +348,11 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
     launcher.start()
     if not quiet:
         started = ', '.join(f'{p.plan.label} (pid {p.popen.pid})' for p in launcher.processes)
+        composed = [_composed_nodes(p.plan) for p in launcher.processes]
+        layout = '; '.join(f'{names} in one process' for names in composed if names)
         until = f'until {duration_s:g} s simulated or Ctrl-C' if duration_s else 'until Ctrl-C'
-        launcher.report(f'uvms launch: {mode} graph, one process per node: {started}'
-                        f'{scheduling}; running {until}')
+        launcher.report(f'uvms launch: {mode} graph, {layout or "one process per node"}: '
+                        f'{started}{scheduling}; running {until}')
     told: list[NodeProcess] = []
 
     def tell_failed_job(process: NodeProcess) -> None:

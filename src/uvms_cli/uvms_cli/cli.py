@@ -191,6 +191,9 @@ def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
                         help='pin the loop processes to these CPUs (e.g. 1 or 0,1)')
     launch.add_argument('--lock-memory', action='store_true',
                         help='the loop processes lock their memory in RAM (mlockall)')
+    launch.add_argument('--compose', choices=('control',),
+                        help='control: controller, thruster_allocator and estimator in one '
+                             'process on one executor (same names, topics, parameters)')
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -267,7 +270,7 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
                             output_path=args.output, quiet=args.quiet, stop=stop,
                             foxglove=_foxglove_address(args), robot=args.robot,
                             rt_priority=0 if args.no_rt else args.rt_priority, cpus=cpus,
-                            lock_memory=args.lock_memory)
+                            lock_memory=args.lock_memory, compose=args.compose)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))
         return EXIT_USAGE
