@@ -22,13 +22,18 @@ from uvms_common.node_main import (
     schedule_process,
     spin_until_stopped,
 )
+from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent
 
 from uvms_bringup.launch_helpers import NodeSpec
+from uvms_common import process_stats
 
 #: Logger of the process's own lines (errors that are no one node's).
 LOGGER = 'composed'
+#: Name of the process's stats file for its launcher (``uvms_common.process_stats``): the
+#: name the launcher gives the process (``composed.COMPOSED``).
+COMPOSED_STATS = 'control'
 
 
 def build_node(spec: NodeSpec, args: Sequence[str]) -> Node:
@@ -67,6 +72,7 @@ def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEve
         logger.fatal(f'{where}{type(exc).__name__}: {exc}')
         status = 1
     finally:
+        process_stats.write(COMPOSED_STATS, process_periods())
         deadline = TeardownDeadline(LOGGER, status)
         if executor is not None:
             for node in nodes:

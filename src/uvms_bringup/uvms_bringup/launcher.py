@@ -17,14 +17,16 @@ import os
 import re
 import sys
 import tempfile
+import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
-from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling, fifo_refusal
+from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
+from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     LOOP_NODES,
@@ -41,6 +43,7 @@ from uvms_bringup.launch_helpers import (
     uses_estimator,
     write_mission_file,
 )
+from uvms_bringup.launch_layout import composed_nodes, describe_scheduling, launch_scheduling
 from uvms_bringup.processes import (
     EXIT_FAILURE,
     EXIT_INTERRUPTED,
@@ -53,6 +56,7 @@ from uvms_bringup.processes import (
     describe_status,
 )
 from uvms_bringup.scenario import Scenario
+from uvms_common import process_stats
 
 
 def node_executable(spec: NodeSpec, bin_dir: Path | None = None) -> list[str]:
@@ -278,7 +282,7 @@ def launch_graph(
     elif robot is not None:
         extra = {spec.name: {'robot_name': robot}
                  for spec in graph_nodes(record=True, foxglove=True) if spec.takes_robot}
-    scheduling = _scheduling(rt_priority, cpus, lock_memory)
+    scheduling = launch_scheduling(rt_priority, cpus, lock_memory)
     own_stop = None
     if stop is None:
         from uvms_common.stop_event import StopEvent
@@ -291,25 +295,13 @@ def launch_graph(
                                 log_level='warn' if quiet else None, foxglove=foxglove,
                                 extra_overrides=extra, scheduling=scheduling,
                                 compose=compose)
-            launcher = Launcher(plans)
-            return _run(launcher, stop, mode, duration_s, quiet, _describe(scheduling, plans))
+            stats = Path(parameters_dir) / 'stats'
+            launcher = Launcher(plans, env={**os.environ, process_stats.ENV: str(stats)})
+            line = describe_scheduling(scheduling, plans)
+            return _run(launcher, stop, mode, duration_s, quiet, line, CostWatch(stats))
     finally:
         if own_stop is not None:
             own_stop.restore()
-
-
-def _scheduling(priority: int, cpus: tuple[int, ...], lock_memory: bool) -> Scheduling:
-    """What the loop processes ask for: the priority only where a child may have it.
-
-    Tried once here (``fifo_refusal``): where it is refused, one warning line names what to
-    change and the nodes do not ask (instead of each repeating the warning).
-    """
-    refusal = fifo_refusal(priority) if priority else ''
-    if refusal:
-        sys.stderr.write(f'uvms launch: warning: {refusal}\n')
-        sys.stderr.flush()
-        priority = 0
-    return Scheduling(priority, cpus, lock_memory)
 
 
 def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) -> Scenario:
@@ -323,32 +315,14 @@ def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) ->
         raise LaunchError(str(exc)) from exc
 
 
-def _describe(scheduling: Scheduling, plans: Iterable[NodeProcessSpec]) -> str:
-    """The loop processes' scheduling on the launch line: ``; simulator, ...: SCHED_FIFO 50``."""
-    asked = [f'SCHED_FIFO {scheduling.priority}' if scheduling.priority else 'normal priority']
-    if scheduling.cpus:
-        asked.append('on CPUs ' + ','.join(map(str, scheduling.cpus)))
-    if scheduling.lock_memory:
-        asked.append('memory locked')
-    loop = [plan.spec.name for plan in plans
-            if plan.spec in LOOP_NODES or _composed_nodes(plan)]
-    return '; ' + ', '.join(loop) + ': ' + ', '.join(asked)
-
-
-def _composed_nodes(plan: NodeProcessSpec) -> str:
-    """The nodes a composed process runs (``controller+thruster_allocator``), else ''."""
-    command = list(plan.command)
-    names = [arg.split(':=', 1)[1] for arg in command if arg.startswith('__node:=')]
-    return '+'.join(names) if len(names) > 1 else ''
-
-
 def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
-         quiet: bool, scheduling: str = '') -> int:
-    """Start, watch and stop a launch; report its outcome in one line."""
+         quiet: bool, scheduling: str, costs: CostWatch) -> int:
+    """Start, watch and stop a launch; report its outcome, and what each process cost."""
+    costs.started_ns = time.monotonic_ns()
     launcher.start()
     if not quiet:
         started = ', '.join(f'{p.plan.label} (pid {p.popen.pid})' for p in launcher.processes)
-        composed = [_composed_nodes(p.plan) for p in launcher.processes]
+        composed = [composed_nodes(p.plan) for p in launcher.processes]
         layout = '; '.join(f'{names} in one process' for names in composed if names)
         until = f'until {duration_s:g} s simulated or Ctrl-C' if duration_s else 'until Ctrl-C'
         launcher.report(f'uvms launch: {mode} graph, {layout or "one process per node"}: '
@@ -364,13 +338,22 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
             launcher.report(outcome.line() if outcome is not None else
                             f'mission failed: {process.name} wrote no outcome; its log says why')
 
+    def poll() -> None:
+        line = costs.poll([p.popen.pid for p in launcher.processes])
+        if line is not None and not quiet:
+            launcher.report(line)
+
     try:
         # Without a duration the simulator never finishes: its exit, even with 0 (a signal
         # sent to it alone), ends the launch as a failure naming it.
         outcome, process = launcher.wait_for_exit(
-            stop, SIMULATOR.name if duration_s else None, tell_failed_job)
+            stop, SIMULATOR.name if duration_s else None, tell_failed_job, poll)
     finally:
+        costs.end([p.popen.pid for p in launcher.processes])
         launcher.stop()
+    if not quiet and costs.first_step_s is not None:
+        for line in costs.table([(p.name, p.popen.pid) for p in launcher.processes]):
+            launcher.report(line)
     for job in launcher.failed_jobs():
         tell_failed_job(job)  # a mission that failed as the run ended
     for other in launcher.unclean_stops():

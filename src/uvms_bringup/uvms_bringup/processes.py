@@ -248,6 +248,7 @@ class Launcher:
     def wait_for_exit(
         self, stop: StopRequest, end_node: str | None = SIMULATOR.name,
         on_finished: Callable[[NodeProcess], None] | None = None,
+        on_poll: Callable[[], None] | None = None,
     ) -> tuple[str, NodeProcess | None]:
         """Watch the children until a stop request or the first one that ends.
 
@@ -260,6 +261,7 @@ class Launcher:
             end_node: The node whose exit with status 0 is the run's normal end.
             on_finished: Called once per finishing node that ended with 0 or
                 ``EXIT_MISSION_FAILED``.
+            on_poll: Called every ``POLL_PERIOD_S`` while the children run.
 
         Returns:
             ``('stopped', None)`` after a stop request, ``('finished', node)`` when
@@ -281,6 +283,8 @@ class Launcher:
                 if process.name == end_node and status == 0:
                     return 'finished', process
                 return 'failed', process
+            if on_poll is not None:
+                on_poll()
             time.sleep(POLL_PERIOD_S)
 
     @staticmethod

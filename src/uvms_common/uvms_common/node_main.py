@@ -33,7 +33,9 @@ from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedE
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from uvms_common import process_stats
 from uvms_common.node_entry import flush_output
+from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import Scheduling, apply_scheduling, parse_cpus
 from uvms_common.stop_event import StopEvent, active_stop_event
@@ -264,6 +266,7 @@ def run_node(
         logger.fatal(f'{type(exc).__name__}: {exc}')
         status = 1
     finally:
+        process_stats.write(logger_name, process_periods())
         if node is not None and close_output is not None:
             try:
                 close_output(node)

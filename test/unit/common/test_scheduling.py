@@ -39,13 +39,14 @@ def test_nothing_asked_changes_nothing() -> None:
 
 def test_pinning_to_an_allowed_cpu_takes_effect() -> None:
     """A process pinned to one of its CPUs runs only there; restored afterwards."""
-    before = os.sched_getaffinity(0)
-    cpu = min(before)
+    before = {tid: os.sched_getaffinity(tid) for tid in scheduling.threads()}
+    cpu = min(before[os.getpid()])
     try:
         outcome = apply_scheduling(Scheduling(cpus=(cpu,)))
-        assert os.sched_getaffinity(0) == {cpu}
+        assert {tid: os.sched_getaffinity(tid) for tid in before} == dict.fromkeys(before, {cpu})
     finally:
-        os.sched_setaffinity(0, before)
+        for tid, cpus in before.items():
+            os.sched_setaffinity(tid, cpus)
     assert outcome.applied == [f'CPUs {cpu}']
 
 
