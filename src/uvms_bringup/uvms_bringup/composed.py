@@ -91,10 +91,11 @@ def compose_plans(plans: Sequence[NodeProcessSpec], composition: str,
     for plan in plans:
         if plan is grouped[0]:
             out.append(NodeProcessSpec(COMPOSED, f'{COMPOSED.executable}-{len(out) + 1}',
-                                       tuple(command)))
+                                       tuple(command), rt_priority=grouped[0].rt_priority))
         elif plan not in grouped:
             out.append(NodeProcessSpec(plan.spec, f'{plan.spec.executable}-{len(out) + 1}',
-                                       plan.command, plan.parameters_file, plan.outcome_file))
+                                       plan.command, plan.parameters_file, plan.outcome_file,
+                                       plan.rt_priority))
     return out
 
 

@@ -196,8 +196,10 @@ def plan_launch(
         command = [*node_executable(spec, bin_dir),
                    *ros_arguments(spec, namespace, [*files, generated], log_level,
                                   scheduling if spec in LOOP_NODES else None)]
+        loop = scheduling is not None and spec in LOOP_NODES
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
-                                     tuple(command), generated))
+                                     tuple(command), generated,
+                                     rt_priority=scheduling.priority if loop else 0))
     if compose is not None:
         from uvms_bringup.composed import COMPOSED, compose_plans
 

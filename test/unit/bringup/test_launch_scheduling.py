@@ -40,3 +40,12 @@ def test_scheduling_stays_out_of_the_recorded_run_parameters(tmp_path: Path) -> 
     recorder = next(plan for plan in plans if plan.spec.name == 'recorder')
     assert recorder.parameters_file is not None
     assert 'rt_priority' not in recorder.parameters_file.read_text()
+
+
+def test_loop_processes_start_at_their_priority(tmp_path: Path) -> None:
+    """The launcher sets SCHED_FIFO between fork and exec for the loop processes only."""
+    plans = plan_launch(None, 'realtime', tmp_path, output_path=tmp_path / 'r.mcap',
+                        scheduling=Scheduling(50))
+    starts = {plan.spec.name: plan.rt_priority for plan in plans}
+    assert starts == {'simulator': 50, 'controller': 50, 'thruster_allocator': 50,
+                      'visualizer': 0, 'recorder': 0}
