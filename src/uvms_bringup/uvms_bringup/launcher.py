@@ -69,6 +69,11 @@ def node_executable(spec: NodeSpec, bin_dir: Path | None = None) -> list[str]:
     script = (bin_dir if bin_dir is not None else Path(sys.executable).parent) / spec.executable
     if script.is_file() and os.access(script, os.X_OK) and _script_imports(script):
         return [str(script)]
+    if spec.class_name:
+        # As the console scripts do: the stop handlers before the node module's imports
+        # (uvms_common.node_entry), so a stop during start-up ends it without a traceback.
+        return [sys.executable, '-c', 'from uvms_common.node_entry import run_node_module; '
+                f'run_node_module({spec.module!r})']
     return [sys.executable, '-m', spec.module]
 
 
