@@ -321,6 +321,8 @@ class SimulatorNode(Node):
             return True
         self._check_startup_time()
         if now_ns - self._held_published_ns >= _HOLD_REPUBLISH_S * 1e9:
+            if self._navigation is not None:  # before /clock, as _publish_state sends it
+                self._navigation.republish_imu()
             self._publish_state()
             self._held_published_ns = now_ns
         watch.poll(now_ns)
