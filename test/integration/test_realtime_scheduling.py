@@ -127,11 +127,12 @@ def test_a_node_refused_the_priority_warns_once_and_runs_on() -> None:
     assert status in (0, 130)
 
 
-def test_uvms_launch_refused_the_priority_warns_once_and_the_run_succeeds(
-        tmp_path: Path) -> None:
+def test_uvms_launch_refused_the_priority_warns_once_and_the_run_succeeds() -> None:
     """``uvms launch`` without the capability: one launcher warning, nodes normal, exit 0."""
-    result = subprocess.run([*UNPRIVILEGED, str(BIN / 'uvms'), 'launch', 'free_motion',
-                             '--duration', '1'], capture_output=True, text=True,
+    # No scenario, so no mission: without priorities on a busy machine a mission may abort
+    # (the reason for the priorities), which is not what this test is about.
+    result = subprocess.run([*UNPRIVILEGED, str(BIN / 'uvms'), 'launch', '--duration', '1'],
+                            capture_output=True, text=True,
                             env=child_env(), timeout=180, stdin=subprocess.DEVNULL)
     warnings = [line for line in result.stderr.splitlines() if REFUSED in line]
     assert result.returncode == 0, result.stderr
