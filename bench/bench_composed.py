@@ -3,8 +3,9 @@
 Issue 29 asks for the controller and the allocator each under 20 % of a core and the whole
 graph under one core, with one process per node. This measures the alternative it left
 open: the same launch (``plan_launch``, real time, recording), once as ``uvms launch`` starts
-it and once with the controller and the thruster allocator built in one process on one
-executor (``bench/composed_nodes.py``: their messages to each other stay in the process),
+it and once as ``uvms launch --compose control`` does, the controller and the thruster
+allocator built in one process on one executor (``uvms_bringup.composed``: their messages to
+each other stay in the process),
 alternating, each run observed like ``bench_realtime`` (CPU of every process over the
 window; the controller's states and the allocator's commands counted against the 2 ms
 periods of the window). It prints figures and asserts nothing.
@@ -17,48 +18,22 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import random
-import sys
 import tempfile
 from pathlib import Path
 
 from bench_realtime import observe  # also puts the packages on sys.path
+from uvms_bringup.composed import COMPOSED
 from uvms_bringup.launch_helpers import CONTROLLER, THRUSTER_ALLOCATOR, resolve_scenario_path
 from uvms_bringup.launcher import plan_launch
-from uvms_bringup.processes import Launcher, NodeProcessSpec
+from uvms_bringup.processes import Launcher
 from uvms_bringup.scenario import load_scenario
 from uvms_common.ros_environment import ros_environment_defaults
 
-COMPOSER = Path(__file__).resolve().parent / 'composed_nodes.py'
-PAIR = 'controller+allocator'
+PAIR = COMPOSED.name
 #: Topics counted against the 2 ms periods: the controller's step and the allocator's tick.
 COUNTED = ('/uvms/controller/state', '/uvms/command/actuators')
-
-
-def ros_args(plan: NodeProcessSpec) -> list[str]:
-    """The ``--ros-args ...`` part of a planned node process's command line."""
-    command = list(plan.command)
-    return command[command.index('--ros-args'):]
-
-
-def composed(plans: list[NodeProcessSpec]) -> list[NodeProcessSpec]:
-    """The plans with the controller and the allocator replaced by one process of both."""
-    by_name = {plan.spec.name: plan for plan in plans}
-    controller, allocator = by_name[CONTROLLER.name], by_name[THRUSTER_ALLOCATOR.name]
-    command = (sys.executable, str(COMPOSER),
-               f'{CONTROLLER.module}:{CONTROLLER.class_name}', *ros_args(controller), '--and',
-               f'{THRUSTER_ALLOCATOR.module}:{THRUSTER_ALLOCATOR.class_name}',
-               *ros_args(allocator))
-    pair = NodeProcessSpec(dataclasses.replace(CONTROLLER, name=PAIR), 'composed-2', command)
-    out: list[NodeProcessSpec] = []
-    for plan in plans:
-        if plan is controller:
-            out.append(pair)
-        elif plan is not allocator:
-            out.append(plan)
-    return out
 
 
 def run(scenario_name: str, compose: bool, seconds: float) -> tuple[dict[str, float], str]:
@@ -74,8 +49,9 @@ def run(scenario_name: str, compose: bool, seconds: float) -> tuple[dict[str, fl
     topics = {'/clock': Clock, COUNTED[0]: ControllerState, COUNTED[1]: ActuatorCommand}
     with tempfile.TemporaryDirectory(prefix='uvms_bench_') as parameters_dir:
         plans = plan_launch(scenario, 'realtime', Path(parameters_dir), log_level='warn',
-                            output_path=Path(parameters_dir) / 'bench.mcap')
-        launcher = Launcher(composed(plans) if compose else plans, env=env)
+                            output_path=Path(parameters_dir) / 'bench.mcap',
+                            compose='control' if compose else None)
+        launcher = Launcher(plans, env=env)
         launcher.start()
         try:
             arrivals, start_ns, end_ns, cpu = observe(launcher, topics, 3.0, seconds, domain_id)

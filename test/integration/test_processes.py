@@ -136,6 +136,9 @@ def child_env() -> dict[str, str]:
     env = dict(os.environ)
     env['ROS_DOMAIN_ID'] = str(DOMAIN_ID)
     env['PYTHONUNBUFFERED'] = '1'
+    # The sources this test imports (pyproject's pythonpath), not the venv's install of
+    # another checkout, for the console scripts and every node `uvms launch` starts.
+    env['PYTHONPATH'] = os.pathsep.join(p for p in sys.path if p)
     return env
 
 

@@ -122,6 +122,13 @@ MISSION = NodeSpec(
     uses_sim_time=False, finishes=True,
 )
 
+#: The processes of the control loop, given SCHED_FIFO by ``uvms launch`` (DESIGN.md, "Real
+#: time on a busy computer"), with the hardware bridges and, on the test stand, the twins that
+#: stand for the devices. The recorder, visualizer, mission and Foxglove server stay at normal
+#: priority.
+LOOP_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, ESTIMATOR, *HARDWARE_BRIDGES.values(),
+              HARDWARE_TWINS)
+
 #: The nodes that always run, in start order; the Foxglove server joins for a live view and
 #: the recorder, last, when there is an output.
 CORE_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, VISUALIZER)

@@ -12,14 +12,18 @@ fills it. ``uvms_bringup.processes`` starts, watches and stops the processes.
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import re
 import sys
 import tempfile
+import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
 from uvms_bringup.hardware_plan import (
@@ -28,8 +32,10 @@ from uvms_bringup.hardware_plan import (
     hardware_parameters,
     hardware_scenario,
 )
+from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
+    LOOP_NODES,
     MISSION,
     RECORDER,
     SIMULATOR,
@@ -43,6 +49,7 @@ from uvms_bringup.launch_helpers import (
     uses_estimator,
     write_mission_file,
 )
+from uvms_bringup.launch_layout import composed_nodes, describe_scheduling, launch_scheduling
 from uvms_bringup.processes import (
     EXIT_FAILURE,
     EXIT_INTERRUPTED,
@@ -55,6 +62,7 @@ from uvms_bringup.processes import (
     describe_status,
 )
 from uvms_bringup.scenario import Scenario
+from uvms_common import process_stats
 
 
 def node_executable(spec: NodeSpec, bin_dir: Path | None = None) -> list[str]:
@@ -65,9 +73,34 @@ def node_executable(spec: NodeSpec, bin_dir: Path | None = None) -> list[str]:
         bin_dir: Directory of the console scripts (that of ``sys.executable`` if None).
     """
     script = (bin_dir if bin_dir is not None else Path(sys.executable).parent) / spec.executable
-    if script.is_file() and os.access(script, os.X_OK):
+    if script.is_file() and os.access(script, os.X_OK) and _script_imports(script):
         return [str(script)]
+    if spec.class_name:
+        # As the console scripts do: the stop handlers before the node module's imports
+        # (uvms_common.node_entry), so a stop during start-up ends it without a traceback.
+        return [sys.executable, '-c', 'from uvms_common.node_entry import run_node_module; '
+                f'run_node_module({spec.module!r})']
     return [sys.executable, '-m', spec.module]
+
+
+def _script_imports(script: Path) -> bool:
+    """Whether the module a console script imports exists in this tree.
+
+    An install older or newer than the sources (a node moved to another package, its
+    script regenerated) leaves a script that fails with ModuleNotFoundError; ``-m`` of the
+    node module then starts it as the tree has it.
+    """
+    try:
+        head = script.read_text(encoding='utf-8', errors='replace')[:2000]
+    except OSError:
+        return True
+    match = re.search(r'^from ([\w.]+) import', head, re.MULTILINE)
+    if match is None:
+        return True
+    try:
+        return importlib.util.find_spec(match.group(1)) is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def ros_arguments(
@@ -76,13 +109,24 @@ def ros_arguments(
     parameter_files: Iterable[Path],
     log_level: str | None = None,
     remaps: Iterable[tuple[str, str]] = (),
+    scheduling: Scheduling | None = None,
 ) -> list[str]:
-    """``--ros-args`` of a node: its name, namespace and topics remapped, its parameter files."""
+    """``--ros-args`` of a node: name, namespace and topics remapped, parameter files, scheduling.
+
+    The scheduling goes on the command line (``-p rt_priority:=50``), not into the generated
+    parameter file, so that the recorder's ``run.parameters`` holds only the graph's own.
+    """
     args = ['--ros-args', '-r', f'__node:={spec.name}', '-r', f'__ns:=/{namespace.strip("/")}']
     for source, target in remaps:
         args += ['-r', f'{source}:={target}']
     for path in parameter_files:
         args += ['--params-file', str(path)]
+    if scheduling is not None and scheduling.asks:
+        args += ['-p', f'rt_priority:={scheduling.priority}']
+        if scheduling.cpus:
+            args += ['-p', f"rt_cpus:='{','.join(map(str, scheduling.cpus))}'"]
+        if scheduling.lock_memory:
+            args += ['-p', 'rt_lock_memory:=true']
     if log_level is not None:
         args += ['--log-level', log_level]
     return args
@@ -102,6 +146,8 @@ def plan_launch(
     bin_dir: Path | None = None,
     foxglove: tuple[str, int] | None = None,
     hardware: HardwarePlan | None = None,
+    scheduling: Scheduling | None = None,
+    compose: str | None = None,
 ) -> list[NodeProcessSpec]:
     """The node processes of a launch, with one generated parameter file each.
 
@@ -119,6 +165,9 @@ def plan_launch(
         foxglove: Host and port of a Foxglove live view (``foxglove_server``); None: none.
         hardware: The hardware file's plan (``--hardware``): bridges, twins; None: the
             simulator alone. The scenario must already be ``hardware_scenario``'s.
+        scheduling: What the loop processes (``LOOP_NODES``) ask for; None: nothing.
+        compose: A composition of ``uvms_bringup.composed`` (``control``) to run in one
+            process; None: one process per node.
 
     Returns:
         The processes in start order: simulator, controller, thruster allocator,
@@ -171,9 +220,16 @@ def plan_launch(
                              encoding='utf-8')
         command = [*node_executable(spec, bin_dir),
                    *ros_arguments(spec, namespace, [*files, generated], log_level,
-                                  remaps if spec is SIMULATOR else ())]
+                                  remaps if spec is SIMULATOR else (),
+                                  scheduling if spec in LOOP_NODES else None)]
+        loop = scheduling is not None and spec in LOOP_NODES
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
-                                     tuple(command), generated))
+                                     tuple(command), generated,
+                                     rt_priority=scheduling.priority if loop else 0))
+    if compose is not None:
+        from uvms_bringup.composed import COMPOSED, compose_plans
+
+        return compose_plans(plans, compose, node_executable(COMPOSED, bin_dir))
     return plans
 
 
@@ -206,6 +262,10 @@ def launch_graph(
     foxglove: tuple[str, int] | None = None,
     robot: str | None = None,
     hardware: HardwarePlan | None = None,
+    rt_priority: int = DEFAULT_RT_PRIORITY,
+    cpus: tuple[int, ...] = (),
+    lock_memory: bool = False,
+    compose: str | None = None,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -228,6 +288,12 @@ def launch_graph(
         hardware: A hardware file's plan (``--hardware``): the bridges stand where the
             simulator's device topics were, with the twins on the simulator or on the
             robot (docs/hardware.md); None: the simulator alone.
+        rt_priority: SCHED_FIFO priority of the loop processes (``LOOP_NODES``); 0: none.
+            Where the system refuses it, one warning line and the graph runs on.
+        cpus: CPUs the loop processes are pinned to; empty: every CPU.
+        lock_memory: The loop processes lock their memory (``mlockall``).
+        compose: ``control`` runs controller, allocator and estimator in one process
+            (``uvms_bringup.composed``); None: one process per node.
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -252,6 +318,7 @@ def launch_graph(
     elif robot is not None:
         extra = {spec.name: {'robot_name': robot}
                  for spec in graph_nodes(record=True, foxglove=True) if spec.takes_robot}
+    scheduling = launch_scheduling(rt_priority, cpus, lock_memory)
     own_stop = None
     if stop is None:
         from uvms_common.stop_event import StopEvent
@@ -262,11 +329,15 @@ def launch_graph(
             plans = plan_launch(scenario, mode, Path(parameters_dir), duration_s=duration_s,
                                 output_path=output_path, namespace=namespace, config=config,
                                 log_level='warn' if quiet else None, foxglove=foxglove,
-                                extra_overrides=extra, hardware=hardware)
-            launcher = Launcher(plans)
+                                extra_overrides=extra, hardware=hardware,
+                                scheduling=scheduling, compose=compose)
+            stats = Path(parameters_dir) / 'stats'
+            launcher = Launcher(plans, env={**os.environ, process_stats.ENV: str(stats)})
+            line = describe_scheduling(scheduling, plans)
             # On the robot no simulator ends the run: it runs until Ctrl-C or a failure.
             plant = hardware is None or hardware.twins
-            return _run(launcher, stop, mode, duration_s if plant else None, quiet)
+            return _run(launcher, stop, mode, duration_s if plant else None, quiet, line,
+                        CostWatch(stats))
     finally:
         if own_stop is not None:
             own_stop.restore()
@@ -284,14 +355,17 @@ def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) ->
 
 
 def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
-         quiet: bool) -> int:
-    """Start, watch and stop a launch; report its outcome in one line."""
+         quiet: bool, scheduling: str, costs: CostWatch) -> int:
+    """Start, watch and stop a launch; report its outcome, and what each process cost."""
+    costs.started_ns = time.monotonic_ns()
     launcher.start()
     if not quiet:
         started = ', '.join(f'{p.plan.label} (pid {p.popen.pid})' for p in launcher.processes)
+        composed = [composed_nodes(p.plan) for p in launcher.processes]
+        layout = '; '.join(f'{names} in one process' for names in composed if names)
         until = f'until {duration_s:g} s simulated or Ctrl-C' if duration_s else 'until Ctrl-C'
-        launcher.report(f'uvms launch: {mode} graph, one process per node: {started}; '
-                        f'running {until}')
+        launcher.report(f'uvms launch: {mode} graph, {layout or "one process per node"}: '
+                        f'{started}{scheduling}; running {until}')
     told: list[NodeProcess] = []
 
     def tell_failed_job(process: NodeProcess) -> None:
@@ -303,13 +377,22 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
             launcher.report(outcome.line() if outcome is not None else
                             f'mission failed: {process.name} wrote no outcome; its log says why')
 
+    def poll() -> None:
+        line = costs.poll([p.popen.pid for p in launcher.processes])
+        if line is not None and not quiet:
+            launcher.report(line)
+
     try:
         # Without a duration the simulator never finishes: its exit, even with 0 (a signal
         # sent to it alone), ends the launch as a failure naming it.
         outcome, process = launcher.wait_for_exit(
-            stop, SIMULATOR.name if duration_s else None, tell_failed_job)
+            stop, SIMULATOR.name if duration_s else None, tell_failed_job, poll)
     finally:
+        costs.end([p.popen.pid for p in launcher.processes])
         launcher.stop()
+    if not quiet and costs.first_step_s is not None:
+        for line in costs.table([(p.name, p.popen.pid) for p in launcher.processes]):
+            launcher.report(line)
     for job in launcher.failed_jobs():
         tell_failed_job(job)  # a mission that failed as the run ended
     for other in launcher.unclean_stops():

@@ -188,9 +188,36 @@ def build_parser() -> argparse.ArgumentParser:
              'file (config/hardware/NAME.yaml or a path): "twin" runs them against protocol '
              'twins fed by the simulator (docs/hardware.md)')
     _add_foxglove_arguments(launch)
+    _add_realtime_arguments(launch)
     for name, (_, help_text) in DELEGATED.items():
         sub.add_parser(name, help=help_text, add_help=False)
     return parser
+
+
+def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
+    """``--rt-priority N``, ``--no-rt``, ``--cpus LIST`` and ``--lock-memory`` of launch."""
+    from uvms_common.scheduling import DEFAULT_RT_PRIORITY, MAX_RT_PRIORITY
+
+    def priority(text: str) -> int:
+        value = int(text)
+        if not 1 <= value <= MAX_RT_PRIORITY:
+            raise argparse.ArgumentTypeError(f'1 to {MAX_RT_PRIORITY}, got {value}')
+        return value
+
+    launch.add_argument('--rt-priority', type=priority, default=DEFAULT_RT_PRIORITY,
+                        metavar='N',
+                        help='SCHED_FIFO priority of simulator, controller, allocator and '
+                             f'estimator (default {DEFAULT_RT_PRIORITY}, as ros2_control); '
+                             'where refused, one warning and they run at normal priority')
+    launch.add_argument('--no-rt', action='store_true',
+                        help='every node at normal priority (no SCHED_FIFO)')
+    launch.add_argument('--cpus', metavar='LIST', default='',
+                        help='pin the loop processes to these CPUs (e.g. 1 or 0,1)')
+    launch.add_argument('--lock-memory', action='store_true',
+                        help='the loop processes lock their memory in RAM (mlockall)')
+    launch.add_argument('--compose', choices=('control',),
+                        help='control: controller, thruster_allocator and estimator in one '
+                             'process on one executor (same names, topics, parameters)')
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -264,8 +291,10 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
     from uvms_bringup.launcher import launch_graph
     from uvms_bringup.processes import LaunchError
     from uvms_bringup.scenario import ScenarioError, load_scenario
+    from uvms_common.scheduling import parse_cpus
 
     try:
+        cpus = parse_cpus(args.cpus)
         scenario = None
         duration = args.duration or None  # 0: run on until stopped
         if args.scenario is not None:
@@ -283,7 +312,9 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
         return launch_graph(scenario, args.mode, duration_s=duration,
                             output_path=args.output, quiet=args.quiet, stop=stop,
                             foxglove=_foxglove_address(args), robot=args.robot,
-                            hardware=hardware)
+                            hardware=hardware,
+                            rt_priority=0 if args.no_rt else args.rt_priority, cpus=cpus,
+                            lock_memory=args.lock_memory, compose=args.compose)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))
         return EXIT_USAGE

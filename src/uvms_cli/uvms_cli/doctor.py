@@ -193,6 +193,24 @@ def _distribution_versions() -> tuple[list[tuple[str, str]], bool]:
     return versions, all_found
 
 
+def realtime_lines() -> list[str]:
+    """Whether a loop process may have SCHED_FIFO here (tried in a child), and the throttling.
+
+    Informational: the graph runs without it, at normal priority (``uvms launch`` warns).
+    """
+    from uvms_common.scheduling import (
+        DEFAULT_RT_PRIORITY,
+        fifo_refusal,
+        rtprio_limit,
+        throttling,
+    )
+
+    refusal = fifo_refusal(DEFAULT_RT_PRIORITY)
+    state = (f'available (SCHED_FIFO {DEFAULT_RT_PRIORITY} granted to a child; '
+             f'RLIMIT_RTPRIO {rtprio_limit()})' if not refusal else f'NOT available: {refusal}')
+    return [f'real time   {state}', f'rt throttle {throttling()}']
+
+
 def report(out: TextIO, types: Sequence[str] = USED_MESSAGE_TYPES) -> bool:
     """Write the doctor report to out and tell whether everything is in order."""
     runtime = detect_runtime()
@@ -212,6 +230,8 @@ def report(out: TextIO, types: Sequence[str] = USED_MESSAGE_TYPES) -> bool:
     versions, found = _distribution_versions()
     for name, version in versions:
         out.write(f'  {name:<11} {version}\n')
+    for line in realtime_lines():
+        out.write(f'  {line}\n')
     for note in runtime.notes:
         out.write(f'  note: {note}\n')
     ok = found and runtime.kind != 'none'

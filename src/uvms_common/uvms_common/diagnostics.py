@@ -20,7 +20,9 @@ A check that raises gives an ERROR status naming the exception; the node goes on
 from __future__ import annotations
 
 import math
+import os
 import re
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -118,11 +120,31 @@ class RateMeter:
         return (count - previous) * 1e9 / (now_ns - previous_ns)
 
 
+class _ProcessCpu:
+    """CPU of this process (every thread) in % of one core since the previous read."""
+
+    def __init__(self) -> None:
+        self._last = (time.monotonic(), self._cpu_s())
+
+    @staticmethod
+    def _cpu_s() -> float:
+        times = os.times()
+        return times.user + times.system
+
+    def percent(self) -> float | None:
+        """% of a core since the last read (None when no wall time passed)."""
+        now, cpu = time.monotonic(), self._cpu_s()
+        (then, before), self._last = self._last, (now, cpu)
+        return 100.0 * (cpu - before) / (now - then) if now > then else None
+
+
 class DiagnosticsPublisher:
     """The node's checks, published as one DiagnosticArray on `TOPIC` once a period.
 
     The period runs on the node's clock (simulated time under ``use_sim_time``), as
-    diagnostic_updater's timer does.
+    diagnostic_updater's timer does. Every node also reports ``"<node>: process"``: CPU % of
+    a core of its process (wall time), and the periods its ``MissCounter`` objects counted
+    (``uvms_common.realtime.process_periods``: missed, worst lateness).
     """
 
     def __init__(self, node: Node, hardware_id: str = DEFAULT_HARDWARE_ID,
@@ -146,6 +168,7 @@ class DiagnosticsPublisher:
         self._publisher = node.create_publisher(
             DiagnosticArray, TOPIC, QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         self._timer: Timer | None = node.create_timer(period_s, self.update)
+        self._cpu = _ProcessCpu()
 
     def add(self, task_name: str, check: Callable[[], Report]) -> None:
         """Report ``check()`` as status ``"<node name>: <task_name>"`` every period."""
@@ -155,9 +178,17 @@ class DiagnosticsPublisher:
         """Run every check and publish their statuses now; return the published array."""
         array = DiagnosticArray()
         array.header.stamp = self._node.get_clock().now().to_msg()
-        array.status = [self._status(name, check) for name, check in self._checks]
+        checks = [*self._checks, ('process', self._process_report)]
+        array.status = [self._status(name, check) for name, check in checks]
         self._publisher.publish(array)
         return array
+
+    def _process_report(self) -> Report:
+        """What the node's process costs: CPU % of a core, missed periods, worst lateness."""
+        from uvms_common.realtime import process_periods
+
+        periods = process_periods()
+        return Report(OK, 'running', {'cpu_percent': self._cpu.percent(), **periods})
 
     def destroy(self) -> None:
         """Remove the timer and the publisher from the node (idempotent)."""

@@ -33,12 +33,15 @@ from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedE
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from uvms_common import process_stats
 from uvms_common.node_entry import flush_output
+from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.scheduling import Scheduling, apply_scheduling, parse_cpus
 from uvms_common.stop_event import StopEvent, active_stop_event
 
 __all__ = ['EXECUTORS', 'SPIN_TURN_S', 'TEARDOWN_BACKSTOP_S', 'TEARDOWN_GRACE_S', 'StopEvent',
-           'TeardownDeadline', 'make_executor', 'profiled', 'run_node',
+           'TeardownDeadline', 'make_executor', 'profiled', 'run_node', 'schedule_process',
            'spin_until_stopped']
 
 #: The node class a process runs.
@@ -122,6 +125,45 @@ def spin_until_stopped(
     while not stop.is_set() and not finished() and rclpy.ok(context=context):
         executor.spin_once(timeout_sec=SPIN_TURN_S)
 
+
+def schedule_process(node: Node) -> None:
+    """Apply the node's ``rt_priority``, ``rt_cpus`` and ``rt_lock_memory`` to its process.
+
+    The one place a node process (or a composed one, with its first node) asks for real-time
+    scheduling (``uvms_common.scheduling``), after the node is built (imports, kernels and
+    allocations done) and before it spins: ``-p rt_priority:=50`` as ``uvms launch`` passes
+    it to the loop processes. A refusal is one warning line; the node runs on.
+
+    Raises:
+        ValueError: A value out of range (a start-up error of the node).
+    """
+    from rcl_interfaces.msg import ParameterDescriptor, ParameterType
+
+    declared = {
+        'rt_priority': (0, ParameterDescriptor(
+            type=ParameterType.PARAMETER_INTEGER,
+            description='SCHED_FIFO priority of the process, 1-99; 0: normal scheduling')),
+        'rt_cpus': ('', ParameterDescriptor(
+            dynamic_typing=True,
+            description="CPUs to pin the process to ('0,1', 1 or [0, 1]); '': every CPU")),
+        'rt_lock_memory': (False, ParameterDescriptor(
+            type=ParameterType.PARAMETER_BOOL,
+            description='lock the pages of the process in RAM (mlockall)')),
+    }
+    values = {}
+    for name, (default, descriptor) in declared.items():
+        if not node.has_parameter(name):
+            node.declare_parameter(name, default, descriptor)
+        values[name] = node.get_parameter(name).value
+    request = Scheduling(int(values['rt_priority']), parse_cpus(values['rt_cpus']),
+                         bool(values['rt_lock_memory']))
+    if not request.asks:
+        return
+    outcome = apply_scheduling(request)
+    if outcome.refused:
+        node.get_logger().warning(outcome.refused)
+    if outcome.applied:
+        node.get_logger().info('real-time scheduling: ' + ', '.join(outcome.applied))
 
 
 class TeardownDeadline:
@@ -208,6 +250,7 @@ def run_node(
         # Not interrupted by a stop signal: an exception raised into the model's or Numba's
         # loading (LLVM callbacks) leaves tracebacks; a stop then ends the node right after.
         node = make_node()
+        schedule_process(node)
         executor = make_executor()
         executor.add_node(node)
         built = node
@@ -223,6 +266,7 @@ def run_node(
         logger.fatal(f'{type(exc).__name__}: {exc}')
         status = 1
     finally:
+        process_stats.write(logger_name, process_periods())
         if node is not None and close_output is not None:
             try:
                 close_output(node)

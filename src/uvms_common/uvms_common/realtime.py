@@ -17,6 +17,7 @@ Example::
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -110,6 +111,9 @@ class MissCounter:
         self._last_ns: int | None = None
         self._window_start_ns: int | None = None
         self._window = [0, 0]  # periods, missed
+        #: Largest delay of a callback beyond its period, after the grace (ns).
+        self.worst_late_ns = 0
+        _COUNTERS.add(self)
 
     @property
     def share(self) -> float | None:
@@ -139,6 +143,7 @@ class MissCounter:
             return None
         assert last is not None
         elapsed = 1
+        self.worst_late_ns = max(self.worst_late_ns, now_ns - last - self.period_ns)
         if not on_time and now_ns > last:
             elapsed = max(1, round((now_ns - last) / self.period_ns))
         missed = elapsed - 1 + (not ran)
@@ -152,6 +157,27 @@ class MissCounter:
         self._window_start_ns, self._window = now_ns, [0, 0]
         share = missed / periods
         return share if share > self.warn_share else None
+
+
+#: Every MissCounter of this process (a node's figures for diagnostics and its launcher).
+_COUNTERS: weakref.WeakSet[MissCounter] = weakref.WeakSet()
+
+
+def process_periods() -> dict[str, Any]:
+    """The periods of every MissCounter of this process, summed: what its launcher prints.
+
+    Returns:
+        ``periods``, ``missed``, ``missed_share`` (None before any period) and
+        ``worst_late_ms`` (largest delay of a callback beyond its period, ms; None without
+        a counter).
+    """
+    counters = list(_COUNTERS)
+    periods = sum(c.periods for c in counters)
+    missed = sum(c.missed for c in counters)
+    return {'periods': periods, 'missed': missed,
+            'missed_share': missed / periods if periods else None,
+            'worst_late_ms': (max(c.worst_late_ns for c in counters) * 1e-6
+                              if counters else None)}
 
 
 class EventLogger:

@@ -170,6 +170,9 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._misses = MissCounter(round(1e9 / float(node['control_rate_hz'])))
         self._period_ns = self._misses.period_ns
+        # Input-triggered steps (lockstep, odometry): the states left unanswered, counted on
+        # their stamps, for the process's figures (diagnostics, uvms launch's table).
+        self._answered = MissCounter(round(1e9 / float(node['control_rate_hz'])))
         self._staleness_log = EventLogger(self.get_logger(), {
             'waiting': 'waiting for fresh joint_states, odometry and wrench (start-up): '
                        'publishing zero generalized force',
@@ -288,6 +291,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         if entry.complete:
             self._pending.finish(stamp)
             self._compute(stamp, [Input(stamp, 0, entry.values[name]) for name in TOPICS])
+            self._answered.tick(stamp)
             return
         if value is None or self._first_stamp_ns is None:
             return  # only valid inputs move the lockstep exchange on
@@ -328,6 +332,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
             self.get_logger().info('waiting for joint_states and wrench', once=True)
         elif self._checked_fresh(now, inputs):
             self._compute(stamp, inputs)
+            self._answered.tick(stamp)
 
     def _checked_fresh(self, now: int, inputs: list[Input | None]) -> bool:
         """Timer mode: whether the inputs are fresh; zero command and log when not."""

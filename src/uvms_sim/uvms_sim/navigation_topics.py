@@ -139,6 +139,8 @@ class NavigationTopics:
         self._raw = RawNavigationMessages(self._gyro_var, self._accel_var)
         self._depth_bias_var = params.depth.bias_max_m ** 2 / 3.0
         self._last: tuple[int, np.ndarray] | None = None
+        self._last_imu: bytes | None = None
+        self._imu_sent_to = 0  # subscriptions matched when the last IMU sample went out
 
     def publish(self, t_ns: int, q: np.ndarray, w: np.ndarray) -> None:
         """Measure the vehicle state (q, w of the plant) at ``t_ns`` and publish what is due."""
@@ -152,11 +154,29 @@ class NavigationTopics:
         for reading in self.sensors.sample(t_ns, truth):
             self._send(reading)
 
+    def republish_imu(self) -> None:
+        """Send the last IMU sample again if a subscriber joined since it went out.
+
+        Real time, while the initial state is held: the estimator starts on its first IMU
+        sample and publishes on /clock only after it; a held state's sensors are sampled
+        once (time stands still), so an estimator whose subscription was matched after that
+        sample never started and the loop never closed (seen on a loaded machine, `uvms
+        launch case1_estimated`, 60 s then an error). Sent again only when the number of
+        matched subscriptions grew, so a started estimator sees the sample at most once more
+        per late subscriber, at the same stamp (a prediction of zero length).
+        """
+        count = self._imu.get_subscription_count()
+        if self._last_imu is not None and count > self._imu_sent_to:
+            self._imu_sent_to = count
+            self._imu.publish(self._last_imu)
+
     def _send(self, reading: Reading) -> None:
         raw = self._raw
         if isinstance(reading, ImuReading):
-            self._imu.publish(raw.imu(reading.t_ns, reading.rpy, reading.rpy_sigma,
-                                      reading.w_body, reading.f_body))
+            self._last_imu = bytes(raw.imu(reading.t_ns, reading.rpy, reading.rpy_sigma,
+                                           reading.w_body, reading.f_body))
+            self._imu_sent_to = self._imu.get_subscription_count()
+            self._imu.publish(self._last_imu)
         elif isinstance(reading, DvlReading):
             if reading.valid:
                 self._dvl.publish(raw.dvl(reading.t_ns, reading.v_dvl, reading.sigma_m_s))

@@ -217,6 +217,9 @@ class ThrusterAllocatorNode(LifecycleNode):
         self._staleness = StalenessMonitor()
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._misses = MissCounter(round(self._period_s * 1e9))
+        # Command-triggered steps: commands left out, counted on their stamps, for the
+        # process's figures (diagnostics, uvms launch's table).
+        self._answered = MissCounter(round(self._period_s * 1e9))
         self._staleness_log = EventLogger(self.get_logger(), {
             'waiting': 'waiting for fresh generalized force commands (start-up): thrusters '
                        'and motors set to zero',
@@ -334,6 +337,7 @@ class ThrusterAllocatorNode(LifecycleNode):
             dt_ns = 0
         self._last_stamp_ns = stamp
         self._step(stamp, self._safe_tau_b, dt_ns * 1e-9)
+        self._answered.tick(stamp)
 
     def _on_timer(self) -> None:
         """Timer mode: step on the latest command, or on zero once it is stale or inactive."""

@@ -89,3 +89,16 @@ def test_doctor_help_exits_cleanly() -> None:
     with pytest.raises(SystemExit) as exit_info:
         doctor.main(['--help'])
     assert exit_info.value.code == 0
+
+
+def test_doctor_says_whether_real_time_scheduling_is_available() -> None:
+    """A line from a child's try (granted, or the refusal) and one on the rt throttling."""
+    from uvms_cli.doctor import realtime_lines
+    from uvms_common.scheduling import fifo_refusal
+
+    available, throttle = realtime_lines()
+    if fifo_refusal(50):
+        assert available.startswith('real time   NOT available: real-time scheduling refused')
+    else:
+        assert available.startswith('real time   available (SCHED_FIFO 50 granted')
+    assert throttle.startswith('rt throttle ')

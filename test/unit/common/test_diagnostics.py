@@ -78,7 +78,7 @@ def test_each_check_is_a_status_named_after_node_and_task(graph: Graph) -> None:
     diagnostics.add('input', lambda: Report(WARN, 'stale input', {'age_s': None}))
     assert graph.spin_until(lambda: len(graph.arrays) >= 1)
     found = statuses(graph.arrays[0])
-    assert sorted(found) == ['reporter: input', 'reporter: stepping']
+    assert sorted(found) == ['reporter: input', 'reporter: process', 'reporter: stepping']
     stepping, stale = found['reporter: stepping'], found['reporter: input']
     assert (stepping.level, stepping.message, stepping.hardware_id) == (
         DiagnosticStatus.OK, 'running', 'bluerov_alpha')
@@ -167,3 +167,14 @@ def test_robot_name_comes_from_the_urdf_of_the_project() -> None:
 def test_levels_are_the_message_constants() -> None:
     """OK/WARN/ERROR/STALE are diagnostic_msgs' byte constants, 0..3."""
     assert (OK, WARN, ERROR, STALE) == (b'\x00', b'\x01', b'\x02', b'\x03')
+
+
+def test_every_node_reports_what_its_process_costs(graph: Graph) -> None:
+    """'<node>: process' comes last, with CPU % of a core, missed periods, worst lateness."""
+    diagnostics = DiagnosticsPublisher(graph.node, period_s=3600.0)
+    diagnostics.add('t', lambda: Report(OK, 'ok'))
+    array = diagnostics.update()
+    process = array.status[-1]
+    assert process.name == 'reporter: process'
+    keys = [value.key for value in process.values]
+    assert keys == ['cpu_percent', 'periods', 'missed', 'missed_share', 'worst_late_ms']

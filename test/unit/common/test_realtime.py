@@ -70,3 +70,28 @@ def test_ticks_that_could_not_do_their_work_count_as_missed() -> None:
     counter = MissCounter(period_ns=2 * MS, grace_ns=0, window_ns=1 * S)
     shares = [counter.tick(k * 2 * MS, ran=k % 2 == 0) for k in range(1001)]
     assert shares[-1] == pytest.approx(0.5, abs=0.01)
+
+
+def test_worst_lateness_is_the_longest_delay_beyond_a_period_after_the_grace() -> None:
+    """A callback 7 ms after the previous one on a 2 ms timer was 5 ms late."""
+    counter = MissCounter(period_ns=2 * MS, grace_ns=10 * MS, window_ns=1 * S)
+    for t in (0, 30 * MS, 32 * MS, 34 * MS, 41 * MS, 43 * MS):  # 0 -> 30 ms is in the grace
+        counter.tick(t)
+    assert counter.worst_late_ns == 5 * MS
+
+
+def test_process_periods_sum_the_counters_of_the_process() -> None:
+    """Periods and misses of every live counter add up; the worst lateness is their max."""
+    from uvms_common.realtime import process_periods
+
+    before = process_periods()
+    first = MissCounter(period_ns=2 * MS, grace_ns=0, window_ns=1 * S)
+    second = MissCounter(period_ns=1 * MS, grace_ns=0, window_ns=1 * S)
+    for t in (0, 2 * MS, 4 * MS, 10 * MS):
+        first.tick(t)
+    for t in (0, 1 * MS, 2 * MS):
+        second.tick(t)
+    after = process_periods()
+    assert after['periods'] - before['periods'] == first.periods + second.periods == 5 + 2
+    assert after['missed'] - before['missed'] == 2
+    assert after['worst_late_ms'] >= 4.0

@@ -16,12 +16,24 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy.interpolate import BPoly, PchipInterpolator, PPoly  # type: ignore[import-untyped]
 
 FloatArray = npt.NDArray[np.float64]
+
+
+def _interpolate() -> Any:
+    """scipy.interpolate, imported at the first path built, not with this module.
+
+    Its import takes 0.8-1.0 s of CPU (scipy.optimize, scipy.special come with it); the
+    allocator and the mission import this module through ``uvms_control.conversions`` and
+    ``uvms_control.task_server`` and never build a path before the first simulated step.
+    """
+    import scipy.interpolate  # type: ignore[import-untyped]
+
+    return scipy.interpolate
 
 
 def shape_preserving_velocities(times: FloatArray, points: FloatArray) -> FloatArray:
@@ -35,7 +47,8 @@ def shape_preserving_velocities(times: FloatArray, points: FloatArray) -> FloatA
     """
     velocities = np.zeros_like(points)
     if len(times) > 2:
-        velocities[1:-1] = PchipInterpolator(times, points, axis=0).derivative()(times[1:-1])
+        pchip = _interpolate().PchipInterpolator(times, points, axis=0)
+        velocities[1:-1] = pchip.derivative()(times[1:-1])
     return velocities
 
 
@@ -68,7 +81,9 @@ class TaskPath:
         if accelerations is None:
             accelerations = np.zeros_like(points)
         knots = np.stack((points, velocities, accelerations), axis=1)  # (n, 3 orders, 3 axes)
-        polynomial = PPoly.from_bernstein_basis(BPoly.from_derivatives(times, knots, orders=5))
+        interpolate = _interpolate()
+        polynomial = interpolate.PPoly.from_bernstein_basis(
+            interpolate.BPoly.from_derivatives(times, knots, orders=5))
         self.times: FloatArray = times
         self.points: FloatArray = points
         self.start_time: float = float(times[0])

@@ -1,0 +1,86 @@
+"""The composed process's main loop: ``uvms_common.node_main.run_node`` for several nodes.
+
+The same steps as a node process (rclpy without its signal handlers, a stop event checked
+between short executor turns, the nodes off the executor before it shuts down, a bounded
+teardown), with every node of the group built on one context and added to one executor.
+The process asks for real-time scheduling once, with the first node's ``rt_*`` parameters.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Sequence
+
+import rclpy
+from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from uvms_common.node_main import (
+    TeardownDeadline,
+    make_executor,
+    profiled,
+    schedule_process,
+    spin_until_stopped,
+)
+from uvms_common.realtime import process_periods
+from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.stop_event import StopEvent
+
+from uvms_bringup.launch_helpers import NodeSpec
+from uvms_common import process_stats
+
+#: Logger of the process's own lines (errors that are no one node's).
+LOGGER = 'composed'
+#: Name of the process's stats file for its launcher (``uvms_common.process_stats``): the
+#: name the launcher gives the process (``composed.COMPOSED``).
+COMPOSED_STATS = 'control'
+
+
+def build_node(spec: NodeSpec, args: Sequence[str]) -> Node:
+    """One node of the group, from its module and class, with its own ``--ros-args``."""
+    node_class = getattr(importlib.import_module(spec.module), spec.class_name)
+    node: Node = node_class(cli_args=list(args))
+    return node
+
+
+def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEvent) -> int:
+    """Build the nodes in order, spin them on one executor until a stop; the exit status."""
+    ros_environment_defaults()
+    rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
+    logger = rclpy.logging.get_logger(LOGGER)
+    nodes: list[Node] = []
+    executor: Executor | None = None
+    status = 0
+    current = ''
+    try:
+        for spec, args in groups:
+            current = spec.name
+            nodes.append(build_node(spec, args))
+            if stop.is_set():
+                break
+        current = ''
+        schedule_process(nodes[0])
+        executor = make_executor()
+        for node in nodes:
+            executor.add_node(node)
+        with profiled(LOGGER):
+            spin_until_stopped(executor, stop)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception as exc:
+        where = f'{current}: ' if current else ''
+        logger.fatal(f'{where}{type(exc).__name__}: {exc}')
+        status = 1
+    finally:
+        process_stats.write(COMPOSED_STATS, process_periods())
+        deadline = TeardownDeadline(LOGGER, status)
+        if executor is not None:
+            for node in nodes:
+                if node in executor.get_nodes():
+                    executor.remove_node(node)
+            executor.shutdown()
+        for node in reversed(nodes):
+            node.destroy_node()
+        rclpy.try_shutdown()
+        deadline.cancel()
+    return status
