@@ -8,8 +8,11 @@ from __future__ import annotations
 
 from uvms_control.core.errors import ControlParameterError
 from uvms_control.core.gain_stability import LoopRadius, loop_radii
-from uvms_control.core.parameter_specs import CONTROLLER_PARAMETER_SPECS
+from uvms_control.core.parameter_specs import (
+    CONTROLLER_NODE_PARAMETER_SPECS,
+    CONTROLLER_PARAMETER_SPECS,
+)
 from uvms_control.core.parameters import ControllerParameters
 
-__all__ = ['CONTROLLER_PARAMETER_SPECS', 'ControlParameterError', 'ControllerParameters',
+__all__ = ['CONTROLLER_NODE_PARAMETER_SPECS', 'CONTROLLER_PARAMETER_SPECS', 'ControlParameterError', 'ControllerParameters',
            'LoopRadius', 'loop_radii']

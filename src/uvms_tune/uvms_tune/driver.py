@@ -7,8 +7,8 @@ as ``uvms run``) and tell the aggregated objective and the constraints. The stud
 journal file in the output folder (``JournalStorage`` + ``JournalFileBackend``), so a tune
 stopped by Ctrl-C or a crash continues with ``resume``.
 
-The sampler is TPE with ``constraints_func`` (the tune extra has no PyTorch, which Optuna's
-GPSampler needs), re-seeded before every trial with the seed plus the number of finished
+The sampler is TPE with the constraints each trial sets (the tune extra has no PyTorch,
+which Optuna's GPSampler needs), re-seeded before every trial with the seed plus the number of finished
 trials: a resumed tune asks the same gains an uninterrupted one would. A trial cut short is
 marked failed on resume and its gains asked again first.
 """
@@ -27,7 +27,7 @@ from optuna.storages import JournalStorage
 from optuna.storages.journal import JournalFileBackend
 from optuna.trial import FrozenTrial, TrialState
 
-from uvms_tune.control_api import CONTROLLER_PARAMETER_SPECS
+from uvms_tune.control_api import CONTROLLER_NODE_PARAMETER_SPECS
 from uvms_tune.errors import TuneError
 from uvms_tune.gains import (
     Stability,
@@ -53,21 +53,29 @@ Progress = Callable[[int, float | None], None]
 #: The journal file in the output folder.
 JOURNAL = 'journal.log'
 #: Control period the stability check assumes (s): the controller's control_rate_hz default.
-CONTROL_PERIOD_S = 1.0 / float(next(s.default for s in CONTROLLER_PARAMETER_SPECS
+CONTROL_PERIOD_S = 1.0 / float(next(s.default for s in CONTROLLER_NODE_PARAMETER_SPECS
                                     if s.name == 'control_rate_hz'))
+#: Names of the constraints every trial sets: the stability check's (1 - ρ_max, negated) and
+#: the fraction of training scenarios that failed.
+CONSTRAINTS = ('stability', 'scenarios')
 #: TPE trials sampled at random before it models (Optuna's default is 10).
 STARTUP_TRIALS = 5
 
 
-def constraints_of(trial: FrozenTrial) -> Sequence[float]:
-    """The constraints a trial was told with (user attr ``constraints``); > 0 is violated."""
-    return list(trial.user_attrs.get('constraints', [1.0, 1.0]))
+def constraints_of(trial: FrozenTrial) -> list[float]:
+    """The constraints a trial was told with (``Trial.set_constraint``); > 0 is violated."""
+    return [float(trial.constraints.get(name, 1.0)) for name in CONSTRAINTS]
 
 
 def sampler_for(seed: int, finished: int) -> optuna.samplers.BaseSampler:
-    """TPE honouring the constraints, seeded for the trial after ``finished`` trials."""
-    return optuna.samplers.TPESampler(seed=seed + finished, constraints_func=constraints_of,
-                                      n_startup_trials=STARTUP_TRIALS, constant_liar=True)
+    """TPE, seeded for the trial after ``finished`` trials.
+
+    Optuna 5 samplers read the constraints each trial sets (``Trial.set_constraint``; the
+    ``constraints_func`` argument is deprecated since 5.0): infeasible trials are ranked by
+    their total violation, below every feasible one.
+    """
+    return optuna.samplers.TPESampler(seed=seed + finished, n_startup_trials=STARTUP_TRIALS,
+                                      constant_liar=True)
 
 
 @dataclass
@@ -158,7 +166,8 @@ class Tuner:
             trial = self.study.ask(self.distributions)
             evaluation = self.evaluate(trial.params, self.tune.train)
             result = evaluation.result
-            trial.set_user_attr('constraints', list(result.constraints))
+            for name, value in zip(CONSTRAINTS, result.constraints, strict=True):
+                trial.set_constraint(name, value)
             trial.set_user_attr('reasons', list(result.reasons))
             trial.set_user_attr('stability_margin', evaluation.stability.margin)
             trial.set_user_attr('stability_loop', evaluation.stability.loop)
@@ -169,27 +178,34 @@ class Tuner:
                 best = self.best()
                 progress(done + 1, None if best is None else best.value)
 
-    def evaluate(self, candidate: Mapping[str, float],
-                 runs: Sequence[ScenarioRun]) -> Evaluation:
-        """Check a candidate's stability, then (if stable) run it on ``runs`` and score it."""
+    def evaluate(self, candidate: Mapping[str, float], runs: Sequence[ScenarioRun],
+                 recordings: dict[str, bytes] | None = None, label: str = '') -> Evaluation:
+        """Check a candidate's stability, then (if stable) run it on ``runs`` and score it.
+
+        ``recordings`` (if given) receives the MCAP of the first run under ``label``.
+        """
         values = controller_values(candidate, self.base)
         check = stability({**self.base, **values}, CONTROL_PERIOD_S,
                           self.tune.max_wall_stiffness_n_m)
         if not check.stable:
             return Evaluation(values, check, unstable_result(check.margin, check.loop))
-        figures = self.run_scenarios(values, runs)
+        figures = self.run_scenarios(values, runs, recordings, label)
         return Evaluation(values, check, aggregate(figures, check.margin, self.tune.objective))
 
-    def run_scenarios(self, values: Mapping[str, Any],
-                      runs: Sequence[ScenarioRun]) -> list[ScenarioFigures]:
+    def run_scenarios(self, values: Mapping[str, Any], runs: Sequence[ScenarioRun],
+                      recordings: dict[str, bytes] | None = None,
+                      label: str = '') -> list[ScenarioFigures]:
         """Each run's figures for controller parameters ``values`` (one batch on the runner)."""
         from uvms_sweep.batch import point_request
 
         requests = [point_request(run.label, run.scenario_path, run.duration_s or
                                   _scenario_duration(run.scenario_path), run.seed,
-                                  {'controller': dict(values), 'simulator': run.simulator})
-                    for run in runs]
+                                  {'controller': dict(values), 'simulator': run.simulator},
+                                  record=recordings is not None and index == 0)
+                    for index, run in enumerate(runs)]
         outcomes = self.runner(requests, self.tune.timeout_s)
+        if recordings is not None and outcomes and outcomes[0].get('mcap'):
+            recordings[label] = outcomes[0]['mcap']
         return [scenario_figures(run.label, outcome, self.tune.objective,
                                  self.tune.constraints)
                 for run, outcome in zip(runs, outcomes, strict=True)]

@@ -60,9 +60,14 @@ def controller_values(candidate: Mapping[str, float], base: Mapping[str, Any]) -
         omega_now, zeta_now = impedance_figures(merged)
         omega = float(candidate.get(_OMEGA, omega_now))
         zeta = float(candidate.get(_ZETA, zeta_now))
-        values['impedance.stiffness_n_m'] = [p * omega ** 2 for p in inertia]
-        values['impedance.damping_n_s_m'] = [2.0 * zeta * p * omega for p in inertia]
+        values['impedance.stiffness_n_m'] = [_round(p * omega ** 2) for p in inertia]
+        values['impedance.damping_n_s_m'] = [_round(2.0 * zeta * p * omega) for p in inertia]
     return values
+
+
+def _round(value: float) -> float:
+    """``value`` to 12 significant digits: 3000, not 3000.0000000000005, in a parameter file."""
+    return float(f'{value:.12g}')
 
 
 def impedance_figures(values: Mapping[str, Any]) -> tuple[float, float]:
