@@ -2,8 +2,9 @@
 
 The training figures of a set come from its trial where the study has one (the enqueued
 baselines, the best trial); the rest, and every held-out run, are run here in one batch per
-set. The first held-out run (else the first training run) of the defaults and of the tuned
-gains is recorded for the force figure.
+set. The first training run of the defaults and of the tuned gains runs once more, recorded,
+for the force figure; the tuned one's figures go into the provenance as ``rerun_figures``
+(they reproduce the best trial's: the runs are lockstep and seeded).
 """
 
 from __future__ import annotations
@@ -25,8 +26,11 @@ def figures_from_attrs(items: list[dict[str, Any]]) -> list[ScenarioFigures]:
 
 
 def _trial_of(tuner: Tuner, name: str) -> FrozenTrial | None:
+    """The finished trial of baseline ``name``, or of the same gains; None: none."""
+    params = tuner.baselines()[name]
     for trial in tuner.finished():
-        if name in str(trial.user_attrs.get('baseline', '')).split(', '):
+        if (name in str(trial.user_attrs.get('baseline', '')).split(', ')
+                or trial.params == params):
             return trial
     return None
 
@@ -40,21 +44,18 @@ def write_results(tuner: Tuner, best: FrozenTrial, trials: int) -> tuple[Path, P
     for name in ('defaults', 'hand_tuned', 'tuned'):
         trial = best if name == 'tuned' else _trial_of(tuner, name)
         candidate = dict(best.params) if name == 'tuned' else baselines[name]
-        record = name in ('defaults', 'tuned')
         if trial is not None and trial.user_attrs.get('figures'):
             train = figures_from_attrs(trial.user_attrs['figures'])
-        elif tune.held_out:
-            train = list(tuner.evaluate(candidate, tune.train).result.figures)
         else:
-            evaluation = tuner.evaluate(candidate, tune.train, recordings if record else None,
-                                        name)
-            train = list(evaluation.result.figures)
+            train = list(tuner.evaluate(candidate, tune.train).result.figures)
         held_out: list[ScenarioFigures] = []
         if tune.held_out:
-            evaluation = tuner.evaluate(candidate, tune.held_out,
-                                        recordings if record else None, name)
-            held_out = list(evaluation.result.figures)
+            held_out = list(tuner.evaluate(candidate, tune.held_out).result.figures)
         sets.append(SetFigures(name, train, held_out))
+    # The force figure's runs: the first training run again, recorded; the tuned one is
+    # also the check that the best trial's figures reproduce.
+    tuner.evaluate(baselines['defaults'], tune.train[:1], recordings, 'defaults')
+    rerun = tuner.evaluate(dict(best.params), tune.train[:1], recordings, 'tuned')
     provenance = {
         'robot': tune.robot, 'tune_file': str(tune.path), 'tune_name': tune.name,
         'trial': best.number, 'trials': len(tuner.finished()), 'budget': trials,
@@ -63,6 +64,7 @@ def write_results(tuner: Tuner, best: FrozenTrial, trials: int) -> tuple[Path, P
         'stability_loop': best.user_attrs['stability_loop'],
         'figures': best.user_attrs['figures'],
         'held_out_figures': [f.as_dict() for f in sets[-1].held_out],
+        'rerun_figures': [f.as_dict() for f in rerun.result.figures],
         'commit': git_commit(Path(__file__).parent), 'seed': tune.seed,
     }
     gains_file = write_gains(tuner.out_dir, best.user_attrs['controller'], provenance)
