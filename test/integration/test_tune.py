@@ -18,10 +18,11 @@ from typing import Any
 import pytest
 from uvms_sweep.batch import PointBatches
 from uvms_sweep.engine import start_local_ray
-from uvms_tune import cli as tune_cli
 from uvms_tune.driver import Tuner
 from uvms_tune.output import read_gains
 from uvms_tune.tune_file import load_tune_file
+
+from uvms_tune import cli as tune_cli
 
 TINY = Path(__file__).resolve().parents[2] / 'config' / 'tunes' / 'tiny.yaml'
 FIGURES = ('force_rms_error_N', 'overshoot_percent', 'settling_time_s')

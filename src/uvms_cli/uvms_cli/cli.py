@@ -1,4 +1,4 @@
-"""The ``uvms`` command: run scenarios, launch the graph, replay, plot, report, sweep, tune, doctor.
+"""The ``uvms`` command: run, launch, replay, plot, report, sweep, tune, task and doctor.
 
 Exit status: 0 success, 1 the run or the tool failed, 2 bad usage or a bad scenario file,
 130 interrupted (Ctrl-C). User errors are one line on stderr, never a traceback.

@@ -1,1 +1,1 @@
-"""uvms tune: the controller's gains by constrained Bayesian optimization (Optuna) over scenarios run on Ray."""
+"""uvms tune: the controller gains by constrained Bayesian optimization over scenarios."""

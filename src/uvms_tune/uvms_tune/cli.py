@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--workers', '-j', type=_count, metavar='N',
                         help="scenario runs at once (default: the machine's or cluster's CPUs)")
     parser.add_argument('--resume', action='store_true',
-                        help="continue the tune in --out from its journal")
+                        help='continue the tune in --out from its journal')
     parser.add_argument('--out', '-o', metavar='DIR',
                         help='output folder (default: out/tune/NAME)')
     parser.add_argument('--apply', action='store_true',
@@ -131,7 +131,6 @@ def _run_trials(tuner: Any, trials: int, *, quiet: bool) -> None:
 def _finish(tuner: Any, trials: int, *, apply: bool) -> int:
     """Write the tuned gains, the report and the figures; ``apply`` to the robot folder."""
     from uvms_description.robots import robot_files
-
     from uvms_tune.finish import write_results
     from uvms_tune.output import apply_to_robot
 
@@ -146,7 +145,7 @@ def _finish(tuner: Any, trials: int, *, apply: bool) -> int:
     if apply:
         target = apply_to_robot(gains_file, robot_files(tuner.tune.robot).directory)
         print(f'uvms tune: applied: {target} (beside controller.yaml; select it with '
-              '`--params-file` on the controller or paste it into a scenario\'s '
+              "`--params-file` on the controller or paste it into a scenario's "
               '`controller:` section)', file=sys.stderr)
     return EXIT_OK
 

@@ -14,5 +14,5 @@ from uvms_control.core.parameter_specs import (
 )
 from uvms_control.core.parameters import ControllerParameters
 
-__all__ = ['CONTROLLER_NODE_PARAMETER_SPECS', 'CONTROLLER_PARAMETER_SPECS', 'ControlParameterError', 'ControllerParameters',
-           'LoopRadius', 'loop_radii']
+__all__ = ['CONTROLLER_NODE_PARAMETER_SPECS', 'CONTROLLER_PARAMETER_SPECS',
+           'ControlParameterError', 'ControllerParameters', 'LoopRadius', 'loop_radii']

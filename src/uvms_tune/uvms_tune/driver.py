@@ -8,9 +8,9 @@ journal file in the output folder (``JournalStorage`` + ``JournalFileBackend``),
 stopped by Ctrl-C or a crash continues with ``resume``.
 
 The sampler is TPE with the constraints each trial sets (the tune extra has no PyTorch,
-which Optuna's GPSampler needs), re-seeded before every trial with the seed plus the number of finished
-trials: a resumed tune asks the same gains an uninterrupted one would. A trial cut short is
-marked failed on resume and its gains asked again first.
+which Optuna's GPSampler needs), re-seeded before every trial with the seed plus the number
+of finished trials: a resumed tune asks the same gains an uninterrupted one would. A trial
+cut short is marked failed on resume and its gains asked again first.
 """
 
 from __future__ import annotations

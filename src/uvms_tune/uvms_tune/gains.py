@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from uvms_description.robots import robot_parameters
-
 from uvms_tune.control_api import (
     CONTROLLER_PARAMETER_SPECS,
     ControllerParameters,

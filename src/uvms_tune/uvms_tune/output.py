@@ -65,7 +65,7 @@ def parameter_file_text(values: Mapping[str, Any], provenance: Mapping[str, Any]
         lines.append(f"#   {figure['label']}: {_fmt(figure.get('force_rms_error_N'))}, "
                      f"{_fmt(figure.get('overshoot_percent'))}, "
                      f"{_fmt(figure.get('settling_time_s'))}")
-    lines.append(f'# full provenance: {PROVENANCE_FILE} of the tune\'s output folder')
+    lines.append(f"# full provenance: {PROVENANCE_FILE} of the tune's output folder")
     body = yaml.safe_dump({'/**/controller': {'ros__parameters': nested(values)}},
                           sort_keys=False, default_flow_style=None, width=99)
     return '\n'.join(lines) + '\n' + body

@@ -65,7 +65,7 @@ def report_text(title: str, sets: Sequence[SetFigures], worst_weight: float,
     for item in sets:
         lines.append(summary_row(item.name, 'train', item.train, worst_weight))
         lines.append(summary_row(item.name, 'held-out', item.held_out, worst_weight))
-    lines += ['', 'Objective: the tune file\'s weighted sum per run, (1 - w) mean + w worst over '
+    lines += ['', "Objective: the tune file's weighted sum per run, (1 - w) mean + w worst over "
               'the runs (n/a where a run failed); the other columns are means over the runs '
               'that did not fail.', '']
     for item in sets:

@@ -19,7 +19,8 @@ from uvms_tune.errors import TuneError
 
 #: Gains that are not controller parameters: the impedance as ω_n = sqrt(K/P) and
 #: ζ = B_d / (2 sqrt(K P)), turned into ``impedance.stiffness_n_m`` and ``damping_n_s_m``.
-DERIVED = {'impedance.natural_frequency_rad_s': (1e-3, 1e3), 'impedance.damping_ratio': (1e-3, 1e2)}
+DERIVED = {'impedance.natural_frequency_rad_s': (1e-3, 1e3),
+           'impedance.damping_ratio': (1e-3, 1e2)}
 #: Baselines that ``enqueue`` may name, run as the first trials in this order.
 BASELINES = ('start', 'defaults', 'hand_tuned')
 #: Objective weights and their defaults (docs/tuning.md).
@@ -171,8 +172,9 @@ def _gains(data: dict[str, Any], path: Path) -> tuple[GainRange, ...]:
         if name in DERIVED:
             lo_limit, hi_limit = DERIVED[name]
         elif name in _SPECS and isinstance(_SPECS[name].default, (float, list)):
-            lo_limit = _SPECS[name].min_value if _SPECS[name].min_value is not None else -math.inf
-            hi_limit = _SPECS[name].max_value if _SPECS[name].max_value is not None else math.inf
+            minimum, maximum = _SPECS[name].min_value, _SPECS[name].max_value
+            lo_limit = -math.inf if minimum is None else float(minimum)
+            hi_limit = math.inf if maximum is None else float(maximum)
         else:
             raise TuneError(f"{path}: key '{key}': not a numeric controller parameter nor one "
                             f"of {', '.join(DERIVED)}")
@@ -235,9 +237,10 @@ def _scenario_path(value: Any, key: str, path: Path) -> Path:
         beside = candidate if candidate.is_absolute() else path.parent / candidate
         if beside.is_file():
             return beside
-    from uvms_bringup.launch_helpers import resolve_scenario_path
+    # uvms_bringup is not typed: the one untyped call of this module.
+    from uvms_bringup.launch_helpers import resolve_scenario_path  # type: ignore[import-untyped]
 
-    resolved = resolve_scenario_path(value)
+    resolved = Path(resolve_scenario_path(value))
     if not resolved.is_file():
         raise TuneError(f"{path}: key '{key}': no scenario file {resolved} (a path or a name)")
     return resolved

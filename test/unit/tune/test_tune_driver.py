@@ -35,6 +35,7 @@ class Runner:
 
     def __call__(self, requests: Sequence[Mapping[str, Any]],
                  timeout_s: float) -> list[dict[str, Any]]:
+        """The outcomes of ``requests``, or KeyboardInterrupt at the set trial."""
         if len(self.requests) // 2 == self.stop_after:
             raise KeyboardInterrupt
         self.requests.extend(requests)
@@ -114,7 +115,7 @@ def test_resume_continues_with_the_same_trials(tmp_path: Path) -> None:
     with pytest.raises(KeyboardInterrupt):
         first.run(8)
     assert len(first.finished()) < 8
-    with pytest.raises(Exception, match='--resume'):
+    with pytest.raises(Exception, match=r'--resume'):
         Tuner(tune_file(), tmp_path / 'cut', Runner())
     resumed = Tuner(tune_file(), tmp_path / 'cut', Runner(), resume=True)
     resumed.run(8)

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-import yaml
 from uvms_tune.errors import TuneError
 from uvms_tune.tune_file import load_tune_file, parse_tune_file
 
@@ -51,6 +50,5 @@ def test_unreadable_yaml_names_the_file(tmp_path: Path) -> None:
     """A YAML syntax error is a TuneError naming the file."""
     path = tmp_path / 'bad.yaml'
     path.write_text('name: [', encoding='utf-8')
-    with pytest.raises(TuneError, match='bad.yaml'):
+    with pytest.raises(TuneError, match=r'bad\.yaml'):
         load_tune_file(path)
-    assert yaml.safe_load('a: 1') == {'a': 1}

@@ -7,10 +7,11 @@ from pathlib import Path
 import pytest
 import rclpy
 from rclpy.node import Node
-from uvms_description.robots import parameter_file_values
 from uvms_tune.control_api import ControllerParameters
 from uvms_tune.gains import controller_values, hand_tuned
 from uvms_tune.output import ROBOT_TUNED_FILE, apply_to_robot, read_gains, write_gains
+
+from uvms_description.robots import parameter_file_values
 
 VALUES = controller_values({'impedance.natural_frequency_rad_s': 9.0,
                             'impedance.damping_ratio': 0.8, 'hybrid.force_kp': 0.07},
