@@ -102,14 +102,18 @@ def _tune(args: argparse.Namespace, stop: StopEvent) -> int:
                 return _error(str(exc), EXIT_USAGE)
             if tune.path.resolve() != (out_dir / 'tune.yaml').resolve():
                 shutil.copyfile(tune.path, out_dir / 'tune.yaml')
-            _run_trials(tuner, trials, quiet=args.quiet)
+            _run_trials(tuner, trials, stop, quiet=args.quiet)
             return _finish(tuner, trials, apply=args.apply)
     except SweepEngineError as exc:
         return _error(str(exc), EXIT_FAILURE)
 
 
-def _run_trials(tuner: Any, trials: int, *, quiet: bool) -> None:
-    """Run the trials with a progress bar showing the best objective so far."""
+def _run_trials(tuner: Any, trials: int, stop: StopEvent, *, quiet: bool) -> None:
+    """Run the trials with a progress bar showing the best objective so far.
+
+    A stop (Ctrl-C, SIGTERM) ends the running trial's points (``PointBatches``) or, between
+    trials (an unstable one runs nothing), the loop: KeyboardInterrupt either way.
+    """
     from tqdm import tqdm
 
     done = len(tuner.finished())
@@ -120,6 +124,8 @@ def _run_trials(tuner: Any, trials: int, *, quiet: bool) -> None:
         if bar is not None:
             bar.set_postfix_str('best ' + ('none feasible' if best is None else f'{best:.4g}'))
             bar.update(1)
+        if stop.is_set():
+            raise KeyboardInterrupt
 
     try:
         tuner.run(trials, progress)
