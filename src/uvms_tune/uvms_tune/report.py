@@ -95,6 +95,7 @@ def draw_figures(out_dir: Path, trials: Sequence[FrozenTrial], gains: Sequence[A
 
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     directory = out_dir / 'figures'
     directory.mkdir(parents=True, exist_ok=True)
@@ -116,6 +117,7 @@ def draw_figures(out_dir: Path, trials: Sequence[FrozenTrial], gains: Sequence[A
         ax.plot([t.number for t in infeasible], [top] * len(infeasible), 'x', color='tab:red',
                 label='infeasible (unstable or failed)')
     ax.set_xlabel('trial')
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_ylabel('objective (-)')
     ax.legend()
     fig.tight_layout()
