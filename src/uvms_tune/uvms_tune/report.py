@@ -131,6 +131,7 @@ def draw_figures(out_dir: Path, trials: Sequence[FrozenTrial], gains: Sequence[A
         ax.set_xlabel(gain.name.replace('.', '.\n'))
         if gain.log:
             ax.set_xscale('log')
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     axes[0][0].set_ylabel('objective (-)')
     fig.tight_layout()
     written.append(directory / 'gains.png')
