@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import json
 import os
+import signal
+import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -90,3 +93,38 @@ def test_a_finished_tune_resumed_runs_no_more_trials(tiny: tuple[int, Path]) -> 
     tuner = Tuner(load_tune_file(TINY), out, lambda r, t: calls.append(r) or [], resume=True)
     tuner.run(2)
     assert calls == [] and len(tuner.finished()) == 2
+
+
+def _complete_trials(out: Path) -> list[tuple[dict[str, float], float]]:
+    """(params, value) of the finished trials of the study in ``out``, in order."""
+    import optuna
+    from optuna.storages import JournalStorage
+    from optuna.storages.journal import JournalFileBackend
+    from optuna.trial import TrialState
+
+    storage = JournalStorage(JournalFileBackend(str(out / 'journal.log')))
+    study = optuna.load_study(study_name='tiny', storage=storage)
+    return [(t.params, float(t.value or 0.0))
+            for t in study.get_trials(states=(TrialState.COMPLETE,))]
+
+
+def test_ctrl_c_then_resume_ends_where_an_uninterrupted_tune_does(
+        tiny: tuple[int, Path], tmp_path: Path) -> None:
+    """SIGINT after the first trial: exit 130; --resume finishes the same trials as `tiny`."""
+    out = tmp_path / 'cut'
+    command = [sys.executable, '-m', 'uvms_tune.cli', str(TINY), '--out', str(out), '--quiet']
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p)}
+    process = subprocess.Popen(command, env=env, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 240.0
+    while time.monotonic() < deadline and process.poll() is None:
+        if (out / 'journal.log').exists() and len(_complete_trials(out)) >= 1:
+            break
+        time.sleep(0.5)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert '--resume' in stderr
+    resumed = subprocess.run([*command, '--resume'], env=env, capture_output=True, text=True,
+                             timeout=400, check=False)
+    assert resumed.returncode == 0, resumed.stderr
+    assert _complete_trials(out) == _complete_trials(tiny[1])
