@@ -1,4 +1,4 @@
-"""The ``uvms`` command: run scenarios, launch the graph, replay, plot, report, sweep, doctor.
+"""The ``uvms`` command: run, launch, replay, plot, report, sweep, tune, task and doctor.
 
 Exit status: 0 success, 1 the run or the tool failed, 2 bad usage or a bad scenario file,
 130 interrupted (Ctrl-C). User errors are one line on stderr, never a traceback.
@@ -44,6 +44,8 @@ DELEGATED = {
     'report': ('uvms_analysis.report', 'print the metrics of recordings'),
     'sweep': ('uvms_sweep.cli', 'run a parameter sweep of a scenario on Ray and map '
                                         'its metrics'),
+    'tune': ('uvms_tune.cli', "tune the controller's gains by constrained Bayesian "
+                              'optimization over scenarios on Ray'),
     'task': ('uvms_tasks.cli', 'send a task or mission file to the controller of a running graph'),
     'hardware': ('uvms_cli.hardware', 'check the devices of a hardware file (uvms '
                                               'hardware check twin|FILE), changing nothing'),

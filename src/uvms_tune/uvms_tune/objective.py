@@ -1,0 +1,121 @@
+"""The tune's objective and constraints from the scenario runs' metrics (pure).
+
+Each scenario run gives its ``uvms report`` metrics; a run that failed, never touched the
+wall, bounced, did not settle or saturated the thrusters is a violated constraint with its
+reason, not a figure. A successful one scores
+
+    J = w_rms e_rms / F_d + w_os overshoot / 100 + w_ts t_settle
+
+(the mid-contact RMS force error after settling, normalised by F_d; overshoot in %; settling
+time in s), and a trial scores (1 - w_worst) mean(J) + w_worst max(J) over its scenarios.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+#: Objective value told to Optuna for a trial that violates a constraint: Optuna needs a
+#: number, and the sampler ranks such trials by their violation, not by it.
+INFEASIBLE_VALUE = 10.0
+
+
+@dataclass(frozen=True)
+class ScenarioFigures:
+    """What one scenario run of a trial gave.
+
+    Attributes:
+        label: The scenario run's label (tune_file.ScenarioRun.label).
+        score: J of the run; None where it failed.
+        reason: Why the run violates a constraint; '' when it does not.
+        metrics: The run's metrics (``uvms report`` CSV keys), empty when it did not run.
+    """
+
+    label: str
+    score: float | None
+    reason: str
+    metrics: Mapping[str, float | None]
+
+    def as_dict(self) -> dict[str, Any]:
+        """A JSON-able summary (trial user attrs, the parameter file's provenance)."""
+        keys = ('desired_force_N', 'force_rms_error_N', 'overshoot_percent', 'settling_time_s',
+                'first_contact_s', 'contact_count', 'saturation_scale_min')
+        return {'label': self.label, 'score': self.score, 'reason': self.reason,
+                **{key: self.metrics.get(key) for key in keys}}
+
+
+def scenario_figures(label: str, outcome: Mapping[str, Any], weights: Mapping[str, float],
+                     constraints: Mapping[str, float]) -> ScenarioFigures:
+    """Score one point outcome (``execute_point``'s) or name the constraint it violates."""
+    metrics = dict(outcome.get('metrics') or {})
+    if outcome.get('status') != 'done':
+        reason = outcome.get('reason') or 'failed'
+        return ScenarioFigures(label, None, f'run failed: {reason}', metrics)
+    reason = violation(metrics, constraints)
+    if reason:
+        return ScenarioFigures(label, None, reason, metrics)
+    f_d = abs(float(metrics['desired_force_N'] or 0.0))
+    score = (weights['rms_force_error'] * float(metrics['force_rms_error_N'] or 0.0) / f_d
+             + weights['overshoot'] * float(metrics['overshoot_percent'] or 0.0) / 100.0
+             + weights['settling_time'] * float(metrics['settling_time_s'] or 0.0))
+    return ScenarioFigures(label, score, '', metrics)
+
+
+def violation(metrics: Mapping[str, Any], constraints: Mapping[str, float]) -> str:
+    """Why a finished run's metrics violate a constraint; '' when they do not."""
+    if metrics.get('first_contact_s') is None:
+        return 'no contact'
+    if not metrics.get('desired_force_N'):
+        return 'no force set-point in contact'
+    contacts = metrics.get('contact_count') or 0
+    if contacts > constraints['max_contacts']:
+        return f'bounced: {int(contacts)} contacts (a safety stop or a lost contact)'
+    if metrics.get('settling_time_s') is None or metrics.get('force_rms_error_N') is None:
+        return 'force did not settle within 5 % of F_d'
+    scale = metrics.get('saturation_scale_min')
+    if scale is not None and scale < constraints['min_saturation_scale']:
+        return (f'thrusters saturated: wrench scaled down to {scale:.3g} '
+                f"(< {constraints['min_saturation_scale']:g})")
+    return ''
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """A trial's value and constraints as told to Optuna.
+
+    Attributes:
+        value: The aggregated objective, or ``INFEASIBLE_VALUE``.
+        constraints: [stability violation, failed scenario fraction]; > 0 is violated.
+        reasons: Why, one line per violated constraint.
+        figures: Each scenario run's figures (empty when not simulated).
+    """
+
+    value: float
+    constraints: tuple[float, float]
+    reasons: tuple[str, ...]
+    figures: tuple[ScenarioFigures, ...] = ()
+
+    @property
+    def feasible(self) -> bool:
+        """No constraint violated."""
+        return all(c <= 0.0 for c in self.constraints)
+
+
+def unstable_result(margin: float, loop: str) -> TrialResult:
+    """An unstable candidate: never simulated, infeasible by its stability margin."""
+    return TrialResult(INFEASIBLE_VALUE, (max(-margin, 1e-6), 0.0), (f'unstable: {loop}',))
+
+
+def aggregate(figures: Sequence[ScenarioFigures], margin: float,
+              weights: Mapping[str, float]) -> TrialResult:
+    """The trial's value over its scenario runs, or its violation when any run failed."""
+    failed = [f for f in figures if f.score is None]
+    if failed:
+        reasons = tuple(f'{f.label}: {f.reason}' for f in failed)
+        return TrialResult(INFEASIBLE_VALUE, (-margin, len(failed) / len(figures)), reasons,
+                           tuple(figures))
+    scores = [float(f.score) for f in figures if f.score is not None]
+    worst = weights['worst']
+    value = (1.0 - worst) * sum(scores) / len(scores) + worst * max(scores)
+    return TrialResult(value, (-margin, 0.0), (), tuple(figures))
