@@ -240,10 +240,10 @@ def _scenario_path(value: Any, key: str, path: Path) -> Path:
     # uvms_bringup is not typed: the one untyped call of this module.
     from uvms_bringup.launch_helpers import resolve_scenario_path  # type: ignore[import-untyped]
 
-    resolved = Path(resolve_scenario_path(value))
-    if not resolved.is_file():
-        raise TuneError(f"{path}: key '{key}': no scenario file {resolved} (a path or a name)")
-    return resolved
+    try:
+        return Path(resolve_scenario_path(value))
+    except FileNotFoundError as exc:
+        raise TuneError(f"{path}: key '{key}': {exc}") from exc
 
 
 def _weights(data: Any, key: str, defaults: Mapping[str, float], path: Path) -> dict[str, float]:
