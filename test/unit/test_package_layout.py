@@ -17,8 +17,11 @@ PACKAGES = sorted(path.parent.name for path in SRC.glob('*/package.xml')
 
 #: Longest module (lines): past about 400 a module usually holds two jobs.
 MAX_MODULE_LINES = 450
-#: The bringup package holds only launching and running the graph.
-MAX_BRINGUP_LINES = 2500
+#: The bringup package holds only launching and running the graph. 2500 until 2026-12-04;
+#: since then it also plans the launch on hardware (bridges, twins: hardware_plan), composes
+#: the control process (composed) and reports scheduling and cost per process (launch_costs),
+#: each a part of launching the graph. A module that is not goes to a package of its own.
+MAX_BRINGUP_LINES = 3300
 
 
 def python_files(package: str) -> list[Path]:
