@@ -74,7 +74,7 @@ sweeps: setup
 	    --workers $(SWEEP_WORKERS) || exit $$?; \
 	done
 
-# tools/run_suite.py runs each integration module (and each unit folder, the scenario tests)
+# tools/run_suite.py runs each integration module (and the unit tests, the scenario tests)
 # in a pytest process of its own with a time limit: a test hung inside C (a Fast DDS
 # livelock) ends its module with its threads' stacks, and the rest of the suite runs on.
 # Each suite is bounded as a whole too (SUITE_LIMIT_S, about 2.4x what it takes on the 2-core

@@ -4,8 +4,8 @@
 A Fast DDS livelock in a participant's teardown spins inside C, where neither pytest-timeout's
 signal nor SIGINT reaches it (CI of 2026-12-03 and 12-04). So every integration module (the
 modules that start DDS participants and node processes) runs in a pytest process of its own;
-the unit tests run one process per sub-folder, the scenario tests in one process (their runs
-are shared across modules and happen in child processes with their own time limit). Each
+the unit tests run in one process, the scenario tests in another (their runs are shared
+across modules and happen in child processes with their own time limit). Each
 process gets a time limit (``--group-limit``, the scenario group ``--scenario-limit``); past it
 the process gets SIGABRT, on which Python's faulthandler (enabled by pytest) prints every
 thread's stack, then its whole process group is killed. The rest of the suite runs on, and the
@@ -36,8 +36,9 @@ ROOT = Path(__file__).resolve().parents[1]
 TESTS = ROOT / 'test'
 #: Top-level test folders whose every module runs in a process of its own.
 ISOLATED = ('integration',)
-#: Top-level test folders that run whole, in one process (their fixtures span modules).
-WHOLE = ('scenarios', 'ros2_way')
+#: Top-level test folders that run whole, in one process each (the scenario runs are shared
+#: across modules; a process per unit folder cost a second or two each for nothing).
+WHOLE = ('scenarios', 'ros2_way', 'unit')
 #: Seconds between SIGABRT (stacks printed) and SIGKILL of the group's process group.
 ABORT_GRACE_S = 10.0
 #: pytest's own "no tests collected" status (every test deselected): not a failure.
@@ -76,9 +77,8 @@ def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float)
             elif top in WHOLE:
                 add(f'test/{top}', module,
                     scenario_limit_s if top == 'scenarios' else group_limit_s)
-            else:
-                folder = module.parent.relative_to(ROOT)
-                add(str(folder), module, group_limit_s)
+            else:  # a module at the top of test/
+                add(str(module.relative_to(ROOT)), module, group_limit_s)
     return list(groups.values())
 
 
