@@ -50,6 +50,7 @@ from uvms_control import raw_conversions, task_conversions
 from uvms_control.controller_reports import ControllerReports
 from uvms_control.controller_safety import ControllerSafety, safety_limits
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.law.task_path import load_interpolation
 from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameter_specs import (
     CONTROLLER_NODE_PARAMETER_SPECS,
@@ -135,6 +136,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
             gains = ControllerParameters.from_flat_dict(self._gains)
             # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
             self.get_logger().info('loading the model and compiled kernels')
+            load_interpolation()  # the paths' splines, before the loop (not at the first goal)
             try:
                 model = UvmsModel(UvmsParameters.from_flat_dict(self._robot))
             except ModelError as error:

@@ -36,6 +36,15 @@ def _interpolate() -> Any:
     return scipy.interpolate
 
 
+def load_interpolation() -> None:
+    """Import scipy.interpolate now: the controller does at configure, before its loop runs.
+
+    Imported at the first goal instead, its 0.8-1.0 s of CPU stalled the control loop for
+    0.3 s and the goal ended INPUTS_STALE (a launched case1_estimated in CI, 2026-12-04).
+    """
+    _interpolate()
+
+
 def shape_preserving_velocities(times: FloatArray, points: FloatArray) -> FloatArray:
     """Waypoint velocities (n, 3) (m/s): PCHIP's derivative inside, zero at both ends.
 
