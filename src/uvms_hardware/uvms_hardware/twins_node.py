@@ -122,8 +122,8 @@ class TwinsNode(Node):
         self._ticks = 0
         plant = str(v['plant_namespace']).rstrip('/')
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        # The two fast topics raw, through the layouts the simulator publishes (the rates of
-        # the whole state: typed, they cost this node a fifth of a core).
+        # The two fast topics raw, through the layouts the simulator publishes, as the control
+        # loop takes them (typed in another layout, they still read).
         self._joint_decoder = RawDecoder(joint_state_codec(self._joints))
         self._joint_fields = self._joint_decoder.codec.struct(['position', 'velocity'])
         self._wrench_decoder = RawDecoder(wrench_codec())
