@@ -50,7 +50,8 @@ $(VENV_312)/.interfaces: $(VENV_312)/.installed $(INTERFACES) tools/build_interf
 
 # The hot path's Numba kernels compiled into their cache once, not by the first nodes to start.
 KERNEL_SOURCES := $(wildcard src/uvms_model/uvms_model/*.py src/uvms_control/uvms_control/core/*.py \
-	src/uvms_control/uvms_control/core/*/*.py src/uvms_thrusters/uvms_thrusters/*.py)
+	src/uvms_control/uvms_control/core/*/*.py src/uvms_control/uvms_control/kernel_cache.py \
+	src/uvms_thrusters/uvms_thrusters/*.py)
 
 $(VENV)/.kernels: $(VENV)/.installed $(KERNEL_SOURCES) tools/compile_kernels.py
 	$(VENV)/bin/python tools/compile_kernels.py
