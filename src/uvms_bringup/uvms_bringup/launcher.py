@@ -396,7 +396,10 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
     for job in launcher.failed_jobs():
         tell_failed_job(job)  # a mission that failed as the run ended
     for other in launcher.unclean_stops():
-        if other is not process:
+        # After a node failed, the others were stopped because of it, some still starting
+        # (a Python stopped while it imports its site module exits 1): the failure is named
+        # below; their status says nothing more.
+        if other is not process and outcome != 'failed':
             launcher.report(f'uvms launch: error: node {other.name!r} exited: '
                             f'{describe_status(other.status or 0)} while stopping')
     if outcome == 'failed' and process is not None:
