@@ -110,6 +110,11 @@ class T200Curve:
         p = min(max(float(pwm_us), self.pwm_us[0]), self.pwm_us[-1])
         return float(self._interpolant(p)) * self.voltage_scale(voltage_v)
 
+    def thrusts_from_pwm(self, pwm_us: FloatArray, voltage_v: float | None = None) -> FloatArray:
+        """Thrusts (N) of several pulses (µs, clamped to the table) in one interpolant call."""
+        clamped = np.clip(np.asarray(pwm_us, float), self.pwm_us[0], self.pwm_us[-1])
+        return np.asarray(self._interpolant(clamped), float) * self.voltage_scale(voltage_v)
+
     def pwm_from_thrust(self, thrust_n: float, voltage_v: float | None = None) -> float:
         """Pulse (µs) giving ``thrust_n`` (N) at ``voltage_v`` (V), clamped to the table.
 

@@ -61,14 +61,10 @@ class ThrusterTwin:
                    ThrusterBank(model, layout.count))
 
     def desired_thrust_n(self, outputs_us: Sequence[int], voltage_v: float) -> np.ndarray:
-        """What each ESC is told: thrust along our positive direction (N)."""
-        desired = np.zeros(len(self.channels))
-        for i, (channel, direction) in enumerate(zip(self.channels, self.directions,
-                                                     strict=True)):
-            pwm = outputs_us[channel - 1]
-            if pwm > 0:
-                desired[i] = direction * self.curve.thrust_from_pwm(float(pwm), voltage_v)
-        return desired
+        """What each ESC is told: thrust along our positive direction (N); no pulse: none."""
+        pwm = np.array([outputs_us[channel - 1] for channel in self.channels], float)
+        thrust = self.curve.thrusts_from_pwm(pwm, voltage_v) * np.array(self.directions)
+        return np.where(pwm > 0.0, thrust, 0.0)
 
     def step(self, outputs_us: Sequence[int], voltage_v: float, dt_s: float) -> np.ndarray:
         """Actual thrusts (N) after ``dt_s`` of the propellers' dynamics (eq. 11-15)."""
