@@ -266,6 +266,7 @@ def launch_graph(
     cpus: tuple[int, ...] = (),
     lock_memory: bool = False,
     compose: str | None = None,
+    real_time_factor: float = 1.0,
 ) -> int:
     """Run the graph as one process per node until the duration, a signal, or a failure.
 
@@ -294,6 +295,8 @@ def launch_graph(
         lock_memory: The loop processes lock their memory (``mlockall``).
         compose: ``control`` runs controller, allocator and estimator in one process
             (``uvms_bringup.composed``); None: one process per node.
+        real_time_factor: Real time: simulated seconds per wall second (the simulator's
+            ``real_time_factor``); below 1 for a machine too small for the graph.
 
     Returns:
         0 when the simulator reached the duration and every node stopped, 130 after a stop
@@ -318,6 +321,8 @@ def launch_graph(
     elif robot is not None:
         extra = {spec.name: {'robot_name': robot}
                  for spec in graph_nodes(record=True, foxglove=True) if spec.takes_robot}
+    if real_time_factor != 1.0:
+        extra.setdefault(SIMULATOR.name, {})['real_time_factor'] = float(real_time_factor)
     scheduling = launch_scheduling(rt_priority, cpus, lock_memory)
     own_stop = None
     if stop is None:

@@ -217,9 +217,22 @@ def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
                         help='pin the loop processes to these CPUs (e.g. 1 or 0,1)')
     launch.add_argument('--lock-memory', action='store_true',
                         help='the loop processes lock their memory in RAM (mlockall)')
+    launch.add_argument('--real-time-factor', type=_real_time_factor, default=1.0,
+                        metavar='F',
+                        help='realtime: simulated seconds per wall second (default 1); below '
+                             '1 runs a graph too heavy for this machine slower, every node '
+                             'on /clock (docs/running.md)')
     launch.add_argument('--compose', choices=('control',),
                         help='control: controller, thruster_allocator and estimator in one '
                              'process on one executor (same names, topics, parameters)')
+
+
+def _real_time_factor(text: str) -> float:
+    """``--real-time-factor``: a float in the simulator's range [0.01, 10]."""
+    value = float(text)
+    if not 0.01 <= value <= 10.0:
+        raise argparse.ArgumentTypeError(f'0.01 to 10, got {value:g}')
+    return value
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -316,7 +329,8 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
                             foxglove=_foxglove_address(args), robot=args.robot,
                             hardware=hardware,
                             rt_priority=0 if args.no_rt else args.rt_priority, cpus=cpus,
-                            lock_memory=args.lock_memory, compose=args.compose)
+                            lock_memory=args.lock_memory, compose=args.compose,
+                            real_time_factor=args.real_time_factor)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))
         return EXIT_USAGE

@@ -66,6 +66,13 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         choices=MODES,
     ),
     ParameterSpec(
+        'real_time_factor', 1.0,
+        "Real time: simulated seconds per wall-clock second (as Gazebo's real_time_factor); "
+        'below 1 a machine too small for the whole graph runs it slower, every node on '
+        "/clock; devices on their own clocks (the hardware bridges' rates) are not scaled.",
+        0.01, 10.0,
+    ),
+    ParameterSpec(
         'physics_rate_hz', 1000.0,
         'Integration rate of the plant (Hz); the fixed step is its inverse.',
         1.0, 100000.0,
@@ -178,6 +185,7 @@ class SimulatorSettings:
     """Validated simulator parameters, in the units the plant and node use."""
 
     mode: str
+    real_time_factor: float
     physics_dt_ns: int
     steps_per_publish: int
     publishes_per_tf: int
@@ -197,6 +205,11 @@ class SimulatorSettings:
     def physics_dt_s(self) -> float:
         """Fixed integration step (s)."""
         return self.physics_dt_ns * 1e-9
+
+    @property
+    def wall_period_s(self) -> float:
+        """Real time: wall-clock seconds per step (the step over ``real_time_factor``)."""
+        return self.physics_dt_s / self.real_time_factor
 
     @classmethod
     def from_values(cls, values: Mapping[str, Any]) -> SimulatorSettings:
@@ -238,6 +251,7 @@ class SimulatorSettings:
         ground_truth_hz = min(float(checked['ground_truth_rate_hz']), publish_hz)
         return cls(
             mode=str(checked['mode']),
+            real_time_factor=float(checked['real_time_factor']),
             physics_dt_ns=dt_ns,
             steps_per_publish=round(ratio),
             publishes_per_tf=max(1, round(publish_hz / tf_hz)) if tf_hz > 0.0 else 0,

@@ -54,7 +54,8 @@ from uvms_sim.startup_watch import StartupWatch, SubscriberWait
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
-#: Real-time factor below which a real-time simulation reports that it falls behind.
+#: Share of its ``real_time_factor`` below which a real-time simulation reports that it falls
+#: behind.
 _BEHIND_REAL_TIME_FACTOR = 0.9
 #: Real time, start-up: wall time between re-publications of the held initial state (s).
 _HOLD_REPUBLISH_S = 0.1
@@ -141,7 +142,7 @@ class SimulatorNode(Node):
         self._realtime_start: Any = None
         # Real time: ticks that end behind the wall clock, counted after the start-up grace
         # (the first ticks wait for the other nodes and the kernels, which is no fault).
-        self._behind = MissCounter(round(cfg.physics_dt_s * 1e9))
+        self._behind = MissCounter(round(cfg.wall_period_s * 1e9))
         # Until the loop is closed (docs/running.md, start-up): None once it is, or unwatched.
         self._startup: StartupWatch | None = None
         self._held_published_ns = 0
@@ -154,7 +155,7 @@ class SimulatorNode(Node):
             self._wait = AttentiveWait(round(period * 1e9))
             self.create_timer(period, self._on_lockstep_timer)
         else:
-            self.create_timer(cfg.physics_dt_s, self._on_realtime_tick)
+            self.create_timer(cfg.wall_period_s, self._on_realtime_tick)
         self._diagnostics = DiagnosticsPublisher(
             self, robot_name(self._plant.model.description.urdf_text))
         self._diagnostics.add('simulation', self._report)
@@ -162,7 +163,9 @@ class SimulatorNode(Node):
         self.get_logger().info(
             f'{cfg.mode} simulation of robot {self.robot_name} at '
             f'{1e9 / cfg.physics_dt_ns:g} Hz, state published every '
-            f'{cfg.steps_per_publish} steps, wall {"on" if cfg.wall_enabled else "off"}')
+            f'{cfg.steps_per_publish} steps, wall {"on" if cfg.wall_enabled else "off"}'
+            + (f', {cfg.real_time_factor:g}x real time'
+               if cfg.mode != 'lockstep' and cfg.real_time_factor != 1.0 else ''))
 
     @property
     def sim_time_ns(self) -> int:
@@ -239,6 +242,7 @@ class SimulatorNode(Node):
         One step per period when the timer is on time; after a late tick, up to
         ``_MAX_CATCH_UP_STEPS`` at once, so simulated time keeps pace with the wall clock
         instead of silently dropping steps. Beyond that the simulation falls behind (warned).
+        Simulated time due is the wall time since the loop closed times ``real_time_factor``.
         """
         if self._finished:
             return
@@ -247,7 +251,8 @@ class SimulatorNode(Node):
             return
         if self._realtime_start is None:
             self._realtime_start = now
-        due_ns = (now - self._realtime_start).nanoseconds
+        due_ns = round((now - self._realtime_start).nanoseconds
+                       * self._settings.real_time_factor)
         publish_every_ns = self._plant.dt_ns * self._settings.steps_per_publish
         for _ in range(_MAX_CATCH_UP_STEPS):
             if self._plant.t_ns > due_ns:
@@ -391,7 +396,8 @@ class SimulatorNode(Node):
             return Report(WARN, 'waiting for the first actuator command', values)
         if mode == 'lockstep' and new_timeouts:
             return Report(WARN, 'lockstep timeouts: stepping on the last command', values)
-        if mode != 'lockstep' and factor is not None and factor < _BEHIND_REAL_TIME_FACTOR:
+        slowest = _BEHIND_REAL_TIME_FACTOR * self._settings.real_time_factor
+        if mode != 'lockstep' and factor is not None and factor < slowest:
             return Report(WARN, f'behind real time (factor {factor:.2f})', values)
         return Report(OK, 'running', values)
 

@@ -110,3 +110,16 @@ def test_scenario_key_typo_is_the_only_line_of_uvms_run(
     err = capsys.readouterr().err
     assert 'stifness_n_m' in err
     assert 'warning' not in err
+
+
+def test_real_time_factor_reaches_the_launch_and_zero_is_refused(
+    launched: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--real-time-factor 0.5 is handed on; 0 is bad usage naming the option and its range."""
+    assert cli.main(['launch', 'free_motion', '--real-time-factor', '0.5']) == 0
+    assert launched['real_time_factor'] == 0.5
+    launched.clear()
+    assert cli.main(['launch', 'free_motion', '--real-time-factor', '0']) == 2
+    assert not launched
+    err = capsys.readouterr().err
+    assert '--real-time-factor' in err and '0.01 to 10' in err

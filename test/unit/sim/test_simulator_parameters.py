@@ -25,6 +25,7 @@ def test_defaults_give_1khz_physics_and_500hz_publication() -> None:
         ('initial.vehicle_pose', [0.0, 0.0, 0.0]),
         ('initial.joint_positions', [0.0, 10.0, 0.0]),
         ('wall_enabled', 1),
+        ('real_time_factor', 0.0),
     ],
 )
 def test_invalid_value_error_names_parameter_value_and_range(name: str, value: object) -> None:
@@ -66,3 +67,11 @@ def test_zero_tf_rate_disables_tf() -> None:
     """tf_rate_hz = 0 turns /tf off."""
     settings = SimulatorSettings.from_values({**DEFAULTS, 'tf_rate_hz': 0.0})
     assert settings.publishes_per_tf == 0
+
+
+def test_half_real_time_ticks_every_other_millisecond_of_wall_time() -> None:
+    """real_time_factor 0.5: a 1 ms step is due every 2 ms of wall time; 1 is the default."""
+    assert SimulatorSettings.from_values(DEFAULTS).wall_period_s == pytest.approx(1e-3)
+    half = SimulatorSettings.from_values({**DEFAULTS, 'real_time_factor': 0.5})
+    assert half.wall_period_s == pytest.approx(2e-3)
+    assert half.physics_dt_ns == 1_000_000
