@@ -4,11 +4,12 @@
 A Fast DDS livelock in a participant's teardown spins inside C, where neither pytest-timeout's
 signal nor SIGINT reaches it (CI of 2026-12-03 and 12-04). So every integration module (the
 modules that start DDS participants and node processes) runs in a pytest process of its own;
-the unit tests run in one process, the scenario tests in another (their runs are shared
-across modules and happen in child processes with their own time limit). Each
-process gets a time limit (``--group-limit``, the scenario group ``--scenario-limit``); past it
-the process gets SIGABRT, on which Python's faulthandler (enabled by pytest) prints every
-thread's stack, then its whole process group is killed. The rest of the suite runs on, and the
+the unit tests run one process per sub-folder, two at a time (pure CPU work: on two cores
+they take half the time), the scenario tests in one (their runs are shared across modules
+and happen in child processes, two at a time, with their own time limit). Each process gets
+a time limit (``--group-limit``, the scenario group ``--scenario-limit``); past it the process
+gets SIGABRT, on which Python's faulthandler (enabled by pytest) prints every thread's stack,
+then its whole process group is killed. The rest of the suite runs on, and the
 summary names the group, the test it was in (the progress file written by test/conftest.py)
 and its stacks above.
 
@@ -29,6 +30,7 @@ import sys
 import tempfile
 import time
 import xml.etree.ElementTree as ET
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,6 +41,10 @@ ISOLATED = ('integration',)
 #: Top-level test folders that run whole, in one process each (the scenario runs are shared
 #: across modules; a process per unit folder cost a second or two each for nothing).
 WHOLE = ('scenarios', 'ros2_way', 'unit')
+#: Folders whose sub-folders run as groups of their own, this many at a time, each one's
+#: output shown as it ends: the unit tests start no node processes and keep no periods, so
+#: two of them share the two cores of CI without changing what they test.
+CONCURRENT = {'unit': 2}
 #: Seconds between SIGABRT (stacks printed) and SIGKILL of the group's process group.
 ABORT_GRACE_S = 10.0
 #: pytest's own "no tests collected" status (every test deselected): not a failure.
@@ -58,6 +64,8 @@ class Group:
     timed_out: bool = False
     last_test: str = ''
     took_s: float = 0.0
+    batch: str = ''
+    process: subprocess.Popen[bytes] | None = field(default=None, repr=False)
 
 
 def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float) -> list[Group]:
@@ -67,6 +75,8 @@ def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float)
     def add(name: str, path: Path, limit_s: float) -> None:
         groups.setdefault(name, Group(name, [], limit_s)).paths.append(path)
 
+    pooled: dict[str, Group] = {}
+
     for path in paths:
         files = [path] if path.is_file() else sorted(path.rglob('test_*.py'))
         for module in files:
@@ -74,11 +84,21 @@ def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float)
             top = parts[0] if len(parts) > 1 else ''
             if top in ISOLATED:
                 add(str(module.relative_to(ROOT)), module, group_limit_s)
+            elif top in CONCURRENT:
+                name = '/'.join(('test', *parts[:2])) if len(parts) > 2 else f'test/{top}'
+                pooled.setdefault(name, Group(name, [], group_limit_s, batch=top)).paths.append(
+                    module)
             elif top in WHOLE:
                 add(f'test/{top}', module,
                     scenario_limit_s if top == 'scenarios' else group_limit_s)
             else:  # a module at the top of test/
                 add(str(module.relative_to(ROOT)), module, group_limit_s)
+    # Largest first (file size: a proxy for time), so that the pool ends close together.
+    for group in sorted(pooled.values(),
+                        key=lambda g: (-sum(p.stat().st_size for p in g.paths), g.name)):
+        groups[group.name] = group
+    for group in groups.values():
+        group.paths.sort()
     return list(groups.values())
 
 
@@ -95,17 +115,22 @@ def read_junit(group: Group, path: Path) -> None:
                 group.failed.append(f"{case.get('classname')}::{case.get('name')}")
 
 
-def run_group(group: Group, index: int, pytest_args: list[str], work: Path) -> None:
-    """Run one group's pytest to its end or its time limit, streaming its output."""
+def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
+              output: Path | None = None) -> None:
+    """Run one group's pytest to its end or its time limit, its output streamed or to a file."""
     junit = work / f'{index}.xml'
     progress = work / f'{index}.progress'
     env = dict(os.environ, UVMS_TEST_PROGRESS=str(progress),
                UVMS_TEST_DOMAIN_START=str(1 + (index * 7) % 100))
     command = [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider',
                '-o', 'addopts=-ra --strict-markers', f'--junitxml={junit}',
-               *pytest_args, *(str(p.relative_to(ROOT)) for p in group.paths)]
+               *pytest_args,
+               *(str(p.relative_to(ROOT) if p.is_relative_to(ROOT) else p) for p in group.paths)]
     start = time.monotonic()
-    process = subprocess.Popen(command, cwd=ROOT, env=env, start_new_session=True)
+    sink = None if output is None else output.open('wb')
+    process = subprocess.Popen(command, cwd=ROOT, env=env, start_new_session=True,
+                               stdout=sink, stderr=subprocess.STDOUT if sink else None)
+    group.process = process
     try:
         group.status = process.wait(timeout=group.limit_s)
     except subprocess.TimeoutExpired:
@@ -124,10 +149,43 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path) -> N
         raise
     finally:
         _kill_group(process.pid)
+        if sink is not None:
+            sink.close()
     group.took_s = time.monotonic() - start
     if progress.exists():
         group.last_test = progress.read_text().strip()
     read_junit(group, junit)
+
+
+def run_batch(batch: list[Group], first: int, total: int, pytest_args: list[str],
+              work: Path) -> None:
+    """Run one group streaming, or a batch in a pool, each one's output printed as it ends."""
+    if len(batch) == 1:
+        print(f'\n== run_suite [{first + 1}/{total}] {batch[0].name}', flush=True)
+        run_group(batch[0], first, pytest_args, work)
+        return
+    workers = CONCURRENT.get(batch[0].batch, 1)
+    print(f'\n== run_suite [{first + 1}-{first + len(batch)}/{total}] {len(batch)} groups of '
+          f'test/{batch[0].batch}, {workers} at a time', flush=True)
+    logs = {id(group): work / f'{first + k}.log' for k, group in enumerate(batch)}
+    pool = ThreadPoolExecutor(max_workers=workers)
+    futures = {pool.submit(run_group, group, first + k, pytest_args, work, logs[id(group)]):
+               group for k, group in enumerate(batch)}
+    try:
+        for future in as_completed(futures):
+            group = futures[future]
+            future.result()
+            log = logs[id(group)]
+            print(f'\n== run_suite: {group.name} ({group.took_s:.0f} s)', flush=True)
+            sys.stdout.buffer.write(log.read_bytes() if log.exists() else b'')
+            sys.stdout.flush()
+    except KeyboardInterrupt:
+        pool.shutdown(wait=False, cancel_futures=True)
+        for group in batch:
+            if group.process is not None and group.process.poll() is None:
+                group.process.send_signal(signal.SIGINT)
+        raise
+    pool.shutdown()
 
 
 def _kill_group(pgid: int) -> None:
@@ -207,9 +265,14 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='uvms-suite-') as work:
-        for index, group in enumerate(groups):
-            print(f'\n== run_suite [{index + 1}/{len(groups)}] {group.name}', flush=True)
-            run_group(group, index, pytest_args, Path(work))
+        index = 0
+        while index < len(groups):
+            batch = [groups[index]]
+            while (batch[0].batch and index + len(batch) < len(groups)
+                   and groups[index + len(batch)].batch == batch[0].batch):
+                batch.append(groups[index + len(batch)])
+            run_batch(batch, index, len(groups), pytest_args, Path(work))
+            index += len(batch)
     for line in summary(groups, time.monotonic() - start):
         print(line)
     if all(g.status == NO_TESTS for g in groups):

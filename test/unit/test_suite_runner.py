@@ -6,6 +6,8 @@ import importlib.util
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location('run_suite', ROOT / 'tools' / 'run_suite.py')
 assert _spec is not None and _spec.loader is not None
@@ -29,11 +31,36 @@ def test_scenario_modules_share_one_process_with_the_longer_limit() -> None:
     assert len(groups[0].paths) == len(list((ROOT / 'test' / 'scenarios').glob('test_*.py')))
 
 
-def test_unit_tests_run_in_one_process() -> None:
-    """Every unit module is run, all by one process."""
+def test_unit_sub_folders_are_groups_of_one_pool() -> None:
+    """Every unit module runs exactly once, in the group of its sub-folder, all in one batch."""
     groups = run_suite.groups_for([ROOT / 'test' / 'unit'], 900.0, 1500.0)
-    assert len(groups) == 1
-    assert sorted(groups[0].paths) == sorted((ROOT / 'test' / 'unit').rglob('test_*.py'))
+    unit = ROOT / 'test' / 'unit'
+    assert {g.name for g in groups} == {'test/unit', *(f'test/unit/{d.name}' for d in
+                                                        unit.iterdir() if d.is_dir() and
+                                                        any(d.rglob('test_*.py')))}
+    assert {g.batch for g in groups} == {'unit'}
+    dealt = [p for g in groups for p in g.paths]
+    assert sorted(dealt) == sorted(unit.rglob('test_*.py'))
+    assert run_suite.CONCURRENT['unit'] == 2
+
+
+def test_a_batch_runs_its_groups_at_once_and_prints_each_output_whole(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two groups of one batch both run; each one's output is printed as one block."""
+    monkeypatch.setitem(run_suite.CONCURRENT, 'x', 2)
+    for name in ('a', 'b'):
+        (tmp_path / f'test_{name}.py').write_text(
+            f'def test_{name}():\n    print("from {name}")\n')
+    groups = [run_suite.Group(f'g{name}', [tmp_path / f'test_{name}.py'], 60.0, batch='x')
+              for name in ('a', 'b')]
+    run_suite.run_batch(groups, 0, 2, ['-s', '-q', '--rootdir', str(tmp_path)], tmp_path)
+    out = capsys.readouterr().out
+    assert [g.status for g in groups] == [0, 0]
+    assert [g.counts['tests'] for g in groups] == [1, 1]
+    for name in ('a', 'b'):
+        block = out[out.index(f'== run_suite: g{name}'):]
+        assert f'from {name}' in block.split('== run_suite:', 2)[1]
 
 
 def test_a_timed_out_group_counts_as_a_failure_and_is_named() -> None:
