@@ -84,7 +84,13 @@ sweeps: setup
 SUITE_LIMIT_S ?= 1800
 SUITE_GUARD := timeout --signal=INT --kill-after=120 $(SUITE_LIMIT_S)
 
-test: setup
+# The Python 3.12 environment, when such an interpreter is found.
+SETUP_312 := $(if $(PYTHON_312),$(VENV_312)/.interfaces $(VENV_312)/.kernels)
+
+# Both environments are set up at once (pip's downloads and unpacking, the interface builds
+# and the kernel compilation of one overlap the other's), each target's output kept together.
+test:
+	$(MAKE) --no-print-directory -j2 --output-sync=target setup $(SETUP_312)
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(SUITE_GUARD) tools/loopback-netns $(BIN)/python tools/run_suite.py
@@ -94,7 +100,7 @@ test-py312:
 ifeq ($(PYTHON_312),)
 	@echo 'make test: no Python 3.12 interpreter found; the suite ran on Python 3.11 only'
 else
-	$(MAKE) --no-print-directory $(VENV_312)/.interfaces $(VENV_312)/.kernels
+	$(MAKE) --no-print-directory $(SETUP_312)
 	$(SUITE_GUARD) tools/loopback-netns $(VENV_312)/bin/python tools/run_suite.py -q -m 'not colcon'
 endif
 
