@@ -34,6 +34,7 @@ from uvms_common.node_main import run_node
 from uvms_common.robot_parameters import declare_robot_name
 
 from uvms_hardware.alpha5_core import (
+    DEFAULT_OVERSPEED_FACTOR,
     Alpha5Core,
     check_device,
 )
@@ -66,6 +67,9 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
      'While no device answers at all, configure asks again for this long (s): the arm or its '
      'link may come up after the bridge (launch order); 0 asks once'),
     ('silent_timeout_s', 0.2, 'A joint without an answer this long is silent (s)'),
+    ('overspeed_factor', DEFAULT_OVERSPEED_FACTOR,
+     'A joint reported faster than this many times its URDF speed limit trips the bridge: '
+     'VELOCITY 0 to every joint, commands refused until deactivate and activate (>= 1)'),
 )
 
 
@@ -110,7 +114,7 @@ class Alpha5BridgeNode(LifecycleNode):
             arm = load_alpha5(self.robot_name, str(v['jaw_joint']))
             core = Alpha5Core(arm, float(v['watchdog_timeout_s']), str(v['command_mode']),
                               float(v['velocity_gain_rad_s_per_n_m']),
-                              float(v['silent_timeout_s']))
+                              float(v['silent_timeout_s']), float(v['overspeed_factor']))
             if not float(v['feedback_rate_hz']) > 0.0:
                 raise Alpha5BridgeError(f'feedback_rate_hz = {v["feedback_rate_hz"]}: > 0')
             link = open_link(parse_connection(str(v['connection']), arm.udp_port))
@@ -218,7 +222,11 @@ class Alpha5BridgeNode(LifecycleNode):
         if core is None or link is None:
             return
         t_s = self.now_s()
+        tripped = core.overspeed
         core.receive(link.read(), t_s)
+        if core.overspeed and not tripped:
+            self.get_logger().error(f'tripped: {core.overspeed}: VELOCITY 0 to every joint; '
+                                    'commands refused until deactivate and activate')
         frames, round_done = core.tick(t_s)
         link.send(frames)
         if round_done and self._active:

@@ -15,7 +15,9 @@ efficiency (``hardware.yaml``); or, with ``command_mode`` ``velocity`` (a fallba
 whose current mode is not to be used), VELOCITY = gain * torque, clamped at the joint's speed
 limit: a plain admittance, documented as such. The watchdog sends VELOCITY 0 to every joint
 when commands stop for ``watchdog_timeout_s``, and repeats it every ``HOLD_RESEND_S`` until a
-new command arrives (a lost UDP datagram must not leave a joint driven).
+new command arrives (a lost UDP datagram must not leave a joint driven). A joint reported
+faster than ``overspeed_factor`` times its speed limit trips the core: VELOCITY 0 to every
+joint as the watchdog does, every command refused until ``stop_driving`` (deactivate).
 """
 
 from __future__ import annotations
@@ -43,6 +45,12 @@ LIMIT_TOLERANCE = 1e-3
 HOLD_RESEND_S = 0.1
 #: A HARDWARE_STATUS error is reported this long after its last packet (s): it comes at 1 Hz.
 STATUS_HOLD_S = 2.5
+#: A joint reported faster than this many times its speed limit (the URDF's) trips the bridge:
+#: VELOCITY 0 to every joint, commands refused until deactivate and activate. In Current mode
+#: nothing on the device holds a joint to its speed limit (the device clamps VELOCITY and
+#: CURRENT setpoints, not the speed a current makes); a loop that lost its stability (found on
+#: the twin stand with joint feedback far under the control rate) spins a joint up.
+DEFAULT_OVERSPEED_FACTOR = 1.5
 #: Modes the bridge restores at the end (others become Standby: the arm is left at rest).
 RESTING_MODES = (Mode.STANDBY, Mode.DISABLE, Mode.PASSIVE)
 
@@ -114,18 +122,25 @@ class Alpha5Core:
 
     def __init__(self, arm: Alpha5Hardware, watchdog_timeout_s: float = 0.1,
                  command_mode: str = 'current', velocity_gain_rad_s_per_n_m: float = 0.1,
-                 silent_timeout_s: float = 0.2) -> None:
+                 silent_timeout_s: float = 0.2,
+                 overspeed_factor: float = DEFAULT_OVERSPEED_FACTOR) -> None:
         if command_mode not in COMMAND_MODES:
             raise ValueError(f'command_mode = {command_mode!r}: one of {", ".join(COMMAND_MODES)}')
+        if not (math.isfinite(overspeed_factor) and overspeed_factor >= 1.0):
+            raise ValueError(f'overspeed_factor = {overspeed_factor!r}: expected >= 1')
         self.arm = arm
         self.drives = arm.drives
         self.command_mode = command_mode
         self.velocity_gain = velocity_gain_rad_s_per_n_m
         self.silent_timeout_s = silent_timeout_s
+        self.overspeed_factor = overspeed_factor
+        #: Why the bridge tripped on a joint's speed ('' while it has not).
+        self.overspeed = ''
         self.watchdog = CommandWatchdog(watchdog_timeout_s)
         self.splitter = rp.FrameSplitter()
         self.feedback = {d.device_id: DeviceFeedback() for d in self.drives}
         self._index = {d.joint_name: i for i, d in enumerate(arm.joints)}
+        self._drive_of = {d.device_id: d for d in self.drives}
         self._next = 0
         self._holding = False
         self._driving = False
@@ -144,7 +159,9 @@ class Alpha5Core:
         """
         names = list(joint_names) or [d.joint_name for d in self.arm.joints]
         problem = ''
-        if len(names) != len(torques_n_m):
+        if self.overspeed:
+            problem = f'tripped: {self.overspeed}; deactivate and activate to drive again'
+        elif len(names) != len(torques_n_m):
             problem = f'{len(names)} joint names, {len(torques_n_m)} torques'
         elif set(names) != set(self._index):
             problem = f'joints {names}, expected {sorted(self._index)}'
@@ -182,8 +199,19 @@ class Alpha5Core:
         return b''.join(rp.encode_mode(d.device_id, Mode.STANDBY) for d in self.drives)
 
     def stop_driving(self) -> None:
-        """Forget the last command (after deactivate): nothing is driven until a new one."""
+        """Forget the last command and a trip (deactivate): nothing is driven until a new one."""
         self._driving = self._holding = False
+        self.overspeed = ''
+
+    def _check_speed(self, drive: Drive, velocity: float) -> None:
+        """Trip (VELOCITY 0 to all, commands refused) on a joint over its speed limit."""
+        limit = self.overspeed_factor * drive.velocity_limit
+        if self.overspeed or abs(velocity) <= limit:
+            return
+        unit = _unit(drive, PacketId.VELOCITY_LIMITS)
+        self.overspeed = (f'{describe(drive)} at {velocity:.3g} {unit}, over '
+                          f'{self.overspeed_factor:g} x its limit {drive.velocity_limit:g} {unit}')
+        self._driving, self._holding, self._last_hold_s = False, True, -math.inf
 
     # -- the period ---------------------------------------------------------------------------
     def tick(self, t_s: float) -> tuple[bytes, bool]:
@@ -222,6 +250,7 @@ class Alpha5Core:
                     feedback.position = value
                 else:
                     feedback.velocity = value
+                    self._check_speed(self._drive_of[packet.device_id], value)
                 feedback.answer_s = t_s
 
     def joint_state(self) -> tuple[list[str], list[float], list[float]]:
@@ -251,8 +280,9 @@ class Alpha5Core:
             'cobs_errors': s.cobs_errors, 'packets': s.packets,
             'watchdog_trips': self.watchdog.trips, 'holding_velocity_0': self.holding,
             'rejected_commands': self.rejected_commands, 'silent_joints': ' '.join(silent),
+            'overspeed': self.overspeed,
             **{f'hardware_status.{k}': v for k, v in status.items()}}
-        problems = []
+        problems = [f'tripped: {self.overspeed}'] if self.overspeed else []
         if silent:
             problems.append(f'silent: {", ".join(silent)}')
         if status:

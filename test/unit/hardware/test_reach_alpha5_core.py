@@ -154,3 +154,35 @@ def test_hardware_status_error_is_an_error_in_the_report() -> None:
     assert level == 2 and 'joint_3' in message
     assert core.report(5.0)[0] == 2  # silent by then, the status itself expired
     assert core.status_errors(5.0) == {}
+
+
+def test_a_joint_over_its_speed_limit_trips_every_joint_to_velocity_0_until_reset() -> None:
+    """joint_2 at 2x its limit: VELOCITY 0 to all, commands refused naming it, ERROR; reset.
+
+    After stop_driving (deactivate) a command drives again.
+    """
+    core = Alpha5Core(ARM)
+    names = [d.joint_name for d in ARM.joints]
+    assert core.command(0.0, names, [0.1] * len(names))
+    shoulder = ARM.joints[1]
+    core.receive(rp.encode_velocity(shoulder.device_id, 1.4 * shoulder.velocity_limit), 0.01)
+    assert not core.overspeed  # within 1.5 x its limit
+    core.receive(rp.encode_velocity(shoulder.device_id, -2.0 * shoulder.velocity_limit), 0.02)
+    assert 'joint_2' in core.overspeed
+    frames, _ = core.tick(0.02)
+    zeros = [p for p in packets(frames) if p.packet_id == PacketId.VELOCITY]
+    assert sorted(p.device_id for p in zeros) == sorted(d.device_id for d in ARM.drives)
+    assert all(rp.packet_values_si(p)[0] == 0.0 for p in zeros)
+    assert core.command(0.03, names, [0.1] * len(names)) == b''
+    assert 'joint_2' in core.last_rejection and 'deactivate' in core.last_rejection
+    level, message, values = core.report(0.03)
+    assert level == 2 and message.startswith('tripped: joint_2')
+    assert 'joint_2' in str(values['overspeed'])
+    core.stop_driving()
+    assert core.command(0.04, names, [0.1] * len(names))
+
+
+def test_an_overspeed_factor_under_1_is_refused() -> None:
+    """A trip below the joint's own limit would stop every normal motion: refused."""
+    with pytest.raises(ValueError, match='overspeed_factor'):
+        Alpha5Core(ARM, overspeed_factor=0.9)
