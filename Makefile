@@ -75,9 +75,10 @@ sweeps: setup
 	    --workers $(SWEEP_WORKERS) || exit $$?; \
 	done
 
-# tools/run_suite.py runs each integration module (and the unit tests, the scenario tests)
-# in a pytest process of its own with a time limit: a test hung inside C (a Fast DDS
-# livelock) ends its module with its threads' stacks, and the rest of the suite runs on.
+# tools/run_suite.py runs each integration module (the unit tests by sub-folder, two at a
+# time; the scenario tests together) in a pytest process of its own with a time limit: a test
+# hung inside C (a Fast DDS livelock) ends its module with its threads' stacks, and the rest
+# of the suite runs on.
 # Each suite is bounded as a whole too (SUITE_LIMIT_S, about 2.4x what it takes on the 2-core
 # development machine): past it pytest gets SIGINT, prints where it was and its summary, and
 # the target fails, rather than a hang running into the CI job's own limit without a word.
