@@ -45,6 +45,10 @@ WHOLE = ('scenarios', 'ros2_way', 'unit')
 #: output shown as it ends: the unit tests start no node processes and keep no periods, so
 #: two of them share the two cores of CI without changing what they test.
 CONCURRENT = {'unit': 2}
+#: Hypothesis's pytest plugin, loaded by every pytest process where hypothesis is installed
+#: (0.6 s of imports each, about 25 s a suite); left out of groups whose modules do not use
+#: hypothesis (the library works without it; the plugin adds its options and statistics).
+HYPOTHESIS_PLUGIN = 'hypothesispytest'
 #: Seconds between SIGABRT (stacks printed) and SIGKILL of the group's process group.
 ABORT_GRACE_S = 10.0
 #: pytest's own "no tests collected" status (every test deselected): not a failure.
@@ -115,6 +119,11 @@ def read_junit(group: Group, path: Path) -> None:
                 group.failed.append(f"{case.get('classname')}::{case.get('name')}")
 
 
+def uses_hypothesis(group: Group) -> bool:
+    """Whether a module of the group names hypothesis (then its plugin is loaded)."""
+    return any('hypothesis' in path.read_text(encoding='utf-8') for path in group.paths)
+
+
 def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
               output: Path | None = None) -> None:
     """Run one group's pytest to its end or its time limit, its output streamed or to a file."""
@@ -122,7 +131,8 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
     progress = work / f'{index}.progress'
     env = dict(os.environ, UVMS_TEST_PROGRESS=str(progress),
                UVMS_TEST_DOMAIN_START=str(1 + (index * 7) % 100))
-    command = [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider',
+    plugins = [] if uses_hypothesis(group) else ['-p', f'no:{HYPOTHESIS_PLUGIN}']
+    command = [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider', *plugins,
                '-o', 'addopts=-ra --strict-markers', f'--junitxml={junit}',
                *pytest_args,
                *(str(p.relative_to(ROOT) if p.is_relative_to(ROOT) else p) for p in group.paths)]

@@ -87,3 +87,10 @@ def test_failures_from_the_junit_report_are_listed(tmp_path: Path) -> None:
     run_suite.read_junit(group, report)
     assert group.failed == ['test.unit.x::test_a']
     assert run_suite.closing_line([group]) == '1 passed, 1 failed, 1 skipped'
+
+
+def test_hypothesis_plugin_is_loaded_only_where_a_module_uses_hypothesis() -> None:
+    """The supervisor's property tests keep the plugin; an integration module goes without."""
+    unit = run_suite.Group('u', [ROOT / 'test/unit/control/test_supervisor_properties.py'], 9.0)
+    graph = run_suite.Group('g', [ROOT / 'test/integration/test_graph.py'], 9.0)
+    assert run_suite.uses_hypothesis(unit) and not run_suite.uses_hypothesis(graph)
