@@ -412,7 +412,8 @@ class SimulatorNode(Node):
         if self._navigation is not None:  # before /clock, on which the estimator publishes
             self._navigation.publish(seen.t_ns, seen.q, seen.w)
         self._clock_pub.publish(out.clock)
-        self._joint_pub.publish(out.joint_state)
+        if self._published % self._settings.publishes_per_joint_state == 0:
+            self._joint_pub.publish(out.joint_state)
         self._odom_pub.publish(out.odometry)
         self._wrench_pub.publish(out.wrench)
         if ground_truth_due:

@@ -75,3 +75,13 @@ def test_half_real_time_ticks_every_other_millisecond_of_wall_time() -> None:
     half = SimulatorSettings.from_values({**DEFAULTS, 'real_time_factor': 0.5})
     assert half.wall_period_s == pytest.approx(2e-3)
     assert half.physics_dt_ns == 1_000_000
+
+
+def test_joint_states_at_an_arm_bus_rate_only_in_real_time() -> None:
+    """125 Hz of joint_states is every 4th state in real time; lockstep refuses it, named."""
+    realtime = {**DEFAULTS, 'mode': 'realtime'}
+    assert SimulatorSettings.from_values(realtime).publishes_per_joint_state == 1
+    slow = SimulatorSettings.from_values({**realtime, 'joint_states_rate_hz': 125.0})
+    assert slow.publishes_per_joint_state == 4
+    with pytest.raises(SimParameterError, match="'joint_states_rate_hz' = 125.*real time"):
+        SimulatorSettings.from_values({**DEFAULTS, 'joint_states_rate_hz': 125.0})
