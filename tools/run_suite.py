@@ -39,8 +39,8 @@ TESTS = ROOT / 'test'
 #: Top-level test folders whose every module runs in a process of its own.
 ISOLATED = ('integration',)
 #: Top-level test folders that run whole, in one process each (the scenario runs are shared
-#: across modules; a process per unit folder cost a second or two each for nothing).
-WHOLE = ('scenarios', 'ros2_way', 'unit')
+#: across modules).
+WHOLE = ('scenarios', 'ros2_way')
 #: Folders whose sub-folders run as groups of their own, this many at a time, each one's
 #: output shown as it ends: the unit tests start no node processes and keep no periods, so
 #: two of them share the two cores of CI without changing what they test.
