@@ -206,7 +206,7 @@ class Alpha5Core:
     def _check_speed(self, drive: Drive, velocity: float) -> None:
         """Trip (VELOCITY 0 to all, commands refused) on a joint over its speed limit."""
         limit = self.overspeed_factor * drive.velocity_limit
-        if self.overspeed or abs(velocity) <= limit:
+        if self.overspeed or not abs(velocity) > limit:  # NaN is no speed: not published
             return
         unit = _unit(drive, PacketId.VELOCITY_LIMITS)
         self.overspeed = (f'{describe(drive)} at {velocity:.3g} {unit}, over '
