@@ -83,5 +83,5 @@ def test_joint_states_at_an_arm_bus_rate_only_in_real_time() -> None:
     assert SimulatorSettings.from_values(realtime).publishes_per_joint_state == 1
     slow = SimulatorSettings.from_values({**realtime, 'joint_states_rate_hz': 125.0})
     assert slow.publishes_per_joint_state == 4
-    with pytest.raises(SimParameterError, match="'joint_states_rate_hz' = 125.*real time"):
+    with pytest.raises(SimParameterError, match=r"'joint_states_rate_hz' = 125.*real time"):
         SimulatorSettings.from_values({**DEFAULTS, 'joint_states_rate_hz': 125.0})
