@@ -228,10 +228,14 @@ def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
 
 
 def _real_time_factor(text: str) -> float:
-    """``--real-time-factor``: a float in the simulator's range [0.01, 10]."""
+    """``--real-time-factor``: a float in the range of the simulator's ``real_time_factor``."""
+    from uvms_sim.parameters import SPECS_BY_NAME
+
+    spec = SPECS_BY_NAME['real_time_factor']
+    low, high = float(spec.min_value or 0.0), float(spec.max_value or 0.0)
     value = float(text)
-    if not 0.01 <= value <= 10.0:
-        raise argparse.ArgumentTypeError(f'0.01 to 10, got {value:g}')
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f'{low:g} to {high:g}, got {value:g}')
     return value
 
 

@@ -107,8 +107,7 @@ class T200Curve:
 
     def thrust_from_pwm(self, pwm_us: float, voltage_v: float | None = None) -> float:
         """Thrust (N) of a pulse (µs, clamped to the table) at ``voltage_v`` (V)."""
-        p = min(max(float(pwm_us), self.pwm_us[0]), self.pwm_us[-1])
-        return float(self._interpolant(p)) * self.voltage_scale(voltage_v)
+        return float(self.thrusts_from_pwm(np.array([float(pwm_us)]), voltage_v)[0])
 
     def thrusts_from_pwm(self, pwm_us: FloatArray, voltage_v: float | None = None) -> FloatArray:
         """Thrusts (N) of several pulses (µs, clamped to the table) in one interpolant call."""
