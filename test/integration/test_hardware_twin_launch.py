@@ -2,9 +2,9 @@
 
 The graph's inputs come from the four bridges (never from the simulator, whose device-side
 topics are under /plant), its actuator command goes out through two of them, and the run ends
-cleanly. Whether a contact task succeeds against the twins depends on the machine keeping
-twelve processes in real time (docs/hardware.md gives the figures); this test asks for the
-wiring only, on idle_wall (no task).
+cleanly. At half speed: twelve processes want more than the 2 cores of a small machine in
+real time (docs/hardware.md gives the figures), and a late control loop is not what this
+test is about. The contact task against the twins is the scenario test's.
 """
 
 from __future__ import annotations
@@ -14,12 +14,15 @@ import subprocess
 import sys
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_typestore
 
 #: What each bridge publishes, and what the graph sends to two of them.
 FROM_BRIDGES = ('/uvms/joint_states', '/uvms/wrench', '/uvms/imu', '/uvms/depth', '/uvms/dvl')
+#: Topics whose first message the test reads (standard types: rosbags' own store).
+FIRST_READ = ('/uvms/joint_states', '/uvms/odometry')
 THROUGH_THE_GRAPH = ('/uvms/odometry/filtered', '/uvms/command/generalized_force',
                      '/uvms/command/actuators')
 
@@ -31,20 +34,29 @@ def test_the_graph_runs_on_the_bridges_against_the_twins(tmp_path: Path) -> None
                PYTHONUNBUFFERED='1')
     process = subprocess.run(
         [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'idle_wall', '--robot',
-         'bluerov2_alpha5', '--hardware', 'twin', '--duration', '10', '--output', str(output)],
+         'bluerov2_alpha5', '--hardware', 'twin', '--duration', '5', '--real-time-factor', '0.5',
+         '--output', str(output)],
         env=env, capture_output=True, text=True, timeout=240, stdin=subprocess.DEVNULL)
     assert process.returncode == 0, process.stderr[-3000:]
     assert 'hardware_twins' in process.stderr and 'alpha5_bridge' in process.stderr
     counts: Counter[str] = Counter()
     typestore = get_typestore(Stores.ROS2_JAZZY)
-    joints = None
+    first: dict[str, object] = {}
     with output.open('rb') as stream:
-        for schema, channel, message in make_reader(stream).iter_messages():
+        for schema, channel, message in make_reader(stream).iter_messages(log_time_order=True):
             counts[channel.topic] += 1
-            if channel.topic == '/uvms/joint_states' and joints is None:
-                joints = typestore.deserialize_cdr(message.data, schema.name)
+            if channel.topic in FIRST_READ and channel.topic not in first:
+                first[channel.topic] = typestore.deserialize_cdr(message.data, schema.name)
+    joints: Any = first.get('/uvms/joint_states')
+    truth: Any = first.get('/uvms/odometry')
     missing = [t for t in (*FROM_BRIDGES, *THROUGH_THE_GRAPH) if counts[t] == 0]
     assert not missing, f'no message on {missing}: {dict(counts)}'
     assert not any(topic.startswith('/plant/') for topic in counts)  # the recorder's own
     assert joints is not None and list(joints.name) == ['joint_1', 'joint_2', 'joint_3',
                                                         'joint_4']
+    # Physics held its first state until every bridge drove its device: the recording starts
+    # at t = 0 and the arm never fell (limp before the arm bridge took it, its light links
+    # trip the bridge's overspeed check within 0.1 s).
+    assert truth.header.stamp.sec == 0 and truth.header.stamp.nanosec == 0
+    assert 'tripped' not in process.stderr, process.stderr[-3000:]
+

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from uvms_sim.parameters import SPECS_BY_NAME as SIMULATOR_SPECS
 
 from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, HARDWARE_TWINS, SIMULATOR, NodeSpec
 from uvms_bringup.scenario import Scenario
@@ -36,6 +37,8 @@ BRIDGES = ('ardusub_bridge', 'dvl_bridge', 'alpha5_bridge', 'netft_bridge')
 #: The parameter of each bridge that names its connection (required in the file).
 CONNECTION_PARAMETER = {'ardusub_bridge': 'mavlink_url', 'dvl_bridge': 'address',
                         'alpha5_bridge': 'connection', 'netft_bridge': 'address'}
+#: The managed nodes the simulator waits for before physics starts (its own default).
+SIMULATOR_STARTUP_NODES = SIMULATOR_SPECS['startup.nodes'].default
 #: Where the simulator's device-side topics go when the twins stand in for the devices.
 PLANT_NAMESPACE = '/plant'
 #: The simulator's topics that the bridges replace (relative names, as the simulator's).
@@ -183,9 +186,11 @@ def hardware_parameters(nodes: Sequence[NodeSpec], plan: HardwarePlan
     """
     values: dict[str, dict[str, Any]] = {name: dict(p) for name, p in plan.bridges.items()}
     values[HARDWARE_TWINS.name] = plan.twin_parameters()
-    # The simulator's measurement topics go to the twins, not to the recorder: it does not
-    # wait for the recorder on them (it still holds its first state until the loop closes).
-    values[SIMULATOR.name] = {'startup.recorder': ''}
+    # The simulator holds its first state until the loop is closed, and through the twins the
+    # loop is closed only once every bridge drives its device: before, the arm twin makes no
+    # torque (limp) and the estimator has no IMU, so physics started with the controller
+    # alone would let the arm fall and the vehicle drift unseen.
+    values[SIMULATOR.name] = {'startup.nodes': [*SIMULATOR_STARTUP_NODES, *plan.bridges]}
     for spec in nodes:
         if spec.uses_sim_time:
             values.setdefault(spec.name, {})['use_sim_time'] = plan.twins

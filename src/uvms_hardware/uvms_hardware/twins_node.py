@@ -8,8 +8,9 @@ between them and the simulator:
 - ``/plant/joint_states`` -> the Alpha 5 twin's joint positions and rates;
 - ``/plant/wrench`` (ft_sensor_link) -> the Net F/T twin, in the sensor's axes;
 - ``/plant/imu``, ``/plant/depth`` -> the ArduSub twin's attitude, rates, specific force and
-  pressure; ``/plant/dvl`` -> the DVL twin's velocity report (no report for ``dvl_lost_s``:
-  ``velocity_valid`` false, as a DVL that lost the bottom);
+  pressure; ``/plant/dvl`` -> one DVL twin velocity report per reading, sent at once (no
+  reading for ``dvl_lost_s``: ``velocity_valid`` false at ``dvl_idle_rate_hz``, as a DVL that
+  lost the bottom);
 - at ``rate_hz`` on the steady clock: the ArduSub twin's servo outputs (PWM) -> thrusts through
   the T200 curve and the thrusters' dynamics, the arm twin's modes and setpoints -> joint
   torques (``twins.plant_side``), published as ``/plant/command/actuators``.
@@ -41,6 +42,7 @@ from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import AddressError, HardwareError
 from uvms_hardware.hardware_config import hardware_section, load_alpha5, load_netft
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR
+from uvms_hardware.reach_protocol import Mode
 from uvms_hardware.transport import parse_connection
 from uvms_hardware.twins.alpha5_twin import Alpha5Twin
 from uvms_hardware.twins.ardusub_twin import ArduSubTwin
@@ -49,6 +51,8 @@ from uvms_hardware.twins.netft_twin import NetFtTwin
 from uvms_hardware.twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
 from uvms_msgs.msg import ActuatorCommand
 
+#: Arm modes in which a bridge drives a joint (Standby, Disable, Passive: not driven).
+CONTROL_MODES = (Mode.CURRENT, Mode.VELOCITY, Mode.POSITION)
 #: Parameters: name -> (default, description).
 PARAMETERS: dict[str, tuple[Any, str]] = {
     'plant_namespace': ('/plant', 'Where the simulator publishes its device-side topics'),
@@ -58,6 +62,8 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     'netft_rate_hz': (500.0, 'Records per second the Net F/T twin streams (Hz): the '
                              "simulator's wrench rate; more would repeat its values"),
     'dvl_lost_s': (0.5, 'No DVL reading from the simulator for this long: no bottom lock (s)'),
+    'dvl_idle_rate_hz': (2.0, 'Reports per second of the DVL twin while no reading comes (Hz; '
+                              'assumed: a DVL without lock still answers its pings)'),
     'dvl_altitude_m': (1.85, 'Altitude the DVL twin reports (m; the simulated reading has '
                               'none)'),
     'ardusub_bridge.connection': ('udpout:127.0.0.1:14551', 'Where the ArduSub bridge '
@@ -99,7 +105,7 @@ class TwinsNode(Node):
         host, port = ardusub_listen_address(str(v['ardusub_bridge.connection']))
         self.ardusub = ArduSubTwin(port=port, host=host)
         host, port = parse_host_port(str(v['dvl_bridge.connection']), 16171)
-        self.dvl = DvlTwin(host=host, port=port)
+        self.dvl = DvlTwin(host=host, port=port, rate_hz=float(v['dvl_idle_rate_hz']))
         arm = load_alpha5(robot)
         link = parse_connection(str(v['alpha5_bridge.connection']), 6789,
                                 'alpha5_bridge.connection')
@@ -109,15 +115,20 @@ class TwinsNode(Node):
         self.arm = Alpha5Twin(arm, host=link.target, port=link.number)
         host, port = parse_host_port(str(v['netft_bridge.connection']), load_netft(robot).port)
         self.netft = NetFtTwin(host=host, port=port, rate_hz=float(v['netft_rate_hz']))
-        for twin in (self.ardusub, self.dvl, self.arm, self.netft):
-            twin.start()
+        # A device always has a state, so a twin serves only once the plant has given it one:
+        # before, the bridges would configure on zeros and the estimator start from them.
+        self._waiting_for = {'joint_states', 'imu'}
+        # And the plant hears from the devices only once the bridges drive them: the simulator
+        # holds its first state until an actuator command comes, and one sent before the arm
+        # is driven would start physics with the arm limp (its light links fall at ~60 rad/s^2).
+        self._driven = False
         self._joints = tuple(d.joint_name for d in arm.drives)
         self._effort = effort_limits_n_m(robot)
         self._thrusters = ThrusterTwin.for_robot(robot)
         self._rot_sensor_from_link = np.array(DEFAULT_ROT_LINK_FROM_SENSOR).reshape(3, 3).T
         self._command_writer = ActuatorCommandWriter(len(self._thrusters.channels), self._joints)
         self._device_clock = DeviceClock(self)
-        self._last_tick_s: float | None = None
+        self._last_plant_ns: int | None = None
         self._last_dvl_s = -float('inf')
         self._ticks = 0
         plant = str(v['plant_namespace']).rstrip('/')
@@ -145,6 +156,16 @@ class TwinsNode(Node):
             f'{self.ardusub.address[1]}, DVL {v["dvl_bridge.connection"]}, Alpha 5 '
             f'{v["alpha5_bridge.connection"]}, Net F/T {v["netft_bridge.connection"]}')
 
+    def _heard(self, topic: str) -> None:
+        """The plant's first ``topic``: once joint states and IMU came, the twins serve."""
+        if not self._waiting_for:
+            return
+        self._waiting_for.discard(topic)
+        if not self._waiting_for:
+            for twin in (self.ardusub, self.dvl, self.arm, self.netft):
+                twin.start()
+            self.get_logger().info('the plant has a state: the twins serve')
+
     def _on_joints(self, data: bytes) -> None:
         decoded = self._decoded(self._joint_decoder, data)
         if decoded is None:
@@ -154,12 +175,14 @@ class TwinsNode(Node):
             values = fields.unpack_from(decoded.view, at)
             n = len(self._joints)
             self.arm.set_joint_state(values[:n], values[n:])
+            self._heard('joint_states')
             return
         msg = decoded.message
         state = dict(zip(msg.name, zip(msg.position, msg.velocity, strict=False), strict=False))
         if all(j in state for j in self._joints):
             self.arm.set_joint_state([state[j][0] for j in self._joints],
                                      [state[j][1] for j in self._joints])
+            self._heard('joint_states')
 
     def _on_wrench(self, data: bytes) -> None:
         decoded = self._decoded(self._wrench_decoder, data)
@@ -188,6 +211,7 @@ class TwinsNode(Node):
                                      rates_rad_s=(w.x, w.y, w.z),
                                      specific_force_m_s2=(a.x, a.y, a.z),
                                      voltage_v=self._voltage_v)
+        self._heard('imu')
 
     def _on_depth(self, msg: PoseWithCovarianceStamped) -> None:
         depth_m = msg.pose.pose.position.z
@@ -197,26 +221,41 @@ class TwinsNode(Node):
         v = msg.twist.twist.linear
         self._last_dvl_s = self._device_clock.now_s()
         # The simulated reading's sigma as the figure of merit (the bridge's variance: fom^2).
-        self.dvl.set_velocity((v.x, v.y, v.z), True, math.sqrt(msg.twist.covariance[0]),
-                              self._altitude_m)
+        self.dvl.report((v.x, v.y, v.z), True, math.sqrt(msg.twist.covariance[0]),
+                        self._altitude_m)
 
     def _on_tick(self) -> None:
-        now_s = self._device_clock.now_s()
-        dt_s = 0.0 if self._last_tick_s is None else min(now_s - self._last_tick_s, 0.1)
-        self._last_tick_s = now_s
-        if now_s - self._last_dvl_s > self._dvl_lost_s:
+        if self._device_clock.now_s() - self._last_dvl_s > self._dvl_lost_s:
             self.dvl.set_velocity((0.0, 0.0, 0.0), False, 10.0, -1.0)
-        thrust = self._thrusters.step(self.ardusub.servo_outputs_us(), self._voltage_v, dt_s)
-        torques = joint_torques(self.arm.joint_commands(), self.arm.joint_torques_n_m(),
-                                self._effort)
+        # The propellers turn in the plant's time (the node's clock: /clock beside the
+        # simulator), not the wall's: at --real-time-factor 0.5 they would spin up twice as fast.
+        plant_ns = self.get_clock().now().nanoseconds
+        dt_s = 0.0 if self._last_plant_ns is None else min((plant_ns - self._last_plant_ns) * 1e-9,
+                                                           0.1)
+        self._last_plant_ns = plant_ns
+        thrust = self._thrusters.step(self.ardusub.servo_outputs_us(), self._voltage_v,
+                                      max(dt_s, 0.0))
+        commands = self.arm.joint_commands()
+        if not self._driven:
+            self._driven = self.ardusub.armed and bool(self.ardusub.overrides()) and all(
+                mode in CONTROL_MODES for mode, _ in commands.values())
+            if not self._driven:
+                return
+            self.get_logger().info('the bridges drive the arm and the vehicle: actuator '
+                                   'commands to the plant')
+        torques = joint_torques(commands, self.arm.joint_torques_n_m(), self._effort)
         self._command_pub.publish(self._command_writer.payload(
-            self.get_clock().now().nanoseconds, thrust, [torques[j] for j in self._joints]))
+            plant_ns, thrust, [torques[j] for j in self._joints]))
         self._ticks += 1
 
     def _report(self) -> Report:
-        level = OK if self._ticks else WARN
-        return Report(level, 'serving' if self._ticks else 'starting',
-                      {'ticks': self._ticks, 'armed': self.ardusub.armed})
+        if self._waiting_for:
+            return Report(WARN, f'waiting for the plant\'s {", ".join(sorted(self._waiting_for))}',
+                          {'ticks': self._ticks})
+        if not self._driven:
+            return Report(WARN, 'waiting for the bridges to drive the arm and the vehicle',
+                          {'armed': self.ardusub.armed})
+        return Report(OK, 'serving', {'ticks': self._ticks, 'armed': self.ardusub.armed})
 
     def destroy_node(self) -> None:
         """Stop the twins, then destroy the node."""

@@ -50,7 +50,7 @@ from uvms_sim.parameters import (
     default_joint_positions,
 )
 from uvms_sim.plant import Plant, initial_coordinates
-from uvms_sim.startup_watch import StartupWatch, SubscriberWait
+from uvms_sim.startup_watch import StartupWatch, SubscriberWait, recorded_publishers
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
@@ -146,9 +146,9 @@ class SimulatorNode(Node):
         # Until the loop is closed (docs/running.md, start-up): None once it is, or unwatched.
         self._startup: StartupWatch | None = None
         self._held_published_ns = 0
-        self._first_state = SubscriberWait(self, cfg.startup, [  # startup.recorder's, first
-            self._clock_pub, self._joint_pub, self._odom_pub, self._wrench_pub, self._ee_pub,
-            self._contact_pub])
+        self._first_state = SubscriberWait(self, cfg.startup, recorded_publishers(  # first
+            self.get_namespace(), [self._clock_pub, self._joint_pub, self._odom_pub,
+                                   self._wrench_pub, self._ee_pub, self._contact_pub]))
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)

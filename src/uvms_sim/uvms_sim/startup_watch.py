@@ -106,6 +106,16 @@ class StartupWatch:
         self._pending = {}
 
 
+def recorded_publishers(namespace: str, publishers: Sequence[Publisher]) -> list[Publisher]:
+    """The state publishers a recorder of ``namespace`` subscribes to: ``/clock`` and those in it.
+
+    A topic remapped out of the namespace is not the recording's: with ``--hardware twin`` the
+    measurements go to ``/plant`` for the twins, and the recording takes them from the bridges.
+    """
+    inside = namespace.rstrip('/') + '/'
+    return [p for p in publishers if p.topic_name == '/clock' or p.topic_name.startswith(inside)]
+
+
 class SubscriberWait:
     """Before the first state: whether a node (the recorder) subscribes to the state topics.
 

@@ -41,6 +41,25 @@ def test_reports_arrive_with_and_without_lock(twin: DvlTwin) -> None:
         link.stop()
 
 
+def test_a_plant_reading_is_reported_once_and_at_once() -> None:
+    """One reading, one report, sent now: the slow idle stream does not repeat it."""
+    with DvlTwin(rate_hz=1.0) as twin:
+        link = DvlLink(parse_host_port(twin.url, 16171)).start()
+        try:
+            assert link.wait_connected(2.0)
+            wait(lambda: twin.client_count() == 1, 2.0, 'the twin to accept')
+            wait(lambda: bool(link.take()), 2.0, 'the first idle report')
+            sent_s = time.monotonic()
+            twin.report((0.2, 0.0, 0.0), valid=True)
+            wait(lambda: any(r.v_m_s == (0.2, 0.0, 0.0) for _, r in link.take()), 2.0,
+                 'the reading')
+            assert time.monotonic() - sent_s < 0.5  # not the idle stream's next report (1 s)
+            time.sleep(0.3)
+            assert link.take() == []  # nothing repeated within the idle period
+        finally:
+            link.stop()
+
+
 def test_malformed_lines_are_survived_and_counted(twin: DvlTwin) -> None:
     """Garbage between reports: counted, and reports keep coming."""
     link = DvlLink(parse_host_port(twin.url, 16171)).start()

@@ -5,9 +5,12 @@ line, newline-terminated): a velocity report (``"type": "velocity"``: time, vx, 
 covariance, altitude, transducers, velocity_valid, status, format, time_of_validity,
 time_of_transmission) at ``rate_hz`` to every connected client, and a dead-reckoning report
 (``"type": "position_local"``) once a second. Velocities are in the DVL's frame (x forward,
-y right, z down). The figure of merit and covariance come from the plant (``set_velocity``):
-the twin does not model the acoustics. Commands from the client are not answered (the bridge
-sends none). Binds 127.0.0.1, port 0 = a free one.
+y right, z down). A plant that measures (``report``: the simulator's DVL, one reading per
+ping) has each reading sent at once, as the DVL reports each ping; the ``rate_hz`` stream then
+only fills in while no reading comes (a DVL without lock still reports at its ping rate). The
+figure of merit and covariance come from the plant: the twin does not model the acoustics.
+Commands from the client are not answered (the bridge sends none). Binds 127.0.0.1, port 0 =
+a free one.
 """
 
 from __future__ import annotations
@@ -32,6 +35,9 @@ class DvlTwin:
         self.address: tuple[str, int] = self._server.getsockname()[:2]
         self._clients: list[socket.socket] = []
         self._lock = threading.Lock()
+        self._send_lock = threading.Lock()  # one report at a time on a connection
+        self._next_velocity_s = time.monotonic()
+        self._last_report_s: float | None = None
         self._stop = threading.Event()
         self._velocity: dict[str, Any] = {'v': (0.0, 0.0, 0.0), 'valid': True, 'fom': 0.002,
                                           'altitude': 2.0}
@@ -74,6 +80,13 @@ class DvlTwin:
             self._velocity = {'v': tuple(v_body_m_s), 'valid': valid, 'fom': fom,
                               'altitude': altitude_m}
 
+    def report(self, v_body_m_s: tuple[float, float, float], valid: bool = True,
+               fom: float = 0.002, altitude_m: float = 2.0) -> None:
+        """A new reading (one ping): sent now, and the ``rate_hz`` stream waits a period."""
+        self.set_velocity(v_body_m_s, valid, fom, altitude_m)
+        if not self.silent:
+            self._send_velocity(time.monotonic())
+
     def send_raw(self, data: bytes) -> None:
         """Bytes to every client as they are (malformed lines for the tests)."""
         with self._lock:
@@ -97,10 +110,12 @@ class DvlTwin:
         """One velocity report as Water Linked's documentation shows it (json_v3.1)."""
         with self._lock:
             p = dict(self._velocity)
+            since_s = (1.0 / self.rate_hz if self._last_report_s is None
+                       else time.monotonic() - self._last_report_s)
         fom = float(p['fom'])
         vx, vy, vz = p['v']
         report = {
-            'time': 1000.0 / self.rate_hz, 'vx': vx, 'vy': vy, 'vz': vz, 'fom': fom,
+            'time': 1000.0 * since_s, 'vx': vx, 'vy': vy, 'vz': vz, 'fom': fom,
             'covariance': [[fom * fom if i == j else 0.0 for j in range(3)] for i in range(3)],
             'altitude': p['altitude'] if p['valid'] else -1.0,
             'transducers': [{'id': i, 'velocity': 0.0, 'distance': p['altitude'], 'rssi': -30.0,
@@ -118,9 +133,18 @@ class DvlTwin:
                   'format': 'json_v3.1'}
         return (json.dumps(report) + '\n').encode()
 
+    def _send_velocity(self, monotonic_s: float) -> None:
+        line = self.velocity_line(time.time())
+        with self._lock:
+            self._next_velocity_s = monotonic_s + 1.0 / self.rate_hz
+            self._last_report_s = monotonic_s
+            self.sent += 1
+        self.send_raw(line)
+
     def _send(self, client: socket.socket, data: bytes) -> None:
         try:
-            client.sendall(data)
+            with self._send_lock:
+                client.sendall(data)
         except OSError:
             with self._lock:
                 if client in self._clients:
@@ -128,7 +152,7 @@ class DvlTwin:
             client.close()
 
     def _run(self) -> None:
-        next_velocity_s = next_position_s = time.monotonic()
+        next_position_s = time.monotonic()
         while not self._stop.is_set():
             try:
                 client, _ = self._server.accept()
@@ -139,12 +163,13 @@ class DvlTwin:
                 pass
             now_s = time.monotonic()
             if self.silent:
-                next_velocity_s = next_position_s = now_s
+                with self._lock:
+                    self._next_velocity_s = next_position_s = now_s
                 continue
-            if now_s >= next_velocity_s:
-                next_velocity_s += 1.0 / self.rate_hz
-                self.send_raw(self.velocity_line(time.time()))
-                self.sent += 1
+            with self._lock:
+                due = now_s >= self._next_velocity_s
+            if due:
+                self._send_velocity(now_s)
             if now_s >= next_position_s:
                 next_position_s += 1.0
                 self.send_raw(self.position_line(time.time()))
