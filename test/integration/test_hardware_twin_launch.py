@@ -4,7 +4,8 @@ The graph's inputs come from the four bridges (never from the simulator, whose d
 topics are under /plant), its actuator command goes out through two of them, and the run ends
 cleanly. At half speed: twelve processes want more than the 2 cores of a small machine in
 real time (docs/hardware.md gives the figures), and a late control loop is not what this
-test is about. The contact task against the twins is the scenario test's.
+test is about. The contact task against the twins is not a test of the suite: it needs the
+machine to itself (docs/hardware.md, "What the twin test stand shows").
 """
 
 from __future__ import annotations
