@@ -93,6 +93,45 @@ def test_signal_closes_the_recorder_process_with_a_complete_file(
     assert len(recording.topics) == len(DEFAULT_TOPICS)
 
 
+def test_what_reached_a_stopping_recorder_is_in_its_file(context: Context, tmp_path: Path) -> None:
+    """Messages waiting in the recorder when SIGINT comes are recorded, not lost.
+
+    A recorder behind on a busy machine (stood for by SIGSTOP) gets its stop with messages
+    not yet taken: the controller's one task record of a run among them. 100 messages fit
+    the stopped process's socket buffers (300 did not: the rest wait for the writer's repeat).
+    """
+    path = tmp_path / 'run.mcap'
+    process = _start_recorder(f'output_path:={path}')
+    talker = Node('talker', namespace='/uvms', context=context)
+    keep_all = QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=1,
+                          reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.VOLATILE)
+    wrench = talker.create_publisher(WrenchStamped, 'wrench', keep_all)
+    try:
+        _wait_for_output(process, 'recording', timeout_s=60.0)
+        deadline = time.monotonic() + 30.0
+        while wrench.get_subscription_count() == 0:
+            assert time.monotonic() < deadline, 'the recorder never subscribed to wrench'
+            time.sleep(0.05)
+        process.send_signal(signal.SIGSTOP)
+        for k in range(100):
+            message = WrenchStamped()
+            message.wrench.force.x = float(k)
+            wrench.publish(message)
+        time.sleep(0.5)  # the messages are in the stopped process's socket buffers
+        process.send_signal(signal.SIGCONT)
+        process.send_signal(signal.SIGINT)
+        output, _ = process.communicate(timeout=30.0)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        talker.destroy_node()
+    assert process.returncode == 0, output
+    recorded = [m for m in open_recording(path).messages() if m.topic == '/uvms/wrench']
+    assert len(recorded) == 100, output
+
+
 @pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGINT], ids=['SIGTERM', 'SIGINT'])
 def test_signal_stops_a_looping_replay_process_cleanly(
     tmp_path: Path, signum: signal.Signals

@@ -126,6 +126,32 @@ def spin_until_stopped(
         executor.spin_once(timeout_sec=SPIN_TURN_S)
 
 
+#: Longest a stopping node spends taking what had already arrived (``drain_taken``) (s).
+DRAIN_S = 2.0
+#: ``drain_taken`` ends once nothing was taken for this long (s).
+DRAIN_QUIET_S = 0.25
+
+
+def drain_taken(executor: Executor, taken: Callable[[], int], budget_s: float = DRAIN_S,
+                quiet_s: float = DRAIN_QUIET_S) -> None:
+    """Spin while ``taken()`` grows: until ``quiet_s`` without, or ``budget_s`` in all.
+
+    After a stop the executor no longer spins, so messages that had reached the process but
+    not the node's callbacks (a recorder behind on a busy machine: the controller's one task
+    record among them) would be lost; some are still in the middleware's hands (a reliable
+    writer's repeats), hence the quiet time rather than one empty turn.
+    """
+    start = last = time.monotonic()
+    count = taken()
+    while last - start < budget_s:
+        executor.spin_once(timeout_sec=0.01)
+        now = time.monotonic()
+        if taken() != count:
+            count, last = taken(), now
+        elif now - last >= quiet_s or now - start >= budget_s:
+            return
+
+
 def schedule_process(node: Node) -> None:
     """Apply the node's ``rt_priority``, ``rt_cpus`` and ``rt_lock_memory`` to its process.
 
@@ -214,6 +240,7 @@ def run_node(
     startup_errors: tuple[type[Exception], ...] = (),
     finished: Callable[[N], bool] | None = None,
     close_output: Callable[[N], None] | None = None,
+    taken: Callable[[N], int] | None = None,
 ) -> int:
     """Build a node and spin it until SIGINT/SIGTERM; return the process exit status.
 
@@ -227,6 +254,8 @@ def run_node(
         close_output: Closes what the node must not lose (the recorder's file), run first
             in the teardown; after it, a teardown stuck in the middleware ends the process
             (``TeardownDeadline``).
+        taken: A count of what the node took (the recorder's messages): after a clean stop
+            the executor spins on while it grows (``drain_taken``), before ``close_output``.
 
     Returns:
         0 after ``finished``, a signal or an external shutdown, each ending in a clean
@@ -267,6 +296,9 @@ def run_node(
         status = 1
     finally:
         process_stats.write(logger_name, process_periods())
+        if status == 0 and node is not None and executor is not None and taken is not None:
+            counted = node
+            drain_taken(executor, lambda: taken(counted))
         if node is not None and close_output is not None:
             try:
                 close_output(node)

@@ -313,6 +313,10 @@ class RecorderNode(Node):
             return Report(WARN, 'dropping messages', values)
         return Report(OK, 'closed' if self._recorder.closed else 'recording', values)
 
+    def taken(self) -> int:
+        """Messages taken so far, written or dropped (what a stop drains: ``run_node``)."""
+        return self._recorder.message_count + self._dropped
+
     def close(self) -> None:
         """Write the file's summary and close it (idempotent); later messages are dropped.
 
@@ -341,11 +345,12 @@ class RecorderNode(Node):
 def main(args: Sequence[str] | None = None) -> None:
     """Run the recorder until SIGINT or SIGTERM, then close the MCAP file cleanly.
 
-    The file is closed before the middleware teardown, whose hang then costs nothing: the
-    process ends itself after a grace period (``uvms_common.node_main.run_node``).
+    What had arrived before the stop is taken first (up to 2 s). The file is closed before
+    the middleware teardown, whose hang then costs nothing: the process ends itself after a
+    grace period (``uvms_common.node_main.run_node``).
     """
     sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException),
-                      close_output=RecorderNode.close))
+                      close_output=RecorderNode.close, taken=RecorderNode.taken))
 
 if __name__ == '__main__':
     main()
