@@ -141,14 +141,15 @@ def drain_taken(executor: Executor, taken: Callable[[], int], budget_s: float = 
     record among them) would be lost; some are still in the middleware's hands (a reliable
     writer's repeats), hence the quiet time rather than one empty turn.
     """
-    start = last = time.monotonic()
+    last = time.monotonic()
+    end = last + budget_s
     count = taken()
-    while last - start < budget_s:
+    while True:
         executor.spin_once(timeout_sec=0.01)
         now = time.monotonic()
         if taken() != count:
             count, last = taken(), now
-        elif now - last >= quiet_s or now - start >= budget_s:
+        if now - last >= quiet_s or now >= end:
             return
 
 

@@ -230,11 +230,10 @@ class TwinsNode(Node):
         # The propellers turn in the plant's time (the node's clock: /clock beside the
         # simulator), not the wall's: at --real-time-factor 0.5 they would spin up twice as fast.
         plant_ns = self.get_clock().now().nanoseconds
-        dt_s = 0.0 if self._last_plant_ns is None else min((plant_ns - self._last_plant_ns) * 1e-9,
-                                                           0.1)
+        last_ns = plant_ns if self._last_plant_ns is None else self._last_plant_ns
+        dt_s = min(max((plant_ns - last_ns) * 1e-9, 0.0), 0.1)
         self._last_plant_ns = plant_ns
-        thrust = self._thrusters.step(self.ardusub.servo_outputs_us(), self._voltage_v,
-                                      max(dt_s, 0.0))
+        thrust = self._thrusters.step(self.ardusub.servo_outputs_us(), self._voltage_v, dt_s)
         commands = self.arm.joint_commands()
         if not self._driven:
             self._driven = self.ardusub.armed and bool(self.ardusub.overrides()) and all(
