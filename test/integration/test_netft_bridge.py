@@ -155,7 +155,7 @@ def test_absent_box_is_refused_at_configure(rig: Rig) -> None:
     started = time.monotonic()
     assert bridge.trigger_configure() == FAILURE
     assert time.monotonic() - started >= 0.5
-    assert f'127.0.0.1:{rig.twin.port}' in bridge.configure_error
+    assert f'127.0.0.1:{rig.twin.port}' in bridge.refusal
 
 
 def test_a_box_that_comes_up_after_the_bridge_is_found(rig: Rig) -> None:

@@ -14,28 +14,22 @@ rdt_sequence gaps), bad datagrams, the status word.
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.exceptions import ParameterException
-from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
-from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
-from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
-from uvms_common.node_main import run_node
-from uvms_common.robot_parameters import declare_robot_name
+from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
 from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import parse_host_port
-from uvms_hardware.device_clock import DeviceClock, stop_requested
+from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR, NetFtCore
 from uvms_hardware.transport import UdpLink, collect
 
-SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 _LEVELS = {0: OK, 1: WARN, 2: ERROR}
 #: The frame of the wrist sensor's wrench (robot.urdf).
 FT_SENSOR_LINK = 'ft_sensor_link'
@@ -61,49 +55,32 @@ class NetFtBridgeError(HardwareError):
     """A parameter of the bridge is invalid or the box cannot be configured."""
 
 
-class NetFtBridgeNode(LifecycleNode):
+class NetFtBridgeNode(BridgeNode):
     """ATI Net F/T bridge: RDT records in, wrench and diagnostics out."""
+
+    error_type = NetFtBridgeError
+    diagnostics_task = 'netft'
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('netft_bridge', **kwargs)
-        self._device_clock = DeviceClock(self)
-        self.robot_name = declare_robot_name(self)
         self.values = {name: self.declare_parameter(
             name, default, ParameterDescriptor(description=text, read_only=True)).value
             for name, default, text in PARAMETERS}
-        starting = declare_autostart(self)
-        guard_change_state(self)
         self.core: NetFtCore | None = None
         self.link: UdpLink | None = None
-        self.configure_error = ''
-        self._entities: list[Any] = []
-        self._timer: Any = None
-        self._active = False
         self._restart_s = 0.0
-        self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
-        self._diagnostics.add('netft', self._report)
-        if starting and not autostart(self):
-            message = self.configure_error or 'the bridge cannot configure'
-            self.destroy_node()
-            raise NetFtBridgeError(message)
+        self.start()
 
-    def now_s(self) -> float:
-        """The steady clock (s): the device's times (``uvms_hardware.device_clock``)."""
-        return self._device_clock.now_s()
-
-    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+    def configure_device(self) -> None:
         """Check parameters, open the link, see one record, create publisher and service."""
         v = self.values
-        try:
-            host, port = parse_host_port(str(v['address']), rdt.RDT_PORT)
-            core = NetFtCore(float(v['counts_per_force']), float(v['counts_per_torque']),
-                             [float(x) for x in v['rot_link_from_sensor']],
-                             float(v['watchdog_timeout_s']))
-            if not float(v['poll_rate_hz']) > 0.0:
-                raise NetFtBridgeError(f'poll_rate_hz = {v["poll_rate_hz"]}: must be > 0')
-            link = UdpLink(host, port)
-        except (HardwareError, ValueError, OSError) as exc:
-            return self._refuse(str(exc))
+        host, port = parse_host_port(str(v['address']), rdt.RDT_PORT)
+        core = NetFtCore(float(v['counts_per_force']), float(v['counts_per_torque']),
+                         [float(x) for x in v['rot_link_from_sensor']],
+                         float(v['watchdog_timeout_s']))
+        if not float(v['poll_rate_hz']) > 0.0:
+            raise NetFtBridgeError(f'poll_rate_hz = {v["poll_rate_hz"]}: must be > 0')
+        self.link = link = UdpLink(host, port)
         timeout_s = float(v['answer_timeout_s'])
         deadline_s = self.now_s() + float(v['startup_wait_s'])
         while True:
@@ -116,78 +93,38 @@ class NetFtBridgeNode(LifecycleNode):
             self.get_logger().info(f'no record from {host}:{port} yet: asking again',
                                    throttle_duration_sec=2.0)
         if not seen:
-            link.close()
-            return self._refuse(f'no RDT record from {host}:{port} within {timeout_s:g} s')
-        self.core, self.link = core, link
+            raise NetFtBridgeError(f'no RDT record from {host}:{port} within {timeout_s:g} s')
+        self.core = core
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._wrench_pub = self.create_publisher(WrenchStamped, 'wrench', qos)
-        self._entities = [(self.destroy_publisher, self._wrench_pub),
-                          (self.destroy_service, self.create_service(
-                              Trigger, '~/bias', self._on_bias))]
+        self._wrench_pub = self.own(self.destroy_publisher,
+                                    self.create_publisher(WrenchStamped, 'wrench', qos))
+        self.own(self.destroy_service, self.create_service(Trigger, '~/bias', self._on_bias))
         self.get_logger().info(f'Net F/T at {host}:{port} answers; publishing wrench in '
                                f'{FT_SENSOR_LINK}')
-        return SUCCESS
 
-    def _refuse(self, error: str) -> TransitionCallbackReturn:
-        self.configure_error = error
-        self.get_logger().error(f'configure refused: {error}')
-        return FAILURE
-
-    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+    def activate_device(self) -> None:
         """Start real-time streaming and poll the socket."""
         assert self.link is not None
         self.link.read()  # records still in flight from the configure check
         self.link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
         self._restart_s = self.now_s()
-        period_s = 1.0 / float(self.values['poll_rate_hz'])
-        self._timer = self._device_clock.timer(period_s, self._on_tick)
-        self._active = True
-        return super().on_activate(state)
+        self._timer = self.device_timer(1.0 / float(self.values['poll_rate_hz']), self._on_tick)
 
-    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Stop the stream."""
-        self._stop()
-        return super().on_deactivate(state)
-
-    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Close the link; drop publisher and service."""
-        self._release()
-        return super().on_cleanup(state)
-
-    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Stop the stream from any state, release everything."""
-        self._stop()
-        self._release()
-        return super().on_shutdown(state)
-
-    def destroy_node(self) -> None:
-        """Shut down as rclcpp's lifecycle node does (stream stopped), then destroy."""
-        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
-            self.trigger_shutdown()
-        else:
-            self._stop()
-        self._diagnostics.destroy()
-        super().destroy_node()
-
-    def _stop(self) -> None:
-        if self._timer is not None:
-            self.destroy_timer(self._timer)
-            self._timer = None
-        if self._active and self.link is not None:
+    def put_device_back(self) -> list[str]:
+        """Stop the stream (command 0)."""
+        if self.link is not None:
             self.link.send(rdt.encode_request(rdt.COMMAND_STOP))
-        self._active = False
+        return []
 
-    def _release(self) -> None:
-        for destroy, entity in reversed(self._entities):
-            destroy(entity)
-        self._entities = []
+    def release_device(self) -> None:
+        """Close the link."""
         if self.link is not None:
             self.link.close()
         self.link, self.core = None, None
 
     def _on_tick(self) -> None:
         core, link = self.core, self.link
-        if core is None or link is None or not self._active:
+        if core is None or link is None or not self.device_active:
             return
         t_s = self.now_s()
         for datagram in link.read_datagrams():
@@ -218,22 +155,19 @@ class NetFtBridgeNode(LifecycleNode):
                             f'{[round(t, 4) for t in torque]} N m (ft_sensor_link)')
         return response
 
-    def _report(self) -> Report:
-        state = state_label(self)
+    def device_report(self) -> Report:
+        """Records, lost records, bad datagrams and the status word; OK while not streaming."""
         if self.core is None:
-            return Report(ERROR if self.configure_error else WARN,
-                          f'{state}: {self.configure_error or "not configured"}',
-                          {'lifecycle_state': state})
-        if not self._active:
-            return Report(OK, f'{state}: not streaming', {'lifecycle_state': state})
+            return Report(WARN, 'not configured', {})
+        if not self.device_active:
+            return Report(OK, 'not streaming', {})
         level, message, values = self.core.report(self.now_s())
-        return Report(_LEVELS[level], message, {'lifecycle_state': state, **values})
+        return Report(_LEVELS[level], message, values)
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the netft_bridge node until SIGINT/SIGTERM."""
-    sys.exit(run_node(NetFtBridgeNode, args, 'netft_bridge',
-                      (NetFtBridgeError, HardwareError, ParameterException)))
+    """Run the netft_bridge node until SIGINT/SIGTERM; the stream is stopped first."""
+    run_bridge(NetFtBridgeNode, args, 'netft_bridge')
 
 
 if __name__ == '__main__':
