@@ -135,3 +135,18 @@ def test_no_dvl_refuses_configure(rig: Rig) -> None:
         url = gone.url
     bridge = rig.start_bridge(address=url, connect_timeout_s=0.3, autostart=False)
     assert bridge.trigger_configure() == TransitionCallbackReturn.FAILURE
+
+
+def test_deactivate_stops_publishing_and_cleanup_disconnects(rig: Rig) -> None:
+    """The base's lifecycle: inactive publishes nothing; cleanup closes the TCP connection."""
+    bridge = rig.start_bridge()
+    rig.spin_until(lambda: len(rig.dvl) >= 1, 3.0, 'dvl')
+    assert bridge.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
+    count = len(rig.dvl)
+    end = time.monotonic() + 0.3
+    while time.monotonic() < end:
+        rig.executor.spin_once(timeout_sec=0.01)
+    assert len(rig.dvl) == count
+    assert bridge.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
+    rig.spin_until(lambda: rig.twin.client_count() == 0, 3.0, 'the connection closed')
+    assert bridge.link is None

@@ -1,6 +1,7 @@
 """The ``dvl_bridge`` node: a Water Linked DVL A50/A125 (TCP JSON) as the ``dvl`` topic.
 
-A managed node (``autostart``): configure connects to ``address`` (``HOST[:PORT]``, port
+A managed node on the bridges' base (``uvms_hardware.bridge_node``, ``autostart``): configure
+connects to ``address`` (``HOST[:PORT]``, port
 16171 by default) and waits ``connect_timeout_s`` for it; activate publishes. Each valid
 (bottom-locked) velocity report becomes ``dvl`` (geometry_msgs/TwistWithCovarianceStamped in
 ``dvl_link``, as the simulator publishes it and ArduSub's DVL extension drops invalid ones):
@@ -13,30 +14,25 @@ every ``reconnect_period_s``. /diagnostics: lost lock (WARN), a silent or discon
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 from geometry_msgs.msg import TwistWithCovarianceStamped
-from rclpy.exceptions import ParameterException
-from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
-from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
-from uvms_common.node_main import run_node
+from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.parameter_declaration import declare_specs
-from uvms_common.robot_parameters import declare_robot_name
 
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.address import LOOPBACK, parse_host_port
-from uvms_hardware.device_clock import DeviceClock
+from uvms_hardware.bridge_node import BridgeNode, run_bridge
 from uvms_hardware.dvl_link import DvlLink
 from uvms_hardware.dvl_protocol import report_in_link, rot_link_from_dvl
-from uvms_hardware.errors import AddressError, DeviceCheckError, HardwareError
+from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
 
-SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 DEFAULT_PORT = 16171
+#: How often the link's queue is drained (s).
+DRAIN_PERIOD_S = 0.01
 
 SPECS = (
     Spec('address', LOOPBACK, 'The DVL: HOST[:PORT] (TCP; port 16171 when not given)'),
@@ -49,16 +45,17 @@ SPECS = (
 
 
 class DvlBridgeError(HardwareError, ValueError):
-    """A parameter of the DVL bridge is invalid."""
+    """A parameter of the DVL bridge is invalid, or no DVL answers at configure."""
 
 
-class DvlBridgeNode(LifecycleNode):
+class DvlBridgeNode(BridgeNode):
     """Water Linked DVL reports -> ``dvl``."""
+
+    error_type = DvlBridgeError
+    diagnostics_task = 'dvl'
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('dvl_bridge', **kwargs)
-        self._device_clock = DeviceClock(self)
-        self.robot_name = declare_robot_name(self)
         try:
             source, section = hardware_section(self.robot_name, 'dvl')
             navigation = robot_parameters(self.robot_name, 'estimator')
@@ -80,96 +77,49 @@ class DvlBridgeNode(LifecycleNode):
             self.get_logger().warning(
                 f'hardware.yaml dvl.mounting_position_m {mounted_m} differs from navigation.yaml '
                 f'navigation.dvl.position_m {link_position_m}, the lever arm the estimator uses')
-        starting = declare_autostart(self)
-        guard_change_state(self)
         self.link: DvlLink | None = None
         self.published = 0
-        self._active = False
-        self._entities: list[Any] = []
-        self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
-        self._diagnostics.add('dvl', self._report)
-        if starting and not autostart(self):
-            self.destroy_node()
-            raise DeviceCheckError('dvl_bridge: cannot configure and activate (logged)')
+        self.start()
 
-    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Connect to the DVL, make the publisher."""
+    def configure_device(self) -> None:
+        """Connect to the DVL (refused when it does not answer), make the publisher."""
         v = self.values
-        try:
-            address = parse_host_port(str(v['address']), self.default_port, 'address')
-        except AddressError as exc:
-            self.get_logger().error(f'configure failed: {exc}')
-            return FAILURE
-        self.link = DvlLink(address, float(v['reconnect_period_s'])).start()
-        if not self.link.wait_connected(float(v['connect_timeout_s'])):
-            self.get_logger().error(f'configure failed: no DVL at {address.host}:'
-                                    f'{address.port} ({self.link.last_error})')
-            self._stop_link()
-            return FAILURE
+        address = parse_host_port(str(v['address']), self.default_port, 'address')
+        self.link = link = DvlLink(address, float(v['reconnect_period_s'])).start()
+        if not link.wait_connected(float(v['connect_timeout_s'])):
+            raise DvlBridgeError(f'no DVL at {address.host}:{address.port} ({link.last_error})')
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._dvl = self.create_publisher(TwistWithCovarianceStamped, 'dvl', qos)
-        self._entities = [(self.destroy_publisher, self._dvl),
-                          (self.destroy_timer, self._device_clock.timer(0.01, self._drain))]
+        self._dvl = self.own(self.destroy_publisher,
+                             self.create_publisher(TwistWithCovarianceStamped, 'dvl', qos))
+        self.device_timer(DRAIN_PERIOD_S, self._drain)
         self.get_logger().info(f'DVL at {address.host}:{address.port}; publishing dvl')
-        return SUCCESS
 
-    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Publish from now on."""
-        self._active = True
-        return super().on_activate(state)
-
-    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Stop publishing (a sensor: nothing on the device to put back)."""
-        self._active = False
-        return super().on_deactivate(state)
-
-    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Disconnect, drop the publisher."""
-        self._release()
-        return super().on_cleanup(state)
-
-    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Release everything from any state."""
-        self._release()
-        return super().on_shutdown(state)
-
-    def destroy_node(self) -> None:
-        """Shut down as rclcpp's lifecycle node does, then destroy."""
-        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
-            self.trigger_shutdown()
-        self._diagnostics.destroy()
-        super().destroy_node()
-
-    def _release(self) -> None:
-        self._active = False
-        for destroy, entity in reversed(self._entities):
-            destroy(entity)
-        self._entities = []
-        self._stop_link()
-
-    def _stop_link(self) -> None:
+    def release_device(self) -> None:
+        """Disconnect (a sensor: nothing on the device to put back)."""
         if self.link is not None:
             self.link.stop()
         self.link = None
 
     def _drain(self) -> None:
-        if self.link is None:
+        link = self.link
+        if link is None:
             return
-        for _, report in self.link.take():
-            if not (self._active and report.valid):
+        for _, report in link.take():
+            if not (self.device_active and report.valid):
                 continue
             v, cov = report_in_link(report, self.rot)
             t_ns = self.get_clock().now().nanoseconds
             self._dvl.publish(bm.dvl_message(t_ns, v.tolist(), cov.ravel().tolist()))
             self.published += 1
 
-    def _report(self) -> Report:
-        state, link = state_label(self), self.link
+    def device_report(self) -> Report:
+        """Connection, lock, silence, counters."""
+        link = self.link
         if link is None:
-            return Report(WARN, f'{state}: not connected', {'lifecycle_state': state})
+            return Report(WARN, 'not connected', {})
         age_s = link.clock() - link.last_report_s
         p = link.parser
-        values = {'lifecycle_state': state, 'connected': link.connected,
+        values = {'connected': link.connected,
                   'report_age_s': age_s, 'bottom_lock': link.last_valid,
                   'reports': p.reports, 'published': self.published,
                   'malformed_lines': p.malformed, 'ignored_reports': p.ignored,
@@ -185,8 +135,7 @@ class DvlBridgeNode(LifecycleNode):
 
 def main(args: list[str] | None = None) -> None:
     """Run the dvl_bridge node until SIGINT/SIGTERM."""
-    sys.exit(run_node(DvlBridgeNode, args, 'dvl_bridge',
-                      (DvlBridgeError, DeviceCheckError, ParameterException)))
+    run_bridge(DvlBridgeNode, args, 'dvl_bridge')
 
 
 if __name__ == '__main__':
