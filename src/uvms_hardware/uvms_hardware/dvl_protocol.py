@@ -4,9 +4,13 @@ Water Linked's "DVL protocol" (TCP, port 16171): newline-delimited JSON objects.
 report has ``"type": "velocity"`` with ``vx, vy, vz`` (m/s, in the DVL's frame: x forward,
 y right, z down as marked on the housing), ``fom`` (figure of merit, m/s: smaller is better),
 ``covariance`` (3x3, (m/s)^2), ``altitude`` (m), ``velocity_valid`` (bottom lock),
-``time_of_validity`` (µs, Unix), ``status`` (0 normal). Dead-reckoning reports
-(``"type": "position_local"``) and command responses are counted and ignored. A line that is
-not a JSON object, or a velocity report missing a field, is counted as malformed and skipped::
+``time_of_validity`` (µs, Unix: the centre of the ping) and ``time_of_transmission`` (µs,
+Unix: just before the report was sent), ``status`` (0 normal); waterlinked/docs
+docs/dvl/dvl-json-protocol.md. Dead-reckoning reports (``"type": "position_local"``) and
+command responses are counted and ignored. A line that is not a JSON object, a velocity report
+missing a field, and any line holding a number that is not finite (the ``NaN``, ``Infinity``
+and ``-Infinity`` literals Python's json reads by default, or ``1e999``) are counted as
+malformed and skipped: no non-finite number ever leaves the parser::
 
     parser = DvlParser()
     for report in parser.feed(chunk):      # any split of the stream
@@ -42,8 +46,10 @@ class VelocityReport:
         covariance: Row-major 3x3 ((m/s)^2), or None when the report has none usable.
         altitude_m: Distance to the bottom (m).
         valid: Bottom lock: the velocity is valid.
-        time_of_validity_us: When it was measured (µs, Unix), None when absent.
+        time_of_validity_us: When it was measured (µs, the DVL's clock: Unix once it is
+            synchronised, else from an arbitrary epoch), None when absent.
         status: 0 normal, else a fault flag.
+        time_of_transmission_us: When the DVL sent it (µs, the same clock), None when absent.
     """
 
     v_m_s: tuple[float, float, float]
@@ -53,13 +59,50 @@ class VelocityReport:
     valid: bool
     time_of_validity_us: int | None
     status: int
+    time_of_transmission_us: int | None = None
+
+
+def _refuse_constant(name: str) -> Any:
+    raise ValueError(f'{name} is not a finite number')
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f'{text} is not a finite number')
+    return value
+
+
+def loads_finite(line: bytes | str) -> Any:
+    """JSON of one line, refusing NaN, Infinity, -Infinity and floats that overflow.
+
+    Raises:
+        ValueError: Not JSON, or a number that is not finite.
+    """
+    return json.loads(line, parse_constant=_refuse_constant, parse_float=_finite_float)
+
+
+def _timestamp_us(obj: dict[str, Any], key: str) -> int | None:
+    value = obj.get(key)
+    if value is None:
+        return None
+    if (isinstance(value, bool) or not isinstance(value, (int, float))
+            or (isinstance(value, float) and not math.isfinite(value))):
+        raise ProtocolError(f'velocity report: {key!r} = {value!r} is not a finite number')
+    return int(value)
 
 
 def _number(obj: dict[str, Any], key: str) -> float:
     value = obj.get(key)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ProtocolError(f'velocity report: {key!r} = {value!r} is not a number')
-    return float(value)
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise ProtocolError(f'velocity report: {key!r} = {value!r} is not a finite number')
+    return number
 
 
 def _covariance(value: Any) -> tuple[float, ...] | None:
@@ -79,12 +122,12 @@ def velocity_report(obj: dict[str, Any]) -> VelocityReport:
     valid = obj.get('velocity_valid')
     if not isinstance(valid, bool):
         raise ProtocolError(f'velocity report: velocity_valid = {valid!r} is not a boolean')
-    tov = obj.get('time_of_validity')
     return VelocityReport(
         (_number(obj, 'vx'), _number(obj, 'vy'), _number(obj, 'vz')), _number(obj, 'fom'),
         _covariance(obj.get('covariance')), _number(obj, 'altitude'), valid,
-        int(tov) if isinstance(tov, (int, float)) and not isinstance(tov, bool) else None,
-        int(obj.get('status', 0)) if isinstance(obj.get('status', 0), int) else -1)
+        _timestamp_us(obj, 'time_of_validity'),
+        int(obj.get('status', 0)) if isinstance(obj.get('status', 0), int) else -1,
+        _timestamp_us(obj, 'time_of_transmission'))
 
 
 class DvlParser:
@@ -116,7 +159,7 @@ class DvlParser:
         if not line.strip():
             return None
         try:
-            obj = json.loads(line)
+            obj = loads_finite(line)
         except (UnicodeDecodeError, ValueError) as exc:
             self._bad(f'not JSON: {exc}')
             return None

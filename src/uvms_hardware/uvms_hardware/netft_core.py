@@ -62,9 +62,7 @@ class NetFtCore:
                  counts_per_torque: float = rdt.DEFAULT_COUNTS_PER_TORQUE,
                  rot_link_from_sensor: Sequence[float] = DEFAULT_ROT_LINK_FROM_SENSOR,
                  timeout_s: float = 0.1) -> None:
-        if not (counts_per_force > 0.0 and counts_per_torque > 0.0):
-            raise ValueError(f'counts_per_force {counts_per_force} and counts_per_torque '
-                             f'{counts_per_torque} must be > 0')
+        rdt.check_calibration(counts_per_force, counts_per_torque)
         if not timeout_s > 0.0:
             raise ValueError(f'watchdog_timeout_s = {timeout_s}: must be > 0')
         check_rotation(rot_link_from_sensor)

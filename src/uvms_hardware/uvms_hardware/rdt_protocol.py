@@ -11,10 +11,14 @@ Force = counts / counts_per_force, torque = counts / counts_per_torque (1,000,00
 default; the box's calibration says). The meaning of the status bits is not in the document:
 they are reported as a number, non-zero taken as a fault (assumed, for docs/hardware.md).
 Whether sequences wrap at 2^32 is not stated either; `lost_records` assumes they do.
+Counts are int32 on the wire, so a record cannot carry a non-finite number: any record decodes
+to finite forces for a finite positive calibration (at most 2^31 counts, i.e. 2147 N at
+1e6 counts per N); a calibration that is not finite and positive is refused.
 """
 
 from __future__ import annotations
 
+import math
 import struct
 from dataclasses import dataclass
 
@@ -105,6 +109,17 @@ def counts_from_wrench(force_n: tuple[float, float, float], torque_n_m: tuple[fl
     return fx, fy, fz, tx, ty, tz
 
 
+def check_calibration(counts_per_force: float, counts_per_torque: float) -> None:
+    """Refuse counts per N or per N m that are not finite and positive.
+
+    Raises:
+        ProtocolError: Naming both values.
+    """
+    if not all(math.isfinite(c) and c > 0.0 for c in (counts_per_force, counts_per_torque)):
+        raise ProtocolError(f'counts per force {counts_per_force} / per torque '
+                            f'{counts_per_torque}: both must be finite and > 0')
+
+
 def wrench_from_counts(counts: tuple[int, ...], counts_per_force: float = DEFAULT_COUNTS_PER_FORCE,
                        counts_per_torque: float = DEFAULT_COUNTS_PER_TORQUE,
                        ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -115,9 +130,7 @@ def wrench_from_counts(counts: tuple[int, ...], counts_per_force: float = DEFAUL
     """
     if len(counts) != 6:
         raise ProtocolError(f'{len(counts)} counts, expected 6 (Fx Fy Fz Tx Ty Tz)')
-    if not (counts_per_force > 0.0 and counts_per_torque > 0.0):
-        raise ProtocolError(f'counts per force {counts_per_force} / per torque '
-                            f'{counts_per_torque}: both must be > 0')
+    check_calibration(counts_per_force, counts_per_torque)
     fx, fy, fz, tx, ty, tz = counts
     return ((fx / counts_per_force, fy / counts_per_force, fz / counts_per_force),
             (tx / counts_per_torque, ty / counts_per_torque, tz / counts_per_torque))

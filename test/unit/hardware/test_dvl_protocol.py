@@ -99,3 +99,35 @@ def test_rotation_is_orthonormal(rpy: tuple[float, float, float]) -> None:
     rot = rot_from_rpy(*rpy)
     np.testing.assert_allclose(rot.T @ rot, np.eye(3), atol=1e-12)
     assert np.linalg.det(rot) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize('literal', [b'NaN', b'Infinity', b'-Infinity', b'1e999', b'-1e999'])
+@pytest.mark.parametrize('field', ['vx', 'fom', 'altitude', 'time_of_validity'])
+def test_a_number_that_is_not_finite_makes_the_line_malformed(field: str,
+                                                              literal: bytes) -> None:
+    """NaN, Infinity (Python's json reads them by default) or an overflow: malformed, dropped."""
+    text = line({**EXAMPLE, field: 12345})
+    bad = text.replace(f'"{field}": 12345'.encode(), f'"{field}": '.encode() + literal)
+    parser = DvlParser()
+    assert parser.feed(bad + line(EXAMPLE)) != [] and parser.malformed == 1
+    assert parser.reports == 1 and 'finite' in parser.last_error
+
+
+def test_a_non_finite_covariance_entry_makes_the_line_malformed() -> None:
+    """A NaN anywhere in the report (here the covariance) drops the whole line."""
+    bad = line(EXAMPLE).replace(b'2.6e-06', b'NaN', 1)
+    parser = DvlParser()
+    assert parser.feed(bad) == [] and parser.malformed == 1
+
+
+@pytest.mark.parametrize('value', [math.nan, math.inf, 10 ** 400])
+def test_a_report_built_from_non_finite_numbers_is_refused(value: float) -> None:
+    """velocity_report itself refuses a non-finite or overflowing number, naming the field."""
+    with pytest.raises(ProtocolError, match="'vy'"):
+        velocity_report({**EXAMPLE, 'vy': value})
+
+
+def test_time_of_transmission_is_decoded() -> None:
+    """The DVL's send time comes through beside the time of validity (µs)."""
+    (report,) = DvlParser().feed(line(EXAMPLE))
+    assert report.time_of_transmission_us == 1638191471752336

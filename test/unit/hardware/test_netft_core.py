@@ -74,3 +74,9 @@ def test_improper_rotation_is_refused(rot: tuple[float, ...]) -> None:
     """Not orthonormal, a reflection, or not 9 values: ValueError."""
     with pytest.raises(ValueError, match='rot_link_from_sensor'):
         check_rotation(rot)
+
+
+def test_an_infinite_calibration_is_refused_at_construction() -> None:
+    """Counts per N of inf would silently read zero force: the core refuses it."""
+    with pytest.raises(ValueError, match='finite'):
+        NetFtCore(counts_per_force=float('inf'), counts_per_torque=1e6)

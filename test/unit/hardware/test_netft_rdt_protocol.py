@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import struct
 
 import pytest
@@ -63,3 +64,27 @@ def test_lost_records_count_the_sequence_gaps(previous: int | None, current: int
                                               lost: int) -> None:
     """A gap of n in rdt_sequence is n - 1 lost records; repeats and reorders lose none."""
     assert rdt.lost_records(previous, current) == lost
+
+
+def test_extreme_int32_counts_decode_to_finite_wrenches() -> None:
+    """Counts are int32 on the wire: the largest and smallest give finite forces and torques."""
+    extreme = (2 ** 31 - 1, -2 ** 31, 2 ** 31 - 1, -2 ** 31, 0, 1)
+    record = rdt.decode_record(rdt.encode_record(rdt.Record(1, 1, 0, extreme)))
+    force, torque = rdt.wrench_from_counts(record.counts, 1e6, 1e6)
+    assert all(math.isfinite(x) for x in (*force, *torque))
+    assert force[0] == pytest.approx(2147.483647)
+
+
+def test_counts_beyond_int32_cannot_be_encoded() -> None:
+    """A count outside int32 is no record (the twin cannot send one by mistake)."""
+    with pytest.raises(struct.error):
+        rdt.encode_record(rdt.Record(1, 1, 0, (2 ** 31, 0, 0, 0, 0, 0)))
+
+
+@pytest.mark.parametrize('calibration', [(math.inf, 1e6), (1e6, math.nan), (0.0, 1e6),
+                                         (1e6, -1.0)])
+def test_a_calibration_that_is_not_finite_and_positive_is_refused(
+        calibration: tuple[float, float]) -> None:
+    """Infinite counts per N would read every force as 0: refused like a negative one."""
+    with pytest.raises(ProtocolError, match='finite and > 0'):
+        rdt.wrench_from_counts((1, 2, 3, 4, 5, 6), *calibration)
