@@ -186,7 +186,7 @@ class Tuner:
         """
         values = controller_values(candidate, self.base)
         check = stability({**self.base, **values}, CONTROL_PERIOD_S,
-                          self.tune.max_wall_stiffness_n_m)
+                          self.tune.train_max_wall_stiffness_n_m)
         if not check.stable:
             return Evaluation(values, check, unstable_result(check.margin, check.loop))
         figures = self.run_scenarios(values, runs, recordings, label)

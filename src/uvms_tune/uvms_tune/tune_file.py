@@ -53,6 +53,7 @@ class ScenarioRun:
     duration_s: float | None
     seed: int
     simulator: Mapping[str, Any]
+    key: str = ''
 
 
 @dataclass(frozen=True)
@@ -76,10 +77,13 @@ class TuneFile:
         default_factory=lambda: dict(CONSTRAINT_DEFAULTS))
 
     @property
-    def max_wall_stiffness_n_m(self) -> float | None:
-        """Stiffest wall the scenarios set (N/m); None: none sets one."""
-        values = [float(run.simulator['contact.stiffness_n_m'])
-                  for run in (*self.train, *self.held_out)
+    def train_max_wall_stiffness_n_m(self) -> float | None:
+        """Stiffest wall the training runs set (N/m); None: none sets one.
+
+        The training stability screen's wall: the held-out runs never take part in training,
+        so their walls do not either.
+        """
+        values = [float(run.simulator['contact.stiffness_n_m']) for run in self.train
                   if 'contact.stiffness_n_m' in run.simulator]
         return max(values) if values else None
 
@@ -148,6 +152,9 @@ def parse_tune_file(data: Any, path: Path) -> TuneFile:
         raise _fail(path, 'enqueue', f'a list of {", ".join(BASELINES)}', enqueue)
     if 'start' in enqueue and not start:
         raise TuneError(f"{path}: key 'enqueue': names 'start' but the file has no 'start'")
+    train = _scenarios(data['train'], 'train', path, required=True)
+    held_out = _scenarios(data.get('held_out', []), 'held_out', path, required=False)
+    _check_held_out(train, held_out, path)
     return TuneFile(
         path=path, name=data['name'], robot=data['robot'],
         description=data.get('description', ''),
@@ -155,8 +162,7 @@ def parse_tune_file(data: Any, path: Path) -> TuneFile:
         seed=_integer(data.get('seed', 0), 'seed', path, 0),
         timeout_s=_number(data.get('timeout_s', 600.0), 'timeout_s', path, positive=True),
         gains=gains, start=dict(start), enqueue=tuple(enqueue),
-        train=_scenarios(data['train'], 'train', path, required=True),
-        held_out=_scenarios(data.get('held_out', []), 'held_out', path, required=False),
+        train=train, held_out=held_out,
         objective=_weights(data.get('objective', {}), 'objective', OBJECTIVE_DEFAULTS, path),
         constraints=_weights(data.get('constraints', {}), 'constraints', CONSTRAINT_DEFAULTS,
                              path),
@@ -225,8 +231,30 @@ def _scenarios(data: Any, key: str, path: Path, *, required: bool) -> tuple[Scen
         for seed in seeds:
             _integer(seed, f'{where}.seeds', path, 0)
             label = f'{scenario_path.stem}#{index}/seed{seed}'
-            runs.append(ScenarioRun(label, scenario_path, duration, seed, dict(simulator)))
+            runs.append(ScenarioRun(label, scenario_path, duration, seed, dict(simulator),
+                                    where))
     return tuple(runs)
+
+
+def _check_held_out(train: tuple[ScenarioRun, ...], held_out: tuple[ScenarioRun, ...],
+                    path: Path) -> None:
+    """Refuse a held-out run that repeats a training run (naming both).
+
+    A held-out run must differ from every training run in its scenario file or its simulator
+    parameters: a seed changes only the sensor noise (nothing in a noise-free scenario) and a
+    duration only how long the same run goes on, so neither makes a run the gains were not
+    tuned on.
+    """
+    for held in held_out:
+        for run in train:
+            if (held.scenario_path.resolve() == run.scenario_path.resolve()
+                    and dict(held.simulator) == dict(run.simulator)):
+                raise TuneError(
+                    f"{path}: key '{held.key}': held-out run {held.label} repeats training run "
+                    f'{run.key} ({run.label}): the same scenario and simulator parameters (a '
+                    'seed changes only the sensor noise, a duration only the length); give it '
+                    'another scenario or another simulator parameter (another wall stiffness, '
+                    'current or start)')
 
 
 def _scenario_path(value: Any, key: str, path: Path) -> Path:
