@@ -1,0 +1,127 @@
+"""The device-clock estimator: minimum-delay offset and skew, robust to late arrivals and jumps."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import pytest
+from uvms_hardware.device_time import DeviceClockEstimator, Point, lower_envelope
+
+OFFSET_S = 1234.5678
+MIN_DELAY_S = 0.0004
+
+
+def feed(clock: DeviceClockEstimator, rng: random.Random, start_s: float, seconds: float,
+         rate_hz: float, skew: float = 0.0, late_s: float = 0.0, late_every: int = 0,
+         offset_s: float = OFFSET_S) -> list[tuple[float, float]]:
+    """Pairs of a device at ``rate_hz`` (device s, true local s), fed with random delays."""
+    truth = []
+    for i in range(int(seconds * rate_hz)):
+        device_s = start_s + i / rate_hz
+        local_s = offset_s + device_s * (1.0 + skew)
+        delay_s = MIN_DELAY_S + rng.expovariate(1.0 / 0.002)
+        if late_every and i % late_every == 0:
+            delay_s += late_s
+        clock.add(device_s, local_s + delay_s)
+        truth.append((device_s, local_s))
+    return truth
+
+
+def worst_error_s(clock: DeviceClockEstimator, truth: list[tuple[float, float]]) -> float:
+    """Largest |to_local(device) - true local time| over the pairs (s)."""
+    return max(abs((clock.to_local(d) or math.nan) - t) for d, t in truth)
+
+
+def test_nothing_is_known_before_the_first_pair() -> None:
+    """No pair: no local time, no offset."""
+    clock = DeviceClockEstimator()
+    assert clock.to_local(1.0) is None and math.isnan(clock.offset_s) and not clock.ready
+
+
+def test_a_constant_offset_is_found_within_the_smallest_delay() -> None:
+    """Delays of 0.4 ms + exponential(2 ms): stamps within 0.5 ms of the truth."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25)
+    rng = random.Random(1)
+    feed(clock, rng, 0.0, 5.0, 100.0)
+    truth = feed(clock, rng, 5.0, 1.0, 100.0)
+    assert worst_error_s(clock, truth) < 0.0005
+    assert clock.offset_s == pytest.approx(OFFSET_S, abs=0.0005)
+
+
+def test_late_arrivals_do_not_move_the_estimate() -> None:
+    """One arrival in three 30 ms late (a busy host): the estimate stays on the early ones."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25)
+    rng = random.Random(2)
+    truth = feed(clock, rng, 0.0, 6.0, 200.0, late_s=0.030, late_every=3)[-200:]
+    assert worst_error_s(clock, truth) < 0.0005
+    assert clock.jitter_s > 0.005  # the late ones are in the reported jitter
+
+
+def test_a_clock_half_a_percent_fast_is_followed() -> None:
+    """ATI's rate tolerance (+-0.5 %): the skew is estimated and stamps stay within 0.5 ms."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25)
+    rng = random.Random(3)
+    feed(clock, rng, 0.0, 5.0, 500.0, skew=0.005)
+    truth = feed(clock, rng, 5.0, 2.0, 500.0, skew=0.005)
+    assert worst_error_s(clock, truth) < 0.0005
+    assert clock.skew == pytest.approx(0.005, abs=0.0002)
+
+
+def test_without_skew_a_long_window_would_lag_a_drifting_clock() -> None:
+    """Oracle: the flat minimum over the window (no slope) errs by about skew x window / 2."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, max_skew=0.0)
+    rng = random.Random(3)
+    feed(clock, rng, 0.0, 5.0, 500.0, skew=0.005)
+    truth = feed(clock, rng, 5.0, 1.0, 500.0, skew=0.005)
+    assert worst_error_s(clock, truth) > 0.005
+
+
+@pytest.mark.parametrize('jump_s', [1.0, -1.0])
+def test_a_device_clock_that_jumps_is_followed_after_a_restart(jump_s: float) -> None:
+    """An NTP step on the device (forward or back): the estimate restarts and is right again."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, reset_s=0.1)
+    rng = random.Random(4)
+    feed(clock, rng, 0.0, 5.0, 50.0)
+    # From device time 5 s on the device reads jump_s more for the same local time.
+    feed(clock, rng, 5.0 + jump_s, 1.0, 50.0, offset_s=OFFSET_S - jump_s)
+    truth = feed(clock, rng, 6.0 + jump_s, 1.0, 50.0, offset_s=OFFSET_S - jump_s)
+    assert clock.resets >= 1
+    assert worst_error_s(clock, truth) < 0.001
+
+
+def test_the_spread_and_jitter_are_reported() -> None:
+    """report() names offset, skew, spread, jitter, restarts and pairs, all finite."""
+    clock = DeviceClockEstimator(window_s=2.0, bucket_s=0.1)
+    feed(clock, random.Random(5), 0.0, 3.0, 100.0)
+    report = clock.report()
+    assert set(report) == {'clock_offset_s', 'clock_skew_ppm', 'clock_offset_spread_s',
+                           'arrival_jitter_s', 'clock_resets', 'clock_pairs'}
+    assert 0.0 <= float(report['clock_offset_spread_s']) < 0.002  # type: ignore[arg-type]
+    assert float(report['arrival_jitter_s']) == pytest.approx(0.002, rel=0.4)  # type: ignore[arg-type]
+
+
+def test_non_finite_pairs_are_ignored() -> None:
+    """NaN or inf in a pair never reaches the estimate."""
+    clock = DeviceClockEstimator()
+    clock.add(math.nan, 1.0)
+    clock.add(1.0, math.inf)
+    assert not clock.ready and clock.pairs == 0
+
+
+@pytest.mark.parametrize('kwargs', [{'bucket_s': 0.0}, {'window_s': 0.1, 'bucket_s': 0.5},
+                                    {'reset_s': 0.0}, {'max_skew': 1.5}])
+def test_impossible_settings_are_refused(kwargs: dict[str, float]) -> None:
+    """A bucket wider than the window, no reset threshold, a skew of 150 %: refused."""
+    with pytest.raises(ValueError, match='device clock'):
+        DeviceClockEstimator(**kwargs)
+
+
+def test_the_envelope_lies_under_every_point() -> None:
+    """The fitted line never passes above a point, and touches at least one."""
+    rng = random.Random(6)
+    points = [Point(i * 0.1, 0.3 + 0.01 * i + rng.random() * 0.05) for i in range(40)]
+    x_ref, y_ref, slope = lower_envelope(points, 1.0)
+    gaps = [p.y - (y_ref + slope * (p.x - x_ref)) for p in points]
+    assert min(gaps) == pytest.approx(0.0, abs=1e-12) and all(g >= -1e-12 for g in gaps)
+    assert slope == pytest.approx(0.1, abs=0.03)  # y rises 0.01 per 0.1 of x
