@@ -7,9 +7,14 @@ connects to ``address`` (``HOST[:PORT]``, port
 ``dvl_link``, as the simulator publishes it and ArduSub's DVL extension drops invalid ones):
 the velocity turned from the DVL's own frame (``hardware.yaml``: ``dvl.mounting_rpy_rad``)
 into dvl_link (``navigation.yaml``: ``navigation.dvl.orientation_rpy``), its covariance the
-report's (else fom^2). Stamped with the node clock at arrival. The connection is retried
+report's (else fom^2). Stamped with the report's own ``time_of_validity`` (the centre of
+the ping, µs on the DVL's clock) mapped into the node clock through the DVL clock's offset,
+estimated from each report's ``time_of_transmission`` against its arrival
+(`uvms_hardware.device_time`: the minimum-delay envelope, so a late arrival does not move
+it); a report without a time of validity is stamped at its arrival and counted. A report is
+published once, when it arrives: a silent DVL publishes nothing. The connection is retried
 every ``reconnect_period_s``. /diagnostics: lost lock (WARN), a silent or disconnected DVL
-(ERROR), malformed lines counted.
+(ERROR), malformed lines counted, the clock offset, skew, spread and arrival jitter.
 """
 
 from __future__ import annotations
@@ -25,14 +30,16 @@ from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.address import LOOPBACK, parse_host_port
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.device_time import DeviceClockEstimator
 from uvms_hardware.dvl_link import DvlLink
-from uvms_hardware.dvl_protocol import report_in_link, rot_link_from_dvl
+from uvms_hardware.dvl_protocol import VelocityReport, report_in_link, rot_link_from_dvl
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
 
 DEFAULT_PORT = 16171
 #: How often the link's queue is drained (s).
 DRAIN_PERIOD_S = 0.01
+_US = 1e-6
 
 SPECS = (
     Spec('address', LOOPBACK, 'The DVL: HOST[:PORT] (TCP; port 16171 when not given)'),
@@ -41,6 +48,10 @@ SPECS = (
     Spec('reconnect_period_s', 1.0, 'Between connection attempts (s)', 0.05, 60.0),
     Spec('timeout_s', 1.0, 'No report this long: the DVL is silent, ERROR (s)', 0.1, 30.0),
     Spec('mounting_rpy_rad', [0.0, 0.0, 0.0], "The DVL's own frame in base_link_frd (rad)"),
+    Spec('clock_window_s', 30.0, "Reports the DVL clock's offset is estimated over (s)",
+         2.0, 600.0),
+    Spec('clock_reset_s', 0.2, "The DVL clock's offset jumps by more than this: estimated "
+         'again from the next report (s; an NTP step on the DVL)', 0.01, 10.0),
 )
 
 
@@ -78,14 +89,19 @@ class DvlBridgeNode(BridgeNode):
                 f'hardware.yaml dvl.mounting_position_m {mounted_m} differs from navigation.yaml '
                 f'navigation.dvl.position_m {link_position_m}, the lever arm the estimator uses')
         self.link: DvlLink | None = None
+        self.clock: DeviceClockEstimator | None = None
         self.published = 0
+        self.stamped_at_arrival = 0
         self.start()
 
     def configure_device(self) -> None:
         """Connect to the DVL (refused when it does not answer), make the publisher."""
         v = self.values
         address = parse_host_port(str(v['address']), self.default_port, 'address')
-        self.link = link = DvlLink(address, float(v['reconnect_period_s'])).start()
+        window_s = float(v['clock_window_s'])
+        self.clock = DeviceClockEstimator(window_s, window_s / 30.0, float(v['clock_reset_s']))
+        self.link = link = DvlLink(address, float(v['reconnect_period_s']),
+                                   arrival_clock=self._local_s).start()
         if not link.wait_connected(float(v['connect_timeout_s'])):
             raise DvlBridgeError(f'no DVL at {address.host}:{address.port} ({link.last_error})')
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -98,18 +114,33 @@ class DvlBridgeNode(BridgeNode):
         """Disconnect (a sensor: nothing on the device to put back)."""
         if self.link is not None:
             self.link.stop()
-        self.link = None
+        self.link, self.clock = None, None
+
+    def _local_s(self) -> float:
+        """The node clock (s): what stamps are in (``/clock`` beside the simulator)."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def stamp_s(self, report: VelocityReport, arrival_s: float) -> float:
+        """When the report's velocity was measured, on the node clock (s)."""
+        clock = self.clock
+        sent_us = report.time_of_transmission_us or report.time_of_validity_us
+        if clock is None or sent_us is None or report.time_of_validity_us is None:
+            self.stamped_at_arrival += 1
+            return arrival_s
+        clock.add(sent_us * _US, arrival_s)
+        return clock.to_local(report.time_of_validity_us * _US) or arrival_s
 
     def _drain(self) -> None:
         link = self.link
         if link is None:
             return
-        for _, report in link.take():
+        for arrival_s, report in link.take():
+            stamp_s = self.stamp_s(report, arrival_s)  # every report times the clock
             if not (self.device_active and report.valid):
                 continue
             v, cov = report_in_link(report, self.rot)
-            t_ns = self.get_clock().now().nanoseconds
-            self._dvl.publish(bm.dvl_message(t_ns, v.tolist(), cov.ravel().tolist()))
+            self._dvl.publish(bm.dvl_message(round(stamp_s * 1e9), v.tolist(),
+                                             cov.ravel().tolist()))
             self.published += 1
 
     def device_report(self) -> Report:
@@ -123,7 +154,9 @@ class DvlBridgeNode(BridgeNode):
                   'report_age_s': age_s, 'bottom_lock': link.last_valid,
                   'reports': p.reports, 'published': self.published,
                   'malformed_lines': p.malformed, 'ignored_reports': p.ignored,
-                  'connects': link.connects, 'last_error': link.last_error or p.last_error}
+                  'connects': link.connects, 'last_error': link.last_error or p.last_error,
+                  'stamped_at_arrival': self.stamped_at_arrival,
+                  **(self.clock.report() if self.clock is not None else {})}
         if not link.connected:
             return Report(ERROR, f'DVL disconnected: {link.last_error}', values)
         if age_s > float(self.values['timeout_s']):

@@ -1,7 +1,9 @@
 """The dvl_bridge's TCP side, without ROS: connect, read, parse, reconnect, in a thread.
 
 The thread connects to the DVL (``HOST:PORT``), feeds what it reads to a `DvlParser` and
-queues the velocity reports with the local time (s) of their arrival; a closed or failed
+queues the velocity reports with the time (s) of their arrival, read on ``arrival_clock`` (the
+clock the bridge stamps with, for `uvms_hardware.device_time`) as soon as ``recv`` returns, not
+when the node drains the queue; ``clock`` (steady) times the reports' age. A closed or failed
 connection is retried every ``reconnect_period_s``. The node drains `take` from its timer::
 
     link = DvlLink(parse_host_port('127.0.0.1', 16171)).start()
@@ -25,10 +27,12 @@ class DvlLink:
     """A reader thread on one DVL; counters for /diagnostics."""
 
     def __init__(self, address: HostPort, reconnect_period_s: float = 1.0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 arrival_clock: Callable[[], float] | None = None) -> None:
         self.address = address
         self.reconnect_period_s = reconnect_period_s
         self.clock = clock
+        self.arrival_clock = clock if arrival_clock is None else arrival_clock
         self.parser = DvlParser()
         self.connected = False
         self.connects = 0
@@ -58,7 +62,7 @@ class DvlLink:
         return self.connected
 
     def take(self) -> list[tuple[float, VelocityReport]]:
-        """Reports queued since the last call, oldest first, with their arrival time (s)."""
+        """Reports queued since the last call, oldest first, with their arrival (s)."""
         out = []
         while self._queue:
             out.append(self._queue.popleft())
@@ -84,6 +88,7 @@ class DvlLink:
                 data = sock.recv(65536)
             except TimeoutError:
                 continue
+            arrival_s = self.arrival_clock()
             if not data:
                 self.last_error = 'the DVL closed the connection'
                 return
@@ -97,4 +102,4 @@ class DvlLink:
             for report in reports:
                 self.last_report_s = now_s
                 self.last_valid = report.valid
-                self._queue.append((now_s, report))
+                self._queue.append((arrival_s, report))

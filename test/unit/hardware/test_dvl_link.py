@@ -98,3 +98,22 @@ def test_no_dvl_means_no_connection() -> None:
         wait(lambda: url in link.last_error, 1.0, 'the error')
     finally:
         link.stop()
+
+
+def test_arrivals_are_read_on_the_arrival_clock_when_they_arrive(twin: DvlTwin) -> None:
+    """The stamp clock is read by the reader thread at recv, not when the node drains."""
+    ticks: list[float] = []
+
+    def arrival_clock() -> float:
+        ticks.append(time.monotonic())
+        return 1e6 + len(ticks)
+
+    link = DvlLink(parse_host_port(twin.url, 16171), arrival_clock=arrival_clock).start()
+    try:
+        assert link.wait_connected(2.0)
+        wait(lambda: len(ticks) >= 2, 2.0, 'two arrivals')
+        time.sleep(0.2)  # drained late: the arrival times do not change
+        taken = link.take()
+        assert taken and all(t_s > 1e6 for t_s, _ in taken)
+    finally:
+        link.stop()

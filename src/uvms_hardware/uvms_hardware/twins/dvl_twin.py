@@ -11,6 +11,14 @@ only fills in while no reading comes (a DVL without lock still reports at its pi
 figure of merit and covariance come from the plant: the twin does not model the acoustics.
 Commands from the client are not answered (the bridge sends none). Binds 127.0.0.1, port 0 =
 a free one.
+
+Time, as the DVL's: ``clock`` is the DVL's own clock (s; Unix time by default, as a DVL
+synchronised by NTP; the plant's time when a plant drives it). ``time_of_validity`` is the
+centre of the ping: the plant's time of the reading when ``report`` is given one, else the
+clock when the report is made; ``time_of_transmission`` is the clock just before the line is
+sent (Water Linked's "DVL A50/A125 TCP JSON API", waterlinked/docs). Both in µs. ``sent_log``
+keeps (time_of_validity s, time_of_transmission s, vx) of recent reports, for tests comparing
+the bridge's stamps with what the twin sent.
 """
 
 from __future__ import annotations
@@ -20,6 +28,8 @@ import json
 import socket
 import threading
 import time
+from collections import deque
+from collections.abc import Callable
 from typing import Any
 
 from uvms_hardware.address import LOOPBACK
@@ -28,8 +38,13 @@ from uvms_hardware.address import LOOPBACK
 class DvlTwin:
     """The twin: a server thread; plant API ``set_velocity``; ``silent`` stops the stream."""
 
-    def __init__(self, port: int = 0, host: str = LOOPBACK, rate_hz: float = 10.0) -> None:
+    def __init__(self, port: int = 0, host: str = LOOPBACK, rate_hz: float = 10.0,
+                 clock: Callable[[], float] = time.time) -> None:
         self.rate_hz = rate_hz
+        #: The DVL's own clock (s): what time_of_validity and time_of_transmission read.
+        self.clock = clock
+        #: (time_of_validity s, time_of_transmission s, vx m/s) of the last reports sent.
+        self.sent_log: deque[tuple[float, float, float]] = deque(maxlen=10000)
         self._server = socket.create_server((host, port))
         self._server.settimeout(0.01)
         self.address: tuple[str, int] = self._server.getsockname()[:2]
@@ -81,11 +96,16 @@ class DvlTwin:
                               'altitude': altitude_m}
 
     def report(self, v_body_m_s: tuple[float, float, float], valid: bool = True,
-               fom: float = 0.002, altitude_m: float = 2.0) -> None:
-        """A new reading (one ping): sent now, and the ``rate_hz`` stream waits a period."""
+               fom: float = 0.002, altitude_m: float = 2.0,
+               time_of_validity_s: float | None = None) -> None:
+        """A new reading (one ping): sent now, and the ``rate_hz`` stream waits a period.
+
+        ``time_of_validity_s``: when the plant measured it, on the twin's ``clock`` (s); now
+        when not given.
+        """
         self.set_velocity(v_body_m_s, valid, fom, altitude_m)
         if not self.silent:
-            self._send_velocity(time.monotonic())
+            self._send_velocity(time.monotonic(), time_of_validity_s)
 
     def send_raw(self, data: bytes) -> None:
         """Bytes to every client as they are (malformed lines for the tests)."""
@@ -106,8 +126,14 @@ class DvlTwin:
         with self._lock:
             return len(self._clients)
 
-    def velocity_line(self, now_s: float) -> bytes:
-        """One velocity report as Water Linked's documentation shows it (json_v3.1)."""
+    def velocity_line(self, time_of_validity_s: float,
+                      time_of_transmission_s: float | None = None) -> bytes:
+        """One velocity report as Water Linked's documentation shows it (json_v3.1).
+
+        Times on the twin's clock (s); the transmission time is the validity time when not
+        given.
+        """
+        sent_s = time_of_validity_s if time_of_transmission_s is None else time_of_transmission_s
         with self._lock:
             p = dict(self._velocity)
             since_s = (1.0 / self.rate_hz if self._last_report_s is None
@@ -121,8 +147,8 @@ class DvlTwin:
             'transducers': [{'id': i, 'velocity': 0.0, 'distance': p['altitude'], 'rssi': -30.0,
                              'nsd': -90.0, 'beam_valid': p['valid']} for i in range(4)],
             'velocity_valid': p['valid'], 'status': 0, 'format': 'json_v3.1',
-            'type': 'velocity', 'time_of_validity': int(now_s * 1e6),
-            'time_of_transmission': int(now_s * 1e6)}
+            'type': 'velocity', 'time_of_validity': round(time_of_validity_s * 1e6),
+            'time_of_transmission': round(sent_s * 1e6)}
         return (json.dumps(report) + '\n').encode()
 
     @staticmethod
@@ -133,12 +159,16 @@ class DvlTwin:
                   'format': 'json_v3.1'}
         return (json.dumps(report) + '\n').encode()
 
-    def _send_velocity(self, monotonic_s: float) -> None:
-        line = self.velocity_line(time.time())
+    def _send_velocity(self, monotonic_s: float, time_of_validity_s: float | None = None
+                       ) -> None:
+        sent_s = self.clock()
+        validity_s = sent_s if time_of_validity_s is None else time_of_validity_s
+        line = self.velocity_line(validity_s, sent_s)
         with self._lock:
             self._next_velocity_s = monotonic_s + 1.0 / self.rate_hz
             self._last_report_s = monotonic_s
             self.sent += 1
+            self.sent_log.append((validity_s, sent_s, float(self._velocity['v'][0])))
         self.send_raw(line)
 
     def _send(self, client: socket.socket, data: bytes) -> None:
@@ -172,7 +202,7 @@ class DvlTwin:
                 self._send_velocity(now_s)
             if now_s >= next_position_s:
                 next_position_s += 1.0
-                self.send_raw(self.position_line(time.time()))
+                self.send_raw(self.position_line(self.clock()))
 
 
 def main(argv: list[str] | None = None) -> None:
