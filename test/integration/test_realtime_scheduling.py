@@ -7,7 +7,9 @@ unprivileged user's login has them.
 
 from __future__ import annotations
 
+import io
 import os
+import resource
 import shutil
 import signal
 import subprocess
@@ -140,3 +142,46 @@ def test_uvms_launch_refused_the_priority_warns_once_and_the_run_succeeds() -> N
     assert warnings[0].startswith('uvms launch: warning: real-time scheduling refused')
     assert GRANTED not in result.stderr
     assert 'normal priority; running until' in result.stderr
+
+
+def test_a_loop_node_launched_at_fifo_runs_on_under_its_runaway_guard() -> None:
+    """Started as ``uvms launch`` starts it: the start-up passes, the loop gets 2 s / 3 s.
+
+    The start-up (imports, model, kernels: 1-2 s without a blocking call) runs under the
+    30 s start-up guard; the running loop blocks every period, so its 2 s guard never fires.
+    """
+    from uvms_bringup.launch_helpers import SIMULATOR
+    from uvms_bringup.processes import Launcher, NodeProcessSpec
+    from uvms_common.scheduling import LOOP_RTTIME_S
+
+    if not fifo_allowed():
+        pytest.skip('SCHED_FIFO not allowed here (uvms doctor says why)')
+    command = (str(BIN / 'simulator'), '--ros-args', '-r', '__ns:=/rt_test', '-p',
+               'mode:=realtime', '-p', 'rt_priority:=50')
+    output = _Lines()
+    launcher = Launcher([NodeProcessSpec(SIMULATOR, 'simulator-1', command, rt_priority=50)],
+                        env=child_env(), stdout=output, stderr=output)
+    launcher.start()
+    try:
+        deadline = time.monotonic() + 60.0
+        while GRANTED not in output.text() and time.monotonic() < deadline:
+            assert launcher.running(), output.text()
+            time.sleep(0.1)
+        assert 'runaway guard 2 s (RLIMIT_RTTIME)' in output.text()
+        pid = launcher.processes[0].popen.pid
+        limit = resource.prlimit(pid, resource.RLIMIT_RTTIME)
+        time.sleep(2 * LOOP_RTTIME_S[1])
+        alive = bool(launcher.running())
+    finally:
+        launcher.stop()
+    assert limit == (round(LOOP_RTTIME_S[0] * 1e6), round(LOOP_RTTIME_S[1] * 1e6))
+    assert alive, output.text()
+    assert launcher.processes[0].status in (0, 130), output.text()
+
+
+class _Lines(io.StringIO):
+    """The launcher's and the node's output, kept."""
+
+    def text(self) -> str:
+        """Everything written so far."""
+        return self.getvalue()

@@ -59,7 +59,7 @@ from uvms_bringup.processes import (
     NodeProcess,
     NodeProcessSpec,
     StopRequest,
-    describe_status,
+    end_line,
 )
 from uvms_bringup.scenario import Scenario
 from uvms_common import process_stats
@@ -341,8 +341,8 @@ def launch_graph(
             line = describe_scheduling(scheduling, plans)
             # On the robot no simulator ends the run: it runs until Ctrl-C or a failure.
             plant = hardware is None or hardware.twins
-            return _run(launcher, stop, mode, duration_s if plant else None, quiet, line,
-                        CostWatch(stats))
+            return run_launch(launcher, stop, mode, duration_s if plant else None, quiet,
+                              line, CostWatch(stats))
     finally:
         if own_stop is not None:
             own_stop.restore()
@@ -359,9 +359,23 @@ def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) ->
         raise LaunchError(str(exc)) from exc
 
 
-def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
-         quiet: bool, scheduling: str, costs: CostWatch) -> int:
-    """Start, watch and stop a launch; report its outcome, and what each process cost."""
+def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
+               quiet: bool, scheduling: str, costs: CostWatch) -> int:
+    """Start, watch and stop a launch; report its outcome, and what each process cost.
+
+    Args:
+        launcher: The processes, not started yet.
+        stop: Polled for a stop request (SIGINT, SIGTERM).
+        mode: ``realtime`` or ``lockstep``, for the launch line.
+        duration_s: Simulated duration after which the simulator's exit 0 is the normal
+            end; None: the run goes on until stopped or a failure.
+        quiet: Report only errors and the closing line.
+        scheduling: The loop processes' scheduling, worded for the launch line.
+        costs: Where the processes' costs are measured.
+
+    Returns:
+        The exit status of ``launch_graph``.
+    """
     costs.started_ns = time.monotonic_ns()
     launcher.start()
     if not quiet:
@@ -405,12 +419,11 @@ def _run(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | N
         # (a Python stopped while it imports its site module exits 1): the failure is named
         # below; their status says nothing more.
         if other is not process and outcome != 'failed':
-            launcher.report(f'uvms launch: error: node {other.name!r} exited: '
-                            f'{describe_status(other.status or 0)} while stopping')
+            launcher.report(f'uvms launch: error: node {other.name!r} {end_line(other)} '
+                            'while stopping')
     if outcome == 'failed' and process is not None:
         launcher.report(f'uvms launch: error: node {process.name!r} ({process.plan.label}) '
-                        f'exited: {describe_status(process.status or 0)}; stopped the other '
-                        'nodes')
+                        f'{end_line(process)}; stopped the other nodes')
         return EXIT_FAILURE
     unclean = bool(launcher.unclean_stops())
     mission = '; the mission failed' if told else ''

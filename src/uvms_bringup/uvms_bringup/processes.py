@@ -6,6 +6,11 @@ the other nodes' last messages and then closes its file. The children run in the
 process group, so a Ctrl-C in the terminal reaches only the launcher, which decides the
 order; on Linux they also receive SIGTERM if the launcher itself dies (``PR_SET_PDEATHSIG``),
 so no orphaned node keeps publishing.
+
+A loop process starts at its SCHED_FIFO priority with a start-up runaway guard
+(``RLIMIT_RTTIME``, ``STARTUP_RTTIME_S``), which the node tightens to ``LOOP_RTTIME_S`` once
+built (``uvms_common.scheduling``). One that spins past it is ended by the kernel (SIGXCPU,
+then SIGKILL); ``end_line`` says so, and the launch stops as for any failed node.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from pathlib import Path
 from typing import IO, Protocol
 
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_common.scheduling import STARTUP_RTTIME_S, limit_rt_time, rt_time_limit_s
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED
 
 from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, RECORDER, SIMULATOR, NodeSpec
@@ -89,12 +95,15 @@ class NodeProcess:
         popen: The process.
         status: Exit status once it ended (negative: killed by that signal), else None.
         signals_sent: Signals the launcher sent it, in order.
+        rt_time_limit_s: Its RLIMIT_RTTIME (soft, hard; s) when last seen running, for a
+            real-time process; None where unlimited or not looked at.
     """
 
     plan: NodeProcessSpec
     popen: subprocess.Popen[bytes]
     status: int | None = None
     signals_sent: list[signal.Signals] = field(default_factory=list)
+    rt_time_limit_s: tuple[float, float] | None = None
 
     @property
     def name(self) -> str:
@@ -104,7 +113,12 @@ class NodeProcess:
     def poll(self) -> int | None:
         """The exit status if the process has ended (kept once known)."""
         if self.status is None:
+            # Kept only from a process still running after it was read: the kernel raises
+            # the soft limit by 1 s as it sends SIGXCPU.
+            limit = rt_time_limit_s(self.popen.pid) if self.plan.rt_priority else None
             self.status = self.popen.poll()
+            if self.status is None and limit is not None:
+                self.rt_time_limit_s = limit
         return self.status
 
 
@@ -120,6 +134,25 @@ def describe_status(status: int) -> str:
     return f'status {status}'
 
 
+def end_line(process: NodeProcess) -> str:
+    """How a node's process ended, after ``node 'NAME' ``: ``exited: status 1``, ...
+
+    A real-time process ended by SIGXCPU, or by a SIGKILL the launcher did not send, ran past
+    its runaway guard (``RLIMIT_RTTIME``): the kernel's soft and hard limits.
+    """
+    status = process.status or 0
+    limit = process.rt_time_limit_s
+    if process.plan.rt_priority and status == -signal.SIGXCPU:
+        ran = f'{limit[0]:g} s ' if limit else ''
+        return f'stopped: real-time loop ran {ran}without blocking (RLIMIT_RTTIME)'
+    if (process.plan.rt_priority and status == -signal.SIGKILL
+            and signal.SIGKILL not in process.signals_sent):
+        ran = f'{limit[1]:g} s ' if limit else ''
+        return (f'stopped: killed by SIGKILL: real-time loop ran {ran}without blocking '
+                "(RLIMIT_RTTIME's hard limit), or the out-of-memory killer")
+    return f'exited: {describe_status(status)}'
+
+
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child between fork and exec
     """Ask Linux for SIGTERM when the launcher dies, so that no node outlives it."""
     if _PRCTL is not None:
@@ -131,12 +164,16 @@ def _child_setup(rt_priority: int) -> Callable[[], None]:
 
     A loop process that starts at its SCHED_FIFO priority loads its modules and kernels
     ahead of the machine's other work, so the first simulated step comes sooner on a busy
-    machine. Refused (the launcher checked before), it starts at normal priority: the node
-    asks again and warns.
+    machine; its start-up runaway guard (``STARTUP_RTTIME_S``) comes with it. Refused (the
+    launcher checked before), it starts at normal priority: the node asks again and warns.
     """
     def setup() -> None:  # pragma: no cover - runs in the child
         _die_with_parent()
         if rt_priority:
+            try:
+                limit_rt_time(*STARTUP_RTTIME_S)
+            except OSError:
+                pass
             try:
                 os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(rt_priority))
             except OSError:

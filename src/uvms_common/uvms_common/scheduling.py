@@ -7,7 +7,13 @@ Where the system refuses (no ``CAP_SYS_NICE``, an ``RLIMIT_RTPRIO`` below the pr
 container), ``refusal_line`` is the one warning naming what to change, and the process runs
 on at normal priority. The kernel's real-time throttling (``/proc/sys/kernel/
 sched_rt_runtime_us``: 950 ms of every 1 s by default) leaves other processes 5 % of each
-CPU, so a runaway real-time loop slows the machine instead of freezing it.
+CPU, so a runaway real-time loop slows the machine instead of freezing it; and the runaway
+guard ends it: a process that asks for SCHED_FIFO also gets ``RLIMIT_RTTIME``
+(``LOOP_RTTIME_S``), the CPU time a real-time thread may use without one blocking call. A
+healthy loop blocks every period (waiting for its timer or its input), which starts the count
+again; one that spins gets SIGXCPU from the kernel after 2 s (its default action ends the
+process) and SIGKILL after 3 s. The kernel does the counting in its scheduler tick, so the
+guard needs no CPU of its own.
 
 Pure standard library: no rclpy (``uvms_common.node_main`` reads the node's parameters).
 
@@ -26,6 +32,7 @@ import os
 import resource
 import subprocess
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,6 +48,14 @@ CAP_SYS_NICE = 23
 #: The kernel's real-time throttling: runtime allowed to real-time tasks per period (µs).
 RT_RUNTIME_FILE = Path('/proc/sys/kernel/sched_rt_runtime_us')
 RT_PERIOD_FILE = Path('/proc/sys/kernel/sched_rt_period_us')
+#: RLIMIT_RTTIME of a loop process once it runs its loop (soft, hard; s of CPU at SCHED_FIFO
+#: without a blocking call): SIGXCPU at the soft limit, SIGKILL at the hard one.
+LOOP_RTTIME_S = (2.0, 3.0)
+#: RLIMIT_RTTIME while a loop process starts (set by ``uvms launch`` between fork and exec,
+#: beside its SCHED_FIFO): imports and kernels ran 1-2 s without a blocking call here (a 1 s
+#: limit ended the simulator's start-up, 2 s did not), and a kernel compiled at a first start
+#: runs for seconds more; the process tightens it to ``LOOP_RTTIME_S`` once built.
+STARTUP_RTTIME_S = (30.0, 31.0)
 
 _HOW_TO_ALLOW = (
     'allow it with `@GROUP - rtprio 98` (and `memlock unlimited` for locked memory) in '
@@ -146,6 +161,38 @@ def refusal_line(what: str, exc: OSError) -> str:
             f'{_HOW_TO_ALLOW}')
 
 
+def limit_rt_time(soft_s: float, hard_s: float, pid: int = 0) -> None:
+    """Set RLIMIT_RTTIME of a process, never raising what is already lower.
+
+    Lowering a limit needs no privilege; a limit set lower by the administrator or the
+    launcher stays.
+
+    Args:
+        soft_s: CPU time without a blocking call after which the kernel sends SIGXCPU (s).
+        hard_s: CPU time without a blocking call after which it sends SIGKILL (s).
+        pid: The process (0: this one).
+
+    Raises:
+        OSError: The system refused (another user's process).
+    """
+    wanted = (round(soft_s * 1e6), round(hard_s * 1e6))
+    current = resource.prlimit(pid, resource.RLIMIT_RTTIME)
+    soft, hard = (w if c == resource.RLIM_INFINITY else min(c, w)
+                  for c, w in zip(current, wanted, strict=True))
+    resource.prlimit(pid, resource.RLIMIT_RTTIME, (min(soft, hard), hard))
+
+
+def rt_time_limit_s(pid: int = 0) -> tuple[float, float] | None:
+    """RLIMIT_RTTIME of a process (soft, hard; s); None where unlimited or unreadable."""
+    try:
+        soft, hard = resource.prlimit(pid, resource.RLIMIT_RTTIME)
+    except OSError:
+        return None
+    if soft == resource.RLIM_INFINITY:
+        return None
+    return soft * 1e-6, (float('inf') if hard == resource.RLIM_INFINITY else hard * 1e-6)
+
+
 def threads(pid: int = 0) -> list[int]:
     """Thread ids of a process (0: this one), from /proc; ``[pid]`` where unreadable.
 
@@ -164,7 +211,9 @@ def threads(pid: int = 0) -> list[int]:
 def apply_scheduling(request: Scheduling, pid: int = 0) -> Outcome:
     """Ask for what ``request`` names, for every thread; refusals in ``Outcome.refused``.
 
-    Pinning comes first (it needs no privilege), then locked memory, then the priority.
+    Pinning comes first (it needs no privilege), then locked memory, then the priority with
+    its runaway guard (``LOOP_RTTIME_S``). The guard's count starts at this call: a start-up
+    that ran at SCHED_FIFO without blocking (imports, kernels) does not count against it.
 
     Args:
         request: What to ask for.
@@ -193,6 +242,11 @@ def apply_scheduling(request: Scheduling, pid: int = 0) -> Outcome:
             outcome.applied.append(f'SCHED_FIFO {request.priority}')
         except OSError as exc:
             refused.append((f'SCHED_FIFO {request.priority}', exc))
+        else:
+            try:
+                outcome.applied.append(_guard_runaway(pid))
+            except OSError as exc:
+                refused.append(('RLIMIT_RTTIME', exc))
     if refused:
         what = ', '.join(name for name, _ in refused)
         first = refused[0][1]
@@ -201,6 +255,15 @@ def apply_scheduling(request: Scheduling, pid: int = 0) -> Outcome:
         else:
             outcome.refused = f'{what} refused: {first}: running on without it'
     return outcome
+
+
+def _guard_runaway(pid: int) -> str:
+    """Set the loop's RLIMIT_RTTIME (``LOOP_RTTIME_S``), counted from now; the guard, worded."""
+    limit_rt_time(*LOOP_RTTIME_S, pid)
+    if not pid:
+        time.sleep(0.001)  # one blocking call: this thread's count starts again
+    limit = rt_time_limit_s(pid)
+    return f'runaway guard {limit[0]:g} s (RLIMIT_RTTIME)' if limit else 'no runaway guard'
 
 
 def fifo_refusal(priority: int = DEFAULT_RT_PRIORITY) -> str:

@@ -1,0 +1,45 @@
+"""How the launcher words a node's end: the runaway guard named, other ends as before."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+from typing import cast
+
+import pytest
+from uvms_bringup.launch_helpers import CONTROLLER, RECORDER
+from uvms_bringup.processes import NodeProcess, NodeProcessSpec, end_line
+
+
+def ended(status: int, rt_priority: int = 50, sent: tuple[signal.Signals, ...] = (),
+          limit: tuple[float, float] | None = (2.0, 3.0)) -> NodeProcess:
+    """A node process that ended with ``status``."""
+    spec = CONTROLLER if rt_priority else RECORDER
+    plan = NodeProcessSpec(spec, f'{spec.executable}-1', ('x',), rt_priority=rt_priority)
+    return NodeProcess(plan, cast(subprocess.Popen[bytes], None), status, list(sent), limit)
+
+
+def test_sigxcpu_names_the_loop_that_ran_without_blocking() -> None:
+    """SIGXCPU: the soft limit it ran past, and RLIMIT_RTTIME."""
+    assert end_line(ended(-signal.SIGXCPU)) == (
+        'stopped: real-time loop ran 2 s without blocking (RLIMIT_RTTIME)')
+
+
+def test_a_sigkill_the_launcher_did_not_send_names_the_hard_limit() -> None:
+    """SIGKILL not sent by the launcher: the hard limit, or the out-of-memory killer."""
+    assert end_line(ended(-signal.SIGKILL, limit=(30.0, 31.0))) == (
+        "stopped: killed by SIGKILL: real-time loop ran 31 s without blocking (RLIMIT_RTTIME's "
+        'hard limit), or the out-of-memory killer')
+
+
+@pytest.mark.parametrize(('process', 'line'), [
+    (ended(-signal.SIGKILL, sent=(signal.SIGINT, signal.SIGTERM, signal.SIGKILL)),
+     'exited: killed by SIGKILL'),
+    (ended(-signal.SIGKILL, rt_priority=0, limit=None), 'exited: killed by SIGKILL'),
+    (ended(1), 'exited: status 1'),
+    (ended(-signal.SIGXCPU, limit=None),
+     'stopped: real-time loop ran without blocking (RLIMIT_RTTIME)'),
+])
+def test_other_ends_are_worded_as_before(process: NodeProcess, line: str) -> None:
+    """The launcher's own SIGKILL, a normal process, an error status: as before."""
+    assert end_line(process) == line
