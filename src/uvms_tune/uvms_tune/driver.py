@@ -29,6 +29,7 @@ from optuna.trial import FrozenTrial, TrialState
 
 from uvms_tune.control_api import CONTROLLER_NODE_PARAMETER_SPECS
 from uvms_tune.errors import TuneError
+from uvms_tune.force_source import with_force_source
 from uvms_tune.gains import (
     Stability,
     as_candidate,
@@ -188,22 +189,28 @@ class Tuner:
         check = stability({**self.base, **values}, CONTROL_PERIOD_S,
                           self.tune.train_max_wall_stiffness_n_m)
         if not check.stable:
-            return Evaluation(values, check, unstable_result(check.margin, check.loop))
+            return Evaluation(values, check, unstable_result(check.margin, check.loop,
+                                                             [run.label for run in runs]))
         figures = self.run_scenarios(values, runs, recordings, label)
         return Evaluation(values, check, aggregate(figures, check.margin, self.tune.objective))
 
     def run_scenarios(self, values: Mapping[str, Any], runs: Sequence[ScenarioRun],
                       recordings: dict[str, bytes] | None = None,
                       label: str = '') -> list[ScenarioFigures]:
-        """Each run's figures for controller parameters ``values`` (one batch on the runner)."""
+        """Each run's figures for controller parameters ``values`` (one batch on the runner).
+
+        Every run is recorded: its recording says whether its force figures are the
+        ground truth's (``force_source.with_force_source``).
+        """
         from uvms_sweep.batch import point_request
 
         requests = [point_request(run.label, run.scenario_path, run.duration_s or
                                   _scenario_duration(run.scenario_path), run.seed,
                                   {'controller': dict(values), 'simulator': run.simulator},
-                                  record=recordings is not None and index == 0)
-                    for index, run in enumerate(runs)]
-        outcomes = self.runner(requests, self.tune.timeout_s)
+                                  record=True)
+                    for run in runs]
+        outcomes = [with_force_source(outcome)
+                    for outcome in self.runner(requests, self.tune.timeout_s)]
         if recordings is not None and outcomes and outcomes[0].get('mcap'):
             recordings[label] = outcomes[0]['mcap']
         return [scenario_figures(run.label, outcome, self.tune.objective,

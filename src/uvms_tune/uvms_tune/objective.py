@@ -2,7 +2,10 @@
 
 Each scenario run gives its ``uvms report`` metrics; a run that failed, never touched the
 wall, bounced, did not settle or saturated the thrusters is a violated constraint with its
-reason, not a figure. A successful one scores
+reason, not a figure. So is a run missing what a constraint or the objective needs: its force
+figures from the simulator's ground-truth contact force (never the controller's own estimate
+F_e), its overshoot (never scored as 0) or its thruster data (the saturation constraint is
+not passed unchecked). A successful one scores
 
     J = w_rms e_rms / F_d + w_os overshoot / 100 + w_ts t_settle
 
@@ -12,6 +15,7 @@ time in s), and a trial scores (1 - w_worst) mean(J) + w_worst max(J) over its s
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -19,6 +23,11 @@ from typing import Any
 #: Objective value told to Optuna for a trial that violates a constraint: Optuna needs a
 #: number, and the sampler ranks such trials by their violation, not by it.
 INFEASIBLE_VALUE = 10.0
+#: The figures' keys that a scenario run's summary keeps (``ScenarioFigures.as_dict``).
+FIGURE_KEYS = ('desired_force_N', 'force_rms_error_N', 'overshoot_percent', 'settling_time_s',
+               'first_contact_s', 'contact_count', 'saturation_scale_min', 'force_source')
+#: ``force_source`` of force figures from the simulator's ground-truth contact force.
+GROUND_TRUTH = 'contact'
 
 
 @dataclass(frozen=True)
@@ -39,10 +48,8 @@ class ScenarioFigures:
 
     def as_dict(self) -> dict[str, Any]:
         """A JSON-able summary (trial user attrs, the parameter file's provenance)."""
-        keys = ('desired_force_N', 'force_rms_error_N', 'overshoot_percent', 'settling_time_s',
-                'first_contact_s', 'contact_count', 'saturation_scale_min')
         return {'label': self.label, 'score': self.score, 'reason': self.reason,
-                **{key: self.metrics.get(key) for key in keys}}
+                **{key: self.metrics.get(key) for key in FIGURE_KEYS}}
 
 
 def scenario_figures(label: str, outcome: Mapping[str, Any], weights: Mapping[str, float],
@@ -55,26 +62,52 @@ def scenario_figures(label: str, outcome: Mapping[str, Any], weights: Mapping[st
     reason = violation(metrics, constraints)
     if reason:
         return ScenarioFigures(label, None, reason, metrics)
-    f_d = abs(float(metrics['desired_force_N'] or 0.0))
-    score = (weights['rms_force_error'] * float(metrics['force_rms_error_N'] or 0.0) / f_d
-             + weights['overshoot'] * float(metrics['overshoot_percent'] or 0.0) / 100.0
-             + weights['settling_time'] * float(metrics['settling_time_s'] or 0.0))
+    # violation() has checked that every figure of J is there and finite.
+    f_d = abs(float(metrics['desired_force_N']))
+    score = (weights['rms_force_error'] * float(metrics['force_rms_error_N']) / f_d
+             + weights['overshoot'] * float(metrics['overshoot_percent']) / 100.0
+             + weights['settling_time'] * float(metrics['settling_time_s']))
     return ScenarioFigures(label, score, '', metrics)
 
 
+def figure(metrics: Mapping[str, Any], key: str) -> float | None:
+    """A metric as a finite number; None where it is missing or not finite (NaN)."""
+    value = metrics.get(key)
+    if value is None or isinstance(value, (bool, str)):
+        return None
+    number = float(value)
+    return number if math.isfinite(number) else None
+
+
 def violation(metrics: Mapping[str, Any], constraints: Mapping[str, float]) -> str:
-    """Why a finished run's metrics violate a constraint; '' when they do not."""
-    if metrics.get('first_contact_s') is None:
+    """Why a finished run's metrics violate a constraint; '' when they do not.
+
+    Missing data fails the run and says what is missing: force figures not from the
+    ground-truth contact force, no overshoot, no thruster data.
+    """
+    source = metrics.get('force_source')
+    if source != GROUND_TRUTH:
+        return ('no ground-truth contact force: the run recorded none (/uvms/contact); the '
+                "controller's own estimate F_e is not scored" if source == 'controller' else
+                'no ground-truth contact force: the run does not say which force its figures '
+                'are of (force_source)')
+    if figure(metrics, 'first_contact_s') is None:
         return 'no contact'
-    if not metrics.get('desired_force_N'):
+    if not figure(metrics, 'desired_force_N'):
         return 'no force set-point in contact'
-    contacts = metrics.get('contact_count') or 0
+    contacts = figure(metrics, 'contact_count') or 0.0
     if contacts > constraints['max_contacts']:
         return f'bounced: {int(contacts)} contacts (a safety stop or a lost contact)'
-    if metrics.get('settling_time_s') is None or metrics.get('force_rms_error_N') is None:
+    if figure(metrics, 'settling_time_s') is None or figure(metrics,
+                                                           'force_rms_error_N') is None:
         return 'force did not settle within 5 % of F_d'
-    scale = metrics.get('saturation_scale_min')
-    if scale is not None and scale < constraints['min_saturation_scale']:
+    if figure(metrics, 'overshoot_percent') is None:
+        return 'no overshoot figure (the peak force was not measured)'
+    scale = figure(metrics, 'saturation_scale_min')
+    if scale is None:
+        return ('no thruster data recorded (/uvms/thrusters/state): the saturation '
+                'constraint cannot be checked')
+    if scale < constraints['min_saturation_scale']:
         return (f'thrusters saturated: wrench scaled down to {scale:.3g} '
                 f"(< {constraints['min_saturation_scale']:g})")
     return ''
@@ -102,9 +135,16 @@ class TrialResult:
         return all(c <= 0.0 for c in self.constraints)
 
 
-def unstable_result(margin: float, loop: str) -> TrialResult:
-    """An unstable candidate: never simulated, infeasible by its stability margin."""
-    return TrialResult(INFEASIBLE_VALUE, (max(-margin, 1e-6), 0.0), (f'unstable: {loop}',))
+def unstable_result(margin: float, loop: str, labels: Sequence[str] = ()) -> TrialResult:
+    """An unstable candidate: never simulated, infeasible by its stability margin.
+
+    Each of ``labels`` (the runs it would have run) is a failed run saying so, so that a
+    report counts them as failed instead of showing no runs.
+    """
+    reason = f'unstable: {loop}'
+    figures = tuple(ScenarioFigures(label, None, f'not simulated: {reason}', {})
+                    for label in labels)
+    return TrialResult(INFEASIBLE_VALUE, (max(-margin, 1e-6), 0.0), (reason,), figures)
 
 
 def aggregate(figures: Sequence[ScenarioFigures], margin: float,

@@ -12,7 +12,8 @@ from uvms_tune.gains import stability
 from uvms_tune.tune_file import TuneFile, parse_tune_file
 
 DONE = {'desired_force_N': 20.0, 'overshoot_percent': 5.0, 'settling_time_s': 1.0,
-        'first_contact_s': 8.05, 'contact_count': 1, 'saturation_scale_min': 1.0}
+        'first_contact_s': 8.05, 'contact_count': 1, 'saturation_scale_min': 1.0,
+        'force_source': 'contact'}
 
 
 def tune_file(low: float = 0.01, high: float = 20.0, trials: int = 8) -> TuneFile:
