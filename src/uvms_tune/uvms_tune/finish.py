@@ -4,7 +4,8 @@ The training figures of a set come from its trial where the study has one (the e
 baselines, the best trial); the rest, and every held-out run, are run here in one batch per
 set. The first training run of the defaults and of the tuned gains runs once more, recorded,
 for the force figure; the tuned one's figures go into the provenance as ``rerun_figures``
-(they reproduce the best trial's: the runs are lockstep and seeded).
+and are compared with the best trial's (the runs are lockstep and seeded, so they should be
+equal): any difference is listed in report.md and as ``rerun_differences``.
 """
 
 from __future__ import annotations
@@ -17,7 +18,13 @@ from optuna.trial import FrozenTrial
 from uvms_tune.driver import Tuner
 from uvms_tune.objective import ScenarioFigures
 from uvms_tune.output import git_commit, write_gains
-from uvms_tune.report import SetFigures, draw_figures, report_text
+from uvms_tune.report import (
+    SetFigures,
+    draw_figures,
+    report_text,
+    reproduction_differences,
+    reproduction_text,
+)
 
 
 def figures_from_attrs(items: list[dict[str, Any]]) -> list[ScenarioFigures]:
@@ -56,6 +63,8 @@ def write_results(tuner: Tuner, best: FrozenTrial, trials: int) -> tuple[Path, P
     # also the check that the best trial's figures reproduce.
     tuner.evaluate(baselines['defaults'], tune.train[:1], recordings, 'defaults')
     rerun = tuner.evaluate(dict(best.params), tune.train[:1], recordings, 'tuned')
+    rerun_figures = [f.as_dict() for f in rerun.result.figures]
+    differences = reproduction_differences(best.user_attrs['figures'], rerun_figures)
     provenance = {
         'robot': tune.robot, 'tune_file': str(tune.path), 'tune_name': tune.name,
         'trial': best.number, 'trials': len(tuner.finished()), 'budget': trials,
@@ -64,7 +73,7 @@ def write_results(tuner: Tuner, best: FrozenTrial, trials: int) -> tuple[Path, P
         'stability_loop': best.user_attrs['stability_loop'],
         'figures': best.user_attrs['figures'],
         'held_out_figures': [f.as_dict() for f in sets[-1].held_out],
-        'rerun_figures': [f.as_dict() for f in rerun.result.figures],
+        'rerun_figures': rerun_figures, 'rerun_differences': differences,
         'commit': git_commit(Path(__file__).parent), 'seed': tune.seed,
     }
     gains_file = write_gains(tuner.out_dir, best.user_attrs['controller'], provenance)
@@ -75,7 +84,8 @@ def write_results(tuner: Tuner, best: FrozenTrial, trials: int) -> tuple[Path, P
              '', 'Figures: `figures/best_objective.png`, `figures/gains.png`'
              + (', `figures/force.png`' if recordings else '') + '.']
     report = tuner.out_dir / 'report.md'
-    report.write_text(report_text(tune.name, sets, tune.objective['worst'], notes) + '\n',
-                      encoding='utf-8')
+    reproduction = reproduction_text(tune.train[0].label, differences)
+    report.write_text(report_text(tune.name, sets, tune.objective['worst'], notes,
+                                  reproduction) + '\n', encoding='utf-8')
     draw_figures(tuner.out_dir, tuner.finished(), tune.gains, recordings)
     return gains_file, report
