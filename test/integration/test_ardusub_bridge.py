@@ -102,6 +102,13 @@ class Rig:
         rclpy.try_shutdown(context=self.context)
 
 
+@pytest.fixture(autouse=True)
+def journal_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Journals of original values go to the test's folder (and its bridge processes')."""
+    monkeypatch.setenv('UVMS_JOURNAL_DIR', str(tmp_path))
+    return tmp_path
+
+
 @pytest.fixture
 def rig() -> Iterator[Rig]:
     """A running twin and a rig around it."""
@@ -164,6 +171,27 @@ def test_deactivate_puts_the_vehicle_back(rig: Rig) -> None:
     neutral = [r for r in rig.twin.overrides() if r.channels[:8] == (1500,) * 8]
     assert neutral, 'no neutral override before the release'
     assert rig.twin.servo_outputs_us()[:8] == [1500] * 8
+
+
+def test_an_activate_that_raises_half_way_puts_everything_back(
+        rig: Rig, journal_dir: Path) -> None:
+    """Arm raises after passthrough was set: Motor1..8 again, disarmed, overrides released."""
+    bridge = rig.start_bridge(autostart=False)
+    assert bridge.trigger_configure() == TransitionCallbackReturn.SUCCESS
+    assert bridge.link is not None
+    link = bridge.link
+
+    def arm_raises(armed: bool, end_s: float = math.inf) -> None:
+        assert functions(rig.twin) == RCIN  # passthrough is on: this is half-way
+        raise RuntimeError('arm failed half-way (injected)')
+
+    link.arm = arm_raises  # type: ignore[method-assign]
+    assert bridge.trigger_activate() != TransitionCallbackReturn.SUCCESS
+    assert functions(rig.twin) == MOTORS and not rig.twin.armed
+    rig.spin_until(lambda: rig.twin.overrides()[-1].channels[:8] == (0,) * 8, 1.0,
+                   'the release of channels 1-8')
+    assert not list(journal_dir.glob('*.json')), 'the journal outlived a complete restore'
+    assert bridge.refusal.startswith('RuntimeError: arm failed half-way')
 
 
 def test_gcs_id_mismatch_refuses_configure(rig: Rig) -> None:

@@ -1,17 +1,24 @@
 """The ``ardusub_bridge`` node: command/actuators -> ArduSub RC overrides; imu, depth, battery.
 
-A managed node (``autostart``) over `uvms_hardware.ardusub_link.ArduSubLink`:
+A managed node (``autostart``) on the bridges' base (``bridge_node``) over
+`uvms_hardware.ardusub_link.ArduSubLink`:
 
 - configure: find ArduSub's HEARTBEAT (``heartbeat_timeout_s``), check its GCS id against
-  ``gcs_system_id`` (refused naming both), warn where a lost link is unprotected, ask for the
-  telemetry (MAV_CMD_SET_MESSAGE_INTERVAL), publish ``imu``, ``depth``, ``battery``.
-- activate: thruster outputs to RCIN passthrough (remembered), arm, take ``command/actuators``.
+  ``gcs_system_id`` and that no other ground station shares our id (refused naming them),
+  refuse thruster outputs an earlier run left in RC passthrough (naming them, the values to
+  restore and the command that does it), warn where a lost link is unprotected, listen for
+  the autopilot's watchdog script (``autopilot_watchdog``), ask for the telemetry
+  (MAV_CMD_SET_MESSAGE_INTERVAL), publish ``imu``, ``depth``, ``battery``.
+- activate: script mode changes nothing on the vehicle; passthrough mode journals the thruster
+  outputs' functions and sets RCIN passthrough. Then arm and take ``command/actuators``. Any
+  failure half-way puts back what was changed (the base's guarantee).
 - each period (``override_rate_hz``): thrusts -> PWM (T200 curve at the measured voltage,
   thruster direction) as RC_CHANNELS_OVERRIDE; no command for ``watchdog_timeout_s``: 1500 on
-  every thruster channel until commands return. A vehicle silent for ``link_timeout_s`` is an
-  ERROR on /diagnostics at once (a running goal can end on it).
-- deactivate, shutdown, SIGINT, SIGTERM: neutral, disarm, functions restored, override
-  released (``ArduSubLink.restore``).
+  every thruster until commands return. A vehicle silent for ``link_timeout_s`` is an ERROR on
+  /diagnostics at once (a running goal can end on it).
+- deactivate, shutdown, SIGINT, SIGTERM, a transition that raised: neutral, disarm, overrides
+  released, functions restored and read back, all within ``restore_budget_s``
+  (``ArduSubLink.restore``).
 
 Default ``mavlink_url`` ``udpout:127.0.0.1:14550``: the bridge is the client that speaks
 first (its 1 Hz HEARTBEAT opens the path), as a GCS does towards a router's server endpoint
@@ -22,35 +29,32 @@ vehicle, the endpoint to use is the router's; that address belongs in the hardwa
 from __future__ import annotations
 
 import math
-import sys
 from typing import Any
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
-from rclpy.exceptions import ParameterException
-from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, Imu
 from std_srvs.srv import Trigger
-from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
-from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
-from uvms_common.node_main import run_node
+from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.parameter_declaration import declare_specs
-from uvms_common.robot_parameters import declare_robot_name
 
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
-from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
-from uvms_hardware.device_clock import DeviceClock, stop_requested
+from uvms_hardware.ardusub_link import PASSTHROUGH, SCRIPT, ArduSubLink, LinkSettings
+from uvms_hardware.ardusub_restore import find_leftovers, leftovers_refusal
+from uvms_hardware.ardusub_watchdog import SCRIPT_NAME, ScriptSettings
+from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.device_clock import stop_requested
+from uvms_hardware.device_journal import DeviceJournal
 from uvms_hardware.errors import DeviceCheckError, HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
 from uvms_hardware.t200_curve import T200Curve
 from uvms_hardware.watchdog import CommandWatchdog
 from uvms_msgs.msg import ActuatorCommand
 
-SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 #: Telemetry intervals are asked for again this often (s), as RDML's ardusub_manager does.
 TELEMETRY_REQUEST_PERIOD_S = 20.0
-
+WATCHDOG_CHOICES = ('auto', SCRIPT, PASSTHROUGH)
 
 SPECS = (
     Spec('mavlink_url', 'udpout:127.0.0.1:14550', 'pymavlink URL of the vehicle: '
@@ -70,20 +74,30 @@ SPECS = (
     Spec('thruster_directions', [1, 1, 1, 1, 1, 1, 1, 1], '+1/-1: thruster i on the frame'),
     Spec('surface_pressure_pa', 101325.0, 'Pressure at zero depth (Pa); ~/zero_depth sets it'),
     Spec('water_density_kg_m3', 1000.0, 'Water density for depth (kg/m^3)', 900.0, 1100.0),
+    Spec('autopilot_watchdog', 'auto', f'{SCRIPT_NAME} on the autopilot: auto (script mode '
+         'when heard at configure, else passthrough), script (refuse without it), passthrough '
+         '(never use it)'),
+    Spec('script_wait_s', 1.5, 'Listen this long at configure for the watchdog script (s); it '
+         'announces itself once a second', 0.0, 10.0),
+    Spec('restore_budget_s', 3.0, 'Longest the restore at a stop may take (s): neutral, '
+         'disarm, release, functions read back', 0.5, 8.0),
+    Spec('journal_dir', '', 'Folder of the journal of original values ("": UVMS_JOURNAL_DIR, '
+         'else $XDG_STATE_HOME/uvms/journal, else ~/.local/state/uvms/journal)'),
 )
 
 
 class ArduSubBridgeError(HardwareError, ValueError):
-    """A parameter of the bridge is invalid."""
+    """A parameter of the bridge is invalid, or the vehicle cannot be configured."""
 
 
-class ArduSubBridgeNode(LifecycleNode):
+class ArduSubBridgeNode(BridgeNode):
     """ArduSub over MAVLink as the robot side of the graph's thrusters and sensors."""
+
+    error_type = ArduSubBridgeError
+    diagnostics_task = 'vehicle'
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('ardusub_bridge', **kwargs)
-        self._device_clock = DeviceClock(self)
-        self.robot_name = declare_robot_name(self)
         try:
             source, section = hardware_section(self.robot_name, 'ardusub')
             navigation = {k: p.value for k, p in robot_parameters(self.robot_name,
@@ -98,149 +112,144 @@ class ArduSubBridgeNode(LifecycleNode):
             ('water_density_kg_m3', depth.get('water_density_kg_m3'))) if value is not None}
         self.values = declare_specs(self, SPECS, robot, lambda spec, exc: ArduSubBridgeError(
             f'invalid parameter {spec.name!r}: {exc}'))
+        if self.values['autopilot_watchdog'] not in WATCHDOG_CHOICES:
+            raise ArduSubBridgeError(f'autopilot_watchdog = {self.values["autopilot_watchdog"]!r}'
+                                     f': expected one of {", ".join(WATCHDOG_CHOICES)}')
         self.curve = T200Curve.from_section(section['t200'])
         self.imu_noise = bm.ImuNoise.from_navigation(navigation)
         self.depth_variance = float(navigation['navigation.depth.sigma_m']) ** 2 + \
             float(navigation['navigation.depth.bias_max_m']) ** 2 / 3.0
         self.gravity = float(depth.get('gravity_m_s2', bm.G_M_S2))
-        starting = declare_autostart(self)
-        guard_change_state(self)
         self.link: ArduSubLink | None = None
         self.watchdog = CommandWatchdog(float(self.values['watchdog_timeout_s']))
         self.thrusts: list[float] | None = None
         self.rejected = 0
         self.warnings: list[str] = []
-        self._active = False
-        self._dirty = False  # activate changed the vehicle: put it back once
         self._link_lost = False
         self._pressure_pa = math.nan
         self.telemetry_rates_hz: dict[str, float] = {}
         self._next_request_s = math.inf
-        self._entities: list[Any] = []
-        self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
-        self._diagnostics.add('vehicle', self._report)
-        if starting and not autostart(self):
-            self.destroy_node()
-            raise DeviceCheckError('ardusub_bridge: cannot configure and activate (logged)')
+        self.start()
 
-    def _now_s(self) -> float:
-        """The steady clock (s): the link's times (``uvms_hardware.device_clock``)."""
-        return self._device_clock.now_s()
-
-    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Find ArduSub, check its GCS id and failsafes, ask for telemetry, make publishers."""
+    # -- the device hooks --------------------------------------------------------------
+    def configure_device(self) -> None:
+        """Find ArduSub, check ids, leftovers and failsafes, pick the mode, ask for telemetry."""
         v = self.values
-        try:
-            settings = LinkSettings(
-                str(v['mavlink_url']), tuple(int(c) for c in v['thruster_channels']),
-                tuple(int(d) for d in v['thruster_directions']), int(v['gcs_system_id']),
-                reply_timeout_s=float(v['reply_timeout_s']),
-                silent_after_s=float(v['link_timeout_s']))
-            self.link = ArduSubLink(settings, self.curve)
-            self.link.stop_requested = stop_requested
-            self.link.open()
-            self.link.wait_vehicle(float(v['heartbeat_timeout_s']))
-            name, gcs_id = self.link.check_gcs_id()
-            self.warnings = self.link.failsafe_warnings()
-            imu_hz = float(v['imu_rate_hz'])
-            self.telemetry_rates_hz = {
-                'ATTITUDE_QUATERNION': imu_hz, 'RAW_IMU': imu_hz,
-                'SCALED_PRESSURE2': float(v['depth_rate_hz']),
-                'SYS_STATUS': float(v['battery_rate_hz'])}
-            self.link.request_telemetry(self.telemetry_rates_hz)
-            self._next_request_s = self._now_s() + TELEMETRY_REQUEST_PERIOD_S
-        except (DeviceCheckError, ValueError, OSError) as exc:
-            self.get_logger().error(f'configure failed: {exc}')
-            self._close_link()
-            return FAILURE
+        settings = LinkSettings(
+            str(v['mavlink_url']), tuple(int(c) for c in v['thruster_channels']),
+            tuple(int(d) for d in v['thruster_directions']), int(v['gcs_system_id']),
+            reply_timeout_s=float(v['reply_timeout_s']),
+            silent_after_s=float(v['link_timeout_s']),
+            restore_budget_s=float(v['restore_budget_s']))
+        journal = DeviceJournal.for_device('ardusub', settings.url, str(v['journal_dir']))
+        self.link = link = ArduSubLink(settings, self.curve, journal=journal)
+        link.stop_requested = stop_requested
+        link.open()
+        link.wait_vehicle(float(v['heartbeat_timeout_s']))
+        name, gcs_id = link.check_gcs_id()
+        leftovers = find_leftovers(link)
+        if leftovers is not None:
+            raise DeviceCheckError(leftovers_refusal(leftovers, settings.url,
+                                                     str(v['journal_dir'])))
+        journal.remove()  # a journal whose values the vehicle has again: nothing left changed
+        self.warnings = link.failsafe_warnings()
+        self._choose_mode(link)
+        self.warnings += link.check_other_gcs()
+        imu_hz = float(v['imu_rate_hz'])
+        self.telemetry_rates_hz = {
+            'ATTITUDE_QUATERNION': imu_hz, 'RAW_IMU': imu_hz,
+            'SCALED_PRESSURE2': float(v['depth_rate_hz']),
+            'SYS_STATUS': float(v['battery_rate_hz'])}
+        link.request_telemetry(self.telemetry_rates_hz)
+        self._next_request_s = self.now_s() + TELEMETRY_REQUEST_PERIOD_S
         for warning in self.warnings:
             self.get_logger().warning(warning)
-        self.get_logger().info(
-            'in RC passthrough a failsafe disarm does not stop the thrusters and what an '
-            "output does once its override expires is unknown: this bridge's watchdog "
-            f'(neutral after {self.watchdog.timeout_s:g} s) is what protects them')
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._imu = self.create_publisher(Imu, 'imu', qos)
-        self._depth = self.create_publisher(PoseWithCovarianceStamped, 'depth', qos)
-        self._battery = self.create_publisher(BatteryState, 'battery', qos)
-        self.link.on_telemetry = self._on_telemetry
-        self._entities = [(self.destroy_publisher, p) for p in (self._imu, self._depth,
-                                                                self._battery)]
-        self._entities += [
-            (self.destroy_service, self.create_service(Trigger, '~/zero_depth', self._zero)),
-            (self.destroy_timer, self._device_clock.timer(1.0 / float(v['override_rate_hz']),
-                                                          self._period))]
-        self.get_logger().info(f'ArduSub system {self.link.vehicle.system_id} at '
-                               f'{settings.url}; {name} = {gcs_id} as ours')
-        return SUCCESS
+        self._imu = self.own(self.destroy_publisher, self.create_publisher(Imu, 'imu', qos))
+        self._depth = self.own(self.destroy_publisher, self.create_publisher(
+            PoseWithCovarianceStamped, 'depth', qos))
+        self._battery = self.own(self.destroy_publisher,
+                                 self.create_publisher(BatteryState, 'battery', qos))
+        link.on_telemetry = self._on_telemetry
+        self.own(self.destroy_service, self.create_service(Trigger, '~/zero_depth', self._zero))
+        self.device_timer(1.0 / float(v['override_rate_hz']), self._period)
+        self.get_logger().info(f'ArduSub system {link.vehicle.system_id} at {settings.url}; '
+                               f'{name} = {gcs_id} as ours; thrusters in {link.mode} mode')
 
-    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Thruster outputs to RCIN passthrough, arm, take commands."""
+    def _choose_mode(self, link: ArduSubLink) -> None:
+        """Script mode when the autopilot's watchdog script is heard (and wanted)."""
+        wanted = str(self.values['autopilot_watchdog'])
+        timeout_ms = None if wanted == PASSTHROUGH else link.wait_watchdog_script(
+            float(self.values['script_wait_s']))
+        if timeout_ms is not None:
+            script = ScriptSettings.from_source()
+            if set(script.outputs) != set(link.settings.thruster_channels):
+                raise DeviceCheckError(
+                    f'{SCRIPT_NAME} drives outputs {list(script.outputs)}, thruster_channels '
+                    f'are {list(link.settings.thruster_channels)}: make them the same')
+            link.use_script(script)
+            clashes = link.rc_input_outputs()
+            if clashes:
+                self.warnings.append(
+                    'outputs ' + ', '.join(f'{o} (SERVO{o}_FUNCTION = {f})' for o, f in
+                                           clashes.items())
+                    + ' follow RC inputs 9-16, which carry the thrust PWMs in script mode')
+            self.get_logger().info(
+                f'{SCRIPT_NAME} heard on the autopilot (timeout {timeout_ms:g} ms): the '
+                'thrusters return to neutral without this process; no parameter is changed')
+            return
+        if wanted == SCRIPT:
+            raise DeviceCheckError(f'{SCRIPT_NAME} not heard from the autopilot within '
+                                   f'{float(self.values["script_wait_s"]):g} s and '
+                                   'autopilot_watchdog = script: install it (docs/hardware.md)')
+        self.get_logger().warning(
+            f'thrusters in RC passthrough: only this process stops them (a kill leaves the '
+            f'last PWM on); install {SCRIPT_NAME} on the autopilot (docs/hardware.md)')
+
+    def activate_device(self) -> None:
+        """Passthrough mode: journal and set RCIN; then arm and take commands."""
         assert self.link is not None
-        self._dirty = True
-        try:
+        if self.link.mode == PASSTHROUGH:
             self.link.enable_passthrough()
-            self.link.arm(True)
-        except DeviceCheckError as exc:
-            self.get_logger().error(f'activate refused: {exc}')
-            self._put_back()
-            return FAILURE
+        self.link.arm(True)
+        self.thrusts = None
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._command = self.create_subscription(ActuatorCommand, 'command/actuators',
                                                  self._on_command, qos)
-        self.thrusts = None
-        self._active = True
-        return super().on_activate(state)
 
-    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Neutral, disarm, functions restored, override released."""
-        self._put_back()
-        return super().on_deactivate(state)
-
-    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Drop publishers, timer and the link."""
-        self._release()
-        return super().on_cleanup(state)
-
-    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """From any state: put the vehicle back as found, release everything."""
-        self._put_back()
-        self._release()
-        return super().on_shutdown(state)
-
-    def destroy_node(self) -> None:
-        """Shut down as rclcpp's lifecycle node does, then destroy."""
-        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
-            self.trigger_shutdown()
-        self._diagnostics.destroy()
-        super().destroy_node()
-
-    def put_vehicle_back(self) -> None:
-        """The process's last word to the vehicle (run_node's close_output, before teardown)."""
-        self._put_back()
-
-    def _put_back(self) -> None:
-        if self._active and hasattr(self, '_command'):
+    def put_device_back(self) -> list[str]:
+        """Stop taking commands; neutral, disarm, release, functions back (bounded)."""
+        if hasattr(self, '_command'):
             self.destroy_subscription(self._command)
-        self._active = False
-        if not self._dirty:
-            return
-        self._dirty = False
-        if self.link is not None and self.link.conn is not None:
-            for problem in self.link.restore():
-                self.get_logger().error(f'putting the vehicle back: {problem}')
+            del self._command
+        if self.link is None or self.link.conn is None:
+            return []
+        return self.link.restore()
 
-    def _release(self) -> None:
-        for destroy, entity in reversed(self._entities):
-            destroy(entity)
-        self._entities = []
-        self._close_link()
-
-    def _close_link(self) -> None:
+    def release_device(self) -> None:
+        """Close the link."""
         if self.link is not None:
             self.link.close()
         self.link = None
 
+    def device_report(self) -> Report:
+        """Link age, armed, mode, voltage, watchdog trips, rejected commands, overrides."""
+        link = self.link
+        if link is None:
+            return Report(WARN, 'no vehicle', {})
+        age_s = link.link_age_s()
+        values = {'link_age_s': age_s, 'armed': link.vehicle.armed,
+                  'mode': link.vehicle.custom_mode, 'voltage_v': link.vehicle.voltage_v,
+                  'thruster_mode': link.mode, 'watchdog_trips': self.watchdog.trips,
+                  'rejected_commands': self.rejected, 'overrides_sent': link.overrides_sent}
+        if age_s > float(self.values['link_timeout_s']):
+            return Report(ERROR, f'vehicle silent for {age_s:.1f} s', values)
+        if self.device_active and self.watchdog.expired(self.now_s()):
+            return Report(WARN, 'no command: thrusters neutral', values)
+        return Report(WARN if self.warnings else OK, self.warnings[0] if self.warnings
+                      else 'running', values)
+
+    # -- the running path --------------------------------------------------------------
     def _on_command(self, msg: ActuatorCommand) -> None:
         thrusts = list(msg.thrust)
         expected = len(self.values['thruster_channels'])
@@ -250,27 +259,27 @@ class ArduSubBridgeNode(LifecycleNode):
                                     f'(expected {expected} finite)', throttle_duration_sec=1.0)
             return
         self.thrusts = thrusts
-        self.watchdog.feed(self._now_s())
+        self.watchdog.feed(self.now_s())
 
     def _period(self) -> None:
         link = self.link
-        if link is None:
+        if link is None or link.conn is None:
             return
         try:
             link.service()
         except OSError as exc:
             self.get_logger().error(f'MAVLink: {exc}', throttle_duration_sec=1.0)
-        if self._now_s() >= self._next_request_s:
+        if self.now_s() >= self._next_request_s:
             # A rebooted autopilot forgets the intervals: asked again, without waiting.
-            self._next_request_s = self._now_s() + TELEMETRY_REQUEST_PERIOD_S
+            self._next_request_s = self.now_s() + TELEMETRY_REQUEST_PERIOD_S
             link.request_telemetry(self.telemetry_rates_hz, wait=False)
         lost = link.link_age_s() > float(self.values['link_timeout_s'])
         if lost != self._link_lost:
             self._link_lost = lost
-            self._diagnostics.update()  # at once: the graph may end a running goal on it
-        if not self._active:
+            self.update_diagnostics()  # at once: the graph may end a running goal on it
+        if not self.device_active:
             return
-        if self.thrusts is None or self.watchdog.expired(self._now_s()):
+        if self.thrusts is None or self.watchdog.expired(self.now_s()):
             link.neutral()
         else:
             link.send_override(link.pwm_for(self.thrusts))
@@ -300,28 +309,10 @@ class ArduSubBridgeNode(LifecycleNode):
             response.message = 'no SCALED_PRESSURE2 received yet'
         return response
 
-    def _report(self) -> Report:
-        state, link = state_label(self), self.link
-        if link is None:
-            return Report(WARN, f'{state}: no vehicle', {'lifecycle_state': state})
-        age_s = link.link_age_s()
-        values = {'lifecycle_state': state, 'link_age_s': age_s, 'armed': link.vehicle.armed,
-                  'mode': link.vehicle.custom_mode, 'voltage_v': link.vehicle.voltage_v,
-                  'watchdog_trips': self.watchdog.trips, 'rejected_commands': self.rejected,
-                  'overrides_sent': link.overrides_sent}
-        if age_s > float(self.values['link_timeout_s']):
-            return Report(ERROR, f'vehicle silent for {age_s:.1f} s', values)
-        if self._active and self.watchdog.expired(self._now_s()):
-            return Report(WARN, 'no command: thrusters neutral', values)
-        return Report(WARN if self.warnings else OK, self.warnings[0] if self.warnings
-                      else 'running', values)
-
 
 def main(args: list[str] | None = None) -> None:
     """Run the ardusub_bridge node until SIGINT/SIGTERM, then put the vehicle back."""
-    sys.exit(run_node(ArduSubBridgeNode, args, 'ardusub_bridge',
-                      (ArduSubBridgeError, DeviceCheckError, ParameterException),
-                      close_output=lambda node: node.put_vehicle_back()))
+    run_bridge(ArduSubBridgeNode, args, 'ardusub_bridge')
 
 
 if __name__ == '__main__':

@@ -1,4 +1,4 @@
-"""The ardusub_bridge's MAVLink side, without ROS: find and check ArduSub, passthrough, override.
+"""The ardusub_bridge's MAVLink side, without ROS: find and check ArduSub, drive its thrusters.
 
 pymavlink does the framing, CRC and message classes (ardupilotmega dialect, MAVLink 2, as
 ArduSub 4.x speaks it). Facts from shared/robots/bluerov2_heavy_alpha5.md ("ArduSub over
@@ -8,9 +8,24 @@ its clock; every wait here has a timeout and services the link meanwhile (our HE
 
     link = ArduSubLink(LinkSettings('udpout:127.0.0.1:14550', (1, 2, 3, 4, 5, 6, 7, 8)))
     link.open(); link.wait_vehicle(5.0); link.check_gcs_id(); warnings = link.failsafe_warnings()
-    link.enable_passthrough(); link.arm(True)          # activate
+    link.wait_watchdog_script(1.5)                     # script mode if the autopilot has it
+    link.enable_passthrough(); link.arm(True)          # activate (passthrough: journal first)
     link.send_override(link.pwm_for(thrusts_n))       # each period, or link.neutral()
-    link.restore()                                     # neutral, disarm, functions back, release
+    link.restore()                                     # neutral, disarm, release, functions back
+
+Two ways to drive the thrusters:
+
+- **script** (``uvms_thruster_watchdog.lua`` heard at configure, ``ardusub_watchdog``): the
+  PWMs go on RC channels 9-16 with the toggle bit; the script on the autopilot puts them on
+  the Motor outputs and returns them to neutral on its own when they stop. Nothing on the
+  vehicle is changed.
+- **passthrough**: each thruster output's SERVOn_FUNCTION becomes RCIN1..8 (journalled before
+  the first change, ``device_journal``), the PWMs go on RC channels 1-8; only this process
+  stops them.
+
+Answers are taken only from the vehicle: PARAM_VALUE and COMMAND_ACK must come from its system
+and component, and a COMMAND_ACK addressed to another system or component (its MAVLink 2
+target fields, 0 when not filled) is someone else's.
 """
 
 from __future__ import annotations
@@ -18,20 +33,24 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from pymavlink import mavutil  # type: ignore[import-untyped]
 
+from uvms_hardware.ardusub_watchdog import ANNOUNCE_NAME, ScriptSettings, toggle_encode
+from uvms_hardware.device_journal import DeviceJournal
 from uvms_hardware.errors import DeviceCheckError
 from uvms_hardware.t200_curve import T200Curve, clamp_pwm
 
 MAV = mavutil.mavlink
 #: SERVOn_FUNCTION of RCIN1 (ArduPilot SRV_Channel.h ``k_rcin1``); RCINk = 50 + k.
 K_RCIN1 = 51
-#: RC_CHANNELS_OVERRIDE values (GCS_Common.cpp): 1-8 ignore / release; 9-18 ignore.
-IGNORE_1_8, RELEASE_1_8, IGNORE_9_18 = 65535, 0, 0
+#: SERVOn_FUNCTION of Motor1 (``k_motor1``): the firmware's default of output n is 32 + n.
+K_MOTOR1 = 33
+#: RC_CHANNELS_OVERRIDE values (GCS_Common.cpp): 1-8 ignore / release; 9-18 ignore / release.
+IGNORE_1_8, RELEASE_1_8, IGNORE_9_18, RELEASE_9_18 = 65535, 0, 0, 65534
 NEUTRAL_US = 1500
 #: The GCS id parameter, then its name before ArduPilot 4.7.
 GCS_ID_PARAMS = ('MAV_GCS_SYSID', 'SYSID_MYGCS')
@@ -41,6 +60,12 @@ TELEMETRY = {'ATTITUDE_QUATERNION': MAV.MAVLINK_MSG_ID_ATTITUDE_QUATERNION,
              'RAW_IMU': MAV.MAVLINK_MSG_ID_RAW_IMU,
              'SCALED_PRESSURE2': MAV.MAVLINK_MSG_ID_SCALED_PRESSURE2,
              'SYS_STATUS': MAV.MAVLINK_MSG_ID_SYS_STATUS}
+PASSTHROUGH, SCRIPT = 'passthrough', 'script'
+#: Longest the whole restore may take (s): 3 neutral overrides, disarm, release, then the
+#: SERVOn_FUNCTIONs set and read back, all within it (see `ArduSubLink.restore`).
+RESTORE_BUDGET_S = 3.0
+#: Share of the restore budget the disarm may use; the parameters get the rest.
+DISARM_SHARE = 1.0 / 3.0
 
 
 def connect(url: str, system_id: int, component_id: int) -> Any:
@@ -48,6 +73,16 @@ def connect(url: str, system_id: int, component_id: int) -> Any:
     os.environ['MAVLINK20'] = '1'  # read by pymavlink when the dialect is set
     return mavutil.mavlink_connection(url, source_system=system_id,
                                       source_component=component_id, dialect='ardupilotmega')
+
+
+def servo_function(output: int) -> str:
+    """The parameter name of an output's function: ``SERVO<n>_FUNCTION``."""
+    return f'SERVO{output}_FUNCTION'
+
+
+def is_rcin(value: float | None) -> bool:
+    """True for RCIN1..RCIN8 passthrough (51..58), what activate's passthrough sets."""
+    return value is not None and K_RCIN1 <= value <= K_RCIN1 + 7
 
 
 @dataclass(frozen=True)
@@ -63,6 +98,7 @@ class LinkSettings:
         reply_timeout_s: Wait for one parameter or command answer (s).
         retries: Tries of a parameter read or command.
         silent_after_s: No vehicle HEARTBEAT this long: restore without waiting for answers.
+        restore_budget_s: Longest the whole restore may take (s).
     """
 
     url: str
@@ -73,6 +109,7 @@ class LinkSettings:
     reply_timeout_s: float = 0.5
     retries: int = 3
     silent_after_s: float = 1.0
+    restore_budget_s: float = RESTORE_BUDGET_S
 
     def __post_init__(self) -> None:
         """Check channels 1-8, distinct, and one direction of +-1 per thruster."""
@@ -100,21 +137,31 @@ class VehicleState:
     voltage_v: float = math.nan
     quaternion_wxyz: tuple[float, float, float, float] | None = None
     latest: dict[str, Any] = field(default_factory=dict)
+    #: The watchdog script's announced TIMEOUT_MS (None until heard).
+    watchdog_timeout_ms: float | None = None
 
 
 class ArduSubLink:
     """MAVLink to one ArduSub vehicle as a GCS; `clock` gives local seconds (monotonic)."""
 
     def __init__(self, settings: LinkSettings, curve: T200Curve,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 journal: DeviceJournal | None = None) -> None:
         self.settings = settings
         self.curve = curve
         self.clock = clock
         self.vehicle = VehicleState()
         self.conn: Any = None
+        #: Where the original SERVOn_FUNCTIONs are kept while changed (passthrough).
+        self.journal = journal or DeviceJournal.for_device('ardusub', settings.url)
         #: SERVOn_FUNCTION values before activate changed them: output -> value.
         self.changed_functions: dict[int, float] = {}
+        #: PASSTHROUGH or SCRIPT (`use_script`).
+        self.mode = PASSTHROUGH
+        self.script = ScriptSettings()
         self.overrides_sent = 0
+        #: Other ground stations heard: (system, component) -> local time (s) last heard.
+        self.other_gcs: dict[tuple[int, int], float] = {}
         self._next_heartbeat_s = -math.inf
         #: Telemetry callback: called with each message of TELEMETRY as it arrives.
         self.on_telemetry: Callable[[str, Any], None] | None = None
@@ -152,6 +199,18 @@ class ArduSubLink:
                 received.append(msg)
         return received
 
+    def from_vehicle(self, msg: Any) -> bool:
+        """True when ``msg`` comes from the vehicle's system and component."""
+        v = self.vehicle
+        return bool(v.system_id) and (msg.get_srcSystem(), msg.get_srcComponent()) == (
+            v.system_id, v.component_id)
+
+    def addressed_to_us(self, msg: Any) -> bool:
+        """True unless the message's target fields name another system or component (0: none)."""
+        s = self.settings
+        return (getattr(msg, 'target_system', 0) in (0, s.gcs_system_id)
+                and getattr(msg, 'target_component', 0) in (0, s.gcs_component_id))
+
     def _take(self, msg: Any, now_s: float) -> None:
         kind, v = msg.get_type(), self.vehicle
         if kind == 'HEARTBEAT':
@@ -161,6 +220,10 @@ class ArduSubLink:
                 v.heartbeat_s = now_s
                 v.armed = bool(msg.base_mode & MAV.MAV_MODE_FLAG_SAFETY_ARMED)
                 v.custom_mode = msg.custom_mode
+            elif msg.type == MAV.MAV_TYPE_GCS:
+                source = (msg.get_srcSystem(), msg.get_srcComponent())
+                if source != (self.settings.gcs_system_id, self.settings.gcs_component_id):
+                    self.other_gcs[source] = now_s
             return
         if v.system_id and msg.get_srcSystem() != v.system_id:
             return
@@ -168,6 +231,8 @@ class ArduSubLink:
             v.voltage_v = msg.voltage_battery / 1000.0
         elif kind == 'ATTITUDE_QUATERNION':
             v.quaternion_wxyz = (msg.q1, msg.q2, msg.q3, msg.q4)
+        elif kind == 'NAMED_VALUE_FLOAT' and msg.name == ANNOUNCE_NAME:
+            v.watchdog_timeout_ms = float(msg.value)
         if kind in TELEMETRY:
             v.latest[kind] = msg
             if self.on_telemetry is not None:
@@ -216,14 +281,17 @@ class ArduSubLink:
                     f'({MAV.MAV_AUTOPILOT_ARDUPILOTMEGA})')
             raise DeviceCheckError(f'{url}: no vehicle HEARTBEAT within {timeout_s:g} s')
 
+    def _is_param(self, msg: Any, name: str) -> bool:
+        return (msg.get_type() == 'PARAM_VALUE' and msg.param_id == name
+                and self.from_vehicle(msg))
+
     def read_param(self, name: str) -> float | None:
         """A vehicle parameter by PARAM_REQUEST_READ; None when not answered."""
         v = self.vehicle
         for _ in range(self.settings.retries):
             self.conn.mav.param_request_read_send(v.system_id, v.component_id,
                                                   name.encode(), -1)
-            msg = self._wait(lambda m: m.get_type() == 'PARAM_VALUE' and m.param_id == name,
-                             self.settings.reply_timeout_s)
+            msg = self._wait(lambda m: self._is_param(m, name), self.settings.reply_timeout_s)
             if msg is not None:
                 return float(msg.param_value)
         return None
@@ -234,9 +302,36 @@ class ArduSubLink:
         v = self.vehicle
         self.conn.mav.param_set_send(v.system_id, v.component_id, name.encode(), value,
                                      param_type)
-        self._wait(lambda m: m.get_type() == 'PARAM_VALUE' and m.param_id == name,
-                   self.settings.reply_timeout_s)
+        self._wait(lambda m: self._is_param(m, name), self.settings.reply_timeout_s)
         return self.read_param(name)
+
+    def set_params_until(self, values: Mapping[str, float], end_s: float) -> dict[str, float]:
+        """PARAM_SET of every value at once, resent until each is read back or ``end_s``.
+
+        ArduPilot answers a PARAM_SET with the parameter's PARAM_VALUE (``GCS_Param.cpp``);
+        each PARAM_SET is followed by a PARAM_REQUEST_READ of the same name (a vehicle that
+        ignores the set, the value being already right, still answers that). A PARAM_VALUE from
+        the vehicle equal to the value is the read-back. Bounded by ``end_s`` (local seconds)
+        whatever the vehicle does.
+
+        Returns:
+            What was not read back: name -> the value it should have.
+        """
+        v, pending = self.vehicle, dict(values)
+        while pending and self.clock() < end_s:
+            for name, value in pending.items():
+                self.conn.mav.param_set_send(v.system_id, v.component_id, name.encode(), value,
+                                             MAV.MAV_PARAM_TYPE_INT16)
+                self.conn.mav.param_request_read_send(v.system_id, v.component_id,
+                                                      name.encode(), -1)
+            round_end_s = min(end_s, self.clock() + self.settings.reply_timeout_s)
+            while pending and self.clock() < round_end_s:
+                for msg in self.service():
+                    if (msg.get_type() == 'PARAM_VALUE' and self.from_vehicle(msg)
+                            and pending.get(msg.param_id) == float(msg.param_value)):
+                        del pending[msg.param_id]
+                time.sleep(0.002)
+        return pending
 
     def check_gcs_id(self) -> tuple[str, int]:
         """The vehicle's GCS id parameter (``MAV_GCS_SYSID``, else ``SYSID_MYGCS``) equals ours.
@@ -258,6 +353,28 @@ class ArduSubLink:
         raise DeviceCheckError(f'neither {" nor ".join(GCS_ID_PARAMS)} answered: cannot '
                                'check that the vehicle obeys our RC overrides')
 
+    def check_other_gcs(self) -> list[str]:
+        """Other ground stations heard on the link (HEARTBEAT of MAV_TYPE_GCS), as warnings.
+
+        The vehicle cannot tell a ground station with our system id from us: it obeys its
+        RC overrides and releases alike, and its heartbeats keep the vehicle's GCS failsafe
+        and the watchdog script's GCS from ever looking lost.
+
+        Raises:
+            DeviceCheckError: a ground station with our system id (another component).
+        """
+        ours = self.settings.gcs_system_id
+        same = sorted(c for s, c in self.other_gcs if s == ours)
+        if same:
+            raise DeviceCheckError(
+                f'another ground station with our system id {ours} is on the link (component'
+                f'{"s" if len(same) > 1 else ""} {", ".join(map(str, same))}, e.g. '
+                'QGroundControl, whose default id is 255): the vehicle obeys its RC overrides '
+                'and releases as ours; close it, or give it another MAVLink system id')
+        return [f'another ground station on the link: system {s} component {c} (the vehicle '
+                'ignores its RC overrides, but it can arm, disarm, change modes and parameters)'
+                for s, c in sorted(self.other_gcs)]
+
     def failsafe_warnings(self) -> list[str]:
         """Where a lost link is unprotected: FS_GCS_ENABLE, FS_PILOT_INPUT, RC_OVERRIDE_TIME."""
         fs_gcs, fs_pilot = self.read_param('FS_GCS_ENABLE'), self.read_param('FS_PILOT_INPUT')
@@ -270,6 +387,29 @@ class ArduSubLink:
         if override_s is None or override_s < 0:
             warnings.append(f'RC_OVERRIDE_TIME = {override_s}: overrides never expire')
         return warnings
+
+    def wait_watchdog_script(self, timeout_s: float) -> float | None:
+        """Listen for the watchdog script's announcement; its TIMEOUT_MS, or None (not heard)."""
+        if self.vehicle.watchdog_timeout_ms is None:
+            self._wait(lambda m: self.vehicle.watchdog_timeout_ms is not None, timeout_s,
+                       interruptible=True)
+        return self.vehicle.watchdog_timeout_ms
+
+    def use_script(self, script: ScriptSettings) -> None:
+        """Drive the thrusters through the watchdog script (RC channels 9-16, nothing changed)."""
+        self.mode, self.script = SCRIPT, script
+
+    def rc_input_outputs(self) -> dict[int, int]:
+        """Outputs 1-16 whose SERVOn_FUNCTION is RCIN9..RCIN16 (59..66): output -> function.
+
+        In script mode those would follow our thrust values (lights, a camera tilt).
+        """
+        found = {}
+        for output in range(1, 17):
+            value = self.read_param(servo_function(output))
+            if value is not None and K_RCIN1 + 8 <= value <= K_RCIN1 + 15:
+                found[output] = int(value)
+        return found
 
     def request_telemetry(self, rates_hz: dict[str, float], wait: bool = True) -> None:
         """MAV_CMD_SET_MESSAGE_INTERVAL (511) for each message (name -> Hz; 0 stops).
@@ -287,96 +427,130 @@ class ArduSubLink:
                                                 MAV.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
                                                 TELEMETRY[name], interval_us, 0, 0, 0, 0, 0)
 
-    def command(self, command: int, *params: float) -> int | None:
-        """COMMAND_LONG; the COMMAND_ACK's result (None when not answered)."""
+    def _is_ack(self, msg: Any, command: int) -> bool:
+        return (msg.get_type() == 'COMMAND_ACK' and msg.command == command
+                and self.from_vehicle(msg) and self.addressed_to_us(msg))
+
+    def command(self, command: int, *params: float, end_s: float = math.inf) -> int | None:
+        """COMMAND_LONG; the COMMAND_ACK's result (None when not answered).
+
+        Sent up to ``retries`` times (MAVLink's confirmation field counting them), never
+        waiting past ``end_s`` (local seconds).
+        """
         v, padded = self.vehicle, (list(params) + [0.0] * 7)[:7]
         for confirmation in range(self.settings.retries):
+            if self.clock() >= end_s:
+                break
             self.conn.mav.command_long_send(v.system_id, v.component_id, command,
                                             confirmation, *padded)
-            ack = self._wait(lambda m: m.get_type() == 'COMMAND_ACK' and m.command == command,
-                             self.settings.reply_timeout_s)
+            timeout_s = min(self.settings.reply_timeout_s, end_s - self.clock())
+            ack = self._wait(lambda m: self._is_ack(m, command), timeout_s)
             if ack is not None:
                 return int(ack.result)
         return None
 
     # -- activate / deactivate ---------------------------------------------------------
     def enable_passthrough(self) -> None:
-        """Remember each thruster output's SERVOn_FUNCTION, set it to RCIN of its channel.
+        """Journal each thruster output's SERVOn_FUNCTION, then set it to RCIN of its channel.
+
+        Every original is read and written to the journal (fsync'd) before the first change.
 
         Raises:
-            DeviceCheckError: an output that does not read back as set, naming it.
+            DeviceCheckError: an output not answered or not read back as set, naming it.
+            JournalError: the journal cannot be written (nothing is changed then).
         """
+        originals: dict[int, float] = {}
         for channel in self.settings.thruster_channels:
-            name = f'SERVO{channel}_FUNCTION'
-            before = self.read_param(name)
+            before = self.read_param(servo_function(channel))
             if before is None:
-                raise DeviceCheckError(f'{name} not answered: cannot set passthrough')
+                raise DeviceCheckError(f'{servo_function(channel)} not answered: cannot set '
+                                       'passthrough')
+            if before != float(K_RCIN1 + channel - 1):
+                originals[channel] = before
+        self.journal.record({servo_function(c): value for c, value in originals.items()})
+        for channel, before in originals.items():
             wanted = float(K_RCIN1 + channel - 1)
-            if before == wanted:
-                continue
             self.changed_functions.setdefault(channel, before)
-            after = self.set_param(name, wanted)
+            after = self.set_param(servo_function(channel), wanted)
             if after != wanted:
-                raise DeviceCheckError(f'{name} reads {after} after setting it to '
-                                       f'{int(wanted)} (RCIN{channel}): channel {channel} is '
-                                       'not in passthrough')
+                raise DeviceCheckError(f'{servo_function(channel)} reads {after} after setting '
+                                       f'it to {int(wanted)} (RCIN{channel}): channel {channel} '
+                                       'is not in passthrough')
 
-    def arm(self, armed: bool) -> None:
+    def arm(self, armed: bool, end_s: float = math.inf) -> None:
         """MAV_CMD_COMPONENT_ARM_DISARM (400), param1 1 or 0.
 
         Raises:
             DeviceCheckError: refused or not answered.
         """
-        result = self.command(MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1.0 if armed else 0.0)
+        result = self.command(MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1.0 if armed else 0.0,
+                              end_s=end_s)
         if result != MAV.MAV_RESULT_ACCEPTED:
             word = 'arm' if armed else 'disarm'
             raise DeviceCheckError(f'{word}: MAV_CMD_COMPONENT_ARM_DISARM answered {result}')
 
     def restore(self) -> list[str]:
-        """Neutral on every thruster, disarm, functions back, release; the problems met.
+        """Neutral, disarm, release, functions back and read back; the problems met.
 
-        Every step is tried even when one fails (a vehicle gone silent); what could not be
-        done is returned, one line each, for the node to log.
+        In this order, all within ``restore_budget_s``: three neutral overrides; the disarm
+        (up to a third of the budget); the overrides released (before any parameter, so that
+        nothing of ours drives an output whose function goes back); every changed
+        SERVOn_FUNCTION set at once and resent until read back or the budget is spent. The
+        journal is removed once everything was read back; otherwise it stays, for the next
+        configure and ``uvms hardware restore``. Every step is tried even when one fails.
         """
         problems: list[str] = []
         if self.conn is None:
             return ['no connection']
+        start_s = self.clock()
+        budget_s = self.settings.restore_budget_s
         if self.link_age_s() > self.settings.silent_after_s:
             return self._restore_blind()
         for _ in range(3):
             self.neutral()
         try:
-            self.arm(False)
+            self.arm(False, end_s=start_s + budget_s * DISARM_SHARE)
         except DeviceCheckError as exc:
-            problems.append(str(exc))
-            if self.link_age_s() > self.settings.silent_after_s:
-                return problems + self._restore_blind()
-        for channel, value in list(self.changed_functions.items()):
-            if self.set_param(f'SERVO{channel}_FUNCTION', value) == value:
-                del self.changed_functions[channel]
-            else:
-                problems.append(f'SERVO{channel}_FUNCTION not restored to {value:g}')
+            if self.vehicle.armed:  # ArduPilot refuses to disarm a vehicle already disarmed
+                problems.append(str(exc))
+        except Exception as exc:  # whatever failed, the functions must still go back
+            problems.append(f'disarm: {type(exc).__name__}: {exc}')
         self.release()
+        problems += self.restore_functions(start_s + budget_s)
         return problems
 
+    def restore_functions(self, end_s: float) -> list[str]:
+        """Every changed SERVOn_FUNCTION back by ``end_s``; journal removed when all read back."""
+        pending = self.set_params_until({servo_function(c): value for c, value in
+                                         self.changed_functions.items()}, end_s)
+        for channel in list(self.changed_functions):
+            if servo_function(channel) not in pending:
+                del self.changed_functions[channel]
+        if pending:
+            return [f'{name} not read back as {value:g} in time; the journal '
+                    f'{self.journal.path} keeps it' for name, value in pending.items()]
+        self.journal.remove()
+        return []
+
     def _restore_blind(self) -> list[str]:
-        """Restore without waiting for answers: the vehicle has gone silent."""
+        """Restore without waiting for answers: the vehicle has gone silent; journal kept."""
         v = self.vehicle
         self.neutral()
         self.conn.mav.command_long_send(v.system_id, v.component_id,
                                         MAV.MAV_CMD_COMPONENT_ARM_DISARM, 0, *[0.0] * 7)
+        self.release()
         for channel, value in self.changed_functions.items():
             self.conn.mav.param_set_send(v.system_id, v.component_id,
-                                         f'SERVO{channel}_FUNCTION'.encode(), value,
+                                         servo_function(channel).encode(), value,
                                          MAV.MAV_PARAM_TYPE_INT16)
-        self.release()
-        return [f'vehicle silent for {self.link_age_s():.1f} s: neutral, disarm, '
-                f'SERVOn_FUNCTION of outputs {sorted(self.changed_functions)} and release '
-                'sent without confirmation; check the vehicle']
+        kept = f'; the journal {self.journal.path} keeps them' if self.changed_functions else ''
+        return [f'vehicle silent for {self.link_age_s():.1f} s: neutral, disarm, release and '
+                f'SERVOn_FUNCTION of outputs {sorted(self.changed_functions)} sent without '
+                f'confirmation{kept}; check the vehicle']
 
     # -- the running path --------------------------------------------------------------
     def pwm_for(self, thrusts_n: Sequence[float]) -> dict[int, int]:
-        """Channel -> PWM (µs) of each thruster's thrust (N), direction applied here once.
+        """Output -> PWM (µs) of each thruster's thrust (N), direction applied here once.
 
         Raises:
             ValueError: not one thrust per thruster.
@@ -390,18 +564,39 @@ class ArduSubLink:
                 for channel, direction, thrust in zip(
                     s.thruster_channels, s.thruster_directions, thrusts_n, strict=True)}
 
-    def send_override(self, pwm_by_channel: dict[int, int], others_1_8: int = IGNORE_1_8
+    def send_override(self, pwm_by_output: dict[int, int], others_1_8: int = IGNORE_1_8
                       ) -> None:
-        """RC_CHANNELS_OVERRIDE to the vehicle: our channels, ``others_1_8`` on 1-8, 0 on 9-18."""
-        values = [pwm_by_channel.get(k, others_1_8) for k in range(1, 9)] + [IGNORE_9_18] * 10
+        """RC_CHANNELS_OVERRIDE to the vehicle carrying each thruster output's PWM.
+
+        Passthrough: output n's PWM on channel n, ``others_1_8`` on the rest of 1-8, 0
+        (ignore) on 9-18. Script: 65535 (ignore) on 1-8, output n's PWM on the script's
+        channel for n (9-16) with the toggle bit of this message, 0 (ignore) elsewhere.
+        """
+        if self.mode == SCRIPT:
+            toggle = self.overrides_sent & 1
+            by_channel = {self.script.rc_channel(o): toggle_encode(pwm, toggle)
+                          for o, pwm in pwm_by_output.items()}
+            values = [IGNORE_1_8] * 8 + [by_channel.get(k, IGNORE_9_18) for k in range(9, 19)]
+        else:
+            values = [pwm_by_output.get(k, others_1_8) for k in range(1, 9)] + \
+                [IGNORE_9_18] * 10
         v = self.vehicle
         self.conn.mav.rc_channels_override_send(v.system_id, v.component_id, *values)
         self.overrides_sent += 1
 
     def neutral(self) -> None:
-        """1500 µs on every thruster channel."""
+        """1500 µs on every thruster output."""
         self.send_override({c: NEUTRAL_US for c in self.settings.thruster_channels})
 
     def release(self) -> None:
-        """Give channels 1-8 back (0 = release)."""
+        """Give our channels back: 0 on 1-8 (passthrough), 65534 on the script's (script)."""
+        if self.mode == SCRIPT:
+            values = [IGNORE_1_8] * 8 + [
+                RELEASE_9_18 if k in {self.script.rc_channel(o)
+                                      for o in self.settings.thruster_channels}
+                else IGNORE_9_18 for k in range(9, 19)]
+            v = self.vehicle
+            self.conn.mav.rc_channels_override_send(v.system_id, v.component_id, *values)
+            self.overrides_sent += 1
+            return
         self.send_override({}, RELEASE_1_8)

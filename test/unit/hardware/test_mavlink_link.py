@@ -5,6 +5,7 @@ from __future__ import annotations
 import socket
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -23,6 +24,13 @@ def _link(url: str, channels: tuple[int, ...] = ALL, gcs_id: int = 255) -> ArduS
                                     retries=2), robot_curve())
     link.open()
     return link
+
+
+@pytest.fixture(autouse=True)
+def journal_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Journals of original values go to the test's folder, never the user's."""
+    monkeypatch.setenv('UVMS_JOURNAL_DIR', str(tmp_path))
+    return tmp_path
 
 
 @pytest.fixture

@@ -11,16 +11,25 @@ bridge; each behaviour names its source:
   RC_OVERRIDE_TIME 3.0, SERVOn_FUNCTION 33..40 (Motor1..8) on outputs 1..8
   (``ArduSub/Parameters.cpp``, ``RC_Channels_VarInfo.h``, ``SRV_Channel.h``).
 - COMMAND_LONG MAV_CMD_COMPONENT_ARM_DISARM (param1 1/0) and MAV_CMD_SET_MESSAGE_INTERVAL
-  (param1 message id, param2 interval µs; -1 stops) answered with COMMAND_ACK.
+  (param1 message id, param2 interval µs; -1 stops) answered with COMMAND_ACK addressed to the
+  sender (target system and component = the command's source, ``GCS_Common.cpp``
+  handle_command_long).
 - RC_CHANNELS_OVERRIDE obeyed only from the GCS system id (``GCS_Common.cpp``): channels 1-8,
   65535 ignore (the old override stays), 0 release; 9-18, 0 or 65535 ignore, 65534 release.
   Each channel's override expires ``RC_OVERRIDE_TIME`` s after it was last set (-1 never;
   0 disables overrides).
 - Outputs: SERVOn_FUNCTION 51..66 (RCIN1..16, ``k_rcin1`` = 51) outputs RC channel k; 1
   (RCPassThru) channel n; 33..40 (Motor1..8) neutral 1500 (no pilot input is modelled);
-  0 no pulse (0). What a passthrough output does once its override expired or was released
-  is **unknown** in the documents: the twin keeps the last value, the unsafe reading, so that
-  the bridge's own watchdog is what the tests see. Before any override it outputs 0.
+  0 no pulse (0). A passthrough output follows its RC channel's input, which keeps the last
+  override once it expired or was released when no receiver is fitted (``RC_Channel::update``
+  sets ``radio_in`` only from an override or a receiver): the twin keeps the last value.
+  Before any override it outputs 0.
+- ``watchdog_script=True``: ``uvms_thruster_watchdog.lua`` installed and running, modelled by
+  ``uvms_hardware.ardusub_watchdog.WatchdogScript`` with the settings read from the script:
+  every PERIOD_MS it may set outputs with ``set_output_pwm_chan_timeout`` (forced over a
+  Motor function until the timeout; a passthrough output ignores it, as ``SRV_Channel::
+  output_ch`` overwrites it from the RC input), and it announces NAMED_VALUE_FLOAT 'UVMS_WD'
+  once a second. ``stop_script()`` makes it die (its overrides then expire).
 - Telemetry at the requested intervals, from the plant: ATTITUDE_QUATERNION (body FRD in NED),
   RAW_IMU (ArduPilot fills it scaled: mG, mrad/s; ``GCS_Common.cpp`` send_raw_imu),
   SCALED_PRESSURE2 (the Bar30 is ArduSub's second barometer; hPa), SYS_STATUS (mV).
@@ -43,6 +52,7 @@ from typing import Any
 from pymavlink import mavutil  # type: ignore[import-untyped]
 
 from uvms_hardware.address import LOOPBACK
+from uvms_hardware.ardusub_watchdog import ANNOUNCE_NAME, ScriptSettings, WatchdogScript
 
 MAV = mavutil.mavlink
 #: ArduSub's custom_mode of MANUAL (ArduSub/mode.h).
@@ -111,6 +121,8 @@ class TwinState:
     overrides: deque[OverrideRecord] = field(default_factory=lambda: deque(maxlen=20000))
     param_sets: list[tuple[str, float]] = field(default_factory=list)
     commands: list[tuple[int, tuple[float, ...]]] = field(default_factory=list)
+    #: The watchdog script's output overrides: output -> (PWM, local time it expires, s).
+    script_overrides: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 class ArduSubTwin:
@@ -118,7 +130,8 @@ class ArduSubTwin:
 
     def __init__(self, port: int = 0, host: str = LOOPBACK, system_id: int = 1,
                  component_id: int = 1, gcs_param: str = 'MAV_GCS_SYSID',
-                 parameters: dict[str, float] | None = None) -> None:
+                 parameters: dict[str, float] | None = None,
+                 watchdog_script: bool = False) -> None:
         self.gcs_param = gcs_param
         self.params = default_parameters(gcs_param)
         for name, value in (parameters or {}).items():
@@ -133,6 +146,10 @@ class ArduSubTwin:
         self.state = TwinState()
         #: True: the twin neither answers nor sends (a vehicle that stopped answering).
         self.silent = False
+        #: The watchdog script (None: not installed); it runs while ``script_running``.
+        self.script = WatchdogScript(ScriptSettings.from_source()) if watchdog_script else None
+        self.script_running = watchdog_script
+        self._next_script_s = 0.0
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._boot_s = time.monotonic()
@@ -204,14 +221,23 @@ class ArduSubTwin:
         with self._lock:
             return self.state.armed
 
-    def _output(self, n: int) -> int:
+    def stop_script(self) -> None:
+        """The watchdog script dies (an error, SCR_ENABLE 0): its overrides run out."""
+        with self._lock:
+            self.script_running = False
+
+    def _output(self, n: int, now_s: float | None = None) -> int:
         function = int(self.params[f'SERVO{n}_FUNCTION'][0])
         if K_RCIN1 <= function <= K_RCIN1 + 15:
             return self.state.channels[function - K_RCIN1 + 1].last_us
         if function == 1:
             return self.state.channels[n].last_us
+        now_s = time.monotonic() if now_s is None else now_s
+        forced = self.state.script_overrides.get(n)
+        if forced is not None and now_s < forced[1]:
+            return forced[0]
         if K_MOTOR1 <= function <= K_MOTOR1 + 7:
-            return 1500
+            return 1500  # disarmed: AP_Motors6DOF neutral; armed: no pilot input modelled
         return 0
 
     def active_override_us(self, channel: int, now_s: float | None = None) -> int:
@@ -240,6 +266,26 @@ class ArduSubTwin:
                 next_heartbeat_s = now_s + 1.0
                 self._heartbeat()
             self._telemetry(now_s)
+            self._run_script(now_s)
+
+    def _run_script(self, now_s: float) -> None:
+        script = self.script
+        if script is None or now_s < self._next_script_s:
+            return
+        with self._lock:
+            if not self.script_running:
+                return
+            settings = script.settings
+            self._next_script_s = now_s + settings.period_ms * 1e-3
+            now_ms = (now_s - self._boot_s) * 1000.0
+            rc_pwm = {k: ch.last_us for k, ch in self.state.channels.items()}
+            for output, pwm in script.update(now_ms, self.state.armed, rc_pwm).items():
+                self.state.script_overrides[output] = (pwm, now_s + settings.timeout_ms * 1e-3)
+            announce = script.announce_due(now_ms)
+        if announce:
+            self.conn.mav.named_value_float_send(int(now_ms) & 0xFFFFFFFF,
+                                                 ANNOUNCE_NAME.encode(),
+                                                 float(settings.timeout_ms))
 
     def _heartbeat(self) -> None:
         with self._lock:
@@ -292,7 +338,8 @@ class ArduSubTwin:
                     result = MAV.MAV_RESULT_UNSUPPORTED
             else:
                 result = MAV.MAV_RESULT_UNSUPPORTED
-        self.conn.mav.command_ack_send(msg.command, result)
+        self.conn.mav.command_ack_send(msg.command, result, 0, 0, msg.get_srcSystem(),
+                                       msg.get_srcComponent())
 
     def _override(self, msg: Any, now_s: float) -> None:
         values = tuple(int(getattr(msg, f'chan{k}_raw')) for k in range(1, 19))
@@ -342,8 +389,11 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--port', type=int, default=14550)
     parser.add_argument('--gcs-param', default='MAV_GCS_SYSID')
+    parser.add_argument('--watchdog-script', action='store_true',
+                        help='model uvms_thruster_watchdog.lua installed on the autopilot')
     args = parser.parse_args(argv)
-    with ArduSubTwin(port=args.port, gcs_param=args.gcs_param) as twin:
+    with ArduSubTwin(port=args.port, gcs_param=args.gcs_param,
+                     watchdog_script=args.watchdog_script) as twin:
         print(f'ardusub twin on udpin:{twin.address[0]}:{twin.address[1]}', flush=True)
         try:
             while True:
