@@ -1,15 +1,32 @@
 """The ``alpha5_bridge`` node: ``command/actuators`` to a Reach Alpha 5, its joints to ROS.
 
-A managed node (``autostart``). configure asks each device in turn (never a broadcast) for
-MODEL, MODE and its three limits, and refuses (FAILURE, the log naming the joint and both
-values) a device whose limits differ from the URDF's (position, speed) or hardware.yaml's
-(current), or that stays silent. activate sends MODE Standby to every device. Running, each
-``ActuatorCommand`` becomes CURRENT mA per joint (``uvms_hardware.alpha5_core``); a timer at
-``feedback_rate_hz`` x devices asks one device per tick for POSITION and VELOCITY and
-publishes ``joint_states`` once per round; the watchdog sends VELOCITY 0 to every joint after
-``watchdog_timeout_s`` without a command and holds. deactivate, shutdown, SIGINT and SIGTERM
-send VELOCITY 0, then each device's mode from before activate (Standby unless it rested in
-Disable or Passive). ``/diagnostics``: bad frames, silent joints, HARDWARE_STATUS, watchdog.
+A managed node (``autostart``) on the bridges' base (``uvms_hardware.bridge_node``). configure
+asks each device in turn (never a broadcast) for MODEL, MODE and its three limits, and
+refuses (FAILURE, the log naming the joint and both values) a device whose limits differ from
+the URDF's (position, speed) or hardware.yaml's (current), or that stays silent. activate
+sends MODE Standby to every device and reads each MODE back (``uvms_hardware.alpha5_probe``:
+resent until confirmed, ``CONFIRM_TRIES`` tries of ``confirm_timeout_s``); a device that does
+not confirm refuses the activation, naming it. Running, each ``ActuatorCommand`` becomes
+CURRENT mA per joint (``uvms_hardware.alpha5_core``); a timer at ``feedback_rate_hz`` x
+devices asks one device per tick for POSITION and VELOCITY; the watchdog sends VELOCITY 0 to
+every joint after ``watchdog_timeout_s`` without a command and holds.
+
+``joint_states`` carries fresh answers only: one message as soon as every driven joint has
+answered position and velocity again (once per round), each answer younger than
+``silent_timeout_s``, never the same answers twice. So a joint that stops answering stops
+the joint states at once (the controller's input-age check then ends its task INPUTS_STALE)
+and /diagnostics turns ERROR naming it. A message of the answering joints only would be
+valid ROS (JointState names its joints), but the controller needs every arm joint and would
+reject it as a bad input instead of seeing its joint states go stale. Each message is stamped
+with the arrival of the oldest answer it holds, on the node clock: the protocol has no device
+clock, so arrival (read once per tick, every 2 ms at the defaults) is what the wire gives.
+
+deactivate, shutdown, ``on_error``, SIGINT and SIGTERM (the base) stop the arm: VELOCITY 0 to
+every device at once, then, device by device and each read back, VELOCITY 0 (MODE Velocity,
+or Disable / Passive which ignore it) and the device's mode from before activate (Standby
+unless it rested in Disable or Passive); what is not confirmed is an error line naming the
+device. With every device silent that takes ``put_back_bound_s`` (0.9 s for five devices at
+the defaults). ``/diagnostics``: bad frames, silent joints, HARDWARE_STATUS, watchdog.
 
 Joints: robot.urdf of bluerov2_alpha5 has four arm joints joint_1..joint_4 = devices E, D, C, B
 (0x05..0x02); the jaw (0x01) is no URDF joint and is not driven unless ``jaw_joint`` names
@@ -19,34 +36,36 @@ to be the URDF's (unknown from the documents).
 
 from __future__ import annotations
 
-import math
-import sys
+import contextlib
 from typing import Any
 
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.exceptions import ParameterException
-from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.time import Time
 from sensor_msgs.msg import JointState
-from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
-from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
-from uvms_common.node_main import run_node
-from uvms_common.robot_parameters import declare_robot_name
+from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
 from uvms_hardware.alpha5_core import (
+    CONFIRM_TRIES,
+    DEFAULT_CONFIRM_TIMEOUT_S,
     DEFAULT_OVERSPEED_FACTOR,
+    PUT_BACK_BUDGET_S,
     Alpha5Core,
+    JointSample,
+    Setting,
     check_device,
+    describe,
+    put_back_bound_s,
 )
-from uvms_hardware.alpha5_probe import probe_device
-from uvms_hardware.device_clock import DeviceClock, stop_requested
+from uvms_hardware.alpha5_probe import confirm_setting, probe_device
+from uvms_hardware.bridge_node import REFUSALS, BridgeNode, run_bridge
+from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Drive, load_alpha5
 from uvms_hardware.reach_protocol import Mode
 from uvms_hardware.transport import Link, open_link, parse_connection
 from uvms_msgs.msg import ActuatorCommand
 
-SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 _LEVELS = {0: OK, 1: WARN, 2: ERROR}
 
 #: name, default, description (unit).
@@ -66,60 +85,67 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
     ('startup_wait_s', 10.0,
      'While no device answers at all, configure asks again for this long (s): the arm or its '
      'link may come up after the bridge (launch order); 0 asks once'),
-    ('silent_timeout_s', 0.2, 'A joint without an answer this long is silent (s)'),
+    ('silent_timeout_s', 0.2,
+     'A joint without an answer this long is silent: no joint_states, diagnostics ERROR (s)'),
     ('overspeed_factor', DEFAULT_OVERSPEED_FACTOR,
      'A joint reported faster than this many times its URDF speed limit trips the bridge: '
      'VELOCITY 0 to every joint, commands refused until deactivate and activate (>= 1)'),
+    ('confirm_timeout_s', DEFAULT_CONFIRM_TIMEOUT_S,
+     f'Wait for a MODE read-back when activate or the put-back confirms a change (s); '
+     f'{CONFIRM_TRIES} tries per change, and the whole put-back with every device silent '
+     f'must fit {PUT_BACK_BUDGET_S:g} s'),
 )
 
 
 class Alpha5BridgeError(HardwareError):
-    """A parameter of the bridge is invalid."""
+    """A parameter of the bridge is invalid, or the arm refuses configure or activate."""
 
 
-class Alpha5BridgeNode(LifecycleNode):
+class Alpha5BridgeNode(BridgeNode):
     """Reach Alpha 5 bridge: actuator commands in, joint_states and diagnostics out."""
+
+    error_type = Alpha5BridgeError
+    diagnostics_task = 'alpha5'
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('alpha5_bridge', **kwargs)
-        self._device_clock = DeviceClock(self)
-        self.robot_name = declare_robot_name(self)
         self.values = {name: self.declare_parameter(
             name, default, ParameterDescriptor(description=text, read_only=True)).value
             for name, default, text in PARAMETERS}
-        starting = declare_autostart(self)
-        guard_change_state(self)
         self.core: Alpha5Core | None = None
         self.link: Link | None = None
         self.modes_before: dict[int, Mode] = {}
+        #: Every reason the last configure was refused, one per device problem.
         self.configure_errors: list[str] = []
-        self._entities: list[Any] = []
         self._timer: Any = None
-        self._active = False
-        self._diagnostics = DiagnosticsPublisher(self, self.robot_name)
-        self._diagnostics.add('alpha5', self._report)
-        if starting and not autostart(self):
-            message = '; '.join(self.configure_errors) or 'the bridge cannot configure'
-            self.destroy_node()
-            raise Alpha5BridgeError(message)
+        self.start()
 
-    def now_s(self) -> float:
-        """The steady clock (s): the device's times (``uvms_hardware.device_clock``)."""
-        return self._device_clock.now_s()
-
-    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Open the link, check every device in turn, create publisher and subscription."""
-        v = self.values
+    # -- the base's hooks ------------------------------------------------------------------
+    def configure_device(self) -> None:
+        """Check parameters, open the link, check every device in turn, create the entities."""
+        self.configure_errors = []
         try:
-            arm = load_alpha5(self.robot_name, str(v['jaw_joint']))
-            core = Alpha5Core(arm, float(v['watchdog_timeout_s']), str(v['command_mode']),
-                              float(v['velocity_gain_rad_s_per_n_m']),
-                              float(v['silent_timeout_s']), float(v['overspeed_factor']))
-            if not float(v['feedback_rate_hz']) > 0.0:
-                raise Alpha5BridgeError(f'feedback_rate_hz = {v["feedback_rate_hz"]}: > 0')
-            link = open_link(parse_connection(str(v['connection']), arm.udp_port))
-        except (HardwareError, ValueError) as exc:
-            return self._refuse([str(exc)])
+            self._configure()
+        except REFUSALS as exc:
+            self.configure_errors = self.configure_errors or [str(exc)]
+            raise
+
+    def _configure(self) -> None:
+        v = self.values
+        arm = load_alpha5(self.robot_name, str(v['jaw_joint']))
+        core = Alpha5Core(arm, float(v['watchdog_timeout_s']), str(v['command_mode']),
+                          float(v['velocity_gain_rad_s_per_n_m']),
+                          float(v['silent_timeout_s']), float(v['overspeed_factor']))
+        rate_hz = float(v['feedback_rate_hz'])
+        if not rate_hz > 0.0:
+            raise Alpha5BridgeError(f'feedback_rate_hz = {rate_hz}: expected > 0')
+        bound_s = put_back_bound_s(len(arm.drives), CONFIRM_TRIES, float(v['confirm_timeout_s']))
+        if not 0.0 < bound_s <= PUT_BACK_BUDGET_S:
+            raise Alpha5BridgeError(
+                f'confirm_timeout_s = {v["confirm_timeout_s"]}: the put-back of '
+                f'{len(arm.drives)} devices could take {bound_s:g} s, more than '
+                f'{PUT_BACK_BUDGET_S:g} s (or is no time at all)')
+        self.link = link = open_link(parse_connection(str(v['connection']), arm.udp_port))
         deadline_s = self.now_s() + float(v['startup_wait_s'])
         while True:
             self.modes_before.clear()
@@ -130,19 +156,20 @@ class Alpha5BridgeNode(LifecycleNode):
             self.get_logger().info(f'not every device answers on {v["connection"]} yet: '
                                    'asking again', throttle_duration_sec=2.0)
         if errors:
-            link.close()
-            return self._refuse(errors)
-        self.core, self.link = core, link
+            self.configure_errors = errors
+            raise Alpha5BridgeError('; '.join(errors))
+        self.core = core
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._joint_pub = self.create_publisher(JointState, 'joint_states', qos)
-        self._entities = [(self.destroy_publisher, self._joint_pub), (
-            self.destroy_subscription, self.create_subscription(
-                ActuatorCommand, 'command/actuators', self._on_command, qos))]
+        self._joint_pub = self.own(self.destroy_publisher,
+                                   self.create_publisher(JointState, 'joint_states', qos))
+        self.own(self.destroy_subscription, self.create_subscription(
+            ActuatorCommand, 'command/actuators', self._on_command, qos))
+        self._timer = self.device_timer(1.0 / (rate_hz * len(arm.drives)), self._on_tick)
+        self._timer.cancel()  # polls from activate to the put-back only
         self.get_logger().info(
             f'{len(arm.drives)} devices checked on {v["connection"]}: ' + ', '.join(
                 f'{d.joint_name}={d.device_id:#04x}' for d in arm.drives)
             + ('' if arm.jaw else '; the jaws (0x01) are not driven'))
-        return SUCCESS
 
     def _check(self, link: Link, core: Alpha5Core, drive: Drive) -> list[str]:
         timeout_s = float(self.values['answer_timeout_s'])
@@ -151,65 +178,71 @@ class Alpha5BridgeNode(LifecycleNode):
             self.modes_before[drive.device_id] = mode
         return check_device(drive, answers, timeout_s)
 
-    def _refuse(self, errors: list[str]) -> TransitionCallbackReturn:
-        self.configure_errors = errors
-        for error in errors:
-            self.get_logger().error(f'configure refused: {error}')
-        return FAILURE
+    def activate_device(self) -> None:
+        """MODE Standby to every device, each read back; then poll and accept commands.
 
-    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """MODE Standby to every device, then poll and accept commands."""
+        Raises:
+            Alpha5BridgeError: A device did not confirm Standby (named); the base then puts
+                back every device.
+        """
         assert self.core is not None and self.link is not None
-        self.link.send(self.core.standby_frames())
-        period_s = 1.0 / (float(self.values['feedback_rate_hz']) * len(self.core.drives))
-        self._timer = self._device_clock.timer(period_s, self._on_tick)
-        self._active = True
-        return super().on_activate(state)
+        self.link.read()  # answers still in flight from configure
+        problems = self._confirm(self.core.standby_settings())
+        if problems:
+            raise Alpha5BridgeError('; '.join(problems))
+        self.core.stop_driving()  # nothing is driven until the first command
+        self._timer.reset()
 
-    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """VELOCITY 0, then each device's mode from before activate."""
-        self._stop()
-        return super().on_deactivate(state)
+    def put_device_back(self) -> list[str]:
+        """VELOCITY 0 to every device at once, then each VELOCITY 0 and resting mode confirmed.
 
-    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Close the link, drop publisher and subscription."""
-        self._release()
-        return super().on_cleanup(state)
-
-    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """Leave the arm at rest from any state, then release everything."""
-        self._stop()
-        self._release()
-        return super().on_shutdown(state)
-
-    def destroy_node(self) -> None:
-        """Shut down as rclcpp's lifecycle node does (arm at rest), then destroy."""
-        if state_label(self) not in ('finalized', 'unknown') and self.context.ok():
-            self.trigger_shutdown()
-        else:
-            self._stop()
-        self._diagnostics.destroy()
-        super().destroy_node()
-
-    def _stop(self) -> None:
+        Returns:
+            One line per change a device did not confirm, naming it.
+        """
+        core, link = self.core, self.link
+        problems: list[str] = []
+        if core is not None and link is not None:
+            link.send(core.neutral_frames())  # every joint stops first, whatever follows
+            problems = self._confirm(core.restore_settings(self.modes_before))
+            core.stop_driving()
         if self._timer is not None:
-            self.destroy_timer(self._timer)
-            self._timer = None
-        if self._active and self.core is not None and self.link is not None:
-            self.link.send(self.core.restore_frames(self.modes_before))
-            self.core.stop_driving()
-        self._active = False
+            with contextlib.suppress(Exception):  # a timer gone with its context polls no more
+                self._timer.cancel()
+        return problems
 
-    def _release(self) -> None:
-        for destroy, entity in reversed(self._entities):
-            destroy(entity)
-        self._entities = []
+    def release_device(self) -> None:
+        """Close the link."""
         if self.link is not None:
             self.link.close()
-        self.link, self.core = None, None
+        self.link, self.core, self._timer = None, None, None
+
+    def device_report(self) -> Report:
+        """Bad frames, silent joints, HARDWARE_STATUS, watchdog; OK while not driving."""
+        if self.core is None:
+            return Report(WARN, 'not configured', {})
+        if not self.device_active:
+            return Report(OK, 'not driving', {})
+        level, message, values = self.core.report(self.now_s())
+        return Report(_LEVELS[level], message, values)
+
+    # -- the period ------------------------------------------------------------------------
+    def _confirm(self, settings: list[Setting]) -> list[str]:
+        """Each setting sent and read back (``confirm_setting``); what did not confirm."""
+        assert self.core is not None and self.link is not None
+        timeout_s = float(self.values['confirm_timeout_s'])
+        problems = []
+        for setting in settings:
+            result = confirm_setting(self.link, self.core.splitter, setting, CONFIRM_TRIES,
+                                     timeout_s)
+            if not result.confirmed:
+                seen = ('no MODE answer' if result.mode is None
+                        else f'MODE reads {result.mode.name.capitalize()}')
+                problems.append(f'{describe(setting.drive)}: {setting.label} not confirmed '
+                                f'after {result.tries} tries of {timeout_s:g} s ({seen})')
+        return problems
 
     def _on_command(self, msg: ActuatorCommand) -> None:
-        if not self._active or self.core is None or self.link is None:
+        if not self.device_active or self.core is None or self.link is None:
             return
         frames = self.core.command(self.now_s(), list(msg.joint_names), list(msg.joint_torques))
         if not frames:
@@ -219,7 +252,7 @@ class Alpha5BridgeNode(LifecycleNode):
 
     def _on_tick(self) -> None:
         core, link = self.core, self.link
-        if core is None or link is None:
+        if core is None or link is None or not self.device_active:
             return
         t_s = self.now_s()
         tripped = core.overspeed
@@ -227,30 +260,26 @@ class Alpha5BridgeNode(LifecycleNode):
         if core.overspeed and not tripped:
             self.get_logger().error(f'tripped: {core.overspeed}: VELOCITY 0 to every joint; '
                                     'commands refused until deactivate and activate')
-        frames, round_done = core.tick(t_s)
+        sample = core.next_joint_state(t_s)  # as soon as every joint answered again
+        if sample is not None:
+            self._joint_pub.publish(self._joint_state(sample, t_s))
+        frames, _ = core.tick(t_s)
         link.send(frames)
-        if round_done and self._active:
-            names, positions, velocities = core.joint_state()
-            if not all(math.isfinite(x) for x in positions + velocities):
-                return  # a device has not answered yet: nothing is published before
-            msg = JointState(name=names, position=positions, velocity=velocities)
-            msg.header.stamp = self.get_clock().now().to_msg()
-            self._joint_pub.publish(msg)
 
-    def _report(self) -> Report:
-        state = state_label(self)
-        if self.core is None:
-            text = '; '.join(self.configure_errors) or 'not configured'
-            return Report(ERROR if self.configure_errors else WARN, f'{state}: {text}',
-                          {'lifecycle_state': state})
-        level, message, values = self.core.report(self.now_s())
-        return Report(_LEVELS[level], message, {'lifecycle_state': state, **values})
+    def _joint_state(self, sample: JointSample, t_s: float) -> JointState:
+        """The message of a sample, stamped with its oldest answer's arrival (node clock)."""
+        age_ns = round((t_s - sample.oldest_answer_s) * 1e9)
+        now = self.get_clock().now()
+        stamp = Time(nanoseconds=max(0, now.nanoseconds - age_ns), clock_type=now.clock_type)
+        msg = JointState(name=sample.names, position=sample.positions,
+                         velocity=sample.velocities)
+        msg.header.stamp = stamp.to_msg()
+        return msg
 
 
 def main(args: list[str] | None = None) -> None:
-    """Run the alpha5_bridge node until SIGINT/SIGTERM."""
-    sys.exit(run_node(Alpha5BridgeNode, args, 'alpha5_bridge',
-                      (Alpha5BridgeError, HardwareError, ParameterException)))
+    """Run the alpha5_bridge node until SIGINT/SIGTERM; the arm is put back first."""
+    run_bridge(Alpha5BridgeNode, args, 'alpha5_bridge')
 
 
 if __name__ == '__main__':

@@ -7,7 +7,7 @@ The node (``alpha5_bridge_node``) owns the link and the clock and calls, per per
     link.send(core.command(t_s, names, torques))    # on each ActuatorCommand
     core.receive(link.read(), t_s)                  # every period
     frames, round_done = core.tick(t_s)             # next feedback REQUEST, watchdog neutral
-    names, q, qd = core.joint_state()               # rad, rad/s (jaw m, m/s)
+    sample = core.next_joint_state(t_s)             # every joint answered again, or None
 
 Feedback asks one device at a time (REQUEST POSITION, VELOCITY), never all at once: broadcast
 requests collide on RS-485. Commands: joint torque as CURRENT mA through Kt, gear ratio and
@@ -18,6 +18,15 @@ when commands stop for ``watchdog_timeout_s``, and repeats it every ``HOLD_RESEN
 new command arrives (a lost UDP datagram must not leave a joint driven). A joint reported
 faster than ``overspeed_factor`` times its speed limit trips the core: VELOCITY 0 to every
 joint as the watchdog does, every command refused until ``stop_driving`` (deactivate).
+Activate's MODE Standby and the put-back's VELOCITY 0 and resting modes are `Setting`s, each
+confirmed by its device's MODE read back (``alpha5_probe.confirm_setting``).
+
+A silent joint is silent: `next_joint_state` gives a joint state only when every driven
+joint has answered since the last one it gave, within ``silent_timeout_s``; so no answer is
+ever handed out twice, and a joint that stops answering stops the joint states at once (the
+controller's input-age check then sees them go stale). Each sample carries the arrival time
+of its oldest answer: the protocol has no device clock (no timestamp or sequence in any
+packet of the document), so the time the bridge read the answer is the best the wire gives.
 """
 
 from __future__ import annotations
@@ -53,6 +62,17 @@ STATUS_HOLD_S = 2.5
 DEFAULT_OVERSPEED_FACTOR = 1.5
 #: Modes the bridge restores at the end (others become Standby: the arm is left at rest).
 RESTING_MODES = (Mode.STANDBY, Mode.DISABLE, Mode.PASSIVE)
+#: Modes that ignore control packets (the document): a VELOCITY 0 has nothing to stop there.
+IGNORING_MODES = frozenset({Mode.DISABLE, Mode.PASSIVE})
+#: Sends of one confirmed setting before it counts as not confirmed.
+CONFIRM_TRIES = 3
+#: Wait for the MODE answer of one try (s). The bus needs about 2 ms for a REQUEST and its
+#: answer at 115200 baud (robots/bluerov2_heavy_alpha5.md); the device's own answer time is
+#: not documented: 30 ms is 15 times the wire's and still fits the put-back in 0.9 s.
+DEFAULT_CONFIRM_TIMEOUT_S = 0.03
+#: The longest a put-back may take with every device silent (s): well under the 2 s a
+#: launcher's stop leaves a bridge (the other bridges share it).
+PUT_BACK_BUDGET_S = 1.0
 
 
 def describe(drive: Drive) -> str:
@@ -106,15 +126,66 @@ def check_device(drive: Drive, answers: Mapping[int, rp.Packet],
     return errors
 
 
+@dataclass(frozen=True)
+class Setting:
+    """A change of one device that is confirmed by reading its MODE back.
+
+    Attributes:
+        drive: The device.
+        frame: What to send (again on each try).
+        accepted: The MODE values that confirm it.
+        label: How messages name it (``MODE Standby``, ``VELOCITY 0``).
+    """
+
+    drive: Drive
+    frame: bytes
+    accepted: frozenset[Mode]
+    label: str
+
+
+def put_back_bound_s(devices: int, tries: int, timeout_s: float) -> float:
+    """The longest a put-back takes (s): two settings per device, each ``tries`` waits."""
+    return 2 * devices * tries * timeout_s
+
+
 @dataclass
 class DeviceFeedback:
-    """What a device last reported (SI) and when (s of the node clock)."""
+    """What a device last reported (SI) and when it arrived (s of the bridge's clock)."""
 
     position: float = math.nan
     velocity: float = math.nan
-    answer_s: float = -math.inf
+    position_s: float = -math.inf
+    velocity_s: float = -math.inf
     status: bytes = b''
     status_s: float = -math.inf
+
+    @property
+    def answer_s(self) -> float:
+        """Arrival of the device's last feedback answer (-inf before the first)."""
+        return max(self.position_s, self.velocity_s)
+
+    @property
+    def oldest_s(self) -> float:
+        """Arrival of the older of its last position and velocity (-inf before both)."""
+        return min(self.position_s, self.velocity_s)
+
+
+@dataclass(frozen=True)
+class JointSample:
+    """One joint state of fresh answers only, in drive order.
+
+    Attributes:
+        names: Joint names.
+        positions: rad (jaw m).
+        velocities: rad/s (jaw m/s).
+        oldest_answer_s: Arrival of the oldest answer it holds (s of the bridge's clock): the
+            stamp it deserves, as the protocol has no device clock.
+    """
+
+    names: list[str]
+    positions: list[float]
+    velocities: list[float]
+    oldest_answer_s: float
 
 
 class Alpha5Core:
@@ -128,6 +199,8 @@ class Alpha5Core:
             raise ValueError(f'command_mode = {command_mode!r}: one of {", ".join(COMMAND_MODES)}')
         if not (math.isfinite(overspeed_factor) and overspeed_factor >= 1.0):
             raise ValueError(f'overspeed_factor = {overspeed_factor!r}: expected >= 1')
+        if not (math.isfinite(silent_timeout_s) and silent_timeout_s > 0.0):
+            raise ValueError(f'silent_timeout_s = {silent_timeout_s!r}: expected seconds > 0')
         self.arm = arm
         self.drives = arm.drives
         self.command_mode = command_mode
@@ -145,6 +218,7 @@ class Alpha5Core:
         self._holding = False
         self._driving = False
         self._last_hold_s = -math.inf
+        self._given_s = [-math.inf] * len(self.drives)
         self.rejected_commands = 0
         self.last_rejection = ''
 
@@ -188,15 +262,33 @@ class Alpha5Core:
         """VELOCITY 0 to every driven device, one at a time (never a broadcast)."""
         return b''.join(rp.encode_velocity(d.device_id, 0.0) for d in self.drives)
 
-    def restore_frames(self, modes: Mapping[int, Mode]) -> bytes:
-        """VELOCITY 0 then MODE back to each device's resting mode before activate (Standby)."""
-        return self.neutral_frames() + b''.join(
-            rp.encode_mode(d.device_id, mode if (mode := modes.get(d.device_id, Mode.STANDBY))
-                           in RESTING_MODES else Mode.STANDBY) for d in self.drives)
+    def restore_settings(self, modes: Mapping[int, Mode]) -> list[Setting]:
+        """VELOCITY 0 to every device, then MODE back to its resting mode before activate.
 
-    def standby_frames(self) -> bytes:
+        A device that rested in another mode (or did not say) is left in Standby. VELOCITY 0
+        is confirmed by MODE Velocity (the control packet switched the mode; a requested
+        VELOCITY is the joint's speed, not the setpoint, so it cannot confirm one), or by
+        Disable and Passive, which ignore control packets: nothing is driven there.
+        """
+        stop = [Setting(d, rp.encode_velocity(d.device_id, 0.0),
+                        frozenset({Mode.VELOCITY}) | IGNORING_MODES, 'VELOCITY 0')
+                for d in self.drives]
+        rest = []
+        for d in self.drives:
+            mode = modes.get(d.device_id, Mode.STANDBY)
+            mode = mode if mode in RESTING_MODES else Mode.STANDBY
+            rest.append(Setting(d, rp.encode_mode(d.device_id, mode), frozenset({mode}),
+                                f'MODE {mode.name.capitalize()}'))
+        return stop + rest
+
+    def standby_settings(self) -> list[Setting]:
         """MODE Standby to every driven device (activate)."""
-        return b''.join(rp.encode_mode(d.device_id, Mode.STANDBY) for d in self.drives)
+        return [Setting(d, rp.encode_mode(d.device_id, Mode.STANDBY), frozenset({Mode.STANDBY}),
+                        'MODE Standby') for d in self.drives]
+
+    def restore_frames(self, modes: Mapping[int, Mode]) -> bytes:
+        """The frames of `restore_settings`, in order."""
+        return b''.join(s.frame for s in self.restore_settings(modes))
 
     def stop_driving(self) -> None:
         """Forget the last command and a trip (deactivate): nothing is driven until a new one."""
@@ -247,17 +339,38 @@ class Alpha5Core:
             elif packet.packet_id in FEEDBACK_REQUEST and len(packet.data) == 4:
                 value = rp.packet_values_si(packet)[0]
                 if packet.packet_id == PacketId.POSITION:
-                    feedback.position = value
+                    feedback.position, feedback.position_s = value, t_s
                 else:
-                    feedback.velocity = value
+                    feedback.velocity, feedback.velocity_s = value, t_s
                     self._check_speed(self._drive_of[packet.device_id], value)
-                feedback.answer_s = t_s
 
     def joint_state(self) -> tuple[list[str], list[float], list[float]]:
-        """(names, positions rad or m, velocities rad/s or m/s) of every driven device."""
+        """(names, positions rad or m, velocities rad/s or m/s): the last reported, however old.
+
+        For tests and tools; what is published comes from `next_joint_state`.
+        """
         values = [self.feedback[d.device_id] for d in self.drives]
         return ([d.joint_name for d in self.drives], [v.position for v in values],
                 [v.velocity for v in values])
+
+    def next_joint_state(self, t_s: float) -> JointSample | None:
+        """The joint state to publish at ``t_s``, or None while it would not be fresh.
+
+        None unless every driven joint has answered both position and velocity since the last
+        sample given, within ``silent_timeout_s``, with finite values: a sample never repeats
+        an answer, so a joint that stops answering stops the samples at once (and a joint
+        whose answer was lost in one round skips that round's sample).
+        """
+        values = [self.feedback[d.device_id] for d in self.drives]
+        if not all(t_s - v.oldest_s <= self.silent_timeout_s and v.oldest_s > given_s
+                   for v, given_s in zip(values, self._given_s, strict=True)):
+            return None
+        positions, velocities = [v.position for v in values], [v.velocity for v in values]
+        if not all(math.isfinite(x) for x in positions + velocities):
+            return None
+        self._given_s = [v.oldest_s for v in values]
+        return JointSample([d.joint_name for d in self.drives], positions, velocities,
+                           min(self._given_s))
 
     # -- health -------------------------------------------------------------------------------
     def silent_joints(self, t_s: float) -> list[str]:

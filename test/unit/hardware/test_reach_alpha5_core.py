@@ -186,3 +186,53 @@ def test_an_overspeed_factor_under_1_is_refused() -> None:
     """A trip below the joint's own limit would stop every normal motion: refused."""
     with pytest.raises(ValueError, match='overspeed_factor'):
         Alpha5Core(ARM, overspeed_factor=0.9)
+
+
+def answer_round(core: Alpha5Core, twin: Alpha5Twin, t_s: float) -> None:
+    """One feedback round at ``t_s``: each device asked in turn, its answer taken."""
+    for _ in core.drives:
+        frames, _ = core.tick(t_s)
+        for packet in packets(frames):
+            core.receive(twin.handle(packet), t_s)
+
+
+def test_a_joint_that_stops_answering_gives_no_joint_state() -> None:
+    """joint_3 silent after 0.01 s: no joint state at all from then on; its answer again: one.
+
+    Before, every round gives one, stamped with its oldest answer's arrival. The old core
+    republished joint_3's last answer each round for as long as the others answered.
+    """
+    core, twin = Alpha5Core(ARM, silent_timeout_s=0.2), Alpha5Twin(ARM, port=0)
+    answer_round(core, twin, 0.0)
+    answer_round(core, twin, 0.01)
+    sample = core.next_joint_state(0.01)
+    assert sample is not None and sample.oldest_answer_s == 0.01
+    twin.set_silent(0x03)
+    given = []
+    for t_s in (0.02, 0.05, 0.15, 0.25, 0.5):
+        answer_round(core, twin, t_s)
+        given.append(core.next_joint_state(t_s))
+    assert given == [None] * 5
+    assert core.silent_joints(0.5) == ['joint_3']
+    twin.set_silent(0x03, False)
+    answer_round(core, twin, 0.6)
+    assert core.next_joint_state(0.6) is not None
+
+
+def test_a_joint_state_is_never_given_twice() -> None:
+    """Without a new answer since the last joint state, there is no next one."""
+    core, twin = Alpha5Core(ARM), Alpha5Twin(ARM, port=0)
+    answer_round(core, twin, 0.0)
+    assert core.next_joint_state(0.0) is not None
+    assert core.next_joint_state(0.002) is None
+
+
+def test_a_joint_state_is_stamped_with_its_oldest_answer() -> None:
+    """Answers at 1.000 s (joint_1) and 1.006 s (the others): the sample says 1.000 s."""
+    core = Alpha5Core(ARM)
+    for t_s, device_id in ((1.0, 5), (1.002, 4), (1.004, 3), (1.006, 2)):
+        core.receive(rp.encode_position(device_id, 0.5) + rp.encode_velocity(device_id, 0.0),
+                     t_s)
+    sample = core.next_joint_state(1.008)
+    assert sample is not None and sample.oldest_answer_s == 1.0
+    assert sample.names == ['joint_1', 'joint_2', 'joint_3', 'joint_4']

@@ -27,6 +27,10 @@ bridge's own watchdog is what the tests see. MODEL's data layout is not document
 answers ``model_data`` (default: the ASCII text ``'alpha5'``). HARDWARE_STATUS' layout is
 not documented either: the twin sends the bytes set by `set_hardware_status`, at 1 Hz to the
 last host while any is non-zero.
+
+Faults a test can set: `set_silent` (a device answers and takes nothing: a broken cable, an
+unpowered joint; the others go on), and ``drop_first_datagrams`` / `drop_datagrams` (the
+next datagrams the server receives are lost before any device sees them, as on a lossy link).
 """
 
 from __future__ import annotations
@@ -77,7 +81,7 @@ class Alpha5Twin:
     """Protocol server of an Alpha 5 (devices of ``arm.drives``) on UDP ``host:port``."""
 
     def __init__(self, arm: Alpha5Hardware, host: str = LOOPBACK, port: int = DEFAULT_PORT,
-                 model_data: bytes = b'alpha5') -> None:
+                 model_data: bytes = b'alpha5', drop_first_datagrams: int = 0) -> None:
         self.devices = {d.device_id: TwinDevice(
             d, position_limits=d.position_limits, velocity_limit=d.velocity_limit,
             current_limit_ma=d.current_limit_ma) for d in arm.drives}
@@ -89,6 +93,9 @@ class Alpha5Twin:
         self._thread: threading.Thread | None = None
         self._running = threading.Event()
         self._host: tuple[str, int] | None = None
+        self._to_drop = drop_first_datagrams
+        #: Datagrams lost on purpose so far.
+        self.dropped = 0
         self.port = port
 
     # -- plant side ---------------------------------------------------------------------------
@@ -122,6 +129,11 @@ class Alpha5Twin:
         """A silent device answers nothing (a broken cable, an unpowered joint)."""
         with self._lock:
             self.devices[device_id].silent = silent
+
+    def drop_datagrams(self, count: int) -> None:
+        """Lose the next ``count`` datagrams the server receives (before any device sees them)."""
+        with self._lock:
+            self._to_drop = count
 
     def set_position_limits(self, device_id: int, lower: float, upper: float) -> None:
         """A device configured with other limits than the URDF's (SI units)."""
@@ -231,6 +243,11 @@ class Alpha5Twin:
             now_s = time.monotonic()
             if readable:
                 datagram, sender = sock.recvfrom(4096)
+                with self._lock:
+                    lost, self._to_drop = self._to_drop > 0, max(0, self._to_drop - 1)
+                    self.dropped += lost
+                if lost:
+                    continue
                 self._host = sender
                 reply = b''.join(self.handle(p, now_s) for p in self.splitter.feed(datagram))
                 if reply:
