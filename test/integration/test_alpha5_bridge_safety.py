@@ -13,8 +13,9 @@ from typing import Any
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
-from test_alpha5_bridge import SUCCESS, Rig
+from test_alpha5_bridge import FAILURE, SUCCESS, Rig
 from uvms_common.lifecycle import state_label
+from uvms_hardware.alpha5_core import CONFIRM_TRIES, DEFAULT_CONFIRM_TIMEOUT_S, put_back_bound_s
 from uvms_hardware.alpha5_probe import Confirmation
 from uvms_hardware.reach_protocol import Mode, PacketId, decode_frame, encode_mode
 
@@ -116,3 +117,66 @@ def test_a_silenced_joint_stops_joint_states_and_diagnostics_name_it(rig: Rig) -
     rig.spin_until(lambda: rig.states[-1].position[2] == pytest.approx(1.6))
     stamps = [stamp_s(s) for s in rig.states]
     assert all(b > a for a, b in itertools.pairwise(stamps))
+
+
+def test_activation_is_confirmed_through_lost_datagrams(rig: Rig) -> None:
+    """The first two datagrams of activate are lost: Standby is sent again until read back.
+
+    The arm rested in Disable: one unconfirmed MODE Standby datagram (the old activate) would
+    have left it there while the bridge drove it.
+    """
+    set_modes(rig, dict.fromkeys(DEVICES, Mode.DISABLE))
+    bridge = rig.start_bridge(autostart=False)
+    assert bridge.trigger_configure() == SUCCESS
+    rig.twin.drop_datagrams(2)
+    assert bridge.trigger_activate() == SUCCESS
+    assert rig.twin.dropped == 2
+    assert modes(rig) == dict.fromkeys(DEVICES, Mode.STANDBY)
+
+
+def test_stop_is_confirmed_through_lost_datagrams(rig: Rig) -> None:
+    """Driven in Current mode, deactivate loses its first three datagrams: the arm still stops.
+
+    The old put-back was one datagram: lost, it left every joint driven at its last current.
+    """
+    bridge = rig.start_bridge()
+    rig.spin_for(0.2, command=[0.5, 0.5, 0.5, 0.5])
+    assert modes(rig) == dict.fromkeys(DEVICES, Mode.CURRENT)
+    rig.twin.drop_datagrams(3)
+    started_s = time.monotonic()
+    assert bridge.trigger_deactivate() == SUCCESS
+    assert rig.twin.dropped == 3
+    assert modes(rig) == dict.fromkeys(DEVICES, Mode.STANDBY)
+    assert all(velocity_zero_since(rig, d, started_s) for d in DEVICES)
+
+
+def test_activation_a_device_does_not_confirm_is_refused_naming_it(rig: Rig) -> None:
+    """The elbow goes silent after configure: activate fails naming joint_3; the rest put back.
+
+    The other devices had taken Standby; they are back in Disable, as found.
+    """
+    set_modes(rig, dict.fromkeys(DEVICES, Mode.DISABLE))
+    bridge = rig.start_bridge(autostart=False)
+    assert bridge.trigger_configure() == SUCCESS
+    rig.twin.set_silent(0x03)
+    started_s = time.monotonic()
+    assert bridge.trigger_activate() == FAILURE
+    took_s = time.monotonic() - started_s
+    assert bridge.refusal.startswith('joint_3 (device 0x03, C): MODE Standby not confirmed')
+    assert 'joint_1' not in bridge.refusal
+    assert modes(rig) == dict.fromkeys(DEVICES, Mode.DISABLE)
+    assert state_label(bridge) == 'inactive' and not bridge.device_changed
+    assert took_s < 1.5, took_s  # Standby and the put-back, the elbow never answering
+
+
+def test_put_back_of_a_silent_arm_ends_within_its_bound(rig: Rig) -> None:
+    """Every device silent while driven: deactivate still ends, within 4 x 2 x 3 x 30 ms."""
+    bridge = rig.start_bridge()
+    rig.spin_for(0.2, command=[0.5, 0.5, 0.5, 0.5])
+    for device_id in DEVICES:
+        rig.twin.set_silent(device_id)
+    started_s = time.monotonic()
+    assert bridge.trigger_deactivate() == SUCCESS
+    took_s = time.monotonic() - started_s
+    assert put_back_bound_s(4, CONFIRM_TRIES, DEFAULT_CONFIRM_TIMEOUT_S) == pytest.approx(0.72)
+    assert 0.72 <= took_s < 1.0, took_s
