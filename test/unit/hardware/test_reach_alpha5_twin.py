@@ -130,3 +130,18 @@ def test_mode_standby_after_velocity_and_unknown_mode_ignored(twin: Alpha5Twin) 
     assert twin.joint_commands()['joint_1'][0] == Mode.STANDBY
     send(twin, rp.encode_packet(0x05, PacketId.MODE, b'\x77'))
     assert twin.joint_commands()['joint_1'][0] == Mode.STANDBY
+
+
+def test_dropped_datagrams_reach_no_device() -> None:
+    """drop_first_datagrams=2: two MODE Disable datagrams are lost, the third is taken."""
+    arm = load_alpha5('bluerov2_alpha5')
+    with Alpha5Twin(arm, port=0, drop_first_datagrams=2) as twin, socket.socket(
+            socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.settimeout(2.0)
+        for _ in range(3):
+            sock.sendto(rp.encode_mode(0x05, Mode.DISABLE) + rp.encode_request(
+                0x05, [PacketId.MODE]), ('127.0.0.1', twin.port))
+        reply, _ = sock.recvfrom(4096)
+        assert twin.dropped == 2 and len(twin.received(0x05)) == 2  # MODE and REQUEST once
+    (packet,) = rp.FrameSplitter().feed(reply)
+    assert packet.data == bytes((Mode.DISABLE,))
