@@ -128,6 +128,11 @@ MISSION = NodeSpec(
 #: priority.
 LOOP_NODES = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR, ESTIMATOR, *HARDWARE_BRIDGES.values(),
               HARDWARE_TWINS)
+#: The bridges that only read sensors (DVL, Net F/T): SCHED_FIFO below the control loop
+#: (``launch_layout.node_scheduling``), so that a sensor's stream never delays a control period
+#: (issue 46). The actuator bridges (ArduSub, Alpha 5) carry the loop's commands: at its
+#: priority.
+SENSOR_BRIDGES = (HARDWARE_BRIDGES['dvl_bridge'], HARDWARE_BRIDGES['netft_bridge'])
 
 #: The nodes that always run, in start order; the Foxglove server joins for a live view and
 #: the recorder, last, when there is an output.

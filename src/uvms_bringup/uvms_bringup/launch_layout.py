@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Iterable
+from dataclasses import replace
 
 from uvms_common.scheduling import Scheduling, fifo_refusal
 
-from uvms_bringup.launch_helpers import LOOP_NODES
+from uvms_bringup.launch_helpers import LOOP_NODES, SENSOR_BRIDGES, NodeSpec
 from uvms_bringup.processes import NodeProcessSpec
+
+#: SCHED_FIFO priority steps between the control loop and the sensor bridges.
+SENSOR_BELOW_LOOP = 10
 
 
 def launch_scheduling(priority: int, cpus: tuple[int, ...], lock_memory: bool) -> Scheduling:
@@ -25,16 +29,50 @@ def launch_scheduling(priority: int, cpus: tuple[int, ...], lock_memory: bool) -
     return Scheduling(priority, cpus, lock_memory)
 
 
+def sensor_priority(loop_priority: int) -> int:
+    """SCHED_FIFO priority of the sensor bridges: ``SENSOR_BELOW_LOOP`` below the loop's.
+
+    Below a loop priority of 11 they run one step below it; below the loop's 1, at normal
+    priority (0): never at the loop's own.
+    """
+    if loop_priority > SENSOR_BELOW_LOOP:
+        return loop_priority - SENSOR_BELOW_LOOP
+    return max(loop_priority - 1, 0)
+
+
+def node_scheduling(spec: NodeSpec, scheduling: Scheduling | None) -> Scheduling | None:
+    """What one node's process asks for: the loop's, lower for a sensor bridge; else None.
+
+    Args:
+        spec: The node.
+        scheduling: What the loop processes (``LOOP_NODES``) ask for; None: nothing.
+    """
+    if scheduling is None or spec not in LOOP_NODES:
+        return None
+    if spec in SENSOR_BRIDGES:
+        return replace(scheduling, priority=sensor_priority(scheduling.priority))
+    return scheduling
+
+
 def describe_scheduling(scheduling: Scheduling, plans: Iterable[NodeProcessSpec]) -> str:
-    """The loop processes' scheduling on the launch line: ``; simulator, ...: SCHED_FIFO 50``."""
-    asked = [f'SCHED_FIFO {scheduling.priority}' if scheduling.priority else 'normal priority']
+    """The loop processes' scheduling on the launch line: ``; simulator, ...: SCHED_FIFO 50``.
+
+    Processes at another priority (the sensor bridges) get a group of their own:
+    ``; simulator, controller: SCHED_FIFO 50; dvl_bridge: SCHED_FIFO 40``.
+    """
+    extras = []
     if scheduling.cpus:
-        asked.append('on CPUs ' + ','.join(map(str, scheduling.cpus)))
+        extras.append('on CPUs ' + ','.join(map(str, scheduling.cpus)))
     if scheduling.lock_memory:
-        asked.append('memory locked')
-    loop = [plan.spec.name for plan in plans
-            if plan.spec in LOOP_NODES or composed_nodes(plan)]
-    return '; ' + ', '.join(loop) + ': ' + ', '.join(asked)
+        extras.append('memory locked')
+    groups: dict[int, list[str]] = {}
+    for plan in plans:
+        if plan.spec in LOOP_NODES or composed_nodes(plan):
+            groups.setdefault(plan.rt_priority, []).append(plan.spec.name)
+    return ''.join(
+        '; ' + ', '.join(names) + ': '
+        + ', '.join([f'SCHED_FIFO {priority}' if priority else 'normal priority', *extras])
+        for priority, names in groups.items())
 
 
 def composed_nodes(plan: NodeProcessSpec) -> str:

@@ -35,7 +35,6 @@ from uvms_bringup.hardware_plan import (
 from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
-    LOOP_NODES,
     MISSION,
     RECORDER,
     SIMULATOR,
@@ -49,7 +48,12 @@ from uvms_bringup.launch_helpers import (
     uses_estimator,
     write_mission_file,
 )
-from uvms_bringup.launch_layout import composed_nodes, describe_scheduling, launch_scheduling
+from uvms_bringup.launch_layout import (
+    composed_nodes,
+    describe_scheduling,
+    launch_scheduling,
+    node_scheduling,
+)
 from uvms_bringup.processes import (
     EXIT_FAILURE,
     EXIT_INTERRUPTED,
@@ -165,7 +169,8 @@ def plan_launch(
         foxglove: Host and port of a Foxglove live view (``foxglove_server``); None: none.
         hardware: The hardware file's plan (``--hardware``): bridges, twins; None: the
             simulator alone. The scenario must already be ``hardware_scenario``'s.
-        scheduling: What the loop processes (``LOOP_NODES``) ask for; None: nothing.
+        scheduling: What the loop processes (``LOOP_NODES``) ask for, the sensor bridges
+            ``launch_layout.SENSOR_BELOW_LOOP`` lower; None: nothing.
         compose: A composition of ``uvms_bringup.composed`` (``control``) to run in one
             process; None: one process per node.
 
@@ -218,14 +223,13 @@ def plan_launch(
         generated = parameters_dir / f'{spec.name}.yaml'
         generated.write_text(parameters_file_text({f'{fq_prefix}/{spec.name}': overrides}),
                              encoding='utf-8')
+        asks = node_scheduling(spec, scheduling)
         command = [*node_executable(spec, bin_dir),
                    *ros_arguments(spec, namespace, [*files, generated], log_level,
-                                  remaps if spec is SIMULATOR else (),
-                                  scheduling if spec in LOOP_NODES else None)]
-        loop = scheduling is not None and spec in LOOP_NODES
+                                  remaps if spec is SIMULATOR else (), asks)]
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated,
-                                     rt_priority=scheduling.priority if loop else 0))
+                                     rt_priority=asks.priority if asks is not None else 0))
     if compose is not None:
         from uvms_bringup.composed import COMPOSED, compose_plans
 
