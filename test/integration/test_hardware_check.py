@@ -21,8 +21,10 @@ ROBOT = 'bluerov2_alpha5'
 class Twins:
     """The four twins on ephemeral loopback ports and a hardware file naming them."""
 
-    def __init__(self, directory: Path, gcs_id: int = 255) -> None:
-        self.ardusub = ArduSubTwin(parameters={'MAV_GCS_SYSID': gcs_id}).start()
+    def __init__(self, directory: Path, gcs_id: int = 255,
+                 ardusub_parameters: dict[str, float] | None = None) -> None:
+        self.ardusub = ArduSubTwin(parameters={'MAV_GCS_SYSID': gcs_id,
+                                               **(ardusub_parameters or {})}).start()
         self.dvl = DvlTwin(rate_hz=20.0).start()
         self.arm = Alpha5Twin(load_alpha5(ROBOT), port=0)
         self.arm.start()
@@ -83,6 +85,24 @@ def test_a_gcs_id_mismatch_and_a_silent_joint_are_named(
     assert 'GCS system id 254 (MAV_GCS_SYSID), ours is 255' in out
     assert 'alpha5: PROBLEM: joint_4 (device 0x02, B): silent' in out
     assert '2 problem(s)' in out
+
+
+def test_thruster_outputs_left_in_passthrough_are_a_problem(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """RCIN on outputs 1-8 (a bridge killed in passthrough): a PROBLEM naming the restore."""
+    monkeypatch.setenv('UVMS_JOURNAL_DIR', str(tmp_path))
+    twins = Twins(tmp_path, ardusub_parameters={f'SERVO{n}_FUNCTION': 50.0 + n
+                                                for n in range(1, 9)})
+    try:
+        assert main(['check', str(twins.path)]) == 1
+    finally:
+        twins.stop()
+    out = capsys.readouterr().out
+    assert 'ardusub: PROBLEM: thruster outputs left in RC passthrough' in out
+    assert 'SERVO1_FUNCTION = 51 (restore 33)' in out
+    assert 'uvms hardware restore ardusub --url udpout:127.0.0.1:' in out
+    assert '1 problem(s)' in out
 
 
 def test_an_unknown_hardware_file_is_bad_usage(capsys: pytest.CaptureFixture[str]) -> None:

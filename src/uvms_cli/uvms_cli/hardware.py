@@ -1,8 +1,16 @@
-"""``uvms hardware check twin|FILE``: each device of a hardware file found and described.
+"""``uvms hardware check twin|FILE`` and ``uvms hardware restore ardusub``.
 
-Changes nothing on any device (``uvms_hardware.hardware_check`` says what it sends). Exit
-status 0 when every device answered and nothing stops its bridge from activating, 1 when
-something does (each problem on a line of its own), 2 for a bad command line or file.
+``check``: each device of a hardware file found and described; changes nothing on any device
+(``uvms_hardware.hardware_check`` says what it sends). Exit status 0 when every device
+answered and nothing stops its bridge from activating, 1 when something does (each problem on
+a line of its own), 2 for a bad command line or file.
+
+``restore ardusub``: what an ardusub_bridge that did not end cleanly (a kill, a crash) left
+changed on the vehicle put back, as the bridge's own stop does (``uvms_hardware.
+ardusub_restore``): neutral, disarm, overrides released, then the thruster outputs'
+functions from the journal (else the firmware defaults) set and read back; the journal is
+removed once all were. Exit status 0 when done or nothing was left, 1 when something could
+not be restored, 2 for a bad command line or file.
 """
 
 from __future__ import annotations
@@ -13,13 +21,17 @@ from collections.abc import Sequence
 
 from uvms_bringup.hardware_plan import HardwareFileError, hardware_file_path, load_hardware_plan
 from uvms_bringup.launch_helpers import config_dir
+from uvms_hardware.ardusub_restore import restore_ardusub
+from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_check import check_hardware
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
+#: The ardusub_bridge's default ``mavlink_url``.
+DEFAULT_MAVLINK_URL = 'udpout:127.0.0.1:14550'
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Parse ``check FILE [--robot NAME]``, check each device, print what was found."""
+    """Parse ``check FILE`` or ``restore ardusub``; run it; the exit status."""
     parser = argparse.ArgumentParser(
         prog='uvms hardware', description='Find the devices a hardware file names and say what '
         'they are and what would stop their bridges; change nothing.')
@@ -30,10 +42,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     check.add_argument('--robot', default='bluerov2_alpha5',
                        help='robot folder whose hardware.yaml describes the devices '
                             '(default: bluerov2_alpha5)')
+    restore = sub.add_parser('restore', help='put back what a bridge that did not end cleanly '
+                             'left changed on its device')
+    restore.add_argument('device', choices=['ardusub'])
+    where = restore.add_mutually_exclusive_group()
+    where.add_argument('--url', help='MAVLink URL of the vehicle, as the bridge uses it '
+                       f'(default: {DEFAULT_MAVLINK_URL})')
+    where.add_argument('--hardware', metavar='twin|FILE',
+                       help="take the URL and GCS id from this hardware file's ardusub_bridge")
+    restore.add_argument('--robot', default='bluerov2_alpha5',
+                         help='robot folder whose hardware.yaml names the thruster outputs')
+    restore.add_argument('--journal-dir', default='',
+                         help='folder of the journal (default: UVMS_JOURNAL_DIR, else '
+                              '$XDG_STATE_HOME/uvms/journal, else ~/.local/state/uvms/journal)')
+    restore.add_argument('--gcs-system-id', type=int, default=None,
+                         help='our MAVLink system id (default: from the hardware file, else 255)')
+    restore.add_argument('--heartbeat-timeout', type=float, default=10.0,
+                         help='seconds to wait for the vehicle (default 10)')
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    if args.action == 'restore':
+        return _restore(args)
     try:
         plan = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
     except HardwareFileError as exc:
@@ -44,6 +75,31 @@ def main(argv: Sequence[str] | None = None) -> int:
               '`uvms launch --hardware`: checking whatever answers at its addresses')
     problems = check_hardware(args.robot, plan.bridges, lambda line: print(line, flush=True))
     print(f'uvms hardware: {problems} problem(s); nothing was changed on any device')
+    return EXIT_OK if problems == 0 else EXIT_PROBLEMS
+
+
+
+def _restore(args: argparse.Namespace) -> int:
+    """``restore ardusub``: the vehicle found, its leftovers put back."""
+    url, gcs_id = args.url or DEFAULT_MAVLINK_URL, 255
+    if args.hardware:
+        try:
+            plan = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
+        except HardwareFileError as exc:
+            print(f'uvms hardware: error: {exc}', file=sys.stderr)
+            return EXIT_USAGE
+        values = plan.bridges.get('ardusub_bridge', {})
+        url = str(values.get('mavlink_url', url))
+        gcs_id = int(values.get('gcs_system_id', gcs_id))
+    if args.gcs_system_id is not None:
+        gcs_id = args.gcs_system_id
+    try:
+        problems = restore_ardusub(args.robot, url, lambda line: print(line, flush=True),
+                                   gcs_id, args.journal_dir, args.heartbeat_timeout)
+    except (HardwareError, ValueError, OSError) as exc:
+        print(f'ardusub: PROBLEM: {exc}', flush=True)
+        problems = 1
+    print(f'uvms hardware restore: {problems} problem(s)')
     return EXIT_OK if problems == 0 else EXIT_PROBLEMS
 
 

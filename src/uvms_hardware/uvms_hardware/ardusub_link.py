@@ -66,6 +66,8 @@ PASSTHROUGH, SCRIPT = 'passthrough', 'script'
 RESTORE_BUDGET_S = 3.0
 #: Share of the restore budget the disarm may use; the parameters get the rest.
 DISARM_SHARE = 1.0 / 3.0
+#: Ground stations send HEARTBEAT at 1 Hz: listening this long hears each at least once (s).
+GCS_LISTEN_S = 1.2
 
 
 def connect(url: str, system_id: int, component_id: int) -> Any:
@@ -163,6 +165,7 @@ class ArduSubLink:
         #: Other ground stations heard: (system, component) -> local time (s) last heard.
         self.other_gcs: dict[tuple[int, int], float] = {}
         self._next_heartbeat_s = -math.inf
+        self.opened_s = -math.inf
         #: Telemetry callback: called with each message of TELEMETRY as it arrives.
         self.on_telemetry: Callable[[str, Any], None] | None = None
         #: True ends any wait at once (SIGINT/SIGTERM of the bridge while it waits).
@@ -173,6 +176,7 @@ class ArduSubLink:
         """Open the connection and send our first HEARTBEAT (a udpout peer learns us)."""
         s = self.settings
         self.conn = connect(s.url, s.gcs_system_id, s.gcs_component_id)
+        self.opened_s = self.clock()
         self.service()
 
     def close(self) -> None:
@@ -363,6 +367,8 @@ class ArduSubLink:
         Raises:
             DeviceCheckError: a ground station with our system id (another component).
         """
+        self._wait(lambda m: False, self.opened_s + GCS_LISTEN_S - self.clock(),
+                   interruptible=True)  # every ground station heard at least once
         ours = self.settings.gcs_system_id
         same = sorted(c for s, c in self.other_gcs if s == ours)
         if same:

@@ -16,8 +16,17 @@ import shlex
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from uvms_hardware.ardusub_link import K_MOTOR1, ArduSubLink, is_rcin, servo_function
+from uvms_hardware.ardusub_link import (
+    K_MOTOR1,
+    ArduSubLink,
+    LinkSettings,
+    is_rcin,
+    servo_function,
+)
+from uvms_hardware.device_journal import DeviceJournal
 from uvms_hardware.errors import DeviceCheckError
+from uvms_hardware.hardware_config import hardware_section
+from uvms_hardware.t200_curve import T200Curve
 
 #: What the firmware sets on outputs 1..8 of the BlueROV2 frames: Motor1..8 (33..40).
 FIRMWARE_DEFAULTS = 'the firmware defaults Motor1..8 = 33..40'
@@ -111,3 +120,20 @@ def restore_leftovers(link: ArduSubLink, say: Callable[[str], None]) -> int:
     say(f'ardusub: restored and read back in {elapsed_s:.2f} s; journal '
         f'{link.journal.path} removed')
     return 0
+
+
+def restore_ardusub(robot: str, url: str, say: Callable[[str], None], gcs_system_id: int = 255,
+                    journal_dir: str = '', heartbeat_timeout_s: float = 10.0) -> int:
+    """``uvms hardware restore ardusub``: find the vehicle, restore its leftovers; problems."""
+    _, section = hardware_section(robot, 'ardusub')
+    settings = LinkSettings(url, tuple(int(c) for c in section['thruster_channels']),
+                            tuple(int(d) for d in section['thruster_directions']),
+                            gcs_system_id)
+    link = ArduSubLink(settings, T200Curve.from_section(section['t200']),
+                       journal=DeviceJournal.for_device('ardusub', url, journal_dir))
+    try:
+        link.open()
+        link.wait_vehicle(heartbeat_timeout_s)
+        return restore_leftovers(link, say)
+    finally:
+        link.close()

@@ -21,6 +21,8 @@ from uvms_hardware.address import parse_host_port
 from uvms_hardware.alpha5_core import check_device
 from uvms_hardware.alpha5_probe import probe_device
 from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
+from uvms_hardware.ardusub_restore import find_leftovers, leftovers_refusal
+from uvms_hardware.ardusub_watchdog import SCRIPT_NAME
 from uvms_hardware.dvl_link import DvlLink
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import hardware_section, load_alpha5
@@ -35,7 +37,7 @@ Say = Callable[[str], None]
 
 
 def check_ardusub(robot: str, values: Mapping[str, Any], say: Say) -> int:
-    """The vehicle: heartbeat, GCS id, failsafes, thruster outputs' functions, battery."""
+    """The vehicle: heartbeat, GCS id, failsafes, thruster outputs (leftovers), script, battery."""
     _, section = hardware_section(robot, 'ardusub')
     settings = LinkSettings(str(values['mavlink_url']),
                             tuple(int(c) for c in section['thruster_channels']),
@@ -57,10 +59,25 @@ def check_ardusub(robot: str, values: Mapping[str, Any], say: Say) -> int:
             say(f'ardusub: PROBLEM: {exc}')
         for warning in link.failsafe_warnings():
             say(f'ardusub: warning: {warning}')
+        try:
+            for warning in link.check_other_gcs():
+                say(f'ardusub: warning: {warning}')
+        except HardwareError as exc:
+            problems += 1
+            say(f'ardusub: PROBLEM: {exc}')
         functions = {c: link.read_param(f'SERVO{c}_FUNCTION') for c in settings.thruster_channels}
         say('ardusub: thruster outputs SERVOn_FUNCTION: ' + ', '.join(
             f'{c}={"?" if f is None else int(f)}' for c, f in functions.items())
-            + ' (activate sets RCIN passthrough 51..58 and puts these back)')
+            + ' (passthrough mode sets RCIN 51..58 and puts these back)')
+        leftovers = find_leftovers(link)
+        if leftovers is not None:
+            problems += 1
+            say(f'ardusub: PROBLEM: {leftovers_refusal(leftovers, settings.url)}')
+        script_ms = link.wait_watchdog_script(1.5)
+        say(f'ardusub: {SCRIPT_NAME} heard (timeout {script_ms:g} ms): the thrusters stop '
+            'without the bridge' if script_ms is not None else
+            f'ardusub: warning: {SCRIPT_NAME} not heard: the bridge will use RC passthrough, '
+            'and only its process stops the thrusters (docs/hardware.md)')
         end_s = time.monotonic() + 1.5
         while math.isnan(v.voltage_v) and time.monotonic() < end_s:
             link.service()
