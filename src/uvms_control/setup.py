@@ -1,50 +1,15 @@
 """ament_python build of uvms_control."""
 
-import os
-import subprocess
-import sys
+import runpy
+from pathlib import Path
 
 from setuptools import find_packages, setup
-from setuptools.command.develop import develop
-from setuptools.command.install import install
 
 package_name = 'uvms_control'
-
-
-def compile_kernels(command, package_root):
-    """Fill the Numba cache of the package at ``package_root`` (its kernels, for its path).
-
-    Numba caches beside each module, keyed by its path: the installed copy needs its own
-    cache, or a node compiles for seconds at its first start. A failure only warns; the
-    kernels then compile at the first start.
-    """
-    env = dict(os.environ)
-    env['PYTHONPATH'] = os.pathsep.join([package_root, env.get('PYTHONPATH', '')])
-    # In package_root, so that -m imports the package from there, not from the sources.
-    result = subprocess.run([sys.executable, '-m', f'{package_name}.kernel_cache'], env=env,
-                            cwd=package_root, check=False)
-    if result.returncode != 0:
-        command.warn(f'{package_name}: the Numba kernels were not compiled (status '
-                     f'{result.returncode}); they compile at the first start of a node')
-
-
-class InstallWithKernels(install):
-    """``setup.py install`` (``colcon build``), then the installed kernels compiled."""
-
-    def run(self):
-        """Install, then compile the kernels of the installed modules."""
-        super().run()
-        compile_kernels(self, os.path.abspath(self.install_lib))
-
-
-class DevelopWithKernels(develop):
-    """``setup.py develop`` (``colcon build --symlink-install``), then the kernels compiled."""
-
-    def run(self):
-        """Link the sources, then compile their kernels (not when uninstalling)."""
-        super().run()
-        if not self.uninstall:
-            compile_kernels(self, os.path.abspath(os.path.dirname(__file__)))
+#: The kernel-compiling install and develop commands, shared by the packages with kernels
+#: (loaded by path: setup.py runs before any package of the repository is importable).
+KERNEL_SETUP = Path(__file__).resolve().parents[2] / 'tools' / 'kernel_setup.py'
+kernel_commands = runpy.run_path(str(KERNEL_SETUP))['kernel_commands']
 
 
 setup(
@@ -64,7 +29,7 @@ setup(
         'contact tasks, as pure cores and a ROS 2 node.'
     ),
     license='Apache-2.0',
-    cmdclass={'install': InstallWithKernels, 'develop': DevelopWithKernels},
+    cmdclass=kernel_commands(package_name, Path(__file__).resolve().parent),
     entry_points={
         'console_scripts': [
             'controller = uvms_control.entry_points:controller',
