@@ -86,6 +86,18 @@ def test_the_best_gains_reproduce_the_reported_figures(tiny: tuple[int, Path]) -
             assert again[key] == pytest.approx(reported[key], rel=1e-6, abs=1e-9)
 
 
+def test_the_tiny_report_states_what_it_lacks_and_its_reproduction(
+        tiny: tuple[int, Path]) -> None:
+    """Ground-truth force on every run, no held-out runs said so, the rerun reproduced."""
+    _, out = tiny
+    provenance = json.loads((out / 'provenance.json').read_text(encoding='utf-8'))
+    report = (out / 'report.md').read_text(encoding='utf-8')
+    assert [f['force_source'] for f in provenance['figures']] == ['contact']
+    assert '**No held-out runs**' in report and '| held-out |' not in report
+    assert provenance['rerun_differences'] == []
+    assert "gave the trial's J, reason and figures again" in report
+
+
 def test_a_finished_tune_resumed_runs_no_more_trials(tiny: tuple[int, Path]) -> None:
     """--resume on a tune that reached its budget asks nothing and keeps its trials."""
     _, out = tiny
