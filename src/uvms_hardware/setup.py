@@ -11,6 +11,9 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
+        # The autopilot's side of the thruster watchdog, copied to ArduSub's scripts folder
+        # by hand (docs/hardware.md); ardusub_watchdog.script_path finds it here.
+        ('share/' + package_name + '/autopilot', ['autopilot/uvms_thruster_watchdog.lua']),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import importlib.util
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,13 +27,16 @@ ANNOUNCE_NAME = 'UVMS_WD'
 
 
 def script_path() -> Path:
-    """The shipped Lua script: the source checkout's copy, else ``share/uvms_hardware``.
+    """The shipped Lua script: the source checkout's, else ``share/uvms_hardware/autopilot``.
+
+    ``share`` of a colcon install (the ament index), else of the Python prefix (a wheel).
 
     Raises:
         FileNotFoundError: neither holds it.
     """
     here = Path(__file__).resolve().parent
-    candidates = [here.parent / 'autopilot' / SCRIPT_NAME]
+    candidates = [here.parent / 'autopilot' / SCRIPT_NAME,
+                  Path(sys.prefix) / 'share' / 'uvms_hardware' / 'autopilot' / SCRIPT_NAME]
     if importlib.util.find_spec('ament_index_python') is not None:
         from ament_index_python.packages import (  # type: ignore[import-not-found]
             PackageNotFoundError,
