@@ -21,8 +21,8 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 
 
-def _workers(text: str) -> int:
-    """Argparse type: a number of workers >= 1."""
+def positive_int(text: str) -> int:
+    """Argparse type: an integer >= 1."""
     try:
         value = int(text)
     except ValueError:
@@ -30,6 +30,25 @@ def _workers(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f'expected an integer >= 1, got {value}')
     return value
+
+
+def add_ray_arguments(parser: argparse.ArgumentParser, runs: str) -> None:
+    """The Ray options of a command that runs graphs as Ray tasks (``uvms sweep``, ``uvms tune``).
+
+    ``--address`` (join a cluster instead of a local Ray), ``--workers``/``-j`` (runs at once)
+    and ``--quiet``/``-q`` (no progress bar).
+
+    Args:
+        parser: The command's parser.
+        runs: What runs at once, for ``--workers``' help (``points``, ``scenario runs``).
+    """
+    parser.add_argument('--address', metavar='RAY_ADDRESS',
+                        help='join this Ray cluster (e.g. HOST:6379 or auto) instead of '
+                             'starting a local Ray')
+    parser.add_argument('--workers', '-j', type=positive_int, metavar='N',
+                        help=f"{runs} at once (default: this machine's CPUs, or the "
+                             "cluster's)")
+    parser.add_argument('--quiet', '-q', action='store_true', help='no progress bar')
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -44,13 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('sweep', metavar='SWEEP.yaml', help='sweep file (docs/sweeps.md)')
     parser.add_argument('--out', '-o', required=True, metavar='DIR',
                         help='output directory: points.csv, figures/, mcap/, logs/')
-    parser.add_argument('--address', metavar='RAY_ADDRESS',
-                        help='join this Ray cluster (e.g. HOST:6379 or auto) instead of '
-                             'starting a local Ray')
-    parser.add_argument('--workers', '-j', type=_workers, metavar='N',
-                        help="points at once (default: this machine's CPUs, or the "
-                             "cluster's)")
-    parser.add_argument('--quiet', '-q', action='store_true', help='no progress bar')
+    add_ray_arguments(parser, 'points')
     return parser
 
 

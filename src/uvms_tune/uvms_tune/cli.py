@@ -16,22 +16,12 @@ from typing import Any
 
 from uvms_common.node_main import StopEvent
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_sweep.cli import add_ray_arguments, positive_int
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
-
-
-def _count(text: str) -> int:
-    """Argparse type: an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'expected an integer >= 1, got {value}')
-    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -44,12 +34,9 @@ def build_parser() -> argparse.ArgumentParser:
                     'refused before any simulation. Writes DIR/tuned_gains.yaml, report.md and '
                     'figures/ (docs/tuning.md).')
     parser.add_argument('tune', metavar='TUNE.yaml', help='tune file (docs/tuning.md)')
-    parser.add_argument('--trials', '-n', type=_count, metavar='N',
+    parser.add_argument('--trials', '-n', type=positive_int, metavar='N',
                         help="trials to finish (default: the tune file's trials)")
-    parser.add_argument('--address', metavar='RAY_ADDRESS',
-                        help='join this Ray cluster instead of starting a local Ray')
-    parser.add_argument('--workers', '-j', type=_count, metavar='N',
-                        help="scenario runs at once (default: the machine's or cluster's CPUs)")
+    add_ray_arguments(parser, 'scenario runs')
     parser.add_argument('--resume', action='store_true',
                         help='continue the tune in --out from its journal')
     parser.add_argument('--out', '-o', metavar='DIR',
@@ -57,7 +44,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--apply', action='store_true',
                         help='also write the gains as robots/NAME/controller_tuned.yaml, beside '
                              'the hand-tuned controller.yaml')
-    parser.add_argument('--quiet', '-q', action='store_true', help='no progress bar')
     return parser
 
 
