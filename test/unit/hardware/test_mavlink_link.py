@@ -184,3 +184,75 @@ def test_a_silent_vehicle_is_restored_without_waiting(twin: ArduSubTwin) -> None
     assert time.monotonic() - start < 0.2
     assert len(problems) == 1 and 'without confirmation' in problems[0]
     link.close()
+
+
+def _impostor(link: ArduSubLink, system_id: int, component_id: int) -> Any:
+    """A MAVLink peer whose messages reach our link, as a router forwards others' traffic."""
+    port = link.conn.port.getsockname()[1]
+    return mavutil.mavlink_connection(f'udpout:127.0.0.1:{port}', source_system=system_id,
+                                      source_component=component_id, dialect='ardupilotmega')
+
+
+def _deaf_to(twin: ArduSubTwin, kind: str) -> None:
+    """The twin stops answering one kind of message (so that only the impostor answers)."""
+    original = twin._handle
+
+    def handle(msg: Any, now_s: float) -> None:
+        if msg.get_type() != kind:
+            original(msg, now_s)
+
+    twin._handle = handle  # type: ignore[method-assign]
+
+
+@pytest.mark.parametrize('source', [(1, 100), (7, 1)])
+def test_a_param_value_from_anyone_but_the_vehicle_is_not_taken(
+        twin: ArduSubTwin, link: ArduSubLink, source: tuple[int, int]) -> None:
+    """PARAM_VALUE from another component or system (a camera, a second vehicle): ignored."""
+    _deaf_to(twin, 'PARAM_REQUEST_READ')
+    other = _impostor(link, *source)
+    for _ in range(3):
+        other.mav.param_value_send(b'MAV_GCS_SYSID', 254.0, MAV.MAV_PARAM_TYPE_INT16, 1, 0)
+    assert link.read_param('MAV_GCS_SYSID') is None
+    other.close()
+
+
+def test_a_command_ack_addressed_to_another_ground_station_is_not_ours(
+        twin: ArduSubTwin, link: ArduSubLink) -> None:
+    """The vehicle's ACK of another GCS's arm (target 254) does not answer ours; ours does."""
+    _deaf_to(twin, 'COMMAND_LONG')
+    vehicle = _impostor(link, 1, 1)  # the vehicle's own ids, its answer to someone else
+    arm = MAV.MAV_CMD_COMPONENT_ARM_DISARM
+    for _ in range(3):
+        vehicle.mav.command_ack_send(arm, MAV.MAV_RESULT_ACCEPTED, 0, 0, 254, 190)
+    assert link.command(arm, 1.0) is None
+    vehicle.mav.command_ack_send(arm, MAV.MAV_RESULT_ACCEPTED, 0, 0, 255,
+                                 MAV.MAV_COMP_ID_MISSIONPLANNER)
+    assert link.command(arm, 1.0) == MAV.MAV_RESULT_ACCEPTED
+    vehicle.close()
+
+
+def test_the_twin_addresses_its_command_acks_to_the_sender(
+        twin: ArduSubTwin, link: ArduSubLink) -> None:
+    """As GCS_Common.cpp does: target system and component of the ACK are the command's source."""
+    link.arm(True)
+    assert twin.armed
+
+
+def test_a_second_ground_station_with_our_system_id_is_refused(link: ArduSubLink) -> None:
+    """QGroundControl's default id 255 beside us: refused, its component named."""
+    qgc = _impostor(link, 255, 191)
+    for _ in range(2):
+        qgc.mav.heartbeat_send(MAV.MAV_TYPE_GCS, MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+    with pytest.raises(DeviceCheckError, match=r'our system id 255 .*component 191'):
+        link.check_other_gcs()
+    qgc.close()
+
+
+def test_a_second_ground_station_with_another_id_is_a_warning(link: ArduSubLink) -> None:
+    """A GCS of system 254: named in a warning (the vehicle ignores its overrides)."""
+    other = _impostor(link, 254, 190)
+    for _ in range(2):
+        other.mav.heartbeat_send(MAV.MAV_TYPE_GCS, MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+    warnings = link.check_other_gcs()
+    assert len(warnings) == 1 and 'system 254 component 190' in warnings[0]
+    other.close()
