@@ -29,7 +29,7 @@ class Rig:
     """A Net F/T twin at 200 Hz, a probe node and the bridge on one executor."""
 
     def __init__(self) -> None:
-        self.twin = NetFtTwin(port=0, rate_hz=200.0)
+        self.twin = NetFtTwin(port=0, rate_hz=200.0, http_port=0)
         self.twin.start()
         self.context = Context()
         rclpy.init(args=[], context=self.context)
@@ -46,7 +46,7 @@ class Rig:
     def start_bridge(self, **parameters: Any) -> NetFtBridgeNode:
         """The bridge on the twin's port with ``parameters``."""
         values = {'robot_name': 'bluerov2_alpha5', 'address': f'127.0.0.1:{self.twin.port}',
-                  **parameters}
+                  'http_port': self.twin.http_port or 0, **parameters}
         self.bridge = NetFtBridgeNode(namespace='uvms', context=self.context, parameter_overrides=[
             Parameter(k, value=v) for k, v in values.items()])
         self.executor.add_node(self.bridge)
@@ -171,3 +171,33 @@ def test_a_box_that_comes_up_after_the_bridge_is_found(rig: Rig) -> None:
     finally:
         timer.join()
         late.stop()
+
+
+def test_the_calibration_is_the_boxs_own_page(rig: Rig) -> None:
+    """A box at 2e6 counts/N and 4e5 counts/(N m): its page says so and the wrench is right."""
+    rig.twin.stop()
+    rig.twin = NetFtTwin(port=0, rate_hz=200.0, counts_per_force=2e6, counts_per_torque=4e5,
+                         http_port=0)
+    rig.twin.start()
+    rig.twin.set_wrench((1.5, -2.0, 3.0), (0.1, 0.2, -0.3))
+    bridge = rig.start_bridge(rot_link_from_sensor=IDENTITY)
+    rig.spin_until(lambda: len(rig.wrenches) >= 3)
+    f, t = rig.wrenches[-1].wrench.force, rig.wrenches[-1].wrench.torque
+    assert (f.x, f.y, f.z) == pytest.approx((1.5, -2.0, 3.0))
+    assert (t.x, t.y, t.z) == pytest.approx((0.1, 0.2, -0.3))
+    assert f'127.0.0.1:{rig.twin.http_port}/netftapi2.xml' in bridge.calibration_source
+    assert 'hardware.yaml' not in bridge.calibration_source
+
+
+def test_without_the_page_the_hardware_files_calibration_is_used_and_named(rig: Rig) -> None:
+    """http_port 0: counts and rate from bluerov2_alpha5's hardware.yaml, the file named."""
+    bridge = rig.start_bridge(http_port=0)
+    assert bridge.core is not None and bridge.core.rdt_rate_hz == 500.0
+    assert bridge.core.counts_per_force == 1e6 and 'hardware.yaml' in bridge.calibration_source
+
+
+def test_no_calibration_from_the_box_or_the_file_refuses_configure(rig: Rig) -> None:
+    """No page and no counts per force given: refused, never a silent 1e6."""
+    bridge = rig.start_bridge(autostart=False, http_port=0, counts_per_force=0.0)
+    assert bridge.trigger_configure() == FAILURE
+    assert 'no counts_per_force' in bridge.refusal and 'never assumed' in bridge.refusal

@@ -14,8 +14,9 @@ do not move it::
     clock.offset_s, clock.skew, clock.spread_s, clock.jitter_s, clock.resets
 
 The window keeps the earliest arrival of each ``bucket_s`` of device time (its minimum-delay
-pair). The envelope is the line under all of them that lies highest at their mean: the edge of
-their lower convex hull above the mean device time, which is the linear-programming estimate of
+pair). The envelope is the line under those of the finished buckets that lies highest at their
+mean (flat until `MIN_SKEW_BUCKETS` are finished): the edge of their lower convex hull above
+the mean device time, which is the linear-programming estimate of
 offset and skew of Moon, Skelly and Towsley ("Estimation and removal of clock skew from network
 delay measurements", INFOCOM 1999). Its slope is the rate difference of the two clocks (skew,
 within ``max_skew``: ATI quotes RDT rates within +-0.5 %), so a window of many seconds does
@@ -39,6 +40,8 @@ __all__ = ['DeviceClockEstimator', 'Point', 'lower_envelope']
 
 #: Recent arrivals whose delay above the envelope makes ``jitter_s``.
 JITTER_SAMPLES = 200
+#: Finished buckets the skew needs; with fewer the envelope is flat.
+MIN_SKEW_BUCKETS = 4
 
 
 @dataclass(frozen=True)
@@ -113,14 +116,14 @@ class DeviceClockEstimator:
         if line is not None:
             excess = point.y - self._y(line, device_s)
             if excess < -self.reset_s:
-                self._restart()
+                self.restart()
             else:
                 self._excess.append(max(0.0, excess))
         index = math.floor(device_s / self.bucket_s)
         if self._buckets and index < self._buckets[-1][0]:
             if device_s > self._buckets[-1][1].x - self.reset_s:
                 return  # a late, reordered pair: its minimum cannot matter
-            self._restart()  # device time ran back: the clock was set back
+            self.restart()  # device time ran back: the clock was set back
         if self._buckets and self._buckets[-1][0] == index:
             if point.y < self._buckets[-1][1].y:
                 self._buckets[-1] = (index, point)
@@ -150,6 +153,11 @@ class DeviceClockEstimator:
         if line is None or not self._buckets:
             return math.nan
         return self._y(line, self._buckets[-1][1].x)
+
+    @property
+    def span_s(self) -> float:
+        """Device time the pairs in the window cover (s): how much the skew rests on."""
+        return self._buckets[-1][1].x - self._buckets[0][1].x if self._buckets else 0.0
 
     @property
     def skew(self) -> float:
@@ -187,8 +195,12 @@ class DeviceClockEstimator:
     def _fitted(self) -> tuple[float, float, float] | None:
         if self._dirty:
             self._dirty = False
+            # The newest bucket is still filling: one late arrival alone in it would tilt the
+            # envelope, so it counts only while no bucket is finished.
             points = [p for _, p in self._buckets]
-            self._line = lower_envelope(points, self.max_skew) if points else None
+            points = points[:-1] if len(points) > 1 else points
+            max_slope = self.max_skew if len(points) >= MIN_SKEW_BUCKETS else 0.0
+            self._line = lower_envelope(points, max_slope) if points else None
         return self._line
 
     def _close_bucket(self) -> None:
@@ -198,9 +210,10 @@ class DeviceClockEstimator:
             return
         last = self._buckets[-1][1]
         if last.y - self._y(line, last.x) > self.reset_s:
-            self._restart(keep=last)
+            self.restart(keep=last)
 
-    def _restart(self, keep: Point | None = None) -> None:
+    def restart(self, keep: Point | None = None) -> None:
+        """Forget every pair (the device's clock was reset), keeping ``keep`` if given."""
         self.resets += 1
         self._buckets.clear()
         self._excess.clear()

@@ -99,11 +99,22 @@ class Alpha5Hardware:
 
 @dataclass(frozen=True)
 class NetFtHardware:
-    """The Net F/T box: RDT port and calibration (counts per N, per N m)."""
+    """The Net F/T box as the hardware file gives it: RDT port, calibration, RDT rate.
+
+    Attributes:
+        port: RDT UDP port.
+        counts_per_force: Counts per N, None where the file does not give it (the bridge then
+            needs the box's own calibration page).
+        counts_per_torque: Counts per N m, likewise.
+        rdt_rate_hz: The box's RDT output rate (Hz), likewise.
+        source: The file these come from.
+    """
 
     port: int
-    counts_per_force: float
-    counts_per_torque: float
+    counts_per_force: float | None = None
+    counts_per_torque: float | None = None
+    rdt_rate_hz: float | None = None
+    source: str = ''
 
 
 def robot_folder(robot_name: str) -> Path:
@@ -222,15 +233,21 @@ def load_alpha5(robot_name: str, jaw_joint: str = '') -> Alpha5Hardware:
 
 
 def load_netft(robot_name: str) -> NetFtHardware:
-    """The Net F/T section of ``robot_name``'s hardware file.
+    """The Net F/T section of ``robot_name``'s hardware file (what it does not give is None).
 
     Raises:
-        HardwareConfigError: See `hardware_section`; a calibration that is not positive.
+        HardwareConfigError: See `hardware_section`; a calibration or rate given that is not a
+            positive number.
     """
     path, section = hardware_section(robot_name, 'netft')
-    config = NetFtHardware(int(section.get('port', 49152)),
-                           _number(path, 'netft', section, 'counts_per_force'),
-                           _number(path, 'netft', section, 'counts_per_torque'))
-    if config.counts_per_force <= 0.0 or config.counts_per_torque <= 0.0:
-        raise HardwareConfigError(f'{path}: netft counts per force/torque must be > 0')
-    return config
+
+    def positive(key: str) -> float | None:
+        if section.get(key) is None:
+            return None
+        value = _number(path, 'netft', section, key)
+        if value <= 0.0:
+            raise HardwareConfigError(f'{path}: netft.{key} = {value}: must be > 0')
+        return value
+
+    return NetFtHardware(int(section.get('port', 49152)), positive('counts_per_force'),
+                         positive('counts_per_torque'), positive('rdt_rate_hz'), str(path))

@@ -1,19 +1,28 @@
 """The ``netft_bridge`` node: an ATI Net F/T's RDT stream as ``wrench`` in ``ft_sensor_link``.
 
-A managed node (``autostart``). configure opens the UDP link to ``address`` and checks that the
-box answers a start request with a record within ``answer_timeout_s`` (then stops it again);
-activate starts real-time streaming (command 2, infinite samples); each record becomes a
-``geometry_msgs/WrenchStamped`` in ``ft_sensor_link`` (the simulator's wrist-sensor topic and
-convention, ``uvms_hardware.netft_core``); ``~/bias`` (std_srvs/Trigger) zeroes the present
-reading (in the bridge: ATI's own bias command is not in the documents). Watchdog: no record
-for ``watchdog_timeout_s`` and publishing stops (there is nothing to publish), /diagnostics
-turns ERROR, and the start request is sent again once a second. deactivate, shutdown, SIGINT
-and SIGTERM send the stop command (command 0). /diagnostics: records, lost records (from
-rdt_sequence gaps), bad datagrams, the status word.
+A managed node (``autostart``). configure finds the calibration, opens the UDP link to
+``address`` and checks that the box answers a start request with a record within
+``answer_timeout_s`` (then stops it again); activate starts real-time streaming (command 2,
+infinite samples); each record becomes a ``geometry_msgs/WrenchStamped`` in ``ft_sensor_link``
+(the simulator's wrist-sensor topic and convention, ``uvms_hardware.netft_core``); ``~/bias``
+(std_srvs/Trigger) zeroes the present reading (in the bridge: ATI's own bias command is not in
+the documents). Watchdog: no record for ``watchdog_timeout_s`` and publishing stops (there is
+nothing to publish), /diagnostics turns ERROR, and the start request is sent again once a
+second. deactivate, shutdown, SIGINT and SIGTERM send the stop command (command 0).
+/diagnostics: records, lost records (from rdt_sequence gaps), bad datagrams, the status word,
+the box clock's offset, skew, spread and arrival jitter.
+
+Calibration, never assumed: counts per force and per torque and the RDT output rate come from
+the box's own page (``http://HOST:http_port/netftapi2.xml``, the active configuration, as
+ATI's demo code reads it; `uvms_hardware.rdt_protocol`), else from the parameters, whose
+defaults are the robot's ``hardware.yaml`` ``netft`` section; with neither, configure is
+refused naming both. Device time: each record is stamped when the box sampled it, its
+rdt_sequence at the RDT rate mapped into the node clock (`uvms_hardware.netft_core`).
 """
 
 from __future__ import annotations
 
+import urllib.request
 from typing import Any
 
 from geometry_msgs.msg import WrenchStamped
@@ -24,9 +33,11 @@ from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
 from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import parse_host_port
+from uvms_hardware.bridge_messages import stamp
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
 from uvms_hardware.device_clock import stop_requested
-from uvms_hardware.errors import HardwareError
+from uvms_hardware.errors import HardwareError, ProtocolError
+from uvms_hardware.hardware_config import HardwareConfigError, NetFtHardware, load_netft
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR, NetFtCore
 from uvms_hardware.transport import UdpLink, collect
 
@@ -35,11 +46,22 @@ _LEVELS = {0: OK, 1: WARN, 2: ERROR}
 FT_SENSOR_LINK = 'ft_sensor_link'
 #: While the stream is stale, the start request is repeated this often (s).
 RESTART_PERIOD_S = 1.0
+#: Largest calibration page read (bytes).
+PAGE_BYTES = 1 << 20
+#: What the box's page gives (rdt_protocol.BoxCalibration), each also a parameter.
+BOX_VALUES = ('counts_per_force', 'counts_per_torque', 'rdt_rate_hz')
 
 PARAMETERS: tuple[tuple[str, Any, str], ...] = (
     ('address', f'127.0.0.1:{rdt.RDT_PORT}', 'HOST[:PORT] of the Net F/T box (RDT over UDP)'),
-    ('counts_per_force', rdt.DEFAULT_COUNTS_PER_FORCE, 'Calibration: counts per N'),
-    ('counts_per_torque', rdt.DEFAULT_COUNTS_PER_TORQUE, 'Calibration: counts per N m'),
+    ('http_port', 80, "Port of the box's web page netftapi2.xml (calibration, RDT rate); its "
+     'values win over the three below; 0: do not ask the box'),
+    ('http_timeout_s', 1.0, 'Time the box has to answer each page request at configure (s)'),
+    ('counts_per_force', 0.0, 'Calibration: counts per N when the box does not say (default: '
+     'hardware.yaml netft; 0: not given)'),
+    ('counts_per_torque', 0.0, 'Calibration: counts per N m when the box does not say (default: '
+     'hardware.yaml netft; 0: not given)'),
+    ('rdt_rate_hz', 0.0, "The box's RDT output rate when the box does not say (Hz): records "
+     'are stamped at their sequence / rate (default: hardware.yaml netft; 0: not given)'),
     ('rot_link_from_sensor', list(DEFAULT_ROT_LINK_FROM_SENSOR),
      'Rotation ft_sensor_link <- sensor axes, row-major (default: sensor z along the jaw)'),
     ('watchdog_timeout_s', 0.1, 'No record for this long: stop publishing, diagnostics (s)'),
@@ -63,21 +85,74 @@ class NetFtBridgeNode(BridgeNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('netft_bridge', **kwargs)
+        try:
+            self.hardware: NetFtHardware | None = load_netft(self.robot_name)
+            self.hardware_problem = ''
+        except HardwareConfigError as exc:
+            self.hardware, self.hardware_problem = None, str(exc)
+        robot = {name: getattr(self.hardware, name) for name in
+                 ('counts_per_force', 'counts_per_torque', 'rdt_rate_hz')
+                 if self.hardware is not None and getattr(self.hardware, name) is not None}
         self.values = {name: self.declare_parameter(
-            name, default, ParameterDescriptor(description=text, read_only=True)).value
+            name, float(robot.get(name, default)) if name in robot else default,
+            ParameterDescriptor(description=text, read_only=True)).value
             for name, default, text in PARAMETERS}
+        #: Where the calibration came from (configure).
+        self.calibration_source = ''
         self.core: NetFtCore | None = None
         self.link: UdpLink | None = None
         self._restart_s = 0.0
         self.start()
 
+    def calibration(self, host: str) -> dict[str, float]:
+        """Counts per N, per N m and the RDT rate: the box's page, else the parameters.
+
+        Raises:
+            NetFtBridgeError: Neither gives all three (both sources named).
+        """
+        v = self.values
+        given = {name: float(v[name]) for name in BOX_VALUES if float(v[name]) > 0.0}
+        where = (f'the parameters (defaults: {self.hardware.source} netft)'
+                 if self.hardware is not None else f'the parameters ({self.hardware_problem})')
+        box: dict[str, float] = {}
+        url, box_problem = '', 'was not asked (http_port 0)'
+        if int(v['http_port']) > 0:
+            url = f'http://{host}:{int(v["http_port"])}/netftapi2.xml'
+            try:
+                page = read_calibration(url, float(v['http_timeout_s']))
+            except (OSError, ProtocolError) as exc:
+                box_problem = f'{url} did not answer: {exc}'
+            else:
+                box = {name: getattr(page, name) for name in BOX_VALUES
+                       if getattr(page, name) is not None}
+                box_problem = f'{url} gave no ' + ', '.join(n for n in BOX_VALUES if n not in box)
+        for name, value in box.items():
+            if name in given and abs(given[name] - value) > 1e-9 * value:
+                self.get_logger().warning(f'{name}: the box says {value:g}, {where} '
+                                          f"{given[name]:g}: the box's is used")
+        values = {**given, **box}
+        missing = [name for name in BOX_VALUES if name not in values]
+        if missing:
+            raise NetFtBridgeError(
+                f'no {", ".join(missing)} for the Net F/T at {host}: the box\'s page '
+                f'{box_problem}, and {where} give none; never assumed: set them from the '
+                "box's page (cfgcpf, cfgcpt, comrdtrate)")
+        sources = {name: url if name in box else where for name in BOX_VALUES}
+        self.calibration_source = (where if not box else url if len(box) == len(BOX_VALUES)
+                                   else '; '.join(f'{n} from {w}' for n, w in sources.items()))
+        if len(box) < len(BOX_VALUES):
+            self.calibration_source += f" (the box's page {box_problem})"
+        return values
+
     def configure_device(self) -> None:
-        """Check parameters, open the link, see one record, create publisher and service."""
+        """Check parameters, find the calibration, open the link, see one record, publish."""
         v = self.values
         host, port = parse_host_port(str(v['address']), rdt.RDT_PORT)
-        core = NetFtCore(float(v['counts_per_force']), float(v['counts_per_torque']),
+        self.calibration_source = ''
+        calibration = self.calibration(host)
+        core = NetFtCore(calibration['counts_per_force'], calibration['counts_per_torque'],
                          [float(x) for x in v['rot_link_from_sensor']],
-                         float(v['watchdog_timeout_s']))
+                         float(v['watchdog_timeout_s']), calibration['rdt_rate_hz'])
         if not float(v['poll_rate_hz']) > 0.0:
             raise NetFtBridgeError(f'poll_rate_hz = {v["poll_rate_hz"]}: must be > 0')
         self.link = link = UdpLink(host, port)
@@ -99,8 +174,11 @@ class NetFtBridgeNode(BridgeNode):
         self._wrench_pub = self.own(self.destroy_publisher,
                                     self.create_publisher(WrenchStamped, 'wrench', qos))
         self.own(self.destroy_service, self.create_service(Trigger, '~/bias', self._on_bias))
-        self.get_logger().info(f'Net F/T at {host}:{port} answers; publishing wrench in '
-                               f'{FT_SENSOR_LINK}')
+        c = calibration
+        self.get_logger().info(
+            f'Net F/T at {host}:{port} answers; {c["counts_per_force"]:g} counts/N, '
+            f'{c["counts_per_torque"]:g} counts/(N m), RDT {c["rdt_rate_hz"]:g} Hz '
+            f'({self.calibration_source}); publishing wrench in {FT_SENSOR_LINK}')
 
     def activate_device(self) -> None:
         """Start real-time streaming and poll the socket."""
@@ -127,18 +205,20 @@ class NetFtBridgeNode(BridgeNode):
         if core is None or link is None or not self.device_active:
             return
         t_s = self.now_s()
-        for datagram in link.read_datagrams():
-            wrench = core.receive(datagram, t_s)
-            if wrench is None:
-                self.get_logger().warning(f'bad datagram dropped: {core.last_error}',
-                                          throttle_duration_sec=5.0)
-                continue
+        datagrams = link.read_datagrams()
+        # Read after the socket: every record had arrived by then (a delay never negative).
+        local_s = self.get_clock().now().nanoseconds * 1e-9
+        bad = core.bad_datagrams
+        for stamp_s, wrench in core.receive_all(datagrams, t_s, local_s):
             msg = WrenchStamped()
-            msg.header.stamp = self.get_clock().now().to_msg()
+            msg.header.stamp = stamp(round(stamp_s * 1e9))
             msg.header.frame_id = FT_SENSOR_LINK
             (msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z), (
                 msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z) = wrench
             self._wrench_pub.publish(msg)
+        if core.bad_datagrams > bad:
+            self.get_logger().warning(f'bad datagram dropped: {core.last_error}',
+                                      throttle_duration_sec=5.0)
         if core.stale(t_s) and t_s - self._restart_s >= RESTART_PERIOD_S:
             self._restart_s = t_s
             link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
@@ -162,7 +242,27 @@ class NetFtBridgeNode(BridgeNode):
         if not self.device_active:
             return Report(OK, 'not streaming', {})
         level, message, values = self.core.report(self.now_s())
-        return Report(_LEVELS[level], message, values)
+        return Report(_LEVELS[level], message,
+                      {**values, 'calibration_source': self.calibration_source,
+                       'counts_per_force': self.core.counts_per_force,
+                       'counts_per_torque': self.core.counts_per_torque})
+
+
+def read_calibration(url: str, timeout_s: float) -> rdt.BoxCalibration:
+    """The box's calibration from its pages: the active configuration's, as ATI's demo reads it.
+
+    Raises:
+        OSError: No answer (urllib's errors are OSErrors).
+        ProtocolError: A page that does not give it.
+    """
+    opener = urllib.request.build_opener(urllib.request.ProxyHandler({}))  # the box, no proxy
+    with opener.open(url, timeout=timeout_s) as answer:
+        page = answer.read(PAGE_BYTES)
+    index = rdt.active_configuration(page)
+    if index is not None:
+        with opener.open(f'{url}?index={index}', timeout=timeout_s) as answer:
+            page = answer.read(PAGE_BYTES)
+    return rdt.calibration_from_netftapi2(page)
 
 
 def main(args: list[str] | None = None) -> None:

@@ -1,11 +1,20 @@
 """The Net F/T bridge's core: RDT datagrams in, a wrench in ft_sensor_link out; no ROS, no I/O.
 
-Per datagram::
+Per poll of the socket::
 
-    core = NetFtCore(counts_per_force=1e6, counts_per_torque=1e6)
-    wrench = core.receive(datagram, t_s)   # (force N, torque N m) in ft_sensor_link, or None
+    core = NetFtCore(counts_per_force=1e6, counts_per_torque=1e6, rdt_rate_hz=500.0)
+    for stamp_s, (force, torque) in core.receive_all(datagrams, t_s, local_s): ...
     core.bias()                            # the present reading becomes zero
     core.stale(t_s)                        # no record for timeout_s: nothing is published
+
+``t_s`` is the steady clock (staleness), ``local_s`` the clock stamps are in, both read when
+the poll began. Each record is stamped when the box sampled it: record n of the stream (its
+rdt_sequence, unwrapped past 2^32) at n / ``rdt_rate_hz`` on the box's clock, mapped into
+``local_s`` through the offset and skew of `uvms_hardware.device_time` (the newest record of
+each poll against the poll's time), so the records of one poll lie one record period apart,
+and a lost record (a sequence gap) advances time as the box did. A sequence that runs back by
+more than `REORDER_RECORDS` is a new stream (the box restarted it): the clock is estimated
+again. Without ``rdt_rate_hz`` every record is stamped with ``local_s``.
 
 Frame and sign: the stack's wrist sensor reports in ft_sensor_link the wrench the end effector
 exerts on the environment, x along the jaw's approach direction, which sensor.yaml takes as
@@ -22,9 +31,14 @@ import math
 from collections.abc import Sequence
 
 from uvms_hardware import rdt_protocol as rdt
+from uvms_hardware.device_time import DeviceClockEstimator
 from uvms_hardware.errors import ProtocolError
 
 Vector = tuple[float, float, float]
+Wrench = tuple[Vector, Vector]
+#: A sequence this many records behind the newest is a reordered record, further a new stream.
+REORDER_RECORDS = 64
+_WRAP = 1 << 32
 #: Default rotation ft_sensor_link <- sensor, row-major: x_link = z_sensor, y = x_s, z = y_s.
 DEFAULT_ROT_LINK_FROM_SENSOR = (0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
 
@@ -56,16 +70,27 @@ def check_rotation(rot: Sequence[float]) -> None:
 
 
 class NetFtCore:
-    """Decodes records, counts losses and bad datagrams, biases, watches the stream."""
+    """Decodes records, counts losses and bad datagrams, biases, watches the stream.
 
-    def __init__(self, counts_per_force: float = rdt.DEFAULT_COUNTS_PER_FORCE,
-                 counts_per_torque: float = rdt.DEFAULT_COUNTS_PER_TORQUE,
+    The calibration (counts per N, per N m) has no default: it is the box's, never assumed.
+    """
+
+    def __init__(self, counts_per_force: float, counts_per_torque: float,
                  rot_link_from_sensor: Sequence[float] = DEFAULT_ROT_LINK_FROM_SENSOR,
-                 timeout_s: float = 0.1) -> None:
+                 timeout_s: float = 0.1, rdt_rate_hz: float | None = None,
+                 clock: DeviceClockEstimator | None = None) -> None:
         rdt.check_calibration(counts_per_force, counts_per_torque)
         if not timeout_s > 0.0:
             raise ValueError(f'watchdog_timeout_s = {timeout_s}: must be > 0')
+        if rdt_rate_hz is not None and not (math.isfinite(rdt_rate_hz) and rdt_rate_hz > 0.0):
+            raise ValueError(f'rdt_rate_hz = {rdt_rate_hz}: must be finite and > 0')
         check_rotation(rot_link_from_sensor)
+        self.rdt_rate_hz = rdt_rate_hz
+        #: The box's clock against ours (records' sequences at rdt_rate_hz vs polls).
+        self.clock = clock or DeviceClockEstimator(window_s=5.0, bucket_s=0.1, reset_s=0.1)
+        #: Times the rdt_sequence ran back: a new stream.
+        self.stream_restarts = 0
+        self._index: int | None = None
         self.counts_per_force = counts_per_force
         self.counts_per_torque = counts_per_torque
         self.rot = tuple(float(x) for x in rot_link_from_sensor)
@@ -83,16 +108,49 @@ class NetFtCore:
         self._raw: tuple[Vector, Vector] | None = None
         self._offset: tuple[Vector, Vector] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
-    def receive(self, datagram: bytes, t_s: float) -> tuple[Vector, Vector] | None:
+    def receive(self, datagram: bytes, t_s: float) -> Wrench | None:
         """(force N, torque N m) in ft_sensor_link, bias removed; None for a bad datagram."""
+        taken = self._take(datagram, t_s)
+        return None if taken is None else taken[1]
+
+    def receive_all(self, datagrams: Sequence[bytes], t_s: float, local_s: float
+                    ) -> list[tuple[float, Wrench]]:
+        """(stamp s on the local clock, wrench) of each good record of one poll, in order."""
+        taken = [t for t in (self._take(d, t_s) for d in datagrams) if t is not None]
+        if not taken or self.rdt_rate_hz is None:
+            return [(local_s, wrench) for _, wrench in taken]
+        period_s = 1.0 / self.rdt_rate_hz
+        self.clock.add(max(index for index, _ in taken) * period_s, local_s)
+        return [(self.clock.to_local(index * period_s) or local_s, wrench)
+                for index, wrench in taken]
+
+    def _index_of(self, sequence: int) -> int:
+        """The record's place in the stream: its sequence unwrapped past 2^32."""
+        if self._index is None or self._sequence is None:
+            self._index, self._sequence = sequence, sequence
+            return sequence
+        step = (sequence - self._sequence) % _WRAP
+        if step < _WRAP // 2:
+            self.lost += rdt.lost_records(self._sequence, sequence)
+            self._index += step
+            self._sequence = sequence
+            return self._index
+        back = _WRAP - step
+        if back <= REORDER_RECORDS:
+            return self._index - back  # reordered on the way: from the past, nothing lost
+        self.stream_restarts += 1  # the box began a new stream
+        self.clock.restart()
+        self._index, self._sequence = sequence, sequence
+        return sequence
+
+    def _take(self, datagram: bytes, t_s: float) -> tuple[int, Wrench] | None:
         try:
             record = rdt.decode_record(datagram)
         except ProtocolError as exc:
             self.bad_datagrams += 1
             self.last_error = str(exc)
             return None
-        self.lost += rdt.lost_records(self._sequence, record.rdt_sequence)
-        self._sequence = record.rdt_sequence
+        index = self._index_of(record.rdt_sequence)
         self.records += 1
         self.status = record.status
         if record.status:
@@ -102,8 +160,8 @@ class NetFtCore:
                                                self.counts_per_torque)
         self._raw = (_rotate(self.rot, force), _rotate(self.rot, torque))
         (f, tq), (f0, t0) = self._raw, self._offset
-        return ((f[0] - f0[0], f[1] - f0[1], f[2] - f0[2]),
-                (tq[0] - t0[0], tq[1] - t0[1], tq[2] - t0[2]))
+        return index, ((f[0] - f0[0], f[1] - f0[1], f[2] - f0[2]),
+                       (tq[0] - t0[0], tq[1] - t0[1], tq[2] - t0[2]))
 
     def bias(self) -> bool:
         """Take the last reading as zero from now on; False when no record has come yet."""
@@ -135,11 +193,18 @@ class NetFtCore:
             'records': self.records, 'lost_records': self.lost,
             'bad_datagrams': self.bad_datagrams, 'status': f'{self.status:#010x}',
             'records_with_status_set': self.faulted_records,
-            'stale_episodes': self.stale_episodes, 'record_age_s': self.age_s(t_s)}
+            'stale_episodes': self.stale_episodes, 'record_age_s': self.age_s(t_s),
+            'rdt_rate_hz': self.rdt_rate_hz, 'stream_restarts': self.stream_restarts,
+            **self.clock.report()}
         if self.stale(t_s):
             return 2, f'no record for more than {self.timeout_s:g} s: not publishing', values
         if self.status:
             return 2, f'status word {self.status:#010x} set (meaning: ATI manual)', values
+        if (self.rdt_rate_hz is not None and self.clock.span_s >= self.clock.window_s / 2.0
+                and abs(self.clock.skew) >= self.clock.max_skew):
+            return 1, (f'records arrive at a rate more than {self.clock.max_skew:.0%} from '
+                       f"rdt_rate_hz {self.rdt_rate_hz:g}: set it to the box's RDT output "
+                       'rate'), values
         if self.lost or self.bad_datagrams:
             return 1, (f'{self.lost} records lost, {self.bad_datagrams} bad datagrams '
                        'dropped'), values

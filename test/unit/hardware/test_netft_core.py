@@ -17,7 +17,7 @@ def datagram(sequence: int, counts: tuple[int, ...], status: int = 0) -> bytes:
 
 def test_known_counts_give_the_known_wrench_with_identity_axes() -> None:
     """Counts (1e6, 2e6, -3e6, 5e5, 0, 1e5) are (1, 2, -3) N and (0.5, 0, 0.1) N m."""
-    core = NetFtCore(rot_link_from_sensor=IDENTITY)
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY)
     force, torque = core.receive(datagram(1, (1_000_000, 2_000_000, -3_000_000, 500_000, 0,
                                               100_000)), 0.0) or ((), ())
     assert force == pytest.approx((1.0, 2.0, -3.0)) and torque == pytest.approx((0.5, 0.0, 0.1))
@@ -25,14 +25,14 @@ def test_known_counts_give_the_known_wrench_with_identity_axes() -> None:
 
 def test_default_axes_put_the_sensor_z_on_the_jaw_approach_x() -> None:
     """An axial push (sensor z) reads on ft_sensor_link x."""
-    core = NetFtCore()
+    core = NetFtCore(1e6, 1e6)
     force, _ = core.receive(datagram(1, (0, 0, 4_000_000, 0, 0, 0)), 0.0) or ((), ())
     assert force == pytest.approx((4.0, 0.0, 0.0))
 
 
 def test_bias_zeroes_the_present_reading() -> None:
     """After bias the same counts read zero, and a change reads as the change."""
-    core = NetFtCore(rot_link_from_sensor=IDENTITY)
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY)
     assert not core.bias()
     core.receive(datagram(1, (1_000_000, 0, 0, 0, 0, 0)), 0.0)
     assert core.bias()
@@ -42,7 +42,7 @@ def test_bias_zeroes_the_present_reading() -> None:
 
 def test_lost_records_and_bad_datagrams_are_counted() -> None:
     """Sequences 1, 2, 6 lose 3; a 30-byte datagram is dropped and counted."""
-    core = NetFtCore()
+    core = NetFtCore(1e6, 1e6)
     for sequence in (1, 2, 6):
         core.receive(datagram(sequence, (0,) * 6), 0.0)
     assert core.receive(bytes(30), 0.0) is None
@@ -52,7 +52,7 @@ def test_lost_records_and_bad_datagrams_are_counted() -> None:
 
 def test_stream_goes_stale_after_the_timeout() -> None:
     """No record for more than 0.1 s: stale, an ERROR report; a record ends it."""
-    core = NetFtCore(timeout_s=0.1)
+    core = NetFtCore(1e6, 1e6, timeout_s=0.1)
     core.receive(datagram(1, (0,) * 6), 1.0)
     assert not core.stale(1.05)
     assert core.stale(1.2) and core.report(1.2)[0] == 2
@@ -62,7 +62,7 @@ def test_stream_goes_stale_after_the_timeout() -> None:
 
 def test_status_word_set_is_an_error() -> None:
     """A record with a non-zero status makes the report an ERROR showing it."""
-    core = NetFtCore()
+    core = NetFtCore(1e6, 1e6)
     core.receive(datagram(1, (0,) * 6, status=0x80010000), 0.0)
     level, message, values = core.report(0.0)
     assert level == 2 and '0x80010000' in message and values['records_with_status_set'] == 1
@@ -80,3 +80,52 @@ def test_an_infinite_calibration_is_refused_at_construction() -> None:
     """Counts per N of inf would silently read zero force: the core refuses it."""
     with pytest.raises(ValueError, match='finite'):
         NetFtCore(counts_per_force=float('inf'), counts_per_torque=1e6)
+
+
+def test_records_of_one_poll_are_stamped_one_period_apart() -> None:
+    """Three records read at once at 500 Hz: 2 ms apart, the newest at the poll's time."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=500.0)
+    zero = (0, 0, 0, 0, 0, 0)
+    samples = core.receive_all([datagram(s, zero) for s in (10, 11, 12)], 0.0, 100.0)
+    stamps = [t for t, _ in samples]
+    assert stamps[1] - stamps[0] == pytest.approx(0.002, abs=1e-9)
+    assert stamps[2] - stamps[1] == pytest.approx(0.002, abs=1e-9)
+    assert stamps[2] == pytest.approx(100.0, abs=1e-9)
+
+
+def test_a_lost_record_advances_time_as_the_box_did() -> None:
+    """Sequence 20 then 23 (21 and 22 lost): stamped 6 ms apart, two records counted lost."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=500.0)
+    zero = (0, 0, 0, 0, 0, 0)
+    (first,) = core.receive_all([datagram(20, zero)], 0.0, 50.0)
+    (second,) = core.receive_all([datagram(23, zero)], 0.006, 50.0061)
+    assert second[0] - first[0] == pytest.approx(0.006, abs=1e-6) and core.lost == 2
+
+
+def test_a_late_poll_keeps_the_records_stamps() -> None:
+    """Records read 30 ms late are stamped when sampled, not when read."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=1000.0)
+    zero = (0, 0, 0, 0, 0, 0)
+    for k in range(1, 200):  # timely polls: the offset is 10 s exactly
+        core.receive_all([datagram(k, zero)], k * 0.001, 10.0 + k * 0.001)
+    late = core.receive_all([datagram(k, zero) for k in range(200, 230)], 0.259, 10.259)
+    assert [t for t, _ in late] == pytest.approx([10.0 + k * 0.001 for k in range(200, 230)],
+                                                 abs=1e-6)
+
+
+def test_a_new_stream_restarts_the_box_clock() -> None:
+    """rdt_sequence back to 1 (a new start request): counted, the clock estimated again."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=500.0)
+    zero = (0, 0, 0, 0, 0, 0)
+    core.receive_all([datagram(5000, zero)], 0.0, 100.0)
+    ((stamp_s, _),) = core.receive_all([datagram(1, zero)], 1.0, 101.0)
+    assert core.stream_restarts == 1 and core.lost == 0
+    assert stamp_s == pytest.approx(101.0)
+
+
+def test_without_a_rate_every_record_is_stamped_with_the_poll() -> None:
+    """No rdt_rate_hz: the poll's time for each record (arrival stamps)."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY)
+    zero = (0, 0, 0, 0, 0, 0)
+    samples = core.receive_all([datagram(s, zero) for s in (1, 2)], 0.0, 7.0)
+    assert [t for t, _ in samples] == [7.0, 7.0]

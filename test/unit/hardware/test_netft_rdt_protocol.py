@@ -88,3 +88,41 @@ def test_a_calibration_that_is_not_finite_and_positive_is_refused(
     """Infinite counts per N would read every force as 0: refused like a negative one."""
     with pytest.raises(ProtocolError, match='finite and > 0'):
         rdt.wrench_from_counts((1, 2, 3, 4, 5, 6), *calibration)
+
+
+def page(cpf: str = '1000000', cpt: str = '1000000', force_unit: str = 'N',
+         torque_unit: str = 'N-m', extra: str = '<comrdtrate>500</comrdtrate>') -> str:
+    """A netftapi2.xml page with the fields ATI's demo code reads."""
+    return (f'<netft><setcfgsel>2</setcfgsel><cfgcpf>{cpf}</cfgcpf><cfgcpt>{cpt}</cfgcpt>'
+            f'<scfgfu>{force_unit}</scfgfu><scfgtu>{torque_unit}</scfgtu>{extra}</netft>')
+
+
+def test_the_boxs_page_gives_counts_per_n_and_per_n_m_and_its_rate() -> None:
+    """cfgcpf, cfgcpt in N and N-m, comrdtrate: taken as they are; setcfgsel names the config."""
+    calibration = rdt.calibration_from_netftapi2(page())
+    assert calibration == rdt.BoxCalibration(1e6, 1e6, 500.0)
+    assert rdt.active_configuration(page()) == 2
+
+
+def test_other_units_are_converted_to_n_and_n_m() -> None:
+    """A box set to lbf and lbf-in: counts per lbf / 4.448 N = counts per N (and per N m)."""
+    calibration = rdt.calibration_from_netftapi2(page('4448', '1130', 'lbf', 'lbf-in'))
+    assert calibration.counts_per_force == pytest.approx(4448 / 4.4482216152605)
+    assert calibration.counts_per_torque == pytest.approx(1130 / 0.1129848290276167)
+    n_mm = rdt.calibration_from_netftapi2(page(torque_unit='N-mm'))
+    assert n_mm.counts_per_torque == pytest.approx(1e9)  # 1e6 per N mm is 1e9 per N m
+
+
+@pytest.mark.parametrize(('text', 'named'), [
+    (page(force_unit='stone'), 'scfgfu'), (page(cpf='0'), 'cfgcpf'),
+    (page(cpt='NaN'), 'cfgcpt'), ('<netft><cfgcpf>1</cfgcpf></netft>', 'scfgfu'),
+    ('<html>not a page', 'not XML')])
+def test_a_page_that_does_not_give_the_calibration_is_refused(text: str, named: str) -> None:
+    """A unit not known, a count not positive, a field missing, not XML: refused, named."""
+    with pytest.raises(ProtocolError, match=named):
+        rdt.calibration_from_netftapi2(text)
+
+
+def test_a_page_without_a_rate_gives_none_for_it() -> None:
+    """No comrdtrate on the page: the rate is not given (the hardware file must say it)."""
+    assert rdt.calibration_from_netftapi2(page(extra='')).rdt_rate_hz is None

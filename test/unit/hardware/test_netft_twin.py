@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import socket
 import time
+import urllib.request
 
 import pytest
 from uvms_hardware.twins.netft_twin import NetFtTwin
@@ -69,3 +70,63 @@ def test_bad_request_is_counted() -> None:
     twin = NetFtTwin(port=0)
     twin.handle(b'\x12\x34\x00\x02\x00', ('127.0.0.1', 1))
     assert twin.bad_requests == 1 and not twin.streaming
+
+
+class ManualClock:
+    """A clock the test sets (s)."""
+
+    def __init__(self, now_s: float) -> None:
+        self.now_s = now_s
+
+    def __call__(self) -> float:
+        """The time set."""
+        return self.now_s
+
+
+def test_records_are_the_samples_due_on_the_boxs_clock() -> None:
+    """At 200 Hz, 10.5 ms after the start: samples 1 and 2, sampled 5 ms apart."""
+    clock = ManualClock(100.0)
+    twin = NetFtTwin(port=0, rate_hz=200.0, clock=clock)
+    twin.handle(rdt.encode_request(rdt.COMMAND_START_REALTIME), ('127.0.0.1', 1))
+    clock.now_s = 100.0105
+    records, wait_s = twin._due()
+    assert [rdt.decode_record(r).rdt_sequence for r in records] == [1, 2]
+    assert (twin.sample_time_s(1), twin.sample_time_s(2)) == pytest.approx((100.005, 100.010))
+    assert wait_s == pytest.approx(0.0045)
+
+
+def test_a_late_twin_skips_what_it_cannot_send_and_keeps_the_sequence_on_time() -> None:
+    """Woken 1 s late at 200 Hz: the newest 50 samples sent, the 150 before lost."""
+    clock = ManualClock(0.0)
+    twin = NetFtTwin(port=0, rate_hz=200.0, clock=clock)
+    twin.handle(rdt.encode_request(rdt.COMMAND_START_REALTIME), ('127.0.0.1', 1))
+    clock.now_s = 1.0
+    records, _ = twin._due()
+    sequences = [rdt.decode_record(r).rdt_sequence for r in records]
+    assert sequences == list(range(151, 201)) and twin.burst_lost == 150
+
+
+def test_each_start_request_begins_a_new_stream_at_sequence_one() -> None:
+    """A second start: rdt_sequence from 1 again, sampled from the new start."""
+    clock = ManualClock(0.0)
+    twin = NetFtTwin(port=0, rate_hz=100.0, clock=clock)
+    start = rdt.encode_request(rdt.COMMAND_START_REALTIME)
+    twin.handle(start, ('127.0.0.1', 1))
+    clock.now_s = 0.05
+    twin._due()
+    twin.handle(start, ('127.0.0.1', 1))
+    clock.now_s = 0.0605
+    records, _ = twin._due()
+    assert [rdt.decode_record(r).rdt_sequence for r in records] == [1]
+    assert twin.sample_time_s(1) == pytest.approx(0.06)
+
+
+def test_the_calibration_page_is_served_on_loopback_http() -> None:
+    """GET /netftapi2.xml gives the twin's counts per N and N m and its rate."""
+    with NetFtTwin(port=0, rate_hz=250.0, counts_per_force=2e6, counts_per_torque=5e5,
+                   http_port=0) as twin:
+        assert twin.http_port
+        with urllib.request.build_opener(urllib.request.ProxyHandler({})).open(
+                f'http://127.0.0.1:{twin.http_port}/netftapi2.xml?index=0', timeout=2.0) as page:
+            calibration = rdt.calibration_from_netftapi2(page.read())
+    assert calibration == rdt.BoxCalibration(2e6, 5e5, 250.0)
