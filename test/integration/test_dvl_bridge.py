@@ -150,3 +150,23 @@ def test_deactivate_stops_publishing_and_cleanup_disconnects(rig: Rig) -> None:
     assert bridge.trigger_cleanup() == TransitionCallbackReturn.SUCCESS
     rig.spin_until(lambda: rig.twin.client_count() == 0, 3.0, 'the connection closed')
     assert bridge.link is None
+
+
+def test_a_silent_dvl_is_never_republished(rig: Rig) -> None:
+    """The DVL goes quiet with its connection open: not one dvl message more, none repeated."""
+    bridge = rig.start_bridge(timeout_s=0.3)
+    rig.spin_until(lambda: len(rig.dvl) >= 3, 3.0, 'dvl')
+    rig.twin.silent = True
+    end = time.monotonic() + 0.2  # what was already on its way
+    while time.monotonic() < end:
+        rig.executor.spin_once(timeout_sec=0.01)
+    count = len(rig.dvl)
+    rig.spin_until(lambda: rig.status(DiagnosticStatus.ERROR, 'DVL silent'), 4.0,
+                   'an ERROR for the silent DVL')
+    end = time.monotonic() + 1.0
+    while time.monotonic() < end:
+        rig.executor.spin_once(timeout_sec=0.01)
+    assert len(rig.dvl) == count and rig.twin.client_count() == 1
+    assert bridge.published == count  # one message per report, never a repeat
+    stamps = [(m.header.stamp.sec, m.header.stamp.nanosec) for m in rig.dvl]
+    assert len(set(stamps)) == len(stamps)

@@ -201,3 +201,19 @@ def test_no_calibration_from_the_box_or_the_file_refuses_configure(rig: Rig) -> 
     bridge = rig.start_bridge(autostart=False, http_port=0, counts_per_force=0.0)
     assert bridge.trigger_configure() == FAILURE
     assert 'no counts_per_force' in bridge.refusal and 'never assumed' in bridge.refusal
+
+
+def test_a_silent_box_is_never_republished(rig: Rig) -> None:
+    """The stream stops: one wrench per record received, none after, none stamped twice."""
+    bridge = rig.start_bridge()
+    rig.spin_until(lambda: len(rig.wrenches) >= 20)
+    rig.twin.stop()
+    rig.spin_until(lambda: bridge.core is not None and bridge.core.stale(bridge.now_s()))
+    count = len(rig.wrenches)
+    end = time.monotonic() + 1.0
+    while time.monotonic() < end:
+        rig.executor.spin_once(timeout_sec=0.01)
+    assert bridge.core is not None
+    assert len(rig.wrenches) == count == bridge.core.records
+    stamps = [(m.header.stamp.sec, m.header.stamp.nanosec) for m in rig.wrenches]
+    assert len(set(stamps)) == len(stamps)
