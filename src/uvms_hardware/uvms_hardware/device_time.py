@@ -27,6 +27,11 @@ above it (jumped back) restarts the estimate from that pair.
 Reported: ``spread_s`` (how far the buckets' minima lie above the envelope: the uncertainty of
 the offset itself) and ``jitter_s`` (the standard deviation of recent arrivals' delay above the
 envelope: the error an arrival-time stamp would carry).
+
+Two clocks that do not run at one rate (a device on wall time against a node on a simulator's
+``/clock`` at another factor, or standing still) cannot be mapped: the skew sits at its bound
+or the estimate keeps restarting. ``rates_agree`` is then False and a bridge stamps at arrival
+(and says so) rather than with a wrong device time.
 """
 
 from __future__ import annotations
@@ -42,6 +47,8 @@ __all__ = ['DeviceClockEstimator', 'Point', 'lower_envelope']
 JITTER_SAMPLES = 200
 #: Finished buckets the skew needs; with fewer the envelope is flat.
 MIN_SKEW_BUCKETS = 4
+#: This many restarts within one window: the two clocks do not run at one rate.
+RESTARTS_DISAGREE = 3
 
 
 @dataclass(frozen=True)
@@ -104,6 +111,8 @@ class DeviceClockEstimator:
         self._buckets: deque[tuple[int, Point]] = deque()
         self._line: tuple[float, float, float] | None = None
         self._excess: deque[float] = deque(maxlen=JITTER_SAMPLES)
+        self._restarts_s: deque[float] = deque(maxlen=RESTARTS_DISAGREE)
+        self._newest_s = -math.inf
         self._dirty = False
 
     def add(self, device_s: float, arrival_s: float) -> None:
@@ -111,6 +120,7 @@ class DeviceClockEstimator:
         if not (math.isfinite(device_s) and math.isfinite(arrival_s)):
             return
         self.pairs += 1
+        self._newest_s = max(self._newest_s, device_s)
         point = Point(device_s, arrival_s - device_s)
         line = self._fitted()
         if line is not None:
@@ -155,6 +165,15 @@ class DeviceClockEstimator:
         return self._y(line, self._buckets[-1][1].x)
 
     @property
+    def rates_agree(self) -> bool:
+        """False when the clocks visibly run at different rates (skew bound, restarts)."""
+        recent = [t for t in self._restarts_s if t > self._newest_s - self.window_s]
+        if len(recent) >= RESTARTS_DISAGREE:
+            return False
+        return not (self.span_s >= self.window_s / 2.0 and self.max_skew > 0.0
+                    and abs(self.skew) >= self.max_skew)
+
+    @property
     def span_s(self) -> float:
         """Device time the pairs in the window cover (s): how much the skew rests on."""
         return self._buckets[-1][1].x - self._buckets[0][1].x if self._buckets else 0.0
@@ -185,7 +204,8 @@ class DeviceClockEstimator:
         """The estimate for /diagnostics (s, ppm, counts)."""
         return {'clock_offset_s': self.offset_s, 'clock_skew_ppm': self.skew * 1e6,
                 'clock_offset_spread_s': self.spread_s, 'arrival_jitter_s': self.jitter_s,
-                'clock_resets': self.resets, 'clock_pairs': self.pairs}
+                'clock_resets': self.resets, 'clock_pairs': self.pairs,
+                'clock_rates_agree': self.rates_agree}
 
     @staticmethod
     def _y(line: tuple[float, float, float], x: float) -> float:
@@ -215,6 +235,7 @@ class DeviceClockEstimator:
     def restart(self, keep: Point | None = None) -> None:
         """Forget every pair (the device's clock was reset), keeping ``keep`` if given."""
         self.resets += 1
+        self._restarts_s.append(self._newest_s)
         self._buckets.clear()
         self._excess.clear()
         if keep is not None:

@@ -11,7 +11,8 @@ report's (else fom^2). Stamped with the report's own ``time_of_validity`` (the c
 the ping, µs on the DVL's clock) mapped into the node clock through the DVL clock's offset,
 estimated from each report's ``time_of_transmission`` against its arrival
 (`uvms_hardware.device_time`: the minimum-delay envelope, so a late arrival does not move
-it); a report without a time of validity is stamped at its arrival and counted. A report is
+it); a report without a time of validity, or while the two clocks visibly run at different
+rates (WARN), is stamped at its arrival and counted. A report is
 published once, when it arrives: a silent DVL publishes nothing. The connection is retried
 every ``reconnect_period_s``. /diagnostics: lost lock (WARN), a silent or disconnected DVL
 (ERROR), malformed lines counted, the clock offset, skew, spread and arrival jitter.
@@ -128,6 +129,9 @@ class DvlBridgeNode(BridgeNode):
             self.stamped_at_arrival += 1
             return arrival_s
         clock.add(sent_us * _US, arrival_s)
+        if not clock.rates_agree:
+            self.stamped_at_arrival += 1
+            return arrival_s
         return clock.to_local(report.time_of_validity_us * _US) or arrival_s
 
     def _drain(self) -> None:
@@ -163,6 +167,10 @@ class DvlBridgeNode(BridgeNode):
             return Report(ERROR, f'DVL silent for {age_s:.1f} s', values)
         if link.last_valid is False:
             return Report(WARN, 'no bottom lock: velocity not published', values)
+        if self.clock is not None and not self.clock.rates_agree:
+            return Report(WARN, "the DVL's clock does not run at the node clock's rate (beside "
+                          "a simulator, the twin must run on the plant's time): stamped at "
+                          'arrival', values)
         return Report(OK, 'bottom lock', values)
 
 

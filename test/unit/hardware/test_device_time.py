@@ -86,7 +86,7 @@ def test_a_device_clock_that_jumps_is_followed_after_a_restart(jump_s: float) ->
     # From device time 5 s on the device reads jump_s more for the same local time.
     feed(clock, rng, 5.0 + jump_s, 1.0, 50.0, offset_s=OFFSET_S - jump_s)
     truth = feed(clock, rng, 6.0 + jump_s, 1.0, 50.0, offset_s=OFFSET_S - jump_s)
-    assert clock.resets >= 1
+    assert clock.resets >= 1 and clock.rates_agree
     assert worst_error_s(clock, truth) < 0.001
 
 
@@ -96,7 +96,8 @@ def test_the_spread_and_jitter_are_reported() -> None:
     feed(clock, random.Random(5), 0.0, 3.0, 100.0)
     report = clock.report()
     assert set(report) == {'clock_offset_s', 'clock_skew_ppm', 'clock_offset_spread_s',
-                           'arrival_jitter_s', 'clock_resets', 'clock_pairs'}
+                           'arrival_jitter_s', 'clock_resets', 'clock_pairs',
+                           'clock_rates_agree'}
     assert 0.0 <= float(report['clock_offset_spread_s']) < 0.002  # type: ignore[arg-type]
     assert float(report['arrival_jitter_s']) == pytest.approx(0.002, rel=0.4)  # type: ignore[arg-type]
 
@@ -125,3 +126,18 @@ def test_the_envelope_lies_under_every_point() -> None:
     gaps = [p.y - (y_ref + slope * (p.x - x_ref)) for p in points]
     assert min(gaps) == pytest.approx(0.0, abs=1e-12) and all(g >= -1e-12 for g in gaps)
     assert slope == pytest.approx(0.1, abs=0.03)  # y rises 0.01 per 0.1 of x
+
+
+@pytest.mark.parametrize('skew', [-0.5, -1.0, 0.02])
+def test_clocks_at_different_rates_are_said_to_disagree(skew: float) -> None:
+    """A simulator's clock at half speed or standing still, a rate 2 % off: rates_agree False."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, reset_s=0.1)
+    feed(clock, random.Random(7), 0.0, 6.0, 50.0, skew=skew)
+    assert not clock.rates_agree
+
+
+def test_clocks_at_one_rate_agree() -> None:
+    """0.5 % apart (ATI's tolerance, within max_skew 1 %): they agree."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25)
+    feed(clock, random.Random(8), 0.0, 6.0, 50.0, skew=0.005)
+    assert clock.rates_agree

@@ -129,3 +129,14 @@ def test_without_a_rate_every_record_is_stamped_with_the_poll() -> None:
     zero = (0, 0, 0, 0, 0, 0)
     samples = core.receive_all([datagram(s, zero) for s in (1, 2)], 0.0, 7.0)
     assert [t for t, _ in samples] == [7.0, 7.0]
+
+
+def test_a_wrong_rdt_rate_is_reported_and_stamps_fall_back_to_the_polls() -> None:
+    """Records at 200 Hz taken for 500 Hz: WARN naming rdt_rate_hz, stamped at the poll."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=500.0)
+    zero = (0, 0, 0, 0, 0, 0)
+    for k in range(1, 1400):  # 7 s at 200 Hz
+        samples = core.receive_all([datagram(k, zero)], k * 0.005, 3.0 + k * 0.005)
+    level, message, values = core.report(1399 * 0.005)
+    assert level == 1 and 'rdt_rate_hz 500' in message and values['clock_rates_agree'] is False
+    assert samples[0][0] == pytest.approx(3.0 + 1399 * 0.005)
