@@ -120,7 +120,7 @@ class DeviceClockEstimator:
         if not (math.isfinite(device_s) and math.isfinite(arrival_s)):
             return
         self.pairs += 1
-        self._newest_s = max(self._newest_s, device_s)
+        self._newest_s = device_s
         point = Point(device_s, arrival_s - device_s)
         line = self._fitted()
         if line is not None:
@@ -167,7 +167,7 @@ class DeviceClockEstimator:
     @property
     def rates_agree(self) -> bool:
         """False when the clocks visibly run at different rates (skew bound, restarts)."""
-        recent = [t for t in self._restarts_s if t > self._newest_s - self.window_s]
+        recent = [t for t in self._restarts_s if abs(self._newest_s - t) < self.window_s]
         if len(recent) >= RESTARTS_DISAGREE:
             return False
         return not (self.span_s >= self.window_s / 2.0 and self.max_skew > 0.0
@@ -232,10 +232,15 @@ class DeviceClockEstimator:
         if last.y - self._y(line, last.x) > self.reset_s:
             self.restart(keep=last)
 
-    def restart(self, keep: Point | None = None) -> None:
-        """Forget every pair (the device's clock was reset), keeping ``keep`` if given."""
+    def restart(self, keep: Point | None = None, jumped: bool = True) -> None:
+        """Forget every pair, keeping ``keep`` if given.
+
+        ``jumped``: the device's clock jumped against ours (counted against ``rates_agree``);
+        False for a reset the device announced (a new stream numbered from the start).
+        """
         self.resets += 1
-        self._restarts_s.append(self._newest_s)
+        if jumped:
+            self._restarts_s.append(self._newest_s)
         self._buckets.clear()
         self._excess.clear()
         if keep is not None:

@@ -143,7 +143,7 @@ class NetFtCore:
         if back <= REORDER_RECORDS:
             return self._index - back  # reordered on the way: from the past, nothing lost
         self.stream_restarts += 1  # the box began a new stream
-        self.clock.restart()
+        self.clock.restart(jumped=False)
         self._index, self._sequence = sequence, sequence
         return sequence
 
