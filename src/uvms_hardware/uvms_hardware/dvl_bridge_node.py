@@ -1,8 +1,8 @@
 """The ``dvl_bridge`` node: a Water Linked DVL A50/A125 (TCP JSON) as the ``dvl`` topic.
 
 A managed node on the bridges' base (``uvms_hardware.bridge_node``, ``autostart``): configure
-connects to ``address`` (``HOST[:PORT]``, port
-16171 by default) and waits ``connect_timeout_s`` for it; activate publishes. Each valid
+connects to ``address`` (``HOST[:PORT]``, port 16171 by default) and waits
+``connect_timeout_s`` for it; activate publishes. Each valid
 (bottom-locked) velocity report becomes ``dvl`` (geometry_msgs/TwistWithCovarianceStamped in
 ``dvl_link``, as the simulator publishes it and ArduSub's DVL extension drops invalid ones):
 the velocity turned from the DVL's own frame (``hardware.yaml``: ``dvl.mounting_rpy_rad``)
@@ -12,8 +12,8 @@ the ping, µs on the DVL's clock) mapped into the node clock through the DVL clo
 estimated from each report's ``time_of_transmission`` against its arrival
 (`uvms_hardware.device_time`: the minimum-delay envelope, so a late arrival does not move
 it); a report without a time of validity, or while the two clocks visibly run at different
-rates (WARN), is stamped at its arrival and counted. A report is
-published once, when it arrives: a silent DVL publishes nothing. The connection is retried
+rates (WARN), is stamped at its arrival and counted. A report is published once, when it
+arrives: a silent DVL publishes nothing. The connection is retried
 every ``reconnect_period_s``. /diagnostics: lost lock (WARN), a silent or disconnected DVL
 (ERROR), malformed lines counted, the clock offset, skew, spread and arrival jitter.
 """
