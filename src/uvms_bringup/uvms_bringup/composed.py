@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 from uvms_bringup.launch_helpers import (
     CONTROLLER,
     ESTIMATOR,
+    HARDWARE_BRIDGES,
     THRUSTER_ALLOCATOR,
     NodeSpec,
 )
@@ -39,6 +40,10 @@ if TYPE_CHECKING:
 #: named once, in ``launch_helpers.THRUSTER_ALLOCATOR``.
 COMPOSITIONS: dict[str, tuple[NodeSpec, ...]] = {
     'control': (ESTIMATOR, CONTROLLER, THRUSTER_ALLOCATOR),
+    # What runs on the robot's computer in the loop: the control nodes and the device bridges,
+    # so that a device's reading reaches the controller, and its command the device, without
+    # leaving the process (Fast DDS's intra-process delivery, no loopback UDP).
+    'robot': (ESTIMATOR, CONTROLLER, THRUSTER_ALLOCATOR, *HARDWARE_BRIDGES.values()),
 }
 #: The composed process as the launcher names it (``control``: the process of the group).
 COMPOSED = NodeSpec('control', 'uvms_bringup', 'control_container', 'uvms_bringup.composed',

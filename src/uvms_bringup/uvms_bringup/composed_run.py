@@ -73,6 +73,16 @@ def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEve
         status = 1
     finally:
         process_stats.write(COMPOSED_STATS, process_periods())
+        # Devices first, before the teardown's deadline is armed: a bridge's restore (the
+        # vehicle disarmed, its outputs' functions back) must not be cut short by it.
+        for node in reversed(nodes):
+            put_back = getattr(node, 'put_back_now', None)
+            if put_back is not None:
+                try:
+                    put_back()
+                except Exception as exc:
+                    logger.error(f'{node.get_name()}: putting the device back: '
+                                 f'{type(exc).__name__}: {exc}')
         deadline = TeardownDeadline(LOGGER, status)
         if executor is not None:
             for node in nodes:

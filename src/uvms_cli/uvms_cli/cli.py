@@ -222,9 +222,10 @@ def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
                         help='realtime: simulated seconds per wall second (default 1); below '
                              '1 runs a graph too heavy for this machine slower, every node '
                              'on /clock (docs/running.md)')
-    launch.add_argument('--compose', choices=('control',),
+    launch.add_argument('--compose', choices=('control', 'robot'),
                         help='control: controller, thruster_allocator and estimator in one '
-                             'process on one executor (same names, topics, parameters)')
+                             'process on one executor (same names, topics, parameters); '
+                             'robot: those and the hardware bridges (--hardware)')
 
 
 def _real_time_factor(text: str) -> float:

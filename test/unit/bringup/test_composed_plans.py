@@ -65,3 +65,21 @@ def test_the_cost_table_reads_the_processes_stats_files(tmp_path: Path,
     table = watch.table([('controller', os.getpid()), ('visualizer', 1 << 30)])
     assert '2 of 400 (0.50 %)' in table[2] and '4.0 ms' in table[2]
     assert table[3].split()[:2] == ['visualizer', '-']
+
+
+def test_the_robot_composition_holds_the_control_nodes_and_every_bridge(tmp_path: Path) -> None:
+    """--compose robot with the twins: control and bridges in one process; twins apart."""
+    from uvms_bringup.hardware_plan import hardware_file_path, load_hardware_plan
+
+    scenario = load_scenario(resolve_scenario_path('bluerov2_alpha5_contact'))
+    hardware = load_hardware_plan(hardware_file_path('twin', Path(__file__).resolve().parents[3]
+                                                     / 'config'))
+    composed = plan_launch(scenario, 'realtime', tmp_path, scheduling=Scheduling(50),
+                           hardware=hardware, compose='robot')
+    [process] = [plan for plan in composed if plan.spec is COMPOSED]
+    command = list(process.command)
+    groups = dict(node_groups(command[command.index('uvms_bringup.composed') + 1:]))
+    assert set(groups) == {'controller', 'thruster_allocator', 'ardusub_bridge', 'dvl_bridge',
+                           'alpha5_bridge', 'netft_bridge'}  # no estimator: state from truth
+    assert {plan.spec.name for plan in composed} == {
+        'simulator', 'hardware_twins', 'control', 'visualizer', 'mission'}
