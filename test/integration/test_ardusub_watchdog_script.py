@@ -143,20 +143,20 @@ def test_a_sigkilled_bridge_leaves_the_thrusters_neutral_within_the_script_timeo
 
 
 def test_script_mode_changes_nothing_and_drives_the_outputs(graph: Graph) -> None:
-    """Script heard: no parameter set, PWMs on RC 9-16 with the toggle, outputs follow."""
+    """Script heard: no parameter set, pilot inputs neutral, PWMs on RC 9-16 with the toggle."""
     with ArduSubTwin(watchdog_script=True) as twin:
         bridge = graph.start_bridge(twin)
         assert bridge.link is not None and bridge.link.mode == 'script'
         graph.spin_until(lambda: all(p > 1600 for p in twin.servo_outputs_us()[:8]), 5.0,
                          'thrust on every output', lambda: graph.publish([30.0] * 8))
         records = twin.overrides()[-10:]
-        assert all(r.channels[:8] == (65535,) * 8 for r in records)
+        assert all(r.channels[:8] == (1500,) * 6 + (65535,) * 2 for r in records)
         assert len({r.channels[8] % 2 for r in records}) == 2, 'no toggle on the wire'
         assert not twin.state.param_sets and functions(twin) == MOTORS
         assert bridge.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
         assert not twin.armed
-        graph.spin_until(lambda: twin.overrides()[-1].channels[8:16] == (65534,) * 8, 1.0,
-                         'the release of RC 9-16 (65534)')
+        graph.spin_until(lambda: twin.overrides()[-1].channels[:16] == (0,) * 6 + (
+            65535,) * 2 + (65534,) * 8, 1.0, 'the release of RC 1-6 (0) and 9-16 (65534)')
         graph.spin_until(lambda: twin.servo_outputs_us()[:8] == NEUTRAL, TIMEOUT_S + MARGIN_S,
                          'neutral after the deactivate')
 

@@ -52,6 +52,8 @@ K_MOTOR1 = 33
 #: RC_CHANNELS_OVERRIDE values (GCS_Common.cpp): 1-8 ignore / release; 9-18 ignore / release.
 IGNORE_1_8, RELEASE_1_8, IGNORE_9_18, RELEASE_9_18 = 65535, 0, 0, 65534
 NEUTRAL_US = 1500
+#: ArduSub's pilot inputs (1 pitch, 2 roll, 3 throttle, 4 yaw, 5 forward, 6 lateral).
+PILOT_CHANNELS = 6
 #: The GCS id parameter, then its name before ArduPilot 4.7.
 GCS_ID_PARAMS = ('MAV_GCS_SYSID', 'SYSID_MYGCS')
 #: Telemetry the bridge asks for: RAW_IMU (ArduPilot sends it scaled, mG and mrad/s, from the
@@ -575,14 +577,17 @@ class ArduSubLink:
         """RC_CHANNELS_OVERRIDE to the vehicle carrying each thruster output's PWM.
 
         Passthrough: output n's PWM on channel n, ``others_1_8`` on the rest of 1-8, 0
-        (ignore) on 9-18. Script: 65535 (ignore) on 1-8, output n's PWM on the script's
+        (ignore) on 9-18. Script: 1500 on the pilot inputs 1-6 (as ArduSub's own
+        ``set_neutral_controls`` does: should the script stop while armed, the Motor outputs
+        get the mixer's neutral), 65535 (ignore) on 7-8, output n's PWM on the script's
         channel for n (9-16) with the toggle bit of this message, 0 (ignore) elsewhere.
         """
         if self.mode == SCRIPT:
             toggle = self.overrides_sent & 1
             by_channel = {self.script.rc_channel(o): toggle_encode(pwm, toggle)
                           for o, pwm in pwm_by_output.items()}
-            values = [IGNORE_1_8] * 8 + [by_channel.get(k, IGNORE_9_18) for k in range(9, 19)]
+            values = [NEUTRAL_US] * PILOT_CHANNELS + [IGNORE_1_8] * (8 - PILOT_CHANNELS) + \
+                [by_channel.get(k, IGNORE_9_18) for k in range(9, 19)]
         else:
             values = [pwm_by_output.get(k, others_1_8) for k in range(1, 9)] + \
                 [IGNORE_9_18] * 10
@@ -595,9 +600,9 @@ class ArduSubLink:
         self.send_override({c: NEUTRAL_US for c in self.settings.thruster_channels})
 
     def release(self) -> None:
-        """Give our channels back: 0 on 1-8 (passthrough), 65534 on the script's (script)."""
+        """Give our channels back: 0 on 1-8; in script mode 0 on 1-6, 65534 on the script's."""
         if self.mode == SCRIPT:
-            values = [IGNORE_1_8] * 8 + [
+            values = [RELEASE_1_8] * PILOT_CHANNELS + [IGNORE_1_8] * (8 - PILOT_CHANNELS) + [
                 RELEASE_9_18 if k in {self.script.rc_channel(o)
                                       for o in self.settings.thruster_channels}
                 else IGNORE_9_18 for k in range(9, 19)]
