@@ -1,0 +1,203 @@
+"""What the robot itself recorded, read from an MCAP and put on one time grid.
+
+Read (suffixes of the topic names, so any namespace works): ``/imu`` (attitude and rates),
+``/dvl`` (velocity over ground in dvl_link), ``/joint_states`` (the arm's encoders),
+``/command/actuators`` (the thrusts sent) and, optionally, ``/depth`` and the estimate
+``/odometry/filtered``. Never the simulator's ground truth (``/odometry``, ``/contact``).
+Times are the messages' header stamps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from uvms_recording.errors import RecordingError
+from uvms_recording.mcap_reader import open_recording
+from uvms_recording.typestore import uvms_typestore
+
+from uvms_identify.errors import IdentifyError
+from uvms_identify.robot_data import RobotData
+from uvms_identify.signals import (
+    euler_zyx,
+    quaternion_to_matrix,
+    resample,
+    smooth_and_differentiate,
+)
+
+FloatArray = NDArray[np.float64]
+
+#: Required topic suffixes and what they are, for the refusal's one line.
+REQUIRED = {
+    '/imu': 'IMU (attitude, rates)',
+    '/joint_states': 'arm joint states',
+    '/command/actuators': 'thrust commands',
+}
+VELOCITY_TOPICS = {'dvl': ('/dvl', 'DVL velocity'),
+                   'estimate': ('/odometry/filtered', 'the estimate (odometry/filtered)')}
+#: Ground-truth topics, never read.
+GROUND_TRUTH = ('/uvms/odometry', '/uvms/contact')
+MIN_DURATION_S = 5.0
+MIN_SPEED = 0.01  # m/s or rad/s: below it on every axis the vehicle did not move
+
+
+@dataclass
+class Series:
+    """One recording on a uniform grid.
+
+    Attributes:
+        source: The recording.
+        t_s: Grid times (N,) (s).
+        nu: Body velocities (N, 6) (m/s, rad/s), smoothed.
+        nu_dot: Their derivatives (N, 6).
+        rpy: Attitude (N, 3) (rad); ``gravity_body``: R^T e_z (N, 3).
+        joints, joint_rates, joint_accelerations: The arm (N, n).
+        tau: Thrust wrench in base_link_frd (N, 6) (N, N m).
+        thrusts: The thrusts (N, p) (N).
+        depth_m: Depth (N,) (m), NaN without a depth topic.
+    """
+
+    source: Path
+    t_s: FloatArray
+    nu: FloatArray
+    nu_dot: FloatArray
+    rpy: FloatArray
+    gravity_body: FloatArray
+    joints: FloatArray
+    joint_rates: FloatArray
+    joint_accelerations: FloatArray
+    tau: FloatArray
+    thrusts: FloatArray
+    depth_m: FloatArray
+
+    def window(self, mask: NDArray[np.bool_]) -> Series:
+        """The samples where ``mask`` holds."""
+        return Series(self.source, *(getattr(self, f)[mask] for f in (
+            't_s', 'nu', 'nu_dot', 'rpy', 'gravity_body', 'joints', 'joint_rates',
+            'joint_accelerations', 'tau', 'thrusts', 'depth_m')))
+
+
+def _stamp(message: object) -> float:
+    stamp = message.header.stamp  # type: ignore[attr-defined]
+    return float(stamp.sec) + 1e-9 * float(stamp.nanosec)
+
+
+def _find(topics: list[str], suffix: str) -> str | None:
+    for topic in topics:
+        if topic.endswith(suffix) and topic not in GROUND_TRUTH:
+            return topic
+    return None
+
+
+def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
+                rate_hz: float = 50.0, window_s: float = 0.6) -> Series:
+    """The recording at ``path`` as a ``Series``.
+
+    Raises:
+        IdentifyError: One line naming the file and what is missing: an unreadable file, a
+            topic not recorded (or without messages), a recording too short, or a vehicle
+            that did not move.
+    """
+    path = Path(path)
+    try:
+        recording = open_recording(path)
+    except RecordingError as exc:
+        raise IdentifyError(f'{path}: {exc}') from exc
+    names = [t for t, info in recording.topics.items() if info.message_count > 0]
+    wanted = {**REQUIRED, VELOCITY_TOPICS[velocity][0]: VELOCITY_TOPICS[velocity][1]}
+    found: dict[str, str] = {}
+    missing = []
+    for suffix, what in wanted.items():
+        topic = _find(names, suffix)
+        if topic is None:
+            missing.append(f'{suffix.lstrip("/")} ({what})')
+        else:
+            found[suffix] = topic
+    if missing:
+        hint = ' (record the navigation topics: navigation.enabled and an estimator: section)' \
+            if any('imu' in m or 'dvl' in m for m in missing) else ''
+        raise IdentifyError(f'{path}: not in the recording: {", ".join(missing)}{hint}')
+    depth_topic = _find(names, '/depth')
+    topic_of = {topic: suffix for suffix, topic in found.items()}
+    if depth_topic:
+        topic_of[depth_topic] = '/depth'
+    rows: dict[str, list[tuple[float, list[float]]]] = {s: [] for s in topic_of.values()}
+    typestore = uvms_typestore()
+    try:
+        for message in recording.messages(topic_of):
+            msg = typestore.deserialize_cdr(message.data, message.type_name)
+            suffix = topic_of[message.topic]
+            t = _stamp(msg)
+            if suffix == '/imu':
+                o, r = msg.orientation, msg.angular_velocity
+                rows[suffix].append((t, [o.x, o.y, o.z, o.w, r.x, r.y, r.z]))
+            elif suffix == '/dvl':
+                v = msg.twist.twist.linear
+                rows[suffix].append((t, [v.x, v.y, v.z]))
+            elif suffix == '/odometry/filtered':
+                v, r = msg.twist.twist.linear, msg.twist.twist.angular
+                rows[suffix].append((t, [v.x, v.y, v.z, r.x, r.y, r.z]))
+            elif suffix == '/joint_states':
+                rows[suffix].append((t, [*msg.position, *msg.velocity]))
+            elif suffix == '/command/actuators':
+                rows[suffix].append((t, list(msg.thrust)))
+            else:
+                rows[suffix].append((t, [msg.pose.pose.position.z]))
+    except RecordingError as exc:
+        raise IdentifyError(f'{path}: {exc}') from exc
+
+    def arrays(suffix: str) -> tuple[FloatArray, FloatArray]:
+        data = rows[suffix]
+        t = np.array([row[0] for row in data])
+        values = np.array([row[1] for row in data], float)
+        order = np.argsort(t, kind='stable')
+        t, values = t[order], values[order]
+        keep = np.r_[True, np.diff(t) > 0.0]
+        return t[keep], values[keep]
+
+    series = {s: arrays(s) for s in rows}
+    start = max(float(series[s][0][0]) for s in found)
+    end = min(float(series[s][0][-1]) for s in found)
+    if end - start < MIN_DURATION_S:
+        raise IdentifyError(f'{path}: too short: {max(end - start, 0.0):.1f} s of '
+                            f'{", ".join(s.lstrip("/") for s in found)} together, at least '
+                            f'{MIN_DURATION_S:g} s needed')
+    dt = 1.0 / rate_hz
+    grid = np.arange(start, end, dt)
+    imu_t, imu = series['/imu']
+    rotations = quaternion_to_matrix(resample(imu_t, imu[:, :4], grid))
+    rates = resample(imu_t, imu[:, 4:], grid)
+    if velocity == 'dvl':
+        dvl_t, dvl = series['/dvl']
+        rates_at_dvl = resample(imu_t, imu[:, 4:], dvl_t)
+        linear = dvl @ robot.dvl_rotation.T - np.cross(rates_at_dvl, robot.dvl_position_m)
+        nu_raw = np.column_stack([resample(dvl_t, linear, grid), rates])
+    else:
+        est_t, est = series['/odometry/filtered']
+        nu_raw = resample(est_t, est, grid)
+    nu, nu_dot = smooth_and_differentiate(nu_raw, dt, window_s)
+    joint_t, joint = series['/joint_states']
+    n_joints = joint.shape[1] // 2
+    joints = resample(joint_t, joint[:, :n_joints], grid)
+    joint_rates, joint_accelerations = smooth_and_differentiate(
+        resample(joint_t, joint[:, n_joints:], grid), dt, window_s)
+    thrust_t, thrust = series['/command/actuators']
+    if thrust.shape[1] != robot.thrust_matrix.shape[1]:
+        raise IdentifyError(f'{path}: command/actuators has {thrust.shape[1]} thrusts, robot '
+                            f'{robot.name} has {robot.thrust_matrix.shape[1]} thrusters')
+    thrusts = resample(thrust_t, thrust, grid)
+    depth = (resample(*series['/depth'], grid)[:, 0] if '/depth' in series
+             else np.full(grid.size, np.nan))
+    trim = round(window_s / dt)
+    keep = slice(trim, grid.size - trim)
+    result = Series(path, grid - grid[0], nu, nu_dot, euler_zyx(rotations),
+                    rotations[:, 2, :], joints, joint_rates, joint_accelerations,
+                    thrusts @ robot.thrust_matrix.T, thrusts, depth).window(
+                        np.isin(np.arange(grid.size), np.arange(grid.size)[keep]))
+    if float(np.abs(result.nu).max()) < MIN_SPEED:
+        raise IdentifyError(f'{path}: no excitation: the vehicle never moved faster than '
+                            f'{MIN_SPEED} m/s or rad/s on any axis (run the experiments of '
+                            '`uvms identify plan`)')
+    return result
