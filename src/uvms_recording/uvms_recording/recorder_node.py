@@ -317,11 +317,37 @@ class RecorderNode(Node):
         """Messages taken so far, written or dropped (what a stop drains: ``run_node``)."""
         return self._recorder.message_count + self._dropped
 
-    def close(self) -> None:
-        """Write the file's summary and close it (idempotent); later messages are dropped.
+    def take_pending(self) -> int:
+        """Write what the middleware still holds for the subscriptions; return how many.
 
-        Safe to call from another thread than the executor's.
+        A recorder behind on a busy machine has messages in its subscriptions' queues that
+        its executor has not taken yet: measured, the controller's one task record among
+        them when the stop's drain ended (``run_node``). Taken here straight from each
+        subscription, /clock first so that the others' log times are its latest; at most
+        each subscription's depth.
         """
+        taken = 0
+        for topic, subscription in self._subscriptions_by_topic.items():
+            write = self._on_clock if topic == '/clock' else functools.partial(
+                self._on_message, topic)
+            while not self._recorder.closed:
+                with subscription.handle:
+                    message = subscription.handle.take_message(subscription.msg_type, True)
+                if message is None:
+                    break
+                write(message[0])
+                taken += 1
+        return taken
+
+    def close(self) -> None:
+        """Take what is still pending, write the file's summary and close it (idempotent).
+
+        Later messages are dropped. Safe to call from another thread than the executor's.
+        """
+        if not self._recorder.closed:
+            pending = self.take_pending()
+            if pending:
+                self.get_logger().info(f'took {pending} pending messages before closing')
         with self._lock:
             if self._recorder.closed:
                 return
