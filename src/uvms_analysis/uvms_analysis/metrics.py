@@ -32,6 +32,7 @@ from uvms_control.core.task.force_figures import (  # noqa: F401 (re-exported: t
 
 from uvms_analysis.series import BoolArray, FloatArray, Run
 from uvms_analysis.tasks import TaskRecord
+from uvms_description import DEFAULT_ROBOT
 
 #: Samples before this time are excluded from the free-motion tracking error (s): the start-up
 #: transient of the controller is not tracking performance.
@@ -216,7 +217,10 @@ def normal_force(run: Run, source: ForceSource = 'auto') -> NormalForce | None:
 def run_robot(metadata: dict[str, dict[str, str]]) -> str | None:
     """The robot a recorded run used: ``robot_name`` of its parameters, None if not recorded.
 
-    The simulator's if it has one, else any node's (all load the same robot folder).
+    The simulator's if it has one, else any node's (all load the same robot folder). Node
+    parameters recorded without any ``robot_name`` mean the nodes' default robot
+    (``uvms_description.DEFAULT_ROBOT``): ``uvms launch`` and ``uvms run`` pass the name only
+    when a scenario or ``--robot`` chooses one.
     """
     text = metadata.get('uvms', {}).get('parameters', '')
     try:
@@ -231,7 +235,7 @@ def run_robot(metadata: dict[str, dict[str, str]]) -> str | None:
         values = section.get('ros__parameters') if isinstance(section, dict) else None
         if isinstance(values, dict) and values.get('robot_name'):
             return str(values['robot_name'])
-    return None
+    return DEFAULT_ROBOT if nodes else None
 
 
 def compute_metrics(run: Run, force_source: ForceSource = 'auto') -> RunMetrics:

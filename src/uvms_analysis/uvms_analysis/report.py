@@ -19,7 +19,8 @@ from uvms_analysis.metrics import (
     compute_metrics,
     task_metrics,
 )
-from uvms_analysis.series import AnalysisError, load_run
+from uvms_analysis.series import AnalysisError, Run, load_run
+from uvms_analysis.tasks import TOPIC_TASK_RECORD
 
 FORMATS = ('text', 'markdown', 'csv')
 NOT_APPLICABLE = 'n/a'
@@ -203,6 +204,18 @@ def _flat(label: str) -> str:
     return label.replace('-\n', '').replace('\n', ' ')
 
 
+def no_task_record(path: str, run: Run) -> str:
+    """What a row of a recording without a task record is, for stderr.
+
+    A run whose recorded mission sent tasks yet holds no record lost it (a warning: the row
+    is not the task's); any other run (free motion, goals sent by hand) gets a note.
+    """
+    sent = bool(run.metadata.get('uvms', {}).get('mission'))
+    what = ('warning: the run sent contact tasks (its mission) but ' if sent else 'note: ')
+    return (f'{what}{path} holds no task record ({TOPIC_TASK_RECORD}): one row for the '
+            'whole recording, task n/a, F_d its median set-point while in contact')
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Argument parser of `uvms report`."""
     parser = argparse.ArgumentParser(
@@ -249,6 +262,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             continue
         if run.problem is not None:
             print(f'uvms report: warning: {run.problem}', file=sys.stderr)
+        if not run.tasks:
+            print(f'uvms report: {no_task_record(path, run)}', file=sys.stderr)
         metrics.extend([task_metrics(run, task, args.force_source) for task in run.tasks]
                        or [compute_metrics(run, args.force_source)])
         errors = estimate_errors(path)

@@ -135,16 +135,21 @@ TOPIC_TYPES = {
 
 
 def write_signals(
-    path: Path, signals: Signals, scenario: str | None = None, thrusters: bool = True
+    path: Path, signals: Signals, scenario: str | None = None, thrusters: bool = True,
+    mission: str = '',
 ) -> Path:
-    """Write a synthetic run with the stack's recorder, as the graph would; returns the path."""
+    """Write a synthetic run with the stack's recorder, as the graph would; returns the path.
+
+    A mission (mission file text) goes into the metadata as the recorder stores a run's.
+    """
     ts = uvms_typestore()
     T = ts.types
     Time, Header = T['builtin_interfaces/msg/Time'], T['std_msgs/msg/Header']
     Vector3, Point = T['geometry_msgs/msg/Vector3'], T['geometry_msgs/msg/Point']
     Quaternion = T['geometry_msgs/msg/Quaternion']
     Pose, Twist = T['geometry_msgs/msg/Pose'], T['geometry_msgs/msg/Twist']
-    metadata = None if scenario is None else run_metadata(scenario, 0, '{}')
+    metadata = None if scenario is None else run_metadata(
+        scenario, 0, '{}', **({'mission': mission} if mission else {}))
     recorder = McapRecorder(path, metadata=metadata)
     for topic, type_name in TOPIC_TYPES.items():
         if thrusters or topic != '/uvms/thrusters/state':

@@ -159,3 +159,39 @@ def test_report_names_the_robot_a_run_used() -> None:
     assert run_robot({}) is None
     assert run_robot({'uvms': {'parameters': ': not yaml ['}}) is None
     assert 'robot' in [column.key for column in COLUMNS]
+
+
+def test_report_of_a_recording_without_task_record_says_so_on_stderr(
+    capsys: pytest.CaptureFixture[str], contact_recording: Path
+) -> None:
+    """A per-recording row (no task record) is named on stderr, not passed off as a task's."""
+    status, out, err = run_report(capsys, str(contact_recording), '--format', 'csv')
+    assert status == 0
+    assert csv_rows(out)['case1_synthetic']['task'] == 'n/a'
+    assert str(contact_recording) in err
+    assert 'no task record (/uvms/controller/task_record)' in err
+
+
+def test_report_warns_when_a_run_that_sent_tasks_holds_no_task_record(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """A recorded mission without any task record is a warning: the record was lost."""
+    from analysis_recordings import contact_signals, write_signals
+
+    path = write_signals(tmp_path / 'hand.mcap', contact_signals(), scenario='case1_ke1e4')
+    write_signals(tmp_path / 'mission.mcap', contact_signals(), scenario='case1_ke1e4',
+                  mission='mission:\n- force_n: 150.0\n')
+    _, _, err = run_report(capsys, str(path))
+    assert err.startswith('uvms report: note: ')
+    _, _, err = run_report(capsys, str(tmp_path / 'mission.mcap'))
+    assert 'uvms report: warning: the run sent contact tasks' in err
+
+
+def test_report_names_the_default_robot_when_the_parameters_name_none() -> None:
+    """Recorded node parameters without robot_name: the nodes loaded the default robot."""
+    from uvms_analysis.metrics import run_robot
+
+    from uvms_description import DEFAULT_ROBOT
+
+    parameters = '/uvms/controller:\n  ros__parameters:\n    control_rate_hz: 500.0\n'
+    assert run_robot({'uvms': {'parameters': parameters}}) == DEFAULT_ROBOT == 'paper_uvms'
