@@ -12,6 +12,8 @@ A managed node (``autostart``) on the bridges' base (``bridge_node``) over
 - activate: script mode changes nothing on the vehicle; passthrough mode journals the thruster
   outputs' functions and sets RCIN passthrough. Then arm and take ``command/actuators``. Any
   failure half-way puts back what was changed (the base's guarantee).
+- telemetry stamped when the autopilot sent it (its boot clock mapped into the node clock,
+  ``ardusub_stamps``); SYS_STATUS, which has no time, at its arrival.
 - each period (``override_rate_hz``): thrusts -> PWM (T200 curve at the measured voltage,
   thruster direction) as RC_CHANNELS_OVERRIDE; no command for ``watchdog_timeout_s``: 1500 on
   every thruster until commands return. A vehicle silent for ``link_timeout_s`` is an ERROR on
@@ -42,6 +44,7 @@ from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.ardusub_link import PASSTHROUGH, SCRIPT, ArduSubLink, LinkSettings
 from uvms_hardware.ardusub_restore import find_leftovers, leftovers_refusal
+from uvms_hardware.ardusub_stamps import TelemetryStamper
 from uvms_hardware.ardusub_watchdog import SCRIPT_NAME, ScriptSettings
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
 from uvms_hardware.device_clock import stop_requested
@@ -127,6 +130,7 @@ class ArduSubBridgeNode(BridgeNode):
         self.warnings: list[str] = []
         self._link_lost = False
         self._pressure_pa = math.nan
+        self.stamper = TelemetryStamper()
         self.telemetry_rates_hz: dict[str, float] = {}
         self._next_request_s = math.inf
         self.start()
@@ -143,6 +147,7 @@ class ArduSubBridgeNode(BridgeNode):
             restore_budget_s=float(v['restore_budget_s']))
         journal = DeviceJournal.for_device('ardusub', settings.url, str(v['journal_dir']))
         self.link = link = ArduSubLink(settings, self.curve, journal=journal)
+        self.stamper = TelemetryStamper()
         link.stop_requested = stop_requested
         link.open()
         link.wait_vehicle(float(v['heartbeat_timeout_s']))
@@ -241,9 +246,14 @@ class ArduSubBridgeNode(BridgeNode):
         values = {'link_age_s': age_s, 'armed': link.vehicle.armed,
                   'mode': link.vehicle.custom_mode, 'voltage_v': link.vehicle.voltage_v,
                   'thruster_mode': link.mode, 'watchdog_trips': self.watchdog.trips,
-                  'rejected_commands': self.rejected, 'overrides_sent': link.overrides_sent}
+                  'rejected_commands': self.rejected, 'overrides_sent': link.overrides_sent,
+                  **self.stamper.report()}
         if age_s > float(self.values['link_timeout_s']):
             return Report(ERROR, f'vehicle silent for {age_s:.1f} s', values)
+        if not self.stamper.clock.rates_agree:
+            return Report(WARN, "the autopilot's clock does not run at the node clock's rate "
+                          "(beside a simulator, the twin must run on the plant's time): "
+                          'telemetry stamped at arrival', values)
         if self.device_active and self.watchdog.expired(self.now_s()):
             return Report(WARN, 'no command: thrusters neutral', values)
         return Report(WARN if self.warnings else OK, self.warnings[0] if self.warnings
@@ -285,7 +295,8 @@ class ArduSubBridgeNode(BridgeNode):
             link.send_override(link.pwm_for(self.thrusts))
 
     def _on_telemetry(self, kind: str, msg: Any) -> None:
-        t_ns = self.get_clock().now().nanoseconds
+        arrival_s = self.get_clock().now().nanoseconds * 1e-9
+        t_ns = round(self.stamper.stamp_s(kind, msg, arrival_s) * 1e9)
         link = self.link
         if kind == 'RAW_IMU' and link is not None and link.vehicle.quaternion_wxyz is not None:
             w, f = bm.imu_from_raw_imu(msg)

@@ -30,8 +30,9 @@ bridge; each behaviour names its source:
   Motor function until the timeout; a passthrough output ignores it, as ``SRV_Channel::
   output_ch`` overwrites it from the RC input), and it announces NAMED_VALUE_FLOAT 'UVMS_WD'
   once a second. ``stop_script()`` makes it die (its overrides then expire).
-- Telemetry at the requested intervals, from the plant: ATTITUDE_QUATERNION (body FRD in NED),
-  RAW_IMU (ArduPilot fills it scaled: mG, mrad/s; ``GCS_Common.cpp`` send_raw_imu),
+- Telemetry at the requested intervals, from the plant, timed on the twin's boot clock as
+  ArduPilot's (``time_boot_ms``; RAW_IMU ``time_usec`` in µs): ATTITUDE_QUATERNION (body FRD
+  in NED), RAW_IMU (ArduPilot fills it scaled: mG, mrad/s; ``GCS_Common.cpp`` send_raw_imu),
   SCALED_PRESSURE2 (the Bar30 is ArduSub's second barometer; hPa), SYS_STATUS (mV).
 
 Not modelled: failsafes (FS_GCS, FS_PILOT), arming checks, modes other than MANUAL, stream
@@ -123,6 +124,8 @@ class TwinState:
     commands: list[tuple[int, tuple[float, ...]]] = field(default_factory=list)
     #: The watchdog script's output overrides: output -> (PWM, local time it expires, s).
     script_overrides: dict[int, tuple[int, float]] = field(default_factory=dict)
+    #: Telemetry sent: (message name, wall time of its time field, s since the epoch).
+    sent: deque[tuple[str, float]] = field(default_factory=lambda: deque(maxlen=20000))
 
 
 class ArduSubTwin:
@@ -368,7 +371,9 @@ class ArduSubTwin:
             for m in due:
                 self.state.due_s[m] = now_s + self.state.intervals_s[m]
             plant = Plant(**vars(self.plant))
-        boot_ms = int((now_s - self._boot_s) * 1000) & 0xFFFFFFFF
+        # The messages' time and its wall time read together: what a test compares stamps with.
+        wall_s, boot_us = time.time(), int((time.monotonic() - self._boot_s) * 1e6)
+        boot_ms = (boot_us // 1000) & 0xFFFFFFFF
         mav = self.conn.mav
         for m in due:
             if m == MAV.MAVLINK_MSG_ID_ATTITUDE_QUATERNION:
@@ -376,12 +381,19 @@ class ArduSubTwin:
             elif m == MAV.MAVLINK_MSG_ID_RAW_IMU:
                 acc = [round(a / 9.80665 * 1000.0) for a in plant.specific_force_m_s2]
                 gyro = [round(w * 1000.0) for w in plant.rates_rad_s]
-                mav.raw_imu_send(boot_ms * 1000, *acc, *gyro, 0, 0, 0)
+                mav.raw_imu_send(boot_us, *acc, *gyro, 0, 0, 0)  # AP_HAL::micros64()
             elif m == MAV.MAVLINK_MSG_ID_SCALED_PRESSURE2:
                 mav.scaled_pressure2_send(boot_ms, plant.pressure_pa / 100.0, 0.0, 1500)
             elif m == MAV.MAVLINK_MSG_ID_SYS_STATUS:
                 mav.sys_status_send(0, 0, 0, 0, int(plant.voltage_v * 1000.0), -1, -1,
                                     0, 0, 0, 0, 0, 0)
+            with self._lock:
+                self.state.sent.append((MAV.mavlink_map[m].msgname, wall_s))
+
+    def sent_times(self, name: str) -> list[float]:
+        """Wall times (s since the epoch) of the times in each message ``name`` sent."""
+        with self._lock:
+            return [t for kind, t in self.state.sent if kind == name]
 
 
 def main(argv: list[str] | None = None) -> None:
