@@ -41,6 +41,7 @@ VELOCITY_TOPICS = {'dvl': ('/dvl', 'DVL velocity'),
 GROUND_TRUTH = ('/uvms/odometry', '/uvms/contact')
 MIN_DURATION_S = 5.0
 MIN_SPEED = 0.01  # m/s or rad/s: below it on every axis the vehicle did not move
+MIN_THRUST_STD_N = 0.1  # N: a thrust that varies less excites nothing
 
 
 @dataclass
@@ -116,7 +117,8 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
         else:
             found[suffix] = topic
     if missing:
-        hint = ' (record the navigation topics: navigation.enabled and an estimator: section)' \
+        hint = (' (the scenarios of `uvms identify plan` record them: navigation.enabled and '
+                "the recorder's topics)") \
             if any('imu' in m or 'dvl' in m for m in missing) else ''
         raise IdentifyError(f'{path}: not in the recording: {", ".join(missing)}{hint}')
     depth_topic = _find(names, '/depth')
@@ -187,7 +189,9 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     if thrust.shape[1] != robot.thrust_matrix.shape[1]:
         raise IdentifyError(f'{path}: command/actuators has {thrust.shape[1]} thrusts, robot '
                             f'{robot.name} has {robot.thrust_matrix.shape[1]} thrusters')
-    thrusts = resample(thrust_t, thrust, grid)
+    # The thrusts pass the same Savitzky-Golay smoothing as the velocities whose derivative
+    # they balance: a force against a smoothed acceleration would read as extra mass.
+    thrusts = smooth_and_differentiate(resample(thrust_t, thrust, grid), dt, window_s)[0]
     depth = (resample(*series['/depth'], grid)[:, 0] if '/depth' in series
              else np.full(grid.size, np.nan))
     trim = round(window_s / dt)
@@ -200,4 +204,8 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
         raise IdentifyError(f'{path}: no excitation: the vehicle never moved faster than '
                             f'{MIN_SPEED} m/s or rad/s on any axis (run the experiments of '
                             '`uvms identify plan`)')
+    if float(result.thrusts.std(axis=0).max()) < MIN_THRUST_STD_N:
+        raise IdentifyError(f'{path}: no excitation: no thrust varied by more than '
+                            f'{MIN_THRUST_STD_N} N (standard deviation); run the experiments '
+                            'of `uvms identify plan`')
     return result
