@@ -21,17 +21,21 @@ offset and skew of Moon, Skelly and Towsley ("Estimation and removal of clock sk
 delay measurements", INFOCOM 1999). Its slope is the rate difference of the two clocks (skew,
 within ``max_skew``: ATI quotes RDT rates within +-0.5 %), so a window of many seconds does
 not lag a drifting clock. A pair more than ``reset_s`` below the envelope (the device's clock
-jumped forward: an NTP step, a restarted counter) or a whole bucket more than ``reset_s``
-above it (jumped back) restarts the estimate from that pair.
+jumped forward: an NTP step, a restarted counter) or `LATE_BUCKETS` whole buckets in a row
+more than ``reset_s`` above it (jumped back; fewer are a starved host) restarts the estimate
+from that pair.
 
 Reported: ``spread_s`` (how far the buckets' minima lie above the envelope: the uncertainty of
 the offset itself) and ``jitter_s`` (the standard deviation of recent arrivals' delay above the
 envelope: the error an arrival-time stamp would carry).
 
 Two clocks that do not run at one rate (a device on wall time against a node on a simulator's
-``/clock`` at another factor, or standing still) cannot be mapped: the skew sits at its bound
-or the estimate keeps restarting. ``rates_agree`` is then False and a bridge stamps at arrival
-(and says so) rather than with a wrong device time.
+``/clock`` at another factor, or standing still) cannot be mapped. A longer history of the
+earliest arrival per ``window_s / 5`` (kept across the restarts late arrivals or clock jumps
+cause, cleared only when the device announces a new count) gives the rate of one clock against
+the other by its lower envelope, which late arrivals do not move: beyond ``max_skew``
+``rates_agree`` is False, and a bridge stamps at arrival (and says so) rather than with a wrong
+device time.
 """
 
 from __future__ import annotations
@@ -47,8 +51,13 @@ __all__ = ['DeviceClockEstimator', 'Point', 'lower_envelope']
 JITTER_SAMPLES = 200
 #: Finished buckets the skew needs; with fewer the envelope is flat.
 MIN_SKEW_BUCKETS = 4
-#: This many restarts within one window: the two clocks do not run at one rate.
-RESTARTS_DISAGREE = 3
+#: Finished buckets in a row this far above the envelope: the device's clock was set back.
+LATE_BUCKETS = 3
+#: The rate history: blocks per window, and how many windows it keeps.
+BLOCKS_PER_WINDOW = 5
+HISTORY_WINDOWS = 2
+#: Finished blocks the rate check needs; with fewer the rates are taken to agree.
+MIN_RATE_BLOCKS = 4
 
 
 @dataclass(frozen=True)
@@ -111,8 +120,10 @@ class DeviceClockEstimator:
         self._buckets: deque[tuple[int, Point]] = deque()
         self._line: tuple[float, float, float] | None = None
         self._excess: deque[float] = deque(maxlen=JITTER_SAMPLES)
-        self._restarts_s: deque[float] = deque(maxlen=RESTARTS_DISAGREE)
-        self._newest_s = -math.inf
+        self._late_buckets = 0
+        self._block_s = window_s / BLOCKS_PER_WINDOW
+        self._history: deque[tuple[int, Point]] = deque(
+            maxlen=BLOCKS_PER_WINDOW * HISTORY_WINDOWS + 1)
         self._dirty = False
 
     def add(self, device_s: float, arrival_s: float) -> None:
@@ -120,8 +131,8 @@ class DeviceClockEstimator:
         if not (math.isfinite(device_s) and math.isfinite(arrival_s)):
             return
         self.pairs += 1
-        self._newest_s = device_s
         point = Point(device_s, arrival_s - device_s)
+        self._remember(point)
         line = self._fitted()
         if line is not None:
             excess = point.y - self._y(line, device_s)
@@ -166,12 +177,11 @@ class DeviceClockEstimator:
 
     @property
     def rates_agree(self) -> bool:
-        """False when the clocks visibly run at different rates (skew bound, restarts)."""
-        recent = [t for t in self._restarts_s if abs(self._newest_s - t) < self.window_s]
-        if len(recent) >= RESTARTS_DISAGREE:
-            return False
-        return not (self.span_s >= self.window_s / 2.0 and self.max_skew > 0.0
-                    and abs(self.skew) >= self.max_skew)
+        """False when the history shows the clocks running more than ``max_skew`` apart."""
+        finished = [p for _, p in self._history][:-1]
+        if len(finished) < MIN_RATE_BLOCKS:
+            return True
+        return abs(lower_envelope(finished, math.inf)[2]) < self.max_skew
 
     @property
     def span_s(self) -> float:
@@ -223,24 +233,41 @@ class DeviceClockEstimator:
             self._line = lower_envelope(points, max_slope) if points else None
         return self._line
 
+    def _remember(self, point: Point) -> None:
+        """The earliest arrival of each block into the rate history (device time forward)."""
+        index = math.floor(point.x / self._block_s)
+        if self._history and index < self._history[-1][0]:
+            self._history.clear()  # device time ran back: a history across it means nothing
+        if self._history and self._history[-1][0] == index:
+            if point.y < self._history[-1][1].y:
+                self._history[-1] = (index, point)
+        else:
+            self._history.append((index, point))
+
     def _close_bucket(self) -> None:
-        """A finished bucket wholly above the envelope: the device's clock was set back."""
+        """`LATE_BUCKETS` finished buckets in a row wholly above the envelope: set back."""
         line = self._fitted()
         if line is None or len(self._buckets) < 2:
             return
         last = self._buckets[-1][1]
-        if last.y - self._y(line, last.x) > self.reset_s:
+        if last.y - self._y(line, last.x) <= self.reset_s:
+            self._late_buckets = 0
+            return
+        self._late_buckets += 1  # a starved host makes a few; a clock set back, all from now
+        if self._late_buckets >= LATE_BUCKETS:
             self.restart(keep=last)
 
     def restart(self, keep: Point | None = None, jumped: bool = True) -> None:
         """Forget every pair, keeping ``keep`` if given.
 
-        ``jumped``: the device's clock jumped against ours (counted against ``rates_agree``);
-        False for a reset the device announced (a new stream numbered from the start).
+        ``jumped``: the device's clock jumped against ours (the rate history is kept); False
+        for a reset the device announced (a new stream numbered from the start: the history
+        is cleared too).
         """
         self.resets += 1
-        if jumped:
-            self._restarts_s.append(self._newest_s)
+        self._late_buckets = 0
+        if not jumped:
+            self._history.clear()
         self._buckets.clear()
         self._excess.clear()
         if keep is not None:

@@ -86,8 +86,19 @@ def test_a_device_clock_that_jumps_is_followed_after_a_restart(jump_s: float) ->
     # From device time 5 s on the device reads jump_s more for the same local time.
     feed(clock, rng, 5.0 + jump_s, 1.0, 50.0, offset_s=OFFSET_S - jump_s)
     truth = feed(clock, rng, 6.0 + jump_s, 1.0, 50.0, offset_s=OFFSET_S - jump_s)
-    assert clock.resets >= 1 and clock.rates_agree
+    assert clock.resets >= 1
     assert worst_error_s(clock, truth) < 0.001
+
+
+def test_after_a_forward_jump_the_rates_agree_again_once_it_left_the_history() -> None:
+    """A 1 s step looks like another rate for two windows (arrival stamps: safe), then not."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, reset_s=0.1)
+    rng = random.Random(9)
+    feed(clock, rng, 0.0, 6.0, 50.0)
+    feed(clock, rng, 7.0, 2.0, 50.0, offset_s=OFFSET_S - 1.0)
+    assert not clock.rates_agree
+    feed(clock, rng, 9.0, 11.0, 50.0, offset_s=OFFSET_S - 1.0)
+    assert clock.rates_agree
 
 
 def test_the_spread_and_jitter_are_reported() -> None:
@@ -134,6 +145,18 @@ def test_clocks_at_different_rates_are_said_to_disagree(skew: float) -> None:
     clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, reset_s=0.1)
     feed(clock, random.Random(7), 0.0, 6.0, 50.0, skew=skew)
     assert not clock.rates_agree
+
+
+def test_a_starved_host_is_not_a_clock_that_disagrees() -> None:
+    """Every arrival for 0.6 s at a time 0.3 s late, twice: the rates agree, stamps stay right."""
+    clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.1, reset_s=0.1)
+    rng = random.Random(10)
+    feed(clock, rng, 0.0, 5.0, 200.0)
+    for start_s in (5.0, 7.0):
+        feed(clock, rng, start_s, 0.6, 200.0, late_s=0.3, late_every=1)
+        feed(clock, rng, start_s + 0.6, 1.4, 200.0)
+    truth = feed(clock, rng, 9.0, 1.0, 200.0)
+    assert clock.rates_agree and worst_error_s(clock, truth) < 0.0005
 
 
 def test_clocks_at_one_rate_agree() -> None:

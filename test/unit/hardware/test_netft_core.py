@@ -135,8 +135,8 @@ def test_a_wrong_rdt_rate_is_reported_and_stamps_fall_back_to_the_polls() -> Non
     """Records at 200 Hz taken for 500 Hz: WARN naming rdt_rate_hz, stamped at the poll."""
     core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=500.0)
     zero = (0, 0, 0, 0, 0, 0)
-    for k in range(1, 1400):  # 7 s at 200 Hz
+    for k in range(1, 4000):  # 20 s at 200 Hz, 8 s of what it takes for the box's time
         samples = core.receive_all([datagram(k, zero)], k * 0.005, 3.0 + k * 0.005)
-    level, message, values = core.report(1399 * 0.005)
+    level, message, values = core.report(3999 * 0.005)
     assert level == 1 and 'rdt_rate_hz 500' in message and values['clock_rates_agree'] is False
-    assert samples[0][0] == pytest.approx(3.0 + 1399 * 0.005)
+    assert samples[0][0] == pytest.approx(3.0 + 3999 * 0.005)

@@ -96,14 +96,14 @@ def test_records_are_the_samples_due_on_the_boxs_clock() -> None:
 
 
 def test_a_late_twin_skips_what_it_cannot_send_and_keeps_the_sequence_on_time() -> None:
-    """Woken 1 s late at 200 Hz: the newest 50 samples sent, the 150 before lost."""
+    """Woken 6 s late at 200 Hz: the newest MAX_BURST (1000) samples sent, the 200 before lost."""
     clock = ManualClock(0.0)
     twin = NetFtTwin(port=0, rate_hz=200.0, clock=clock)
     twin.handle(rdt.encode_request(rdt.COMMAND_START_REALTIME), ('127.0.0.1', 1))
-    clock.now_s = 1.0
+    clock.now_s = 6.0
     records, _ = twin._due()
     sequences = [rdt.decode_record(r).rdt_sequence for r in records]
-    assert sequences == list(range(151, 201)) and twin.burst_lost == 150
+    assert sequences == list(range(201, 1201)) and twin.burst_lost == 200
 
 
 def test_each_start_request_begins_a_new_stream_at_sequence_one() -> None:

@@ -45,7 +45,7 @@ from uvms_hardware.errors import ProtocolError
 #: Largest record rate the twin streams at (Hz).
 MAX_RATE_HZ = 1000.0
 #: Most records a late twin sends at once; older samples are lost (their sequences skipped).
-MAX_BURST = 50
+MAX_BURST = 1000
 
 
 class NetFtTwin:
