@@ -16,9 +16,9 @@ do not move it::
 The window keeps the earliest arrival of each ``bucket_s`` of device time (its minimum-delay
 pair). The envelope is the line under those of the finished buckets that lies highest at their
 mean (flat until `MIN_SKEW_BUCKETS` are finished): the edge of their lower convex hull above
-the mean device time, which is the linear-programming estimate of
-offset and skew of Moon, Skelly and Towsley ("Estimation and removal of clock skew from network
-delay measurements", INFOCOM 1999). Its slope is the rate difference of the two clocks (skew,
+the mean device time, which is the linear-programming estimate of offset and skew of Moon,
+Skelly and Towsley ("Estimation and removal of clock skew from network delay measurements",
+INFOCOM 1999). Its slope is the rate difference of the two clocks (skew,
 within ``max_skew``: ATI quotes RDT rates within +-0.5 %), so a window of many seconds does
 not lag a drifting clock. A pair more than ``reset_s`` below the envelope (the device's clock
 jumped forward: an NTP step, a restarted counter) or `LATE_BUCKETS` whole buckets in a row
@@ -32,10 +32,10 @@ envelope: the error an arrival-time stamp would carry).
 Two clocks that do not run at one rate (a device on wall time against a node on a simulator's
 ``/clock`` at another factor, or standing still) cannot be mapped. A longer history of the
 earliest arrival per ``window_s / 5`` (kept across the restarts late arrivals or clock jumps
-cause, cleared only when the device announces a new count) gives the rate of one clock against
-the other by its lower envelope, which late arrivals do not move: beyond ``max_skew``
-``rates_agree`` is False, and a bridge stamps at arrival (and says so) rather than with a wrong
-device time.
+cause, cleared when the device announces a new count or its time runs back) gives the rate
+of one clock against the other by its lower envelope, which late arrivals do not move: beyond
+``max_skew`` ``rates_agree`` is False, and a bridge stamps at arrival (and says so) rather
+than with a wrong device time.
 """
 
 from __future__ import annotations
