@@ -13,7 +13,8 @@ A managed node (``autostart``) on the bridges' base (``bridge_node``) over
   outputs' functions and sets RCIN passthrough. Then arm and take ``command/actuators``. Any
   failure half-way puts back what was changed (the base's guarantee).
 - telemetry stamped when the autopilot sent it (its boot clock mapped into the node clock,
-  ``ardusub_stamps``); SYS_STATUS, which has no time, at its arrival.
+  ``ardusub_stamps``, from the kernel's arrival time of each datagram, ``datagram_arrival``);
+  SYS_STATUS, which has no time, at its arrival.
 - each period (``override_rate_hz``): thrusts -> PWM (T200 curve at the measured voltage,
   thruster direction) as RC_CHANNELS_OVERRIDE; no command for ``watchdog_timeout_s``: 1500 on
   every thruster until commands return. A vehicle silent for ``link_timeout_s`` is an ERROR on
@@ -147,7 +148,10 @@ class ArduSubBridgeNode(BridgeNode):
             restore_budget_s=float(v['restore_budget_s']))
         journal = DeviceJournal.for_device('ardusub', settings.url, str(v['journal_dir']))
         self.link = link = ArduSubLink(settings, self.curve, journal=journal)
-        self.stamper = TelemetryStamper()
+        # On a simulated clock (beside the simulator and the twins) the autopilot's clock can
+        # never be mapped into the node's: arrival stamps, as /diagnostics then says.
+        self.stamper = TelemetryStamper(
+            device_time=not self.get_parameter('use_sim_time').value)
         link.stop_requested = stop_requested
         link.open()
         link.wait_vehicle(float(v['heartbeat_timeout_s']))
@@ -250,7 +254,7 @@ class ArduSubBridgeNode(BridgeNode):
                   **self.stamper.report()}
         if age_s > float(self.values['link_timeout_s']):
             return Report(ERROR, f'vehicle silent for {age_s:.1f} s', values)
-        if not self.stamper.clock.rates_agree:
+        if self.stamper.device_time and not self.stamper.clock.rates_agree:
             return Report(WARN, "the autopilot's clock does not run at the node clock's rate "
                           "(beside a simulator, the twin must run on the plant's time): "
                           'telemetry stamped at arrival', values)
@@ -294,8 +298,12 @@ class ArduSubBridgeNode(BridgeNode):
         else:
             link.send_override(link.pwm_for(self.thrusts))
 
-    def _on_telemetry(self, kind: str, msg: Any) -> None:
+    def _on_telemetry(self, kind: str, msg: Any, kernel_arrival_s: float | None) -> None:
         arrival_s = self.get_clock().now().nanoseconds * 1e-9
+        if kernel_arrival_s is not None and self.stamper.device_time:
+            # When the datagram reached the host (the node clock's epoch when not simulated),
+            # not when this period's poll read it.
+            arrival_s = min(arrival_s, kernel_arrival_s)
         t_ns = round(self.stamper.stamp_s(kind, msg, arrival_s) * 1e9)
         link = self.link
         if kind == 'RAW_IMU' and link is not None and link.vehicle.quaternion_wxyz is not None:

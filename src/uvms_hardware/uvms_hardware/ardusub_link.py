@@ -40,6 +40,7 @@ from typing import Any
 from pymavlink import mavutil  # type: ignore[import-untyped]
 
 from uvms_hardware.ardusub_watchdog import ANNOUNCE_NAME, ScriptSettings, toggle_encode
+from uvms_hardware.datagram_arrival import DatagramArrival
 from uvms_hardware.device_journal import DeviceJournal
 from uvms_hardware.errors import DeviceCheckError
 from uvms_hardware.t200_curve import T200Curve, clamp_pwm
@@ -168,8 +169,10 @@ class ArduSubLink:
         self.other_gcs: dict[tuple[int, int], float] = {}
         self._next_heartbeat_s = -math.inf
         self.opened_s = -math.inf
-        #: Telemetry callback: called with each message of TELEMETRY as it arrives.
-        self.on_telemetry: Callable[[str, Any], None] | None = None
+        #: Telemetry callback: (name, message, the kernel's arrival time of its datagram in s
+        #: since the epoch, or None) for each message of TELEMETRY as it is read.
+        self.on_telemetry: Callable[[str, Any, float | None], None] | None = None
+        self.arrival: DatagramArrival | None = None
         #: True ends any wait at once (SIGINT/SIGTERM of the bridge while it waits).
         self.stop_requested: Callable[[], bool] = lambda: False
 
@@ -178,6 +181,7 @@ class ArduSubLink:
         """Open the connection and send our first HEARTBEAT (a udpout peer learns us)."""
         s = self.settings
         self.conn = connect(s.url, s.gcs_system_id, s.gcs_component_id)
+        self.arrival = DatagramArrival.attach(self.conn)
         self.opened_s = self.clock()
         self.service()
 
@@ -242,7 +246,7 @@ class ArduSubLink:
         if kind in TELEMETRY:
             v.latest[kind] = msg
             if self.on_telemetry is not None:
-                self.on_telemetry(kind, msg)
+                self.on_telemetry(kind, msg, self.arrival.last_s if self.arrival else None)
 
     def _wait(self, match: Callable[[Any], bool], timeout_s: float,
               interruptible: bool = False) -> Any:

@@ -11,11 +11,13 @@ it, not when it was read::
     stamper = TelemetryStamper()
     stamp_s = stamper.stamp_s('RAW_IMU', msg, arrival_s)   # node clock (s)
 
-SYS_STATUS has no time: stamped at arrival. While the two clocks visibly run at different
-rates (a twin on wall time beside a simulator's ``/clock``), every message is stamped at
-arrival and counted, never with a wrong device time. TIMESYNC is not used: the envelope gives
-the offset plus the link's smallest one-way delay (sub-millisecond on a companion computer's
-loopback or Ethernet), which is the time the data left the autopilot.
+SYS_STATUS has no time: stamped at arrival. A stamp is never later than the arrival (nothing
+is sent after it arrived). While the two clocks visibly run at different rates (a twin on wall
+time beside a simulator's ``/clock``), every message is stamped at arrival and counted, never
+with a wrong device time; a node on a simulated clock (``use_sim_time``) asks for that from the
+start (``device_time=False``): the autopilot's clock never runs on it. TIMESYNC is not used:
+the envelope gives the offset plus the link's smallest one-way delay (sub-millisecond on a
+companion computer's loopback or Ethernet), which is the time the data left the autopilot.
 """
 
 from __future__ import annotations
@@ -40,8 +42,10 @@ class TelemetryStamper:
     """Stamps of ArduSub's telemetry on the node clock, from the autopilot's boot clock."""
 
     def __init__(self, window_s: float = WINDOW_S, bucket_s: float = BUCKET_S,
-                 reset_s: float = RESET_S) -> None:
+                 reset_s: float = RESET_S, device_time: bool = True) -> None:
         self.clock = DeviceClockEstimator(window_s, bucket_s, reset_s)
+        #: False: every message at its arrival (a node on a simulated clock).
+        self.device_time = device_time
         #: Timed messages stamped at their arrival (the clocks' rates differ).
         self.stamped_at_arrival = 0
 
@@ -53,10 +57,10 @@ class TelemetryStamper:
         device_s = device_time(msg)
         self.clock.add(device_s, arrival_s)
         local_s = self.clock.to_local(device_s) if self.clock.rates_agree else None
-        if local_s is None:
+        if local_s is None or not self.device_time:
             self.stamped_at_arrival += 1
             return arrival_s
-        return local_s
+        return min(local_s, arrival_s)
 
     def report(self) -> dict[str, object]:
         """The clock estimate and the count stamped at arrival, for /diagnostics."""
