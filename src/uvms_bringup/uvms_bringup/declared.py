@@ -43,7 +43,8 @@ from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
 #: 200-214).
 CHECK_DOMAIN_ID = 232
 
-_TYPE_NAMES = {
+#: Parameter types as a scenario or parameter file writes them (in error messages).
+TYPE_NAMES = {
     Parameter.Type.BOOL: 'bool',
     Parameter.Type.INTEGER: 'int',
     Parameter.Type.DOUBLE: 'float (write a decimal point, e.g. 1.0e+4)',
@@ -161,7 +162,7 @@ def _check_override(
     value = as_declared_type(declared_type, value)
     given_type = Parameter(name, value=value).type_
     if declared_type != given_type:
-        expected = _TYPE_NAMES.get(declared_type, declared_type.name)
+        expected = TYPE_NAMES.get(declared_type, declared_type.name)
         msg = (f'{scenario.path}: key {key!r}: expected {expected}, got '
                f'{type(value).__name__} {value!r}')
         raise ScenarioError(msg)

@@ -19,6 +19,7 @@ from uvms_common.stop_event import StopEvent
 
 if TYPE_CHECKING:
     from uvms_bringup.graph import Graph
+    from uvms_bringup.scenario import Scenario
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -101,6 +102,16 @@ def _port(text: str) -> int:
     return value
 
 
+def _add_params_file_argument(parser: argparse.ArgumentParser) -> None:
+    """``--params-file FILE`` (repeatable) of run and launch, as ROS's ``--params-file``."""
+    parser.add_argument(
+        '--params-file', action='append', default=[], metavar='FILE',
+        help='a ROS 2 parameter file (node_name: ros__parameters: ..., /** and /**/node '
+             'wildcards) applied to the nodes over the scenario; repeatable, later files '
+             'win; every name is checked against what the nodes declare '
+             '(e.g. config/tunes/*/gains.yaml; docs/running.md)')
+
+
 def _add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
     """``--foxglove [PORT]`` and ``--foxglove-host HOST`` of run and launch."""
     from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
@@ -153,6 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help=ROBOT_HELP)
     run.add_argument('--quiet', '-q', action='store_true',
                      help='no progress bar, only warnings, errors and the summary line')
+    _add_params_file_argument(run)
     _add_foxglove_arguments(run)
     launch = sub.add_parser(
         'launch', help="run the graph, one process per node, in real time for the scenario's "
@@ -184,6 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     launch.add_argument('--robot', metavar='NAME',
                         help=ROBOT_HELP)
     launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
+    _add_params_file_argument(launch)
     launch.add_argument(
         '--hardware', metavar='twin|FILE',
         help='drive the hardware bridges (ArduSub, DVL, Alpha 5, Net F/T) named by a hardware '
@@ -322,6 +335,7 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             scenario = scenario.with_changes(duration_s=duration)
             if args.duration is None:
                 duration = scenario.duration_s
+        scenario = _with_params_files(scenario, args.params_file)
         hardware = None
         if args.hardware is not None:
             from uvms_bringup.hardware_plan import hardware_file_path, load_hardware_plan
@@ -362,6 +376,7 @@ def _run_in_process(
                                              seed=getattr(args, 'seed', None))
             warning = short_duration_warning(scenario, scenario.duration_s)
         duration = args.duration if scenario is None else scenario.duration_s
+        scenario = _with_params_files(scenario, args.params_file)
         _check_robot(args.robot or (scenario.robot if scenario is not None else None))
         if args.quiet:
             _quiet_logs()
@@ -376,6 +391,21 @@ def _run_in_process(
     if warning:  # after the scenario's keys were checked: a typo's error comes alone
         print(f'uvms {command}: warning: {warning}', file=sys.stderr)
     return _run_graph_and_report(args, graph, mode, stop, progress)
+
+
+def _with_params_files(scenario: Scenario | None, files: Sequence[str]) -> Scenario | None:
+    """The scenario with the ``--params-file`` files' parameters over its own.
+
+    Raises:
+        ScenarioError: A file, a section or a name the nodes do not take (named).
+    """
+    if not files:
+        return scenario
+    from uvms_bringup.launch_helpers import graph_nodes, uses_estimator
+    from uvms_bringup.params_files import apply_params_files
+
+    specs = graph_nodes(record=False, estimator=uses_estimator(scenario))
+    return apply_params_files(scenario, files, specs)
 
 
 def _run_graph_and_report(
