@@ -105,7 +105,10 @@ class TwinsNode(Node):
         host, port = ardusub_listen_address(str(v['ardusub_bridge.connection']))
         self.ardusub = ArduSubTwin(port=port, host=host)
         host, port = parse_host_port(str(v['dvl_bridge.connection']), 16171)
-        self.dvl = DvlTwin(host=host, port=port, rate_hz=float(v['dvl_idle_rate_hz']))
+        # The DVL's clock is the plant's (as a real one is NTP-synchronised to the vehicle's):
+        # its time_of_validity is when the plant measured, whatever the real-time factor.
+        self.dvl = DvlTwin(host=host, port=port, rate_hz=float(v['dvl_idle_rate_hz']),
+                           clock=lambda: self.get_clock().now().nanoseconds * 1e-9)
         arm = load_alpha5(robot)
         link = parse_connection(str(v['alpha5_bridge.connection']), 6789,
                                 'alpha5_bridge.connection')
@@ -221,8 +224,9 @@ class TwinsNode(Node):
         v = msg.twist.twist.linear
         self._last_dvl_s = self._device_clock.now_s()
         # The simulated reading's sigma as the figure of merit (the bridge's variance: fom^2).
+        stamp = msg.header.stamp
         self.dvl.report((v.x, v.y, v.z), True, math.sqrt(msg.twist.covariance[0]),
-                        self._altitude_m)
+                        self._altitude_m, time_of_validity_s=stamp.sec + stamp.nanosec * 1e-9)
 
     def _on_tick(self) -> None:
         if self._device_clock.now_s() - self._last_dvl_s > self._dvl_lost_s:
