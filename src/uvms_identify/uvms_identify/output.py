@@ -138,7 +138,9 @@ def write_figures(result: Identification, out: Path) -> list[Path]:
         axes[0, 0].legend(fontsize=8)
         figure.suptitle(f'{series.source.name}: held-out part, velocity predicted from its start')
         figure.tight_layout()
-        path = out / f'{series.source.stem}_velocity.png'
+        stem = f'{series.source.stem}_velocity'
+        count = sum(p.stem.startswith(stem) for p in paths)
+        path = out / (f'{stem}.png' if count == 0 else f'{stem}_{count + 1}.png')
         figure.savefig(path, dpi=90)
         plt.close(figure)
         paths.append(path)
@@ -195,7 +197,8 @@ def write_report(result: Identification, out: Path, figures: list[Path]) -> Path
     windows = ', '.join(f'{count} windows of {h:g} s' for h, count in result.windows.items())
     lines += ['', f'Held-out errors: RMS of the velocity error at the horizon, predicted from '
               f'the measured velocity with the recorded thrusts, attitude and arm ({windows}, '
-              'the last 30 % of each recording).', '', '## Figures', '']
+              'the last 30 % of each recording; each axis over the recordings that excite it '
+              'most, all recordings for an axis none excites most).', '', '## Figures', '']
     lines += [f'![{p.stem}]({p.name})' for p in figures]
     path = out / 'report.md'
     path.write_text('\n'.join(lines) + '\n', encoding='utf-8')

@@ -42,6 +42,8 @@ GROUND_TRUTH = ('/uvms/odometry', '/uvms/contact')
 MIN_DURATION_S = 5.0
 MIN_SPEED = 0.01  # m/s or rad/s: below it on every axis the vehicle did not move
 MIN_THRUST_STD_N = 0.1  # N: a thrust that varies less excites nothing
+MAX_GAP_S = 0.3  # s: the velocity topic silent longer is a gap (a DVL without bottom lock)
+MIN_SEGMENT_S = 2.0  # s: shorter stretches between gaps are left out
 
 
 @dataclass
@@ -58,6 +60,8 @@ class Series:
         tau: Thrust wrench in base_link_frd (N, 6) (N, N m).
         thrusts: The thrusts (N, p) (N).
         depth_m: Depth (N,) (m), NaN without a depth topic.
+        valid: Where the velocity is measured (N,): False within the smoothing window of a
+            gap of the velocity topic (a DVL without bottom lock).
     """
 
     source: Path
@@ -72,12 +76,13 @@ class Series:
     tau: FloatArray
     thrusts: FloatArray
     depth_m: FloatArray
+    valid: NDArray[np.bool_]
 
     def window(self, mask: NDArray[np.bool_]) -> Series:
         """The samples where ``mask`` holds."""
         return Series(self.source, *(getattr(self, f)[mask] for f in (
             't_s', 'nu', 'nu_dot', 'rpy', 'gravity_body', 'joints', 'joint_rates',
-            'joint_accelerations', 'tau', 'thrusts', 'depth_m')))
+            'joint_accelerations', 'tau', 'thrusts', 'depth_m', 'valid')))
 
 
 def _stamp(message: object) -> float:
@@ -171,6 +176,7 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     imu_t, imu = series['/imu']
     rotations = quaternion_to_matrix(resample(imu_t, imu[:, :4], grid))
     rates = resample(imu_t, imu[:, 4:], grid)
+    velocity_t = series[VELOCITY_TOPICS[velocity][0]][0]
     if velocity == 'dvl':
         dvl_t, dvl = series['/dvl']
         rates_at_dvl = resample(imu_t, imu[:, 4:], dvl_t)
@@ -195,10 +201,16 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     depth = (resample(*series['/depth'], grid)[:, 0] if '/depth' in series
              else np.full(grid.size, np.nan))
     trim = round(window_s / dt)
+    # A gap of the velocity topic (no bottom lock) spoils the smoothing a window around it.
+    nearest = np.minimum(np.abs(grid - velocity_t[np.clip(
+        np.searchsorted(velocity_t, grid), 0, velocity_t.size - 1)]), np.abs(grid - velocity_t[
+            np.clip(np.searchsorted(velocity_t, grid) - 1, 0, velocity_t.size - 1)]))
+    gap = nearest > MAX_GAP_S
+    valid = ~(np.convolve(gap.astype(float), np.ones(2 * trim + 1), mode='same') > 0.0)
     keep = slice(trim, grid.size - trim)
     result = Series(path, grid - grid[0], nu, nu_dot, euler_zyx(rotations),
                     rotations[:, 2, :], joints, joint_rates, joint_accelerations,
-                    thrusts @ robot.thrust_matrix.T, thrusts, depth).window(
+                    thrusts @ robot.thrust_matrix.T, thrusts, depth, valid).window(
                         np.isin(np.arange(grid.size), np.arange(grid.size)[keep]))
     if float(np.abs(result.nu).max()) < MIN_SPEED:
         raise IdentifyError(f'{path}: no excitation: the vehicle never moved faster than '
@@ -209,3 +221,15 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
                             f'{MIN_THRUST_STD_N} N (standard deviation); run the experiments '
                             'of `uvms identify plan`')
     return result
+
+
+def segments(series: Series, min_length_s: float = MIN_SEGMENT_S) -> list[Series]:
+    """The contiguous stretches of ``series`` where the velocity is measured."""
+    edges = np.flatnonzero(np.diff(np.r_[0, series.valid.astype(int), 0]))
+    parts = []
+    for begin, end in zip(edges[::2], edges[1::2], strict=True):
+        if end - begin >= 3 and series.t_s[end - 1] - series.t_s[begin] >= min_length_s:
+            mask = np.zeros(series.t_s.size, dtype=bool)
+            mask[begin:end] = True
+            parts.append(series.window(mask))
+    return parts
