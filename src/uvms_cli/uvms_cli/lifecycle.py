@@ -1,7 +1,8 @@
 """``uvms lifecycle NODE ACTION``: a managed node's state, and its transitions, from a shell.
 
-The controller and the thruster allocator are managed (lifecycle) nodes. This command calls
-their real lifecycle services, ``/<ns>/<node>/get_state`` (lifecycle_msgs/srv/GetState) and
+The managed (lifecycle) nodes are ``MANAGED_NODES``: the controller, the thruster
+allocator, the estimator and the four hardware bridges. This command calls their real
+lifecycle services, ``/<ns>/<node>/get_state`` (lifecycle_msgs/srv/GetState) and
 ``/<ns>/<node>/change_state`` (lifecycle_msgs/srv/ChangeState), as ``ros2 lifecycle`` would
 without a ROS install. ``reset`` is deactivate then activate: it clears the controller's
 safe hold (docs/interfaces.md, "Safety")::
@@ -29,6 +30,10 @@ EXIT_INTERRUPTED = 130
 #: Transitions by name, in the order ``reset`` and the help list them.
 TRANSITIONS = ('configure', 'activate', 'deactivate', 'cleanup')
 ACTIONS = ('get', *TRANSITIONS, 'reset')
+#: Every managed (lifecycle) node of the graph: the loop nodes, the estimator
+#: (``state_source: estimate``) and the hardware bridges (``--hardware``).
+MANAGED_NODES = ('controller', 'thruster_allocator', 'estimator', 'ardusub_bridge',
+                 'dvl_bridge', 'alpha5_bridge', 'netft_bridge')
 #: The command that clears a latched safe hold (named by the controller's refusal and log).
 RESET_COMMAND = 'uvms lifecycle controller reset'
 
@@ -47,7 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog='exit status: 0 done; 1 no answer within --timeout, or the node refused the '
                'transition; 2 bad usage; 130 interrupted.')
     parser.add_argument('node', metavar='NODE',
-                        help='node name in the namespace: controller or thruster_allocator')
+                        help='node name in the namespace, a managed node: '
+                             f'{", ".join(MANAGED_NODES)} (the last four with --hardware)')
     parser.add_argument('action', choices=ACTIONS,
                         help='get the state, make one transition, or reset (deactivate, '
                              'activate)')
