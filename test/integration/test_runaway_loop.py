@@ -134,7 +134,7 @@ def test_a_spinning_loop_that_ignores_sigxcpu_is_killed_at_the_hard_limit(
     spinning = out.first('[spinner-2] spinning')
     reported = err.first("node 'spinner' (spinner-2) stopped: killed by SIGKILL: real-time "
                          f'loop ran {LOOP_RTTIME_S[1]:g} s without blocking '
-                         "(RLIMIT_RTTIME's hard limit)")
+                         "(RLIMIT_RTTIME's hard limit); stopped the other nodes")
     assert spinning is not None and reported is not None, out.text() + err.text()
     assert reported - spinning < STOPPED_WITHIN_S
     assert status == EXIT_FAILURE

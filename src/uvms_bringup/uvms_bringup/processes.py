@@ -137,19 +137,21 @@ def describe_status(status: int) -> str:
 def end_line(process: NodeProcess) -> str:
     """How a node's process ended, after ``node 'NAME' ``: ``exited: status 1``, ...
 
-    A real-time process ended by SIGXCPU, or by a SIGKILL the launcher did not send, ran past
-    its runaway guard (``RLIMIT_RTTIME``): the kernel's soft and hard limits.
+    A real-time process ended by SIGXCPU ran past its runaway guard's soft limit
+    (``RLIMIT_RTTIME``). One ended by a SIGKILL the launcher did not send ran past the hard
+    limit only if it had survived a SIGXCPU first, which the kernel marks by raising the soft
+    limit by 1 s, up to the hard one: otherwise the SIGKILL came from elsewhere (``kill -9``,
+    the out-of-memory killer) and is said as it is.
     """
     status = process.status or 0
     limit = process.rt_time_limit_s
     if process.plan.rt_priority and status == -signal.SIGXCPU:
         ran = f'{limit[0]:g} s ' if limit else ''
         return f'stopped: real-time loop ran {ran}without blocking (RLIMIT_RTTIME)'
-    if (process.plan.rt_priority and status == -signal.SIGKILL
-            and signal.SIGKILL not in process.signals_sent):
-        ran = f'{limit[1]:g} s ' if limit else ''
-        return (f'stopped: killed by SIGKILL: real-time loop ran {ran}without blocking '
-                "(RLIMIT_RTTIME's hard limit), or the out-of-memory killer")
+    if (process.plan.rt_priority and status == -signal.SIGKILL and limit is not None
+            and limit[0] >= limit[1] and signal.SIGKILL not in process.signals_sent):
+        return (f'stopped: killed by SIGKILL: real-time loop ran {limit[1]:g} s without '
+                "blocking (RLIMIT_RTTIME's hard limit)")
     return f'exited: {describe_status(status)}'
 
 

@@ -25,21 +25,22 @@ def test_sigxcpu_names_the_loop_that_ran_without_blocking() -> None:
         'stopped: real-time loop ran 2 s without blocking (RLIMIT_RTTIME)')
 
 
-def test_a_sigkill_the_launcher_did_not_send_names_the_hard_limit() -> None:
-    """SIGKILL not sent by the launcher: the hard limit, or the out-of-memory killer."""
-    assert end_line(ended(-signal.SIGKILL, limit=(30.0, 31.0))) == (
+def test_a_sigkill_after_a_survived_sigxcpu_names_the_hard_limit() -> None:
+    """SIGKILL once the kernel raised the soft limit to the hard one: the hard limit."""
+    assert end_line(ended(-signal.SIGKILL, limit=(31.0, 31.0))) == (
         "stopped: killed by SIGKILL: real-time loop ran 31 s without blocking (RLIMIT_RTTIME's "
-        'hard limit), or the out-of-memory killer')
+        'hard limit)')
 
 
 @pytest.mark.parametrize(('process', 'line'), [
     (ended(-signal.SIGKILL, sent=(signal.SIGINT, signal.SIGTERM, signal.SIGKILL)),
      'exited: killed by SIGKILL'),
     (ended(-signal.SIGKILL, rt_priority=0, limit=None), 'exited: killed by SIGKILL'),
+    (ended(-signal.SIGKILL), 'exited: killed by SIGKILL'),  # kill -9: no SIGXCPU before
     (ended(1), 'exited: status 1'),
     (ended(-signal.SIGXCPU, limit=None),
      'stopped: real-time loop ran without blocking (RLIMIT_RTTIME)'),
 ])
 def test_other_ends_are_worded_as_before(process: NodeProcess, line: str) -> None:
-    """The launcher's own SIGKILL, a normal process, an error status: as before."""
+    """The launcher's own SIGKILL, kill -9, a normal process, an error status: as before."""
     assert end_line(process) == line
