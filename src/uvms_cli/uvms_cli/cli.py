@@ -1,4 +1,4 @@
-"""The ``uvms`` command: run, launch, replay, plot, report, sweep, tune, task and doctor.
+"""The ``uvms`` command: run, launch, replay, plot, report, sweep, tune, task, param, doctor.
 
 Exit status: 0 success, 1 the run or the tool failed, 2 bad usage or a bad scenario file,
 130 interrupted (Ctrl-C). User errors are one line on stderr, never a traceback.
@@ -52,6 +52,8 @@ DELEGATED = {
                                               'hardware check twin|FILE), changing nothing'),
     'lifecycle': ('uvms_cli.lifecycle', "get or change a managed node's lifecycle state "
                                         '(reset: deactivate + activate, clears a safe hold)'),
+    'param': ('uvms_cli.param', "list, get or set a running node's parameters (as ros2 "
+                                'param)'),
     'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '
                                       'messages'),
 }
