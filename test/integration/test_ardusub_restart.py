@@ -206,3 +206,39 @@ def test_the_restore_ends_within_its_budget_when_nothing_answers_under_load(
     assert elapsed_s <= budget_s + 0.3
     assert budget_s + 0.3 + SPIN_TURN_S + TEARDOWN_GRACE_S < SIGTERM_TIMEOUT_S
     assert len(problems) == 8 and all('not read back' in p for p in problems)
+
+
+def test_a_sigint_with_nothing_answering_exits_before_the_launchers_sigterm(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Deaf vehicle, 2 busy loops: SIGINT to exit < 5 s; the journal stays, restore undoes it."""
+    with ArduSubTwin() as twin:
+        process = _bridge_process(twin, tmp_path)
+        try:
+            deadline = time.monotonic() + 30.0
+            while not (twin.armed and functions(twin) == RCIN):
+                assert process.poll() is None, process.communicate()[0]
+                assert time.monotonic() < deadline, 'the bridge did not activate'
+                time.sleep(0.05)
+            original = twin._handle
+
+            def deaf(msg: Any, now_s: float) -> None:
+                if msg.get_type() not in ('PARAM_SET', 'COMMAND_LONG'):
+                    original(msg, now_s)
+
+            twin._handle = deaf  # type: ignore[method-assign]
+            with busy_loops(2):
+                start = time.monotonic()
+                process.send_signal(signal.SIGINT)
+                output, _ = process.communicate(timeout=SIGTERM_TIMEOUT_S + 10.0)
+                stopped_s = time.monotonic() - start
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.communicate()
+        print(f'SIGINT to exit with nothing answering: {stopped_s:.2f} s')
+        assert process.returncode == 0, output
+        assert stopped_s < SIGTERM_TIMEOUT_S, output
+        assert 'not read back' in output and len(list(tmp_path.glob('*.json'))) == 1
+        twin._handle = original  # type: ignore[method-assign]
+        assert restore(twin.url, tmp_path) == 0, capsys.readouterr().out
+        assert functions(twin) == MOTORS and not list(tmp_path.glob('*.json'))
