@@ -156,7 +156,11 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
         raise IdentifyError(f'{path}: {exc}') from exc
 
     def arrays(suffix: str) -> tuple[FloatArray, FloatArray]:
-        data = rows[suffix]
+        # Rows of another length (a message of another robot on the same topic) are left out.
+        lengths = [len(row[1]) for row in rows[suffix]]
+        usual = max(set(lengths), key=lengths.count)
+        data = [row for row, length in zip(rows[suffix], lengths, strict=True)
+                if length == usual]
         t = np.array([row[0] for row in data])
         values = np.array([row[1] for row in data], float)
         order = np.argsort(t, kind='stable')
