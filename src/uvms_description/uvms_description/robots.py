@@ -29,6 +29,10 @@ START_PREFIX = 'initial.'
 PARAMETER_FILES = ('thrusters.yaml', 'sensor.yaml', 'controller.yaml', 'navigation.yaml',
                    START_FILE)
 """The robot's ROS 2 parameter files, in the order their values are merged."""
+DEVICE_TIMING_FILE = 'device_timing.yaml'
+"""Optional: the robot's device timing (the simulator's ``devices.*``); none: ideal devices."""
+OPTIONAL_PARAMETER_FILES = (DEVICE_TIMING_FILE,)
+"""Parameter files a robot folder may have, merged after ``PARAMETER_FILES`` when present."""
 _NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _SECTION = re.compile(r'^(/\*\*|/\*\*/(?P<node>[A-Za-z_][A-Za-z0-9_]*))$')
 
@@ -47,7 +51,7 @@ class RobotFiles:
         urdf: ``robot.urdf`` or ``robot.urdf.xacro``.
         hydrodynamics: ``hydrodynamics.yaml``.
         parameter_files: ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``,
-            ``navigation.yaml``, ``start.yaml``.
+            ``navigation.yaml``, ``start.yaml``, then ``device_timing.yaml`` if present.
     """
 
     name: str
@@ -108,8 +112,9 @@ def robot_files(name: str = DEFAULT_ROBOT, directory: Path | None = None) -> Rob
         if not (folder / file).is_file():
             msg = f'{folder / file}: missing file of robot {name!r} (docs/robots.md)'
             raise RobotFolderError(msg)
+    optional = tuple(folder / f for f in OPTIONAL_PARAMETER_FILES if (folder / f).is_file())
     return RobotFiles(name, folder, urdfs[0], folder / HYDRODYNAMICS_FILE,
-                      tuple(folder / f for f in PARAMETER_FILES))
+                      (*(folder / f for f in PARAMETER_FILES), *optional))
 
 
 def urdf_text(path: Path) -> str:
@@ -184,7 +189,8 @@ def robot_parameters(
     """The values a node takes as defaults from robot ``name``'s parameter files.
 
     Every value of ``thrusters.yaml``, ``sensor.yaml``, ``controller.yaml``,
-    ``navigation.yaml`` and ``start.yaml`` for ``node`` (flat dotted names). The URDF and
+    ``navigation.yaml``, ``start.yaml`` and ``device_timing.yaml`` (if present) for ``node``
+    (flat dotted names). The URDF and
     hydrodynamics paths are not among them (a recording would carry this machine's paths):
     ``with_description_paths`` fills them in.
 

@@ -23,6 +23,8 @@ robot_localization consumes them:
 
 from __future__ import annotations
 
+from collections import deque
+
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped, TwistWithCovarianceStamped
@@ -48,6 +50,7 @@ from uvms_sim.conversions import (
     quaternion_from_rpy,
     time_from_ns,
 )
+from uvms_sim.device_timing import DeviceTiming
 from uvms_sim.raw_conversions import UNUSED_VARIANCE, RawNavigationMessages
 
 __all__ = ['UNUSED_VARIANCE', 'NavigationTopics', 'depth_message', 'dvl_message', 'dvl_mount',
@@ -121,12 +124,23 @@ class NavigationTopics:
     """Samples the navigation sensors at each published state and publishes what is due.
 
     The truth's linear acceleration is the backward difference of the NED velocity between
-    published states (one publish period late, 2 ms at 500 Hz).
+    published states (one publish period late, 2 ms at 500 Hz). With device timing
+    (``devices.imu|dvl|depth.latency_s``) a reading goes out with the first state at or
+    after its time plus its latency, stamped with its own time (as the DVL's
+    time_of_validity); the sensors' rates are navigation's.
     """
 
-    def __init__(self, node: Node, params: NavigationParameters, seed: int) -> None:
+    def __init__(self, node: Node, params: NavigationParameters, seed: int,
+                 devices: DeviceTiming | None = None) -> None:
         self.params = params
         self.sensors = NavigationSensors(params, seed)
+        timing = devices if devices is not None else DeviceTiming({})
+        self._rng = np.random.default_rng(seed + 3)
+        self._latency = {kind: (round(timing[name].latency_s * 1e9),
+                                round(timing[name].jitter_s * 1e9))
+                         for kind, name in ((ImuReading, 'imu'), (DvlReading, 'dvl'),
+                                            (DepthReading, 'depth'))}
+        self._delayed: deque[tuple[int, Reading]] = deque()
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._imu = node.create_publisher(Imu, 'imu', qos)
         self._dvl = node.create_publisher(TwistWithCovarianceStamped, 'dvl', qos)
@@ -152,7 +166,19 @@ class NavigationTopics:
         self._last = (t_ns, v_ned)
         truth = NavigationTruth.of(q[0:3], q[3:6], w[0:3], w[3:6], a_ned)
         for reading in self.sensors.sample(t_ns, truth):
-            self._send(reading)
+            latency_ns, jitter_ns = self._latency.get(type(reading), (0, 0))
+            if latency_ns == 0:
+                self._send(reading)
+                continue
+            if jitter_ns:
+                latency_ns += round(float(self._rng.uniform(-1.0, 1.0)) * jitter_ns)
+            self._delayed.append((reading.t_ns + latency_ns, reading))
+        if self._delayed:
+            due = sorted((item for item in self._delayed if item[0] <= t_ns),
+                         key=lambda item: item[1].t_ns)
+            self._delayed = deque(item for item in self._delayed if item[0] > t_ns)
+            for _, reading in due:
+                self._send(reading)
 
     def republish_imu(self) -> None:
         """Send the last IMU sample again if a subscriber joined since it went out.

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from uvms_sim.device_timing import SENSORS, DeviceTiming
 from uvms_sim.errors import SimParameterError
 from uvms_sim.startup import StartupSettings
 
@@ -185,6 +186,50 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ),
 )
 
+_SIGNAL_TEXT = {
+    'joint_states': "the arm joints' positions, velocities and efforts (joint_states)",
+    'wrench': 'the wrist sensor (wrench)',
+    'imu': 'the IMU (imu; its rate is navigation.imu.rate_hz)',
+    'dvl': "the DVL (dvl; its rate is navigation.dvl's, by altitude)",
+    'depth': 'the depth sensor (depth; its rate is navigation.depth.rate_hz)',
+}
+
+
+def _device_specs() -> tuple[ParameterSpec, ...]:
+    """``devices.*``: the robot's device timing (its device_timing.yaml), all ideal by default."""
+    specs = [ParameterSpec(
+        'devices.ideal', False,
+        "Ideal devices: every sensor with every state and undelayed, every command applied "
+        "at once (the paper's claims), whatever the robot's device_timing.yaml declares; "
+        'false keeps its device timing (docs/robots.md, "Device timing").',
+    )]
+    for name in SENSORS:
+        if name in ('joint_states', 'wrench'):
+            specs.append(ParameterSpec(
+                f'devices.{name}.rate_hz', 0.0,
+                f'Rate at which {_SIGNAL_TEXT[name]} is sampled (Hz), held between samples; '
+                '0: with every state.', 0.0, 100000.0))
+        specs.append(ParameterSpec(
+            f'devices.{name}.latency_s', 0.0,
+            f'Latency of {_SIGNAL_TEXT[name]} from the sample to its delivery (s), delivered '
+            'with the first state at or after it; 0: none.', 0.0, 10.0))
+        specs.append(ParameterSpec(
+            f'devices.{name}.jitter_s', 0.0,
+            f'Half width of the uniform spread of devices.{name}.latency_s (s), at most it.',
+            0.0, 10.0))
+    specs.append(ParameterSpec(
+        'devices.thrusts.rate_hz', 0.0,
+        'Rate at which the vehicle applies thrust commands (Hz), held in between (ArduSub: '
+        'its 50 Hz RC loop); 0: each command at once.', 0.0, 100000.0))
+    specs.append(ParameterSpec(
+        'devices.arm_commands.rate_hz', 0.0,
+        "Rate at which the arm applies joint torque commands (Hz), held in between (the "
+        "arm bus's command slots); 0: each command at once.", 0.0, 100000.0))
+    return tuple(specs)
+
+
+SIMULATOR_PARAMETERS += _device_specs()
+
 SPECS_BY_NAME: dict[str, ParameterSpec] = {spec.name: spec for spec in SIMULATOR_PARAMETERS}
 
 
@@ -209,6 +254,7 @@ class SimulatorSettings:
     joint_positions: np.ndarray
     ee_position: np.ndarray
     startup: StartupSettings
+    devices: DeviceTiming
 
     @property
     def physics_dt_s(self) -> float:
@@ -286,6 +332,7 @@ class SimulatorSettings:
                                     round(float(checked['startup.timeout_s']) * 1e9),
                                     tuple(checked['startup.nodes']),
                                     str(checked['startup.recorder'])),
+            devices=DeviceTiming.from_values(checked),
         )
 
 

@@ -37,7 +37,7 @@ PAPER_START = {
 
 def _model(name: str) -> UvmsModel:
     flat = {key: item.value for key, item in robot_parameters(name, 'simulator').items()
-            if not key.startswith(('initial.', 'navigation.'))}
+            if not key.startswith(('initial.', 'navigation.', 'devices.'))}
     return UvmsModel(UvmsParameters.from_flat_dict(with_description_paths(flat, name)))
 
 
