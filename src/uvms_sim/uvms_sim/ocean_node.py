@@ -11,6 +11,7 @@ first set, so that a run without a current records exactly what it recorded befo
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from geometry_msgs.msg import TwistStamped
@@ -18,11 +19,22 @@ from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParam
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
+from uvms_model.ocean_current import CurrentParameters
 
 from uvms_sim import conversions
 from uvms_sim.errors import SimParameterError
 from uvms_sim.ocean import OCEAN_PARAMETERS, PREFIX, current_parameters
 from uvms_sim.plant import Plant
+
+
+def describe_current(params: CurrentParameters) -> str:
+    """The console line of the current in force: speed, where it flows, its variation."""
+    if not params.enabled:
+        return 'ocean current: off (still water)'
+    toward = math.degrees(params.direction_rad) % 360.0
+    return (f'ocean current on: {params.mean_speed_m_s:g} m/s toward {toward:.0f} deg '
+            f'(map_ned, 0 = north, 90 = east; {params.direction_rad:g} rad), '
+            f'sigma {params.sigma_m_s:g} m/s, T {params.time_constant_s:g} s')
 
 
 class OceanCurrentInterface:
@@ -48,6 +60,8 @@ class OceanCurrentInterface:
             values[spec.name] = node.declare_parameter(spec.name, spec.default, descriptor).value
         plant.set_current(current_parameters(values))
         self._publishing = plant.current_parameters.enabled
+        if self._publishing:  # a scenario's current: said once, as a change at run time is
+            node.get_logger().info(describe_current(plant.current_parameters))
         self._publisher = node.create_publisher(TwistStamped, 'ocean/current', qos)
         node.add_on_set_parameters_callback(self._on_set)
 
@@ -66,9 +80,7 @@ class OceanCurrentInterface:
             return SetParametersResult(successful=False, reason=str(exc))
         self._plant.set_current(params)
         self._publishing = self._publishing or params.enabled
-        self._node.get_logger().info(
-            f'ocean current: {params.mean_speed_m_s:g} m/s toward {params.direction_rad:g} rad '
-            f'(sigma {params.sigma_m_s:g} m/s, T {params.time_constant_s:g} s)')
+        self._node.get_logger().info(describe_current(params))
         return SetParametersResult(successful=True)
 
     def publish(self, t_ns: int) -> None:

@@ -63,6 +63,11 @@ def residual_step(measured_speed: FloatArray, measured_current: FloatArray,
     return declared
 
 
+#: Time constants of the η̂ filter after a declaration when its estimate is reported as
+#: settled (5: within 1 % of a step, e^-5).
+SETTLE_TIME_CONSTANTS = 5.0
+
+
 @dataclass(frozen=True)
 class DetectionParameters:
     """Thresholds of the detector (parameters ``fault_detection.*``, docs/controller.md).
@@ -118,6 +123,13 @@ class ThrusterFaultDetector:
         self.effectiveness = np.ones(count)
         self.status = np.zeros(count, dtype=np.uint8)
         self.detected_at_s = np.full(count, np.nan)
+        #: Time of each thruster's last status change (s): its declaration, then degraded or
+        #: failed as η̂ settles, or recovered; NaN before any.
+        self.changed_at_s = np.full(count, np.nan)
+        self._status_before = np.zeros(count, dtype=np.uint8)
+        #: Whether each declared thruster's η̂ has had ``SETTLE_TIME_CONSTANTS`` time
+        #: constants since its declaration (its value then means what it says).
+        self.settled = np.zeros(count, dtype=np.bool_)
         self.speed_residual = np.zeros(count)
         self.current_residual = np.zeros(count)
         self._over_s = np.zeros(count)
@@ -130,6 +142,8 @@ class ThrusterFaultDetector:
         self.effectiveness[:] = 1.0
         self.status[:] = STATUS_OK
         self.detected_at_s[:] = np.nan
+        self.changed_at_s[:] = np.nan
+        self.settled[:] = False
         self.speed_residual[:] = 0.0
         self.current_residual[:] = 0.0
         self._over_s[:] = 0.0
@@ -157,6 +171,7 @@ class ThrusterFaultDetector:
         p = self.params
         model = self.model
         model.step(commanded, dt)
+        np.copyto(self._status_before, self.status)
         omega_model = model.omega
         if not residual_step(measured_speed, measured_current, omega_model, model.motor_current,
                              self.speed_residual, self.current_residual, self._over_s,
@@ -177,4 +192,7 @@ class ThrusterFaultDetector:
         eta[eta < p.failed_below] = 0.0
         self.effectiveness[:] = eta
         self.status[declared] = np.where(eta[declared] == 0.0, STATUS_FAILED, STATUS_DEGRADED)
+        self.changed_at_s[self.status != self._status_before] = t_s
+        self.settled[:] = declared & (
+            t_s - self.detected_at_s >= SETTLE_TIME_CONSTANTS * p.estimate_time_constant_s)
         return not np.array_equal(before, self.effectiveness)

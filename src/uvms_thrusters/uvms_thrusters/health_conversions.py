@@ -82,18 +82,32 @@ def health_change(before: tuple[Any, ...] | None, after: tuple[Any, ...],
     """The console line of a health change: (``WARN`` or ``ERROR``, text), None if none.
 
     ``before`` and ``after`` are the allocator node's health keys (rank, accommodating,
-    detector status bytes). A thruster declared degraded or failed, or recovered, is WARN; a
-    rank below 6 (the vehicle cannot produce every wrench) is ERROR, its return WARN.
+    detector status bytes). A thruster's fault declared, its estimate settled as degraded or
+    failed, or its recovery, is WARN, each at the time of that change; a rank below 6 (the
+    vehicle cannot produce every wrench) is ERROR, its return WARN.
+
+    A declaration comes before its estimate: the detector declares a fault when the ESC
+    speed stays off the model's (``fault_detection.persistence_s``), with η̂ one filter step
+    from 1 (0.98); η̂ then settles over ``estimate_time_constant_s`` and the thruster is
+    degraded, or failed once η̂ falls below ``failed_below`` (measured: a thruster switched
+    off is declared at 11.106 s and failed at 11.294 s). So the declaration line names no
+    state, and each later line its own time.
     """
     if before is None or before == after:
         return None
-    detector, names = allocator.detector, ('recovered', 'declared degraded', 'declared failed')
+    detector = allocator.detector
     old = np.zeros(0, np.uint8) if before[2] is None else np.frombuffer(before[2], np.uint8)
     new = np.zeros(0, np.uint8) if after[2] is None else np.frombuffer(after[2], np.uint8)
-    parts = [f'thruster {i} (T{i + 1}) {names[int(new[i])]}' + (
-        f' at {detector.detected_at_s[i]:.3f} s (eta_hat {detector.effectiveness[i]:.3f})'
-        if detector is not None and new[i] else '')
-        for i in np.flatnonzero(old != new)] if old.size == new.size else []
+    parts = [_status_line(detector, int(i), int(old[i]), int(new[i]))
+             for i in np.flatnonzero(old != new)] if old.size == new.size else []
+    if detector is not None and len(before) > 3 and len(after) > 3 and after[3] is not None:
+        was = (np.zeros(0, np.bool_) if before[3] is None
+               else np.frombuffer(before[3], np.bool_))
+        now = np.frombuffer(after[3], np.bool_)
+        if was.size == now.size:
+            parts += [f'thruster {i} (T{i + 1}) degraded: eta_hat settled at '
+                      f'{detector.effectiveness[i]:.3f}'
+                      for i in np.flatnonzero(now & ~was) if new.size > i and new[i] == 1]
     if not allocator.fully_actuated:
         return ERROR, '; '.join([*parts, f'rank {allocator.rank} < 6: the vehicle cannot '
                                  'produce every wrench (a running task ends ACTUATION_LOST)'])
@@ -104,6 +118,23 @@ def health_change(before: tuple[Any, ...] | None, after: tuple[Any, ...],
     accommodating = ('allocating around it' if allocator.accommodate
                      else 'accommodation off')
     return WARN, '; '.join(parts) + f' ({accommodating})'
+
+
+def _status_line(detector: Any, i: int, old: int, new: int) -> str:
+    """One thruster's status change, at its time, with η̂ where it means something."""
+    name = f'thruster {i} (T{i + 1})'
+    at = detector.changed_at_s[i] if detector is not None else float('nan')
+    when = f' at {at:.3f} s' if np.isfinite(at) else ''
+    eta = detector.effectiveness[i] if detector is not None else float('nan')
+    if new == 0:
+        return f'{name} recovered{when}'
+    if old == 0 and new == 1:
+        return (f"{name} fault declared{when}: its ESC speed left the model's; eta_hat "
+                'being estimated')
+    state = 'failed' if new == 2 else 'degraded'
+    if old == 0:
+        return f'{name} fault declared{when}: {state} (eta_hat {eta:.3f})'
+    return f'{name} {state}{when} (eta_hat {eta:.3f})'
 
 
 def on_set_fault_parameters(allocator: ThrusterAllocator | None,

@@ -361,6 +361,11 @@ class ThrusterAllocatorNode(LifecycleNode):
     def _step(self, t_ns: int, tau_b: np.ndarray, dt: float) -> None:
         assert self.core is not None
         output = self.core.step(tau_b, dt, t_ns * 1e-9)
+        for fault in self.core.injector.newly_started(t_ns * 1e-9):
+            self.get_logger().warning(
+                f'fault injected at {t_ns * 1e-9:.3f} s: {fault.describe()} (simulated: '
+                f"fault_injection.thrusters, a scenario's faults:); the allocator knows it "
+                'only from the ESC feedback')
         self._published += 1
         self._saturated += output.allocation.saturation_scale < 1.0
         thrust = output.allocation.thrust if self._desired_output else output.thrust
@@ -375,7 +380,8 @@ class ThrusterAllocatorNode(LifecycleNode):
         assert self.core is not None
         detector = self.core.detector
         key = (self.core.rank, self.core.accommodate,
-               None if detector is None else detector.status.tobytes())
+               None if detector is None else detector.status.tobytes(),
+               None if detector is None else detector.settled.tobytes())
         if self._health_gate.due(t_ns) or key != self._health_key:
             change = health_change(self._health_key, key, self.core)  # one console line
             if change is not None and change[0] == ERROR:

@@ -63,6 +63,15 @@ class ThrusterFault:
     value: float
     at_s: float
 
+    def describe(self) -> str:
+        """The fault in words: ``thruster 0 (T1) off``, ``... at efficiency 0.3``."""
+        name = f'thruster {self.index} (T{self.index + 1})'
+        what = {'off': 'off', 'efficiency': f'at efficiency {self.value:g}',
+                'stuck': f'stuck at {self.value:g} N',
+                'saturation': f'saturated at +-{self.value:g} N'}.get(
+                    self.kind, f'{self.kind} {self.value:g}')
+        return f'{name} {what}'
+
     def text(self) -> str:
         """The fault as ``parse_faults`` reads it."""
         value = '' if self.kind == 'off' else f' value={self.value!r}'
@@ -158,6 +167,14 @@ class ThrusterFaultInjector:
         self.faults = tuple(sorted(faults, key=lambda f: f.at_s))
         self.count = count
         self._demand = np.zeros(count)
+        self._started = 0
+
+    def newly_started(self, t_s: float) -> tuple[ThrusterFault, ...]:
+        """The faults that start acting at t_s and were not returned before (once each)."""
+        first = self._started
+        while self._started < len(self.faults) and self.faults[self._started].at_s <= t_s:
+            self._started += 1
+        return self.faults[first:self._started]
 
     def active(self, t_s: float) -> dict[int, ThrusterFault]:
         """Per thruster index, the fault acting at t_s (the latest started one)."""
