@@ -12,6 +12,7 @@ gdb, CI run of 2026-12-04, a test's teardown in ``destroy_node`` for minutes).
 
 import itertools
 import os
+import tempfile
 from collections.abc import Iterator
 
 import pytest
@@ -19,6 +20,9 @@ from uvms_common.ros_environment import ros_environment_defaults
 
 # Before any test creates a DDS participant; a user's own settings win (see the module).
 ros_environment_defaults()
+# The hardware bridges journal what they change on a device (uvms_hardware.device_journal):
+# the tests' journals go to a folder of the run's own, never to the user's ~/.local/state.
+os.environ.setdefault('UVMS_JOURNAL_DIR', tempfile.mkdtemp(prefix='uvms-test-journal-'))
 
 #: Domains handed to test modules in turn (1-100: their UDP ports stay below Linux's
 #: ephemeral range); 0 is left to whatever runs outside the tests. tools/run_suite.py starts

@@ -48,8 +48,10 @@ DELEGATED = {
     'tune': ('uvms_tune.cli', "tune the controller's gains by constrained Bayesian "
                               'optimization over scenarios on Ray'),
     'task': ('uvms_tasks.cli', 'send a task or mission file to the controller of a running graph'),
-    'hardware': ('uvms_cli.hardware', 'check the devices of a hardware file (uvms '
-                                              'hardware check twin|FILE), changing nothing'),
+    'hardware': ('uvms_cli.hardware', 'check the devices of a hardware file, changing nothing '
+                                      '(uvms hardware check twin|FILE); put back what a '
+                                      'crashed bridge left changed (uvms hardware restore '
+                                      'ardusub)'),
     'lifecycle': ('uvms_cli.lifecycle', "get or change a managed node's lifecycle state "
                                         '(reset: deactivate + activate, clears a safe hold)'),
     'param': ('uvms_cli.param', "list, get or set a running node's parameters (as ros2 "

@@ -103,7 +103,9 @@ class TwinsNode(Node):
         self._rho = float(ardusub['depth']['water_density_kg_m3'])
         self._surface_pa = float(ardusub['depth']['surface_pressure_pa'])
         host, port = ardusub_listen_address(str(v['ardusub_bridge.connection']))
-        self.ardusub = ArduSubTwin(port=port, host=host)
+        # The autopilot runs our watchdog script, as a deployed vehicle should (docs/hardware.md):
+        # the stand's bridge then drives the thrusters through it, changing no parameter.
+        self.ardusub = ArduSubTwin(port=port, host=host, watchdog_script=True)
         host, port = parse_host_port(str(v['dvl_bridge.connection']), 16171)
         # The DVL's clock is the plant's (as a real one is NTP-synchronised to the vehicle's):
         # its time_of_validity is when the plant measured, whatever the real-time factor.
