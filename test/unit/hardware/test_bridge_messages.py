@@ -20,7 +20,7 @@ from uvms_sim import raw_conversions as sim_raw
 NAVIGATION = {k: p.value for k, p in robot_parameters('bluerov2_alpha5', 'estimator').items()}
 NOISE = bm.ImuNoise.from_navigation(NAVIGATION)
 HARDWARE = Path(__file__).resolve().parents[3] / 'src' / 'uvms_hardware' / 'uvms_hardware'
-PURE = ['t200_curve.py', 'dvl_protocol.py', 'dvl_link.py', 'ardusub_link.py',
+PURE = ['t200_curve.py', 'dvl_protocol.py', 'dvl_link.py', 'ardusub_link.py', 'ardusub_wire.py',
         'hardware_config.py', 'twins/ardusub_twin.py', 'twins/dvl_twin.py']
 
 
