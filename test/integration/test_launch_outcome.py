@@ -112,7 +112,7 @@ def test_a_recorder_that_starts_late_still_records_from_t0(tmp_path: Path) -> No
 
     launcher = Launcher(late, env=environment(), stdout=Lines(),  # type: ignore[arg-type]
                         stderr=Lines())  # type: ignore[arg-type]
-    status = launcher_module._run(launcher, threading.Event(), 'realtime', 1.5, True, '',
+    status = launcher_module.run_launch(launcher, threading.Event(), 'realtime', 1.5, True, '',
                                   CostWatch(tmp_path / 'stats'))
     assert status == 0, ''.join(lines)[-3000:]
     firsts: dict[str, object] = {}

@@ -440,7 +440,3 @@ def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: flo
     if unclean:
         return EXIT_FAILURE
     return EXIT_MISSION_FAILED if told else EXIT_OK
-
-
-#: The former private name, still used by test/integration/test_launch_outcome.py.
-_run = run_launch
