@@ -109,6 +109,18 @@ def check_scenario_overrides(
 
 
 @contextmanager
+def _quiet_start(spec: NodeSpec, namespace: str) -> Iterator[None]:
+    """Only the warnings and errors of a throwaway node: its start-up lines are not the run's."""
+    logger = f'{namespace.strip("/").replace("/", ".")}.{spec.name}'.lstrip('.')
+    level = rclpy.logging.get_logger_level(logger)
+    rclpy.logging.set_logger_level(logger, rclpy.logging.LoggingSeverity.WARN)
+    try:
+        yield
+    finally:
+        rclpy.logging.set_logger_level(logger, level)
+
+
+@contextmanager
 def _throwaway_context() -> Iterator[Context]:
     """A context in ``CHECK_DOMAIN_ID`` whose one participant lives until the block ends."""
     context = Context()
@@ -212,7 +224,8 @@ def declared_parameters(
     declared: dict[str, dict[str, Parameter.Type]] = {}
     with _throwaway_context() as context:
         for spec in specs:
-            node = make_node(spec, {}, config, namespace, context)
+            with _quiet_start(spec, namespace):
+                node = make_node(spec, {}, config, namespace, context)
             try:
                 declared[spec.name] = {
                     name: parameter.type_
