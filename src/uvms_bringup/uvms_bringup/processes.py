@@ -29,6 +29,7 @@ from typing import IO, Protocol
 
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import STARTUP_RTTIME_S, limit_rt_time, rt_time_limit_s
+from uvms_common.stop_event import STOP_SIGNALS_BLOCKED
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED
 
 from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, RECORDER, SIMULATOR, NodeSpec
@@ -162,7 +163,11 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the child between 
 
 
 def _child_setup(rt_priority: int) -> Callable[[], None]:
-    """What the child runs between fork and exec: die with the launcher, its priority.
+    """What the child runs between fork and exec: stops held, die with the launcher, priority.
+
+    SIGINT is blocked (the mask survives exec and the ROS wheels' re-exec) until the node
+    installs its stop handlers; SIGTERM is not, so a process that never installs them still
+    ends at the launcher's SIGTERM.
 
     A loop process that starts at its SCHED_FIFO priority loads its modules and kernels
     ahead of the machine's other work, so the first simulated step comes sooner on a busy
@@ -170,6 +175,9 @@ def _child_setup(rt_priority: int) -> Callable[[], None]:
     launcher checked before), it starts at normal priority: the node asks again and warns.
     """
     def setup() -> None:  # pragma: no cover - runs in the child
+        # Held (not lost) until the node's StopEvent is installed and unblocks them: a stop
+        # during the interpreter's start then ends the node cleanly (uvms_common.stop_event).
+        signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS_BLOCKED)
         _die_with_parent()
         if rt_priority:
             try:

@@ -3,6 +3,13 @@
 A process installs its ``StopEvent`` first, so that a signal during its imports (rclpy,
 numpy and Pinocchio take most of a second) stops it cleanly instead of raising
 ``KeyboardInterrupt`` with a traceback from whatever module was loading.
+
+A process started by ``uvms launch`` starts with SIGINT blocked (``STOP_SIGNALS_BLOCKED``,
+set between fork and exec by ``uvms_bringup.processes``): a stop that arrives while its
+interpreter is still starting (the ROS wheels' ``.pth`` re-executes Python then) waits
+pending instead of failing the start with ``Fatal Python error: init_import_site``. The
+first ``StopEvent`` unblocks it once its handlers are installed, so the pending stop is
+delivered to them at once and ends the process cleanly.
 """
 
 from __future__ import annotations
@@ -14,6 +21,15 @@ from contextlib import contextmanager
 from types import FrameType
 
 _active: list[StopEvent] = []
+
+#: The signals a launched process starts with blocked, until its handlers are installed.
+STOP_SIGNALS_BLOCKED = frozenset({signal.SIGINT})
+
+
+def unblock_stop_signals() -> None:
+    """Deliver the stop signals that were held while the process started (main thread)."""
+    if hasattr(signal, 'pthread_sigmask'):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOP_SIGNALS_BLOCKED)
 
 
 class StopEvent:
@@ -28,6 +44,7 @@ class StopEvent:
             for sig in (signal.SIGINT, signal.SIGTERM):
                 self._previous[sig] = signal.signal(sig, self._on_signal)
             _active.append(self)
+            unblock_stop_signals()
 
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
         self.signal_number = signum

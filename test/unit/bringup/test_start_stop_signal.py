@@ -1,0 +1,67 @@
+"""A stop that reaches a launched node while its interpreter is still starting ends it cleanly.
+
+Issue 48: ``[mission-5] Fatal Python error: init_import_site: Failed to import the site
+module`` and ``node 'mission' exited: status 1 while stopping`` after a Ctrl-C 1.8-3.7 s
+into a launch: the launcher's SIGINT reached a child before its interpreter had imported
+``site`` (the ROS wheels' ``.pth`` re-executes Python there).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from uvms_bringup.processes import _child_setup
+
+#: A node module: waits for its stop (as run_node does), then returns.
+_NODE = """
+import time
+from uvms_common.stop_event import active_stop_event
+
+def main():
+    stop = active_stop_event()
+    while not stop.is_set():
+        time.sleep(0.01)
+"""
+
+#: A program that never installs stop handlers (sleeps).
+_NO_HANDLERS = 'import time\ntime.sleep(60)\n'
+
+
+def _start(tmp_path: Path, code: str) -> subprocess.Popen[str]:
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join([str(tmp_path), *sys.path])}
+    return subprocess.Popen([sys.executable, '-c', code], env=env, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            process_group=0, preexec_fn=_child_setup(0))
+
+
+@pytest.mark.parametrize('delay_s', [0.0, 0.02, 0.1])
+def test_a_sigint_during_the_interpreters_start_ends_the_node_with_status_0(
+        tmp_path: Path, delay_s: float) -> None:
+    """Before the fix the child exited 1 with ``init_import_site`` (or a traceback)."""
+    (tmp_path / 'stop_test_node.py').write_text(_NODE)
+    code = ('from uvms_common.node_entry import run_node_module; '
+            "run_node_module('stop_test_node')")
+    for _ in range(5):
+        child = _start(tmp_path, code)
+        time.sleep(delay_s)
+        child.send_signal(signal.SIGINT)
+        _, err = child.communicate(timeout=30)
+        assert child.returncode == 0, err
+        assert 'Fatal Python error' not in err and 'Traceback' not in err, err
+
+
+def test_a_process_that_never_installs_handlers_still_ends_at_sigterm(tmp_path: Path) -> None:
+    """SIGINT waits for handlers that never come; the launcher's SIGTERM still ends it."""
+    child = _start(tmp_path, _NO_HANDLERS)
+    time.sleep(0.5)
+    child.send_signal(signal.SIGINT)
+    with pytest.raises(subprocess.TimeoutExpired):
+        child.wait(timeout=1.0)
+    child.send_signal(signal.SIGTERM)
+    assert child.wait(timeout=10) == -signal.SIGTERM
