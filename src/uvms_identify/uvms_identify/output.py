@@ -12,7 +12,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from uvms_identify.identify import HORIZONS_S, Identification
+from uvms_identify.identify import HORIZONS_S, Identification, delayed
 from uvms_identify.known_terms import ZERO_HULL, model_with_hull, net_buoyancy_n
 from uvms_identify.predict import simulate
 from uvms_identify.regressor import (
@@ -83,6 +83,8 @@ def write_hydrodynamics(result: Identification, out: Path, figures: list[Path]) 
         '# Fit figures: ' + ', '.join(p.name for p in figures) + ' (beside report.md).',
         '# Prior (terms the data could not identify keep it): '
         f'{robot.files.hydrodynamics}',
+        f'# Thrust delay: {1000 * result.delay_s:+.0f} ms (the recorded thrust at t acts at '
+        't + delay; fitted with the terms, not a key of this file).',
         '# Per term: fitted value +- 95 % CI, or why it kept the prior:',
     ]
     for j, name in enumerate(PARAMETER_NAMES):
@@ -123,7 +125,8 @@ def write_figures(result: Identification, out: Path) -> list[Path]:
         if len(series.t_s) < 3:
             continue
         steps = len(series.t_s) - 1
-        identified = simulate(model, result.fit.theta, series, 0, steps)
+        identified = simulate(model, result.fit.theta, delayed(series, result.delay_s), 0,
+                              steps)
         current = simulate(model, result.prior, series, 0, steps)
         figure, axes = plt.subplots(3, 2, figsize=(11, 8), sharex=True)
         for axis in range(6):
@@ -157,6 +160,10 @@ def write_report(result: Identification, out: Path, figures: list[Path]) -> Path
              f'{100 * (1 - 0.3):.0f} % of each), condition number {fit.condition_number:.3g} '
              "(column-normalized). Prior and comparison: the robot folder's "
              f'{robot.files.hydrodynamics}.', '',
+             f'Thrust delay: {1000 * result.delay_s:+.0f} ms: the recorded thrusts fit best as '
+             'acting this much later (negative: earlier) than stamped; searched over '
+             '-40..+80 ms with the terms; the held-out predictions of the identified model use '
+             'it, those of the robot folder do not.', '',
              '## Terms', '',
              '| term | identified | 95 % CI | robot folder | change | status |',
              '| --- | --- | --- | --- | --- | --- |']

@@ -143,7 +143,7 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
             elif suffix == '/dvl':
                 v = msg.twist.twist.linear
                 rows[suffix].append((t, [v.x, v.y, v.z]))
-            elif suffix == '/odometry/filtered':
+            elif suffix == VELOCITY_TOPICS['estimate'][0]:
                 v, r = msg.twist.twist.linear, msg.twist.twist.angular
                 rows[suffix].append((t, [v.x, v.y, v.z, r.x, r.y, r.z]))
             elif suffix == '/joint_states':
@@ -187,7 +187,7 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
         linear = dvl @ robot.dvl_rotation.T - np.cross(rates_at_dvl, robot.dvl_position_m)
         nu_raw = np.column_stack([resample(dvl_t, linear, grid), rates])
     else:
-        est_t, est = series['/odometry/filtered']
+        est_t, est = series[VELOCITY_TOPICS['estimate'][0]]
         nu_raw = resample(est_t, est, grid)
     nu, nu_dot = smooth_and_differentiate(nu_raw, dt, window_s)
     joint_t, joint = series['/joint_states']
