@@ -56,6 +56,7 @@ def altered_robot(directory: Path) -> Path:
     return folder
 
 
+@pytest.mark.timeout(1800)  # six runs and the fit: about 10 min on 2 loaded cores
 def test_the_plan_on_another_robot_recovers_its_hull(tmp_path: Path) -> None:
     """Well-determined terms within 10 %, the 10 s prediction error halved or better."""
     folder = altered_robot(tmp_path)
