@@ -23,6 +23,15 @@ import threading
 
 from uvms_common.stop_event import StopEvent
 
+#: Set by ``run_node_module``: the process ends right after the node's ``main`` returns, so
+#: ``run_node`` leaves the middleware's teardown to the process's end (``node_main``).
+_process_ends_after_main = False
+
+
+def process_ends_after_main() -> bool:
+    """Whether this process ends as soon as the node's ``main`` returns (a node process)."""
+    return _process_ends_after_main
+
 
 def _exit_status(code: object) -> int:
     """The process status ``SystemExit(code)`` gives (None: 0; a message: printed, 1)."""
@@ -70,8 +79,10 @@ def run_node_module(module_name: str) -> None:
     with the status of ``main``'s ``sys.exit`` (``end_process``). An exception other than
     SystemExit leaves as usual, with its traceback.
     """
+    global _process_ends_after_main
     stop = StopEvent()
     status = 0
+    _process_ends_after_main = True
     try:
         module = importlib.import_module(module_name)
         if not stop.is_set():

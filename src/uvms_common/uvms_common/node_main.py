@@ -14,6 +14,16 @@ The teardown is bounded: the node's output is closed first (the recorder's MCAP 
 the middleware teardown gets ``TEARDOWN_GRACE_S``; a teardown still running then (rclpy's
 ``destroy_node`` has been seen to hang) writes every thread's stack to stderr and ends the
 process with the status it would have had, well before the launcher's SIGTERM and SIGKILL.
+
+In a node process (``uvms_common.node_entry``, which ends the process as soon as ``main``
+returns) the middleware's teardown is not run at all (issue 48): the node's own work at its
+end still is (its ``destroy_node`` override: goals cancelled, devices put back, files
+closed), with rclpy's entity destruction made a no-op (``middleware_teardown_skipped``),
+then the reliable publishers get ``ACK_WAIT_S`` to have their data acknowledged, and the
+process leaves. A stop seen in CI ended with faulthandler's backstop (status 1) in
+``ActionClient.destroy`` after the mission had succeeded: a teardown that blocks holding the
+GIL; the process's end frees the same resources without that risk. Peers forget the
+vanished participant after its lease (``fastdds_loopback.xml``).
 """
 
 from __future__ import annotations
@@ -34,15 +44,15 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from uvms_common import process_stats
-from uvms_common.node_entry import flush_output
+from uvms_common.node_entry import flush_output, process_ends_after_main
 from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import Scheduling, apply_scheduling, parse_cpus
 from uvms_common.stop_event import StopEvent, active_stop_event
 
-__all__ = ['EXECUTORS', 'SPIN_TURN_S', 'TEARDOWN_BACKSTOP_S', 'TEARDOWN_GRACE_S', 'StopEvent',
-           'TeardownDeadline', 'make_executor', 'profiled', 'run_node', 'schedule_process',
-           'spin_until_stopped']
+__all__ = ['ACK_WAIT_S', 'EXECUTORS', 'SPIN_TURN_S', 'TEARDOWN_BACKSTOP_S', 'TEARDOWN_GRACE_S',
+           'StopEvent', 'TeardownDeadline', 'make_executor', 'middleware_teardown_skipped',
+           'profiled', 'run_node', 'schedule_process', 'spin_until_stopped', 'wait_for_acks']
 
 #: The node class a process runs.
 N = TypeVar('N', bound=Node)
@@ -55,6 +65,9 @@ SPIN_TURN_S = 0.1
 #: closed (s); a normal one takes tens of milliseconds. After it the process ends itself: a
 #: stop stays within 2 s of the signal, far below the launcher's 5 s before SIGTERM.
 TEARDOWN_GRACE_S = 1.0
+#: Longest a node process leaving without the middleware's teardown waits for its reliable
+#: publishers' data to be acknowledged (s, over all of them).
+ACK_WAIT_S = 0.3
 #: Further time after which faulthandler's own thread dumps the stacks and exits (status 1):
 #: for a teardown stuck while holding the GIL, where no Python thread runs any more (s).
 TEARDOWN_BACKSTOP_S = 1.0
@@ -193,6 +206,58 @@ def schedule_process(node: Node) -> None:
         node.get_logger().info('real-time scheduling: ' + ', '.join(outcome.applied))
 
 
+#: rclpy's middleware teardown: what ``middleware_teardown_skipped`` makes a no-op.
+_TEARDOWN_METHODS = (
+    ('rclpy.node', 'Node', ('destroy_node', 'destroy_publisher', 'destroy_subscription',
+                            'destroy_client', 'destroy_service', 'destroy_timer',
+                            'destroy_guard_condition', 'destroy_rate')),
+    ('rclpy.action.client', 'ActionClient', ('destroy',)),
+    ('rclpy.action.server', 'ActionServer', ('destroy',)),
+)
+
+
+@contextlib.contextmanager
+def middleware_teardown_skipped() -> Iterator[None]:
+    """Within the block rclpy's entity and node destruction does nothing.
+
+    For a process about to end: a node's ``destroy_node`` override then does its own work
+    (cancel a goal, put a device back) and its ``super().destroy_node()`` returns at once.
+    Bound methods taken before the block (``own(self.destroy_timer, ...)``) still destroy.
+    """
+    import importlib
+
+    saved: list[tuple[type, str, object]] = []
+    for module_name, class_name, methods in _TEARDOWN_METHODS:
+        cls = getattr(importlib.import_module(module_name), class_name)
+        for method in methods:
+            saved.append((cls, method, cls.__dict__[method]))
+            setattr(cls, method, lambda self, *args, **kwargs: True)
+    try:
+        yield
+    finally:
+        for cls, method, original in saved:
+            setattr(cls, method, original)
+
+
+def wait_for_acks(node: Node, budget_s: float = ACK_WAIT_S) -> bool:
+    """Wait, ``budget_s`` at most in all, for the node's reliable publishers' acknowledgements.
+
+    Returns:
+        Whether every publisher's data was acknowledged in time (best-effort ones at once).
+    """
+    from rclpy.duration import Duration
+
+    end = time.monotonic() + budget_s
+    acked = True
+    for publisher in list(node.publishers):
+        left_s = max(0.0, end - time.monotonic())
+        try:
+            acked = publisher.wait_for_all_acked(Duration(seconds=left_s)) and acked
+        except Exception:  # a publisher already gone: nothing to wait for
+            continue
+    return acked
+
+
 class TeardownDeadline:
     """Ends the process if the teardown outlives its grace period; ``cancel`` when it is done.
 
@@ -309,18 +374,24 @@ def run_node(
         # Seen in CI and here under load: destroy_node stuck after the work was done, the
         # process SIGKILLed by the launcher. Nothing is left to lose now.
         deadline = TeardownDeadline(logger_name, status)
-        if executor is not None:
-            # Off the executor first, which unhooks the node's entities from it: a request or
-            # message arriving between the executor's shutdown and the node's destruction
-            # otherwise reaches a shut-down EventsExecutor from a DDS thread (a SIGSEGV seen
-            # once in CI: the controller, the mission cancelling its goal as the graph
-            # stopped; ros2/rclpy#1644 is of this family).
-            if node is not None and node in executor.get_nodes():
-                executor.remove_node(node)
-            executor.shutdown()
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        if node is not None and process_ends_after_main():
+            # The node's own end runs; the middleware's is left to the process's end.
+            with middleware_teardown_skipped():
+                node.destroy_node()
+            wait_for_acks(node)
+        else:
+            if executor is not None:
+                # Off the executor first, which unhooks the node's entities from it: a
+                # request or message arriving between the executor's shutdown and the node's
+                # destruction otherwise reaches a shut-down EventsExecutor from a DDS thread
+                # (a SIGSEGV seen once in CI: the controller, the mission cancelling its goal
+                # as the graph stopped; ros2/rclpy#1644 is of this family).
+                if node is not None and node in executor.get_nodes():
+                    executor.remove_node(node)
+                executor.shutdown()
+            if node is not None:
+                node.destroy_node()
+            rclpy.try_shutdown()
         deadline.cancel()
         if stop is not earlier:
             stop.restore()
