@@ -21,8 +21,8 @@ setup(
     maintainer_email='dev@uvms.local',
     description=(
         "Bridges from the UVMS graph to the robot's own protocols (ArduSub over MAVLink, "
-        'Water Linked DVL, Reach Alpha serial protocol, ATI Net F/T), their pure protocol '
-        'codecs, and protocol twins to test them against.'
+        'Water Linked DVL, Reach Alpha serial protocol, ATI Net F/T) and their pure protocol '
+        'codecs (the twins to test them against: uvms_twins).'
     ),
     license='Apache-2.0',
     entry_points={
@@ -31,7 +31,6 @@ setup(
             'netft_bridge = uvms_hardware.entry_points:netft_bridge',
             'ardusub_bridge = uvms_hardware.entry_points:ardusub_bridge',
             'dvl_bridge = uvms_hardware.entry_points:dvl_bridge',
-            'hardware_twins = uvms_hardware.entry_points:hardware_twins',
         ],
     },
 )

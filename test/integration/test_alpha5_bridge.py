@@ -18,7 +18,7 @@ from uvms_common.lifecycle import state_label
 from uvms_hardware.alpha5_bridge_node import Alpha5BridgeError, Alpha5BridgeNode
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId
-from uvms_hardware.twins.alpha5_twin import Alpha5Twin
+from uvms_twins.alpha5_twin import Alpha5Twin
 
 from uvms_msgs.msg import ActuatorCommand
 

@@ -26,7 +26,7 @@ from sensor_msgs.msg import BatteryState, Imu
 from std_srvs.srv import Trigger
 from uvms_hardware.ardusub_bridge_node import ArduSubBridgeNode
 from uvms_hardware.t200_curve import robot_curve
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_twins.ardusub_twin import ArduSubTwin
 
 from uvms_msgs.msg import ActuatorCommand
 

@@ -20,7 +20,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import Imu
 from uvms_hardware.ardusub_bridge_node import ArduSubBridgeNode
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_twins.ardusub_twin import ArduSubTwin
 
 ROBOT = 'bluerov2_alpha5'
 #: The issue's bound on the stamp error where the protocol has a device clock (s).

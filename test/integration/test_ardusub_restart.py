@@ -25,7 +25,7 @@ from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
 from uvms_hardware.ardusub_restore import find_leftovers
 from uvms_hardware.device_journal import DeviceJournal
 from uvms_hardware.t200_curve import robot_curve
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_twins.ardusub_twin import ArduSubTwin
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in ('uvms_common', 'uvms_description', 'uvms_model',

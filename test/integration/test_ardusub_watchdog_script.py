@@ -20,7 +20,7 @@ from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from uvms_hardware.ardusub_bridge_node import ArduSubBridgeNode
 from uvms_hardware.ardusub_watchdog import ScriptSettings
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_twins.ardusub_twin import ArduSubTwin
 
 from uvms_msgs.msg import ActuatorCommand
 

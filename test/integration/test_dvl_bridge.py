@@ -15,7 +15,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from uvms_hardware.dvl_bridge_node import DvlBridgeNode
-from uvms_hardware.twins.dvl_twin import DvlTwin
+from uvms_twins.dvl_twin import DvlTwin
 
 ROBOT = 'bluerov2_alpha5'
 

@@ -17,7 +17,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from uvms_hardware.dvl_bridge_node import DvlBridgeNode
-from uvms_hardware.twins.dvl_twin import DvlTwin
+from uvms_twins.dvl_twin import DvlTwin
 
 #: The centre of the ping before the report is sent (Water Linked's example report: 189 ms).
 PING_TO_SEND_S = 0.1

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId, encode_current
-from uvms_hardware.twins.alpha5_twin import Alpha5Twin
-from uvms_hardware.twins.netft_twin import NetFtTwin
+from uvms_twins.alpha5_twin import Alpha5Twin
+from uvms_twins.netft_twin import NetFtTwin
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = [REPO / 'src' / name for name in

@@ -10,10 +10,10 @@ import pytest
 import yaml
 from uvms_cli.hardware import main
 from uvms_hardware.hardware_config import load_alpha5
-from uvms_hardware.twins.alpha5_twin import Alpha5Twin
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
-from uvms_hardware.twins.dvl_twin import DvlTwin
-from uvms_hardware.twins.netft_twin import NetFtTwin
+from uvms_twins.alpha5_twin import Alpha5Twin
+from uvms_twins.ardusub_twin import ArduSubTwin
+from uvms_twins.dvl_twin import DvlTwin
+from uvms_twins.netft_twin import NetFtTwin
 
 ROBOT = 'bluerov2_alpha5'
 

@@ -18,7 +18,7 @@ from rclpy.parameter import Parameter
 from std_srvs.srv import Trigger
 from uvms_common.lifecycle import state_label
 from uvms_hardware.netft_bridge_node import NetFtBridgeNode
-from uvms_hardware.twins.netft_twin import NetFtTwin
+from uvms_twins.netft_twin import NetFtTwin
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
 FAILURE = TransitionCallbackReturn.FAILURE

@@ -18,7 +18,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from uvms_hardware.netft_bridge_node import NetFtBridgeNode
-from uvms_hardware.twins.netft_twin import NetFtTwin
+from uvms_twins.netft_twin import NetFtTwin
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
 RATE_HZ = 200.0

@@ -102,7 +102,7 @@ HARDWARE_BRIDGES = {
                              ('netft_bridge', 'NetFtBridgeNode'))}
 #: The protocol twins on the simulator (``uvms launch --hardware twin``).
 HARDWARE_TWINS = NodeSpec(
-    'hardware_twins', 'uvms_hardware', 'hardware_twins', 'uvms_hardware.twins_node',
+    'hardware_twins', 'uvms_twins', 'hardware_twins', 'uvms_twins.twins_node',
     'TwinsNode', (), takes_robot=True,
 )
 #: What the recorder records beside its defaults when the estimator runs.

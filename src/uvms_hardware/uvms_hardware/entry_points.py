@@ -21,8 +21,3 @@ def alpha5_bridge() -> None:
 def netft_bridge() -> None:
     """The ATI Net F/T bridge (``uvms_hardware.netft_bridge_node``)."""
     run_node_module('uvms_hardware.netft_bridge_node')
-
-
-def hardware_twins() -> None:
-    """The protocol twins on the simulator (``uvms_hardware.twins_node``)."""
-    run_node_module('uvms_hardware.twins_node')

@@ -43,10 +43,11 @@ from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from uvms_hardware import reach_protocol as rp
 from uvms_hardware.address import LOOPBACK
 from uvms_hardware.hardware_config import Alpha5Hardware, Drive
 from uvms_hardware.reach_protocol import Mode, PacketId
+
+from uvms_hardware import reach_protocol as rp
 
 #: UDP port of Reach's examples.
 DEFAULT_PORT = 6789

@@ -51,7 +51,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from pymavlink import mavutil  # type: ignore[import-untyped]
-
 from uvms_hardware.address import LOOPBACK
 from uvms_hardware.ardusub_watchdog import ANNOUNCE_NAME, ScriptSettings, WatchdogScript
 

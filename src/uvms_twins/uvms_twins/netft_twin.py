@@ -38,9 +38,10 @@ import time
 from collections.abc import Callable
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
-from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import LOOPBACK
 from uvms_hardware.errors import ProtocolError
+
+from uvms_hardware import rdt_protocol as rdt
 
 #: Largest record rate the twin streams at (Hz).
 MAX_RATE_HZ = 1000.0

@@ -30,12 +30,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from uvms_thrusters.robot_thrusters import robot_thrusters
-from uvms_thrusters.thruster_dynamics import ThrusterBank
-
 from uvms_hardware.hardware_config import hardware_section, urdf_joint_limits
 from uvms_hardware.reach_protocol import Mode
 from uvms_hardware.t200_curve import T200Curve
+from uvms_thrusters.robot_thrusters import robot_thrusters
+from uvms_thrusters.thruster_dynamics import ThrusterBank
 
 
 @dataclass

@@ -13,7 +13,7 @@ between them and the simulator:
   lost the bottom);
 - at ``rate_hz`` on the steady clock: the ArduSub twin's servo outputs (PWM) -> thrusts through
   the T200 curve and the thrusters' dynamics, the arm twin's modes and setpoints -> joint
-  torques (``twins.plant_side``), published as ``/plant/command/actuators``.
+  torques (``uvms_twins.plant_side``), published as ``/plant/command/actuators``.
 
 Real devices need no such node; it is the test stand. Everything binds where the hardware
 file says (127.0.0.1 in ``config/hardware/twin.yaml``).
@@ -35,8 +35,6 @@ from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, Report
 from uvms_common.hot_messages import joint_state_codec, wrench_codec
 from uvms_common.node_main import run_node
 from uvms_common.robot_parameters import declare_robot_name
-from uvms_thrusters.raw_conversions import ActuatorCommandWriter
-
 from uvms_hardware.address import parse_host_port
 from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import AddressError, HardwareError
@@ -44,12 +42,14 @@ from uvms_hardware.hardware_config import hardware_section, load_alpha5, load_ne
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR
 from uvms_hardware.reach_protocol import Mode
 from uvms_hardware.transport import parse_connection
-from uvms_hardware.twins.alpha5_twin import Alpha5Twin
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
-from uvms_hardware.twins.dvl_twin import DvlTwin
-from uvms_hardware.twins.netft_twin import NetFtTwin
-from uvms_hardware.twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
+from uvms_thrusters.raw_conversions import ActuatorCommandWriter
+
 from uvms_msgs.msg import ActuatorCommand
+from uvms_twins.alpha5_twin import Alpha5Twin
+from uvms_twins.ardusub_twin import ArduSubTwin
+from uvms_twins.dvl_twin import DvlTwin
+from uvms_twins.netft_twin import NetFtTwin
+from uvms_twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
 
 #: Arm modes in which a bridge drives a joint (Standby, Disable, Passive: not driven).
 CONTROL_MODES = (Mode.CURRENT, Mode.VELOCITY, Mode.POSITION)

@@ -8,7 +8,7 @@ from collections.abc import Callable, Iterator
 import pytest
 from uvms_hardware.address import parse_host_port
 from uvms_hardware.dvl_link import DvlLink
-from uvms_hardware.twins.dvl_twin import DvlTwin
+from uvms_twins.dvl_twin import DvlTwin
 
 
 def wait(condition: Callable[[], bool], timeout_s: float, what: str) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from uvms_hardware.twins.dvl_twin import DvlTwin
+from uvms_twins.dvl_twin import DvlTwin
 
 
 def test_a_report_carries_the_plants_time_of_validity_and_the_send_time() -> None:

@@ -13,7 +13,7 @@ from pymavlink import mavutil
 from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
 from uvms_hardware.errors import DeviceCheckError
 from uvms_hardware.t200_curve import robot_curve
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_twins.ardusub_twin import ArduSubTwin
 
 MAV = mavutil.mavlink
 ALL = (1, 2, 3, 4, 5, 6, 7, 8)

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 from pymavlink import mavutil
-from uvms_hardware.twins.ardusub_twin import ArduSubTwin
+from uvms_twins.ardusub_twin import ArduSubTwin
 
 MAV = mavutil.mavlink
 

@@ -7,7 +7,7 @@ import time
 import urllib.request
 
 import pytest
-from uvms_hardware.twins.netft_twin import NetFtTwin
+from uvms_twins.netft_twin import NetFtTwin
 
 from uvms_hardware import rdt_protocol as rdt
 

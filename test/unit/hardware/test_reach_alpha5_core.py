@@ -8,7 +8,7 @@ import pytest
 from uvms_hardware.alpha5_core import Alpha5Core, check_device
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId
-from uvms_hardware.twins.alpha5_twin import Alpha5Twin
+from uvms_twins.alpha5_twin import Alpha5Twin
 
 from uvms_hardware import reach_protocol as rp
 

@@ -7,7 +7,7 @@ import socket
 import pytest
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import DeviceId, Mode, PacketId
-from uvms_hardware.twins.alpha5_twin import Alpha5Twin, current_to_torque_n_m
+from uvms_twins.alpha5_twin import Alpha5Twin, current_to_torque_n_m
 
 from uvms_hardware import reach_protocol as rp
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from uvms_hardware.reach_protocol import Mode
 from uvms_hardware.t200_curve import clamp_pwm
-from uvms_hardware.twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
+from uvms_twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
 
 ROBOT = 'bluerov2_alpha5'
 
