@@ -30,6 +30,7 @@ from typing import Any
 from action_msgs.msg import GoalStatus
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
 from rclpy.action.client import ClientGoalHandle
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message
@@ -115,6 +116,7 @@ class MissionNode(Node):
         self._target: tuple[float, float, float] | None = None
         self._busy = False
         self._server_seen_s: float | None = None
+        self._created_s = time.monotonic()
         self._handle: ClientGoalHandle | None = None
         self.client = ContactTaskClient(self)
         # The state topic drives the mission: every control step is a chance to start. Taken
@@ -125,6 +127,9 @@ class MissionNode(Node):
         self.get_logger().info(
             f'mission of {len(self.tasks)} task(s) for {self.client.action_name}; waiting for '
             'the action server and controller/state')
+        # On the steady clock: discovery runs on wall time, also before /clock ticks.
+        self._discovery_timer = self.create_timer(
+            DISCOVERY_POLL_S, self._server_settled, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     @property
     def succeeded(self) -> bool:
@@ -157,6 +162,11 @@ class MissionNode(Node):
         now = time.monotonic()
         if self._server_seen_s is None:
             self._server_seen_s = now
+            self.destroy_timer(self._discovery_timer)
+            # One line that says when (bench/bench_soak.py reads the discovery time from it).
+            self.get_logger().info(
+                f'found the action server {self.client.action_name} '
+                f'{now - self._created_s:.2f} s after the node started')
         return now - self._server_seen_s >= self.server_settle_s
 
     def _send_next(self) -> None:
@@ -238,6 +248,10 @@ class MissionNode(Node):
             self._handle = None
         self.client.destroy()
         super().destroy_node()
+
+
+#: Period of the wall-clock check for the action server until it is found (s).
+DISCOVERY_POLL_S = 0.05
 
 
 def main(args: list[str] | None = None) -> None:
