@@ -83,7 +83,7 @@ def test_bluerov2_alpha5_declares_device_timing_and_the_paper_robot_none() -> No
     """The BlueROV2 + Alpha 5 folder declares its timing; the paper robot none."""
     bluerov = robot_parameters('bluerov2_alpha5', 'simulator')
     assert bluerov['devices.thrusts.rate_hz'].value == 50.0
-    assert bluerov['devices.ideal'].value is False
+    assert bluerov['devices.ideal'].value is True  # until the controller holds at its rates
     assert bluerov['devices.joint_states.rate_hz'].value < 500.0
     assert bluerov['devices.thrusts.rate_hz'].source.name == 'device_timing.yaml'
     for name, item in bluerov.items():
@@ -93,6 +93,7 @@ def test_bluerov2_alpha5_declares_device_timing_and_the_paper_robot_none() -> No
     paper = robot_parameters('paper_uvms', 'simulator')
     assert not [name for name in paper if name.startswith('devices.')]
     timing = DeviceTiming.from_values(
-        {**DEFAULTS, **{n: i.value for n, i in bluerov.items() if n.startswith('devices.')}})
+        {**DEFAULTS, **{n: i.value for n, i in bluerov.items() if n.startswith('devices.')},
+         'devices.ideal': False})  # what a scenario's devices.ideal false applies
     assert not timing.ideal
     assert timing['wrench'].latency_s == pytest.approx(288e-6)
