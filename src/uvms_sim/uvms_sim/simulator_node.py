@@ -10,7 +10,6 @@ achieved step rate, the real-time factor (both against the wall clock) and locks
 from __future__ import annotations
 
 import sys
-from dataclasses import replace
 from typing import Any
 
 from geometry_msgs.msg import PoseStamped, WrenchStamped
@@ -41,7 +40,7 @@ from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, Navigat
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions, raw_conversions
-from uvms_sim.device_timing import CommandHold, SampleHold
+from uvms_sim.device_delivery import DeviceDelivery
 from uvms_sim.errors import CommandError, SimParameterError, SimulationError, StartupError
 from uvms_sim.lockstep_wait import AttentiveWait
 from uvms_sim.navigation_topics import NavigationTopics, dvl_mount
@@ -51,7 +50,7 @@ from uvms_sim.parameters import (
     SimulatorSettings,
     default_joint_positions,
 )
-from uvms_sim.plant import Observation, Plant, initial_coordinates
+from uvms_sim.plant import Plant, initial_coordinates
 from uvms_sim.startup_watch import StartupWatch, SubscriberWait, recorded_publishers
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
@@ -134,20 +133,8 @@ class SimulatorNode(Node):
         self._navigation = (NavigationTopics(self, self._navigation_params, params.sensor.seed,
                                              devices)
                             if self._navigation_params.switch.enabled else None)
-        # Device timing (uvms_sim.device_timing): None where a signal is ideal, so that an
-        # ideal run takes exactly today's path.
-        seed = params.sensor.seed
-        self._joint_hold: SampleHold[Observation] | None = (
-            None if devices['joint_states'].ideal
-            else SampleHold(devices['joint_states'], seed + 1))
-        self._wrench_hold: SampleHold[Observation] | None = (
-            None if devices['wrench'].ideal else SampleHold(devices['wrench'], seed + 2))
-        self._thrust_hold: CommandHold[Any] | None = (
-            None if devices['thrusts'].rate_hz == 0.0
-            else CommandHold(devices['thrusts'].rate_hz))
-        self._torque_hold: CommandHold[Any] | None = (
-            None if devices['arm_commands'].rate_hz == 0.0
-            else CommandHold(devices['arm_commands'].rate_hz))
+        # Device timing (uvms_sim.device_delivery): an ideal run takes exactly today's path.
+        self._devices = DeviceDelivery(devices, params.sensor.seed)
         self._messages = raw_conversions.RawStateMessages(self._plant.joint_names)
         self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
@@ -386,10 +373,7 @@ class SimulatorNode(Node):
                 thrusts, torques = self._command[1], self._command[2]
         if thrusts is None:
             thrusts, torques = [0.0] * self._plant.n_thrusters, [0.0] * self._plant.n_joints
-        if self._thrust_hold is not None:  # applied in the vehicle's own loop, held
-            thrusts = self._thrust_hold.at(self._plant.t_ns, thrusts)
-        if self._torque_hold is not None:  # applied in the arm bus's command slots, held
-            torques = self._torque_hold.at(self._plant.t_ns, torques)
+        thrusts, torques = self._devices.commands(self._plant.t_ns, thrusts, torques)
         try:
             self._plant.step(thrusts, torques)
         except SimulationError as exc:
@@ -424,24 +408,6 @@ class SimulatorNode(Node):
             return Report(WARN, f'behind real time (factor {factor:.2f})', values)
         return Report(OK, 'running', values)
 
-    def _delivered(self, seen: Observation) -> Observation:
-        """The observation with joint states and wrench as the devices deliver them at t_k.
-
-        Each held signal is its newest delivered sample (uvms_sim.device_timing), stamped
-        with the state's time; the ground truth (odometry, ee_pose, contact) stays current.
-        """
-        if self._joint_hold is None and self._wrench_hold is None:
-            return seen
-        joints = seen if self._joint_hold is None else self._joint_hold.at(
-            seen.t_ns, lambda: seen)
-        wrench = seen if self._wrench_hold is None else self._wrench_hold.at(
-            seen.t_ns, lambda: seen)
-        n = self._plant.n_joints
-        q, w = seen.q.copy(), seen.w.copy()
-        q[6:], w[6:] = joints.q[6:6 + n], joints.w[6:6 + n]
-        return replace(seen, q=q, w=w, joint_torques=joints.joint_torques,
-                       sensor_force=wrench.sensor_force, sensor_torque=wrench.sensor_torque)
-
     def _publish_state(self) -> None:
         """Publish /clock, the sensor topics and, when due, ee_pose, contact and /tf (at t_k)."""
         tf_due = (self._tf_pub is not None
@@ -449,7 +415,8 @@ class SimulatorNode(Node):
         ground_truth_due = self._published % self._settings.publishes_per_ground_truth == 0
         seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
-        out.update(self._delivered(seen), ground_truth=ground_truth_due)
+        out.update(self._devices.observation(seen, self._plant.n_joints),
+                   ground_truth=ground_truth_due)
         if self._navigation is not None:  # before /clock, on which the estimator publishes
             self._navigation.publish(seen.t_ns, seen.q, seen.w)
         self._clock_pub.publish(out.clock)

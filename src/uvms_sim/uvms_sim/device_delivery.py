@@ -1,0 +1,60 @@
+"""The robot's device timing applied to what the simulator publishes and what it steps on.
+
+One object per simulator holds the holds of ``uvms_sim.device_timing`` that the robot's
+timing asks for (None where a signal is ideal, so that an ideal run takes exactly the
+idealized path)::
+
+    delivery = DeviceDelivery(devices, seed)
+    out.update(delivery.observation(seen, n_joints))          # joint states, wrench as delivered
+    thrusts, torques = delivery.commands(t_ns, thrusts, torques)  # as the devices apply them
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from uvms_sim.device_timing import CommandHold, DeviceTiming, SampleHold
+from uvms_sim.plant import Observation
+
+
+class DeviceDelivery:
+    """Sensors sampled, delayed and held; commands latched at the devices' rates."""
+
+    def __init__(self, devices: DeviceTiming, seed: int) -> None:
+        self._joint_hold: SampleHold[Observation] | None = (
+            None if devices['joint_states'].ideal
+            else SampleHold(devices['joint_states'], seed + 1))
+        self._wrench_hold: SampleHold[Observation] | None = (
+            None if devices['wrench'].ideal else SampleHold(devices['wrench'], seed + 2))
+        self._thrust_hold: CommandHold[Any] | None = (
+            None if devices['thrusts'].rate_hz == 0.0
+            else CommandHold(devices['thrusts'].rate_hz))
+        self._torque_hold: CommandHold[Any] | None = (
+            None if devices['arm_commands'].rate_hz == 0.0
+            else CommandHold(devices['arm_commands'].rate_hz))
+
+    def observation(self, seen: Observation, n_joints: int) -> Observation:
+        """The observation with joint states and wrench as the devices deliver them at t_k.
+
+        Each held signal is its newest delivered sample (uvms_sim.device_timing), stamped
+        with the state's time; the ground truth (odometry, ee_pose, contact) stays current.
+        """
+        if self._joint_hold is None and self._wrench_hold is None:
+            return seen
+        joints = seen if self._joint_hold is None else self._joint_hold.at(
+            seen.t_ns, lambda: seen)
+        wrench = seen if self._wrench_hold is None else self._wrench_hold.at(
+            seen.t_ns, lambda: seen)
+        q, w = seen.q.copy(), seen.w.copy()
+        q[6:], w[6:] = joints.q[6:6 + n_joints], joints.w[6:6 + n_joints]
+        return replace(seen, q=q, w=w, joint_torques=joints.joint_torques,
+                       sensor_force=wrench.sensor_force, sensor_torque=wrench.sensor_torque)
+
+    def commands(self, t_ns: int, thrusts: Any, torques: Any) -> tuple[Any, Any]:
+        """Thrusts as the vehicle's own loop applies them, torques as the arm bus's slots do."""
+        if self._thrust_hold is not None:
+            thrusts = self._thrust_hold.at(t_ns, thrusts)
+        if self._torque_hold is not None:
+            torques = self._torque_hold.at(t_ns, torques)
+        return thrusts, torques
