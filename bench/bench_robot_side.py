@@ -1,0 +1,201 @@
+"""The robot-side footprint of the twin stand, per process layout, side by side in one run.
+
+Issue 47 asks what the processes that would run on the robot's own computer cost (the four
+hardware bridges, the control nodes, the estimator and the recorder: not the simulator, the
+twins, the visualizer or the mission), and what the twin stand costs per process, for
+``uvms launch bluerov2_alpha5_contact --hardware twin`` in three layouts:
+
+- ``separate``: one process per node (the launch without ``--compose``);
+- ``control``: ``--compose control`` (controller, allocator and estimator in one process);
+- ``robot``: ``--compose robot`` (those and the four bridges in one process).
+
+For each real-time factor (``--real-time-factors``, default 1.0 and 0.5) it runs the three
+layouts in turn, ``--pairs`` times, to the scenario's end, and reads the launch's own closing
+cost table (``uvms_bringup.launch_costs``: CPU in % of one core per process from the first
+simulated step, missed periods of the loop processes) instead of measuring anew. It prints
+one row per run (outcome, contacts from the recording, robot-side CPU, the twin stand's CPU
+per process, the worst missed share of a loop process) and per factor the robot-side
+footprint of each layout against the separate layout's of the same round (measured side by
+side), as ratios. The load average is printed before and after; only figures of an
+otherwise quiet machine mean something. It asserts nothing.
+
+Not measured here: the latency from a device's reply to the command it causes. The twins
+that could time it (the Alpha 5 twin's joint answer against the next CURRENT frame for that
+joint) run inside the launched ``hardware_twins`` process, which publishes no such times.
+
+Usage::
+
+    .venv/bin/python bench/bench_robot_side.py [--pairs N] [--real-time-factors F ...]
+        [--hardware twin|FILE] [--scenario NAME]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from bench_realtime_load import MISSION_FAILED, source_path
+
+SCENARIO = 'bluerov2_alpha5_contact'
+#: Layout name -> the ``uvms launch`` arguments that make it; the first is the baseline.
+LAYOUTS: dict[str, tuple[str, ...]] = {
+    'separate': (),
+    'control': ('--compose', 'control'),
+    'robot': ('--compose', 'robot'),
+}
+BASELINE = 'separate'
+#: Processes that would run on the robot's computer, by the launch's process names
+#: (``control``: the composed process of ``--compose control|robot``).
+ROBOT_SIDE = frozenset({
+    'ardusub_bridge', 'dvl_bridge', 'alpha5_bridge', 'netft_bridge', 'controller',
+    'thruster_allocator', 'estimator', 'control', 'recorder',
+})
+#: The twin stand: the world and the devices' protocol twins.
+TWIN_STAND = ('simulator', 'hardware_twins')
+#: A row of the launch's closing cost table: ``name  CPU %  M of N (x %)  late`` or ``-``.
+COST_ROW = re.compile(r'^\s+(\w+)\s+([\d.]+) %\s+(?:(\d+) of (\d+) \(|-)')
+COST_HEADER = 'uvms launch: cost per process'
+
+
+@dataclass
+class Run:
+    """One launch as its closing table and recording tell it.
+
+    Attributes:
+        outcome: SUCCEEDED, the mission's failure, NODE FAILED or the exit status.
+        contacts: Separate contact intervals of the recording (None without a recording).
+        cpu: CPU per process (% of one core) from the cost table.
+        missed_pct: Worst missed share of a loop process (%), None without periods.
+    """
+
+    outcome: str
+    contacts: int | None
+    cpu: dict[str, float]
+    missed_pct: float | None
+
+    @property
+    def robot_side(self) -> float:
+        """CPU of the processes that would run on the robot's computer (% of one core)."""
+        return sum(v for name, v in self.cpu.items() if name in ROBOT_SIDE)
+
+
+def read_costs(lines: list[str]) -> tuple[dict[str, float], float | None]:
+    """CPU per process and the worst missed share from the launch's closing cost table."""
+    cpu: dict[str, float] = {}
+    shares = []
+    inside = False
+    for line in lines:
+        if line.startswith(COST_HEADER):
+            inside = True
+            continue
+        match = COST_ROW.match(line) if inside else None
+        if match is None or match.group(1) in ('process', 'graph'):
+            continue
+        cpu[match.group(1)] = float(match.group(2))
+        if match.group(4) and int(match.group(4)):
+            shares.append(100.0 * int(match.group(3)) / int(match.group(4)))
+    return cpu, max(shares) if shares else None
+
+
+def launch(layout: str, factor: float, hardware: str, scenario: str, directory: Path) -> Run:
+    """One ``uvms launch`` to the scenario's end in a layout, read from its output."""
+    output = directory / f'{layout}-{random.randrange(1 << 30)}.mcap'
+    env = dict(os.environ, PYTHONPATH=source_path(), ROS_DOMAIN_ID=str(random.randint(1, 100)))
+    command = [str(Path(sys.executable).parent / 'uvms'), 'launch', scenario, '--hardware',
+               hardware, '--real-time-factor', str(factor), '--output', str(output),
+               *LAYOUTS[layout]]
+    result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=1200,
+                            check=False, stdin=subprocess.DEVNULL)
+    lines = result.stderr.splitlines()
+    outcome = {0: 'SUCCEEDED', 1: 'NODE FAILED', 130: 'INTERRUPTED'}.get(result.returncode,
+                                                                       str(result.returncode))
+    for line in lines:
+        failed = MISSION_FAILED.match(line)
+        if failed:
+            outcome = failed.group(1)
+    cpu, missed = read_costs(lines)
+    if not cpu:
+        print(f'    {layout}: no cost table; the end of its output:\n'
+              + '\n'.join(f'      {line}' for line in lines[-12:]))
+    contacts = None
+    if output.is_file():
+        from uvms_analysis.metrics import compute_metrics
+        from uvms_analysis.series import load_run
+
+        try:
+            contacts = compute_metrics(load_run(output)).contact_count
+        except Exception as exc:  # a recording cut short by a failed node
+            print(f'    {output.name}: no metrics ({type(exc).__name__}: {exc})')
+        output.unlink()
+    return Run(outcome, contacts, cpu, missed)
+
+
+def row(factor: float, layout: str, index: int, run: Run) -> str:
+    """One run's Markdown row."""
+    robot = ', '.join(f'{name} {value:.0f}' for name, value in sorted(run.cpu.items())
+                      if name in ROBOT_SIDE)
+    stand = ', '.join(f'{name} {run.cpu[name]:.0f}' for name in TWIN_STAND if name in run.cpu)
+    missed = '-' if run.missed_pct is None else f'{run.missed_pct:.2f}'
+    contacts = '-' if run.contacts is None else str(run.contacts)
+    return (f'| {factor:g} | {layout} {index} | {run.outcome} | {contacts} | '
+            f'{run.robot_side:.0f} ({robot}) | {stand} | {missed} |')
+
+
+def summary(factor: float, runs: dict[str, list[Run]]) -> list[str]:
+    """Per layout: footprint range, and its ratios to the baseline of the same round."""
+    lines = []
+    base = [r.robot_side for r in runs[BASELINE]]
+    for layout, done in runs.items():
+        sides = [r.robot_side for r in done]
+        stand = {name: [r.cpu[name] for r in done if name in r.cpu] for name in TWIN_STAND}
+        text = (f'factor {factor:g}, {layout}: robot side {min(sides):.0f}-{max(sides):.0f} % '
+                f'of one core; twin stand '
+                + ', '.join(f'{name} {statistics.fmean(v):.0f} %' for name, v in stand.items()
+                            if v))
+        if layout != BASELINE:
+            ratios = [s / b for s, b in zip(sides, base, strict=True) if b > 0]
+            text += ('; / separate, round by round: '
+                     + (', '.join(f'{r:.2f}' for r in ratios) or '-'))
+        lines.append(text)
+    return lines
+
+
+def main() -> None:
+    """Rounds of the three layouts per factor; the rows, then the footprints and ratios."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--pairs', type=int, default=2, help='rounds of the three layouts')
+    parser.add_argument('--real-time-factors', type=float, nargs='+', default=[1.0, 0.5],
+                        metavar='F')
+    parser.add_argument('--hardware', default='twin', help='twin or a hardware file')
+    parser.add_argument('--scenario', default=SCENARIO)
+    args = parser.parse_args()
+    sys.path[:0] = source_path().split(os.pathsep)
+    print(f'load before: {" ".join(f"{v:.2f}" for v in os.getloadavg())} '
+          f'({os.cpu_count()} CPUs); {args.scenario} --hardware {args.hardware}')
+    print('| factor | layout | outcome | contacts | robot side, % of one core | '
+          'twin stand, % | missed % (worst loop process) |')
+    print('| --- | --- | --- | --- | --- | --- | --- |')
+    closing = []
+    with tempfile.TemporaryDirectory(prefix='uvms_robot_side_') as directory:
+        for factor in args.real_time_factors:
+            runs: dict[str, list[Run]] = {layout: [] for layout in LAYOUTS}
+            for index in range(1, args.pairs + 1):
+                for layout in LAYOUTS:
+                    run = launch(layout, factor, args.hardware, args.scenario, Path(directory))
+                    runs[layout].append(run)
+                    print(row(factor, layout, index, run), flush=True)
+            closing += summary(factor, runs)
+    print('\n'.join(closing))
+    print(f'load after: {" ".join(f"{v:.2f}" for v in os.getloadavg())}')
+
+
+if __name__ == '__main__':
+    main()
