@@ -19,7 +19,11 @@ from uvms_description.robots import robot_parameters, robot_start
 
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 SCENARIOS = sorted((CONFIG / 'scenarios').glob('*.yaml'))
-TASK_FILES = sorted((CONFIG / 'tasks').glob('*.yaml'))
+#: The paper robot's task files (Case I's point A); the BlueROV2's pool tasks are relative.
+POOL_TASK_FILES = sorted((CONFIG / 'tasks').glob('bluerov2_pool_*.yaml'))
+TASK_FILES = sorted(set((CONFIG / 'tasks').glob('*.yaml')) - set(POOL_TASK_FILES))
+BLUEROV2_CONTACT = CONFIG / 'scenarios' / 'bluerov2_alpha5_contact.yaml'
+
 IDLE_WALL = CONFIG / 'scenarios' / 'idle_wall.yaml'  # the graph the task files are sent to
 POINT_A = np.array([1.70, 0.0, -0.10])  # of the paper's Fig. 7 (m, map_ned)
 #: Where the robot may hold when a task file is sent (m, map_ned): A, the half circle's end D,
@@ -102,3 +106,22 @@ def test_task_files_run_from_point_a_wherever_the_robot_holds(path: Path, hold: 
         planned, transit_s = planned_goal(goal, x, limits)
         assert (transit_s > 0.0) == (hold != 'A')
         np.testing.assert_allclose(planned.path[0], x, atol=1e-12)
+
+
+@pytest.mark.parametrize('path', POOL_TASK_FILES, ids=lambda p: p.stem)
+def test_pool_task_files_pass_the_bluerov2_checks_from_where_it_holds(path: Path) -> None:
+    """Each pool task starts where the BlueROV2 holds (no start of its own) and is accepted.
+
+    From the contact scenario's point A and from the robot's own start pose: no transit,
+    the path's first point is the held one.
+    """
+    limits, threshold = robot_limits('bluerov2_alpha5')
+    holds = (start_of(scenario(BLUEROV2_CONTACT)),
+             np.array(robot_start('bluerov2_alpha5')['initial.ee_position'], dtype=np.float64))
+    assert len(POOL_TASK_FILES) == 2
+    for x in holds:
+        for task in load_task_file(path):
+            goal = as_goal(task, x)
+            np.testing.assert_allclose(goal.path[0], x, atol=1e-12)
+            validate_goal(goal, x, limits, threshold, now_s=0.0, start=x)
+            assert planned_goal(goal, x, limits)[1] == 0.0
