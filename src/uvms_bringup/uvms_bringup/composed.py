@@ -132,6 +132,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == '__main__':
-    from uvms_common.node_entry import end_process
+    from uvms_common.node_entry import end_process, mark_process_ends_after_main
 
+    mark_process_ends_after_main()  # run_composed leaves the middleware teardown to the end
     end_process(main())

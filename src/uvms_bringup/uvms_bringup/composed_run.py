@@ -4,6 +4,8 @@ The same steps as a node process (rclpy without its signal handlers, a stop even
 between short executor turns, the nodes off the executor before it shuts down, a bounded
 teardown), with every node of the group built on one context and added to one executor.
 The process asks for real-time scheduling once, with the first node's ``rt_*`` parameters.
+Started as ``python -m uvms_bringup.composed`` (the launcher's way), it leaves the
+middleware's teardown to the process's end, as a node process does (issue 48).
 """
 
 from __future__ import annotations
@@ -15,12 +17,16 @@ import rclpy
 from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from uvms_common.node_entry import process_ends_after_main
 from uvms_common.node_main import (
+    ACK_WAIT_S,
     TeardownDeadline,
     make_executor,
+    middleware_teardown_skipped,
     profiled,
     schedule_process,
     spin_until_stopped,
+    wait_for_acks,
 )
 from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
@@ -84,13 +90,22 @@ def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEve
                     logger.error(f'{node.get_name()}: putting the device back: '
                                  f'{type(exc).__name__}: {exc}')
         deadline = TeardownDeadline(LOGGER, status)
-        if executor is not None:
+        if process_ends_after_main():
+            # As a node process (uvms_common.node_main): the nodes' own end, not the
+            # middleware's, which the process's end makes needless (issue 48).
+            with middleware_teardown_skipped():
+                for node in reversed(nodes):
+                    node.destroy_node()
             for node in nodes:
-                if node in executor.get_nodes():
-                    executor.remove_node(node)
-            executor.shutdown()
-        for node in reversed(nodes):
-            node.destroy_node()
-        rclpy.try_shutdown()
+                wait_for_acks(node, ACK_WAIT_S / len(nodes))
+        else:
+            if executor is not None:
+                for node in nodes:
+                    if node in executor.get_nodes():
+                        executor.remove_node(node)
+                executor.shutdown()
+            for node in reversed(nodes):
+                node.destroy_node()
+            rclpy.try_shutdown()
         deadline.cancel()
     return status

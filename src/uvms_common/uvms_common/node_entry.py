@@ -28,6 +28,12 @@ from uvms_common.stop_event import StopEvent
 _process_ends_after_main = False
 
 
+def mark_process_ends_after_main() -> None:
+    """Say that this process ends (``end_process``) as soon as its ``main`` returns."""
+    global _process_ends_after_main
+    _process_ends_after_main = True
+
+
 def process_ends_after_main() -> bool:
     """Whether this process ends as soon as the node's ``main`` returns (a node process)."""
     return _process_ends_after_main
@@ -75,18 +81,23 @@ def end_process(status: int) -> None:
 def run_node_module(module_name: str) -> None:
     """Import a node module with the stop handlers in place, run its ``main()``, end.
 
-    Exits 0 without building the node when a stop signal arrived during the import; else
-    with the status of ``main``'s ``sys.exit`` (``end_process``). An exception other than
-    SystemExit leaves as usual, with its traceback.
+    Exits 0 without building the node when a stop signal arrived during the import (which
+    it interrupts); else with the status of ``main``'s ``sys.exit`` (``end_process``). An
+    exception other than SystemExit leaves as usual, with its traceback.
     """
-    global _process_ends_after_main
     stop = StopEvent()
     status = 0
-    _process_ends_after_main = True
+    mark_process_ends_after_main()
     try:
-        module = importlib.import_module(module_name)
+        # Interrupted by a stop: the import (rclpy, numpy, Pinocchio) took more than 10 s on
+        # a machine at load 14, so a stop waiting for it outlived the launcher's SIGTERM
+        # and SIGKILL (issue 48); nothing is built yet, so nothing is lost.
+        with stop.interrupting():
+            module = importlib.import_module(module_name)
         if not stop.is_set():
             module.main()
+    except KeyboardInterrupt:
+        status = 0
     except SystemExit as exc:
         status = _exit_status(exc.code)
     finally:

@@ -275,10 +275,13 @@ class TeardownDeadline:
         self._grace_s = grace_s
         self._done = threading.Event()
         self._stream = sys.__stderr__ or sys.stderr
-        faulthandler.dump_traceback_later(grace_s + backstop_s, exit=True, file=self._stream)
         self._thread = threading.Thread(target=self._watch, name='teardown deadline',
                                         daemon=True)
+        # Started first: on a loaded machine starting the thread alone took more than the
+        # backstop's 2 s once (issue 48: faulthandler then ended a thruster_allocator that
+        # was stopping normally, status 1); the backstop counts from the thread's start.
         self._thread.start()
+        faulthandler.dump_traceback_later(grace_s + backstop_s, exit=True, file=self._stream)
 
     def cancel(self) -> None:
         """The teardown finished: nothing is ended."""

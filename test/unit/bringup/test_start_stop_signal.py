@@ -65,3 +65,22 @@ def test_a_process_that_never_installs_handlers_still_ends_at_sigterm(tmp_path: 
         child.wait(timeout=1.0)
     child.send_signal(signal.SIGTERM)
     assert child.wait(timeout=10) == -signal.SIGTERM
+
+
+def test_a_stop_during_a_slow_import_ends_the_node_at_once(tmp_path: Path) -> None:
+    """An import that takes long (rclpy, Pinocchio: over 10 s at load 14) is interrupted.
+
+    Before, the stop waited for the import, and the launcher's SIGTERM and SIGKILL came
+    first (``node 'mission' exited: killed by SIGKILL while stopping``).
+    """
+    (tmp_path / 'slow_import_node.py').write_text('import time\ntime.sleep(30)\n' + _NODE)
+    code = ('from uvms_common.node_entry import run_node_module; '
+            "run_node_module('slow_import_node')")
+    child = _start(tmp_path, code)
+    time.sleep(3.0)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 0, err
+    assert time.monotonic() - sent < 10.0, err
+    assert 'Traceback' not in err and 'KeyboardInterrupt' not in err, err
