@@ -33,9 +33,11 @@ from rclpy.action.client import ClientGoalHandle
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 from rclpy.task import Future
+from std_msgs.msg import Bool
 from unique_identifier_msgs.msg import UUID
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
@@ -128,6 +130,11 @@ class MissionNode(Node):
             f'mission of {len(self.tasks)} task(s) for {self.client.action_name}; waiting for '
             'the action server and controller/state')
         # On the steady clock: discovery runs on wall time, also before /clock ticks.
+        # Latched: a simulator that holds physics until the mission is ready (issue 48) reads
+        # it whenever it subscribes.
+        self._ready_publisher = self.create_publisher(Bool, MISSION_READY_TOPIC, QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._discovery_timer = self.create_timer(
             DISCOVERY_POLL_S, self._server_settled, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
@@ -167,6 +174,7 @@ class MissionNode(Node):
             self.get_logger().info(
                 f'found the action server {self.client.action_name} '
                 f'{now - self._created_s:.2f} s after the node started')
+            self._ready_publisher.publish(Bool(data=True))
         return now - self._server_seen_s >= self.server_settle_s
 
     def _send_next(self) -> None:
@@ -252,6 +260,8 @@ class MissionNode(Node):
 
 #: Period of the wall-clock check for the action server until it is found (s).
 DISCOVERY_POLL_S = 0.05
+#: Latched topic on which the mission says it found the action server (True, once).
+MISSION_READY_TOPIC = 'mission/ready'
 
 
 def main(args: list[str] | None = None) -> None:
