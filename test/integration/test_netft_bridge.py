@@ -148,6 +148,20 @@ def test_deactivate_stops_the_stream(rig: Rig) -> None:
     assert not rig.twin.streaming and state_label(bridge) == 'inactive'
 
 
+def test_each_record_is_published_once_after_deactivate_and_activate(rig: Rig) -> None:
+    """A second activation polls with the one timer of the configured link: no record twice."""
+    bridge = rig.start_bridge()
+    timers = len(list(bridge.timers))
+    for _ in range(2):
+        assert bridge.trigger_deactivate() == SUCCESS
+        assert bridge.trigger_activate() == SUCCESS
+    assert len(list(bridge.timers)) == timers
+    rig.wrenches.clear()
+    rig.spin_until(lambda: len(rig.wrenches) >= 20)
+    stamps = [(w.header.stamp.sec, w.header.stamp.nanosec) for w in rig.wrenches]
+    assert len(set(stamps)) == len(stamps)
+
+
 def test_absent_box_is_refused_at_configure(rig: Rig) -> None:
     """Nothing at the address for startup_wait_s: configure fails naming it."""
     rig.twin.stop()

@@ -54,6 +54,8 @@ DELEGATED = {
                                       'ardusub)'),
     'lifecycle': ('uvms_cli.lifecycle', "get or change a managed node's lifecycle state "
                                         '(reset: deactivate + activate, clears a safe hold)'),
+    'identify': ('uvms_identify.cli', "identify the vehicle's hydrodynamics from its own "
+                                      'recordings (plan, fit)'),
     'param': ('uvms_cli.param', "list, get or set a running node's parameters (as ros2 "
                                 'param)'),
     'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '

@@ -174,6 +174,8 @@ class NetFtBridgeNode(BridgeNode):
         self._wrench_pub = self.own(self.destroy_publisher,
                                     self.create_publisher(WrenchStamped, 'wrench', qos))
         self.own(self.destroy_service, self.create_service(Trigger, '~/bias', self._on_bias))
+        # One poll timer for the configured link; it reads only while active.
+        self.device_timer(1.0 / float(v['poll_rate_hz']), self._on_tick)
         c = calibration
         self.get_logger().info(
             f'Net F/T at {host}:{port} answers; {c["counts_per_force"]:g} counts/N, '
@@ -186,7 +188,6 @@ class NetFtBridgeNode(BridgeNode):
         self.link.read()  # records still in flight from the configure check
         self.link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
         self._restart_s = self.now_s()
-        self._timer = self.device_timer(1.0 / float(self.values['poll_rate_hz']), self._on_tick)
 
     def put_device_back(self) -> list[str]:
         """Stop the stream (command 0)."""
