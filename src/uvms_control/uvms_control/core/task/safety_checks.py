@@ -65,7 +65,8 @@ def check_limits(result: ControllerResult, f_sensor: FloatArray, f_normal: float
     magnitude = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
     if not magnitude <= limits.max_contact_force_n:
         return Breach(TaskCode.FORCE_LIMIT, (
-            f'contact force |F_e| = {magnitude:.1f} N (n·F_e = {f_normal:.1f} N) exceeds '
+            f'contact force |F_e| = {beyond(magnitude, limits.max_contact_force_n, 1)} N '
+            f'(n·F_e = {f_normal:.1f} N) exceeds '
             f'safety.max_contact_force_n = {limits.max_contact_force_n} N'))
     reading = max(abs(value) for value in f_sensor.tolist())
     if reading >= SATURATION_SHARE * limits.sensor_range_n:
@@ -74,9 +75,21 @@ def check_limits(result: ControllerResult, f_sensor: FloatArray, f_normal: float
     error = math.dist(result.X_d.tolist(), result.X.tolist())
     if not error <= limits.max_position_error_m:
         return Breach(TaskCode.TRACKING_LIMIT, (
-            f'position error |X_d - X| = {error:.3f} m exceeds safety.max_position_error_m = '
-            f'{limits.max_position_error_m} m'))
+            f'position error |X_d - X| = {beyond(error, limits.max_position_error_m, 3)} m '
+            f'exceeds safety.max_position_error_m = {limits.max_position_error_m} m'))
     return None
+
+
+def beyond(value: float, limit: float, decimals: int) -> str:
+    """``value`` with at least ``decimals`` decimals, more until it reads apart from ``limit``.
+
+    A breach message must show why: ``0.0031 m exceeds ... = 0.003 m``, never ``0.003 m``
+    twice. At most 9 decimals.
+    """
+    digits = decimals
+    while digits < 9 and f'{value:.{digits}f}' == f'{limit:.{digits}f}':
+        digits += 1
+    return f'{value:.{digits}f}'
 
 
 def force_direction(F_e: FloatArray, normal: FloatArray, threshold_n: float) -> FloatArray:
