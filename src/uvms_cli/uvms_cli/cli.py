@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import math
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -16,6 +15,8 @@ from typing import TYPE_CHECKING
 from uvms_common.node_entry import end_process
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent
+
+from uvms_cli.argument_types import port, positive_seconds, seconds_or_zero, seed
 
 if TYPE_CHECKING:
     from uvms_bringup.graph import Graph
@@ -63,51 +64,6 @@ DELEGATED = {
 }
 
 
-def _positive_seconds(text: str) -> float:
-    """Argparse type: a finite number of seconds > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a number of seconds, got {text!r}') from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f'expected a number of seconds > 0, got {text!r}')
-    return value
-
-
-def _seconds_or_zero(text: str) -> float:
-    """Argparse type: a finite number of seconds >= 0 (0: no limit)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a number of seconds, got {text!r}') from None
-    if not (math.isfinite(value) and value >= 0.0):
-        raise argparse.ArgumentTypeError(
-            f'expected a number of seconds >= 0 (0: run until Ctrl-C), got {text!r}')
-    return value
-
-
-def _seed(text: str) -> int:
-    """Argparse type: an integer seed in [0, 2^31 - 1]."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected an integer, got {text!r}') from None
-    if not 0 <= value <= 2**31 - 1:
-        raise argparse.ArgumentTypeError(f'expected an integer in [0, 2147483647], got {value}')
-    return value
-
-
-def _port(text: str) -> int:
-    """Argparse type: a TCP port in [0, 65535] (0: any free port)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a TCP port number, got {text!r}') from None
-    if not 0 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f'expected a TCP port in [0, 65535], got {value}')
-    return value
-
-
 def _add_params_file_argument(parser: argparse.ArgumentParser) -> None:
     """``--params-file FILE`` (repeatable) of run and launch, as ROS's ``--params-file``."""
     parser.add_argument(
@@ -123,7 +79,7 @@ def _add_foxglove_arguments(parser: argparse.ArgumentParser) -> None:
     from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
     parser.add_argument(
-        '--foxglove', type=_port, nargs='?', const=FOXGLOVE_PORT, metavar='PORT',
+        '--foxglove', type=port, nargs='?', const=FOXGLOVE_PORT, metavar='PORT',
         help='serve the running graph to the Foxglove app on ws://127.0.0.1:PORT '
              f'(default port {FOXGLOVE_PORT}; 0 picks a free one)')
     parser.add_argument(
@@ -161,10 +117,10 @@ def build_parser() -> argparse.ArgumentParser:
                     "simulated time, until the scenario's duration_s or --duration.")
     run.add_argument('scenario', metavar='SCENARIO.yaml',
                      help='scenario file, or a name of config/scenarios/NAME.yaml')
-    run.add_argument('--duration', type=_positive_seconds, metavar='S',
+    run.add_argument('--duration', type=positive_seconds, metavar='S',
                      help="simulated seconds to run (default: the scenario's duration_s)")
     run.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
-    run.add_argument('--seed', type=_seed, metavar='N',
+    run.add_argument('--seed', type=seed, metavar='N',
                      help="sensor noise seed (default: the scenario's)")
     run.add_argument('--robot', metavar='NAME',
                      help=ROBOT_HELP)
@@ -193,7 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
                'stopped by Ctrl-C/SIGTERM.')
     launch.add_argument('scenario', metavar='SCENARIO.yaml', nargs='?',
                         help='scenario file or name (default: the parameter files only)')
-    launch.add_argument('--duration', type=_seconds_or_zero, metavar='S',
+    launch.add_argument('--duration', type=seconds_or_zero, metavar='S',
                         help="stop after this many simulated seconds (default: the scenario's "
                              'duration_s; without a scenario, or with 0: run until Ctrl-C)')
     launch.add_argument('--output', '-o', metavar='F.mcap', help='record every topic to this file')
