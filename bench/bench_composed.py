@@ -28,8 +28,8 @@ from uvms_bringup.composed import COMPOSED
 from uvms_bringup.launch_helpers import CONTROLLER, THRUSTER_ALLOCATOR, resolve_scenario_path
 from uvms_bringup.launcher import plan_launch
 from uvms_bringup.processes import Launcher
-from uvms_bringup.scenario import load_scenario
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_scenarios.scenario import load_scenario
 
 PAIR = COMPOSED.name
 #: Topics counted against the 2 ms periods: the controller's step and the allocator's tick.

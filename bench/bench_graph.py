@@ -79,7 +79,6 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
     THRUSTER_ALLOCATOR,
     resolve_scenario_path,
 )
-from uvms_bringup.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
 from uvms_common.robot_parameters import robot_model_values  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
 from uvms_control.controller_node import safety_limits  # noqa: E402
@@ -93,6 +92,7 @@ from uvms_control.core.task.task_supervisor import TaskSupervisor  # noqa: E402
 from uvms_control.task_conversions import contact_task_goal  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402
+from uvms_scenarios.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
 from uvms_sim.parameters import (  # noqa: E402
     SIMULATOR_PARAMETERS,
     SimulatorSettings,

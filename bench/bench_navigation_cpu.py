@@ -45,8 +45,8 @@ sys.path[:0] = [str(p) for p in sorted((REPO / 'src').glob('uvms_*')) if p.name 
 
 from uvms_bringup.launch_helpers import resolve_scenario_path  # noqa: E402
 from uvms_bringup.launcher import plan_launch  # noqa: E402
-from uvms_bringup.scenario import load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+from uvms_scenarios.scenario import load_scenario  # noqa: E402
 
 #: The processes whose CPU is reported.
 WATCHED = ('simulator', 'estimator', 'controller')

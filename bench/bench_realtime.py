@@ -64,8 +64,8 @@ from uvms_bringup.launch_helpers import (  # noqa: E402
 )
 from uvms_bringup.launcher import plan_launch  # noqa: E402
 from uvms_bringup.processes import Launcher, NodeProcess, NodeProcessSpec  # noqa: E402
-from uvms_bringup.scenario import load_scenario  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+from uvms_scenarios.scenario import load_scenario  # noqa: E402
 from uvms_sim.parameters import SIMULATOR_PARAMETERS  # noqa: E402
 
 #: One scenario per shipped robot: the paper's UVMS and the BlueROV2 Heavy with an Alpha 5.

@@ -43,25 +43,30 @@ class FakeBridge(BridgeNode):
         self.start()
 
     def configure_device(self) -> None:
+        """Open the link; raise where the test asks."""
         self.device.links_open += 1
         if 'configure' in self.faults:
             raise self.faults['configure']
 
     def activate_device(self) -> None:
+        """Change one value, raise where the test asks, then change another."""
         self.device.changed['SERVO1_FUNCTION'] = 33.0  # the original, journaled first
         if 'activate' in self.faults:
             raise self.faults['activate']
         self.device.changed['SERVO2_FUNCTION'] = 34.0
 
     def put_device_back(self) -> list[str]:
+        """Every changed value back."""
         self.device.puts_back += 1
         self.device.changed.clear()
         return []
 
     def release_device(self) -> None:
+        """Close the link."""
         self.device.links_open -= 1
 
     def device_report(self) -> Report:
+        """Always fine."""
         return Report(OK, 'fine', {})
 
 
@@ -144,7 +149,7 @@ def test_destroying_an_active_bridge_puts_the_device_back(context: Context) -> N
 
 
 def test_autostart_refusal_raises_the_bridge_error_naming_it(context: Context) -> None:
-    """autostart true and a failing check: the constructor raises with the refusal."""
+    """Autostart true and a failing check: the constructor raises with the refusal."""
 
     class Starting(FakeBridge):
         def __init__(self, device: FakeDevice, context: Context) -> None:

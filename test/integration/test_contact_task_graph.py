@@ -25,8 +25,8 @@ from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from uvms_bringup.graph import Graph, build_graph, run_graph
-from uvms_bringup.scenario import load_scenario
 from uvms_control.task_server import REJECTED_PREFIX
+from uvms_scenarios.scenario import load_scenario
 from uvms_tasks.client import ContactTaskClient
 
 from uvms_analysis import report

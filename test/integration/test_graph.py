@@ -10,7 +10,7 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 from uvms_bringup.graph import GraphError, RunResult, build_graph, run_graph
-from uvms_bringup.scenario import Scenario, load_scenario
+from uvms_scenarios.scenario import Scenario, load_scenario
 
 from uvms_cli import cli
 

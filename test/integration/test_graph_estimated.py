@@ -14,8 +14,8 @@ from uvms_analysis.estimate_errors import estimate_errors
 from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.graph import RunResult, build_graph, run_graph
 from uvms_bringup.launch_helpers import ESTIMATOR, graph_nodes, uses_estimator
-from uvms_bringup.scenario import load_scenario
 from uvms_control.core.parameters import topic_for
+from uvms_scenarios.scenario import load_scenario
 
 from uvms_analysis import report
 

@@ -116,7 +116,7 @@ def test_a_controller_on_the_estimate_steps_on_each_estimate_in_real_time(tmp_pa
     Waiting for complete stamps, the launched case1_estimated stalled (INPUTS_STALE); on its
     timer the controller beat against the states (docs/running.md).
     """
-    from uvms_bringup.scenario import parse_scenario
+    from uvms_scenarios.scenario import parse_scenario
 
     scenario = parse_scenario({'name': 's', 'description': 'd', 'duration_s': 1.0,
                                'controller': {'state_source': 'estimate'}},
@@ -129,7 +129,7 @@ def test_a_controller_on_the_estimate_steps_on_each_estimate_in_real_time(tmp_pa
 
 def test_robot_reaches_every_node_that_loads_a_robot_folder(tmp_path: Path) -> None:
     """--robot (or a scenario's robot:) sets robot_name of simulator, controller, allocator."""
-    from uvms_bringup.scenario import parse_scenario
+    from uvms_scenarios.scenario import parse_scenario
 
     scenario = parse_scenario({'name': 's', 'description': 'd', 'duration_s': 1.0,
                                'robot': 'mine'}, tmp_path / 's.yaml')

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.launch_helpers import SIMULATOR, config_dir
-from uvms_bringup.scenario import ScenarioError, load_scenario
+from uvms_scenarios.scenario import ScenarioError, load_scenario
 
 from uvms_cli import cli
 

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 from uvms_bringup.graph import GraphError, build_graph, run_graph
-from uvms_bringup.scenario import load_scenario
+from uvms_scenarios.scenario import load_scenario
 
 from uvms_bringup import graph as graph_module
 

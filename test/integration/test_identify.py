@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from uvms_bringup.declared import check_scenario_overrides
-from uvms_bringup.scenario import load_scenario
 from uvms_identify.recording import read_series
 from uvms_identify.robot_data import load_robot
+from uvms_scenarios.scenario import load_scenario
 
 from uvms_cli import cli
 from uvms_identify import cli as identify_cli

@@ -20,8 +20,8 @@ from sensor_msgs.msg import JointState
 from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import RECORDER
 from uvms_bringup.processes import Launcher
-from uvms_bringup.scenario import load_scenario
 from uvms_common.ros_environment import ros_environment_defaults
+from uvms_scenarios.scenario import load_scenario
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED
 
 from uvms_bringup import launcher as launcher_module

@@ -16,8 +16,8 @@ import pinocchio as pin
 import pytest
 from rosbags.highlevel import AnyReader
 from uvms_bringup.graph import build_graph, run_graph
-from uvms_bringup.scenario import load_scenario
 from uvms_recording.typestore import uvms_typestore
+from uvms_scenarios.scenario import load_scenario
 from uvms_viz.marker_geometry import WALL_THICKNESS_M
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
 from uvms_bringup.graph import build_graph, run_graph
-from uvms_bringup.scenario import load_scenario
+from uvms_scenarios.scenario import load_scenario
 
 SCENARIO = Path(__file__).resolve().parents[2] / 'config' / 'scenarios' / 'free_motion.yaml'
 #: Hold at A for 2 s, then 4 s of the 16 s half circle: the start of the arc, where the

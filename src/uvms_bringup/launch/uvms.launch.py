@@ -40,7 +40,7 @@ from uvms_bringup.launch_helpers import (
     uses_estimator,
     write_mission_file,
 )
-from uvms_bringup.scenario import load_scenario
+from uvms_scenarios.scenario import load_scenario
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
 

@@ -27,6 +27,7 @@ from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
+from uvms_scenarios.scenario import ParameterValue, Scenario, ScenarioError
 
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
@@ -36,7 +37,6 @@ from uvms_bringup.launch_helpers import (
     graph_nodes,
 )
 from uvms_bringup.node_factory import GraphError, make_node
-from uvms_bringup.scenario import ParameterValue, Scenario, ScenarioError
 
 #: ROS domain of the throwaway context: the last of the default port mapping (0-232), which
 #: no graph of ours joins (sweeps take 215-231 and 101-1, tests 1-200, bench_scenarios

@@ -24,6 +24,7 @@ from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedEx
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from uvms_common.node_main import StopEvent, make_executor
+from uvms_scenarios.scenario import ParameterValue, Scenario
 from uvms_tasks.mission_node import MissionNode
 
 from uvms_bringup.bars import RunBar
@@ -39,7 +40,6 @@ from uvms_bringup.launch_helpers import (
     uses_estimator,
 )
 from uvms_bringup.node_factory import GraphError, make_node
-from uvms_bringup.scenario import ParameterValue, Scenario
 from uvms_bringup.stall_watch import StallWatch, stall_limit_s
 
 #: Longest wall-clock wait for any callback before the lockstep loop checks on the graph (s).

@@ -27,10 +27,10 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from uvms_scenarios.scenario import Scenario
 from uvms_sim.parameters import SPECS_BY_NAME as SIMULATOR_SPECS
 
 from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, HARDWARE_TWINS, SIMULATOR, NodeSpec
-from uvms_bringup.scenario import Scenario
 
 #: The bridges a hardware file may name, in start order.
 BRIDGES = ('ardusub_bridge', 'dvl_bridge', 'alpha5_bridge', 'netft_bridge')

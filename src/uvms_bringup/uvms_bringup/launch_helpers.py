@@ -14,10 +14,9 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from uvms_scenarios.scenario import ParameterValue, Scenario
 from uvms_tasks.task_file import Yaml12Loader
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
-
-from uvms_bringup.scenario import ParameterValue, Scenario
 
 #: Namespace of the robot's nodes and topics (``/clock``, ``/tf`` stay global).
 DEFAULT_NAMESPACE = 'uvms'

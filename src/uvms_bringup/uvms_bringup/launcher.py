@@ -24,6 +24,7 @@ from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling
+from uvms_scenarios.scenario import Scenario
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
 from uvms_bringup.hardware_plan import (
@@ -65,7 +66,6 @@ from uvms_bringup.processes import (
     StopRequest,
     end_line,
 )
-from uvms_bringup.scenario import Scenario
 from uvms_common import process_stats
 
 

@@ -9,9 +9,9 @@ from pathlib import Path
 from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from uvms_scenarios.scenario import ParameterValue
 
 from uvms_bringup.launch_helpers import NodeSpec
-from uvms_bringup.scenario import ParameterValue
 
 
 class GraphError(RuntimeError):

@@ -20,7 +20,7 @@ from uvms_cli.argument_types import port, positive_seconds, seconds_or_zero, see
 
 if TYPE_CHECKING:
     from uvms_bringup.graph import Graph
-    from uvms_bringup.scenario import Scenario
+    from uvms_scenarios.scenario import Scenario
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -285,8 +285,8 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
     from uvms_bringup.launch_helpers import resolve_scenario_path
     from uvms_bringup.launcher import launch_graph
     from uvms_bringup.processes import LaunchError
-    from uvms_bringup.scenario import ScenarioError, load_scenario
     from uvms_common.scheduling import parse_cpus
+    from uvms_scenarios.scenario import ScenarioError, load_scenario
 
     try:
         cpus = parse_cpus(args.cpus)
@@ -326,7 +326,7 @@ def _run_in_process(
     """Build and run the graph in this process; report the outcome."""
     from uvms_bringup.graph import GraphError, build_graph
     from uvms_bringup.launch_helpers import resolve_scenario_path
-    from uvms_bringup.scenario import ScenarioError, load_scenario, short_duration_warning
+    from uvms_scenarios.scenario import ScenarioError, load_scenario, short_duration_warning
 
     command = args.command
     scenario = None

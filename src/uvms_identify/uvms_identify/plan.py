@@ -235,7 +235,8 @@ def write_plan(robot: RobotData, experiments: list[Experiment], out: Path,
     for experiment in experiments:
         data = scenario(robot, experiment, robot_reference, joint_positions)
         path = out / f'{experiment.name}.yaml'
-        text = ('# Scenario file (schema: docs/running.md, uvms_bringup/scenario.py), written by '
+        text = ('# Scenario file (schema: docs/running.md, uvms_scenarios/scenario.py), '
+                'written by '
                 '`uvms identify plan`.\n' + yaml.safe_dump(data, sort_keys=False, width=99))
         path.write_text(text, encoding='utf-8')
         paths.append(path)

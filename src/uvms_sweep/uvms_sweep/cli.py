@@ -88,7 +88,7 @@ def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     """Check the sweep, run it, and report."""
     import rclpy.logging
     from uvms_bringup.graph import GraphError
-    from uvms_bringup.scenario import ScenarioError
+    from uvms_scenarios.scenario import ScenarioError
 
     from uvms_sweep.engine import SweepEngineError, run_sweep
     from uvms_sweep.sweep_file import SweepError, load_sweep

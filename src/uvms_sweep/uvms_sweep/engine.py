@@ -42,8 +42,8 @@ from typing import Any
 
 from uvms_bringup.bars import PointBar
 from uvms_bringup.declared import CHECK_DOMAIN_ID
-from uvms_bringup.scenario import Scenario
 from uvms_common.node_main import StopEvent
+from uvms_scenarios.scenario import Scenario
 
 from uvms_sweep.maps import draw_figures
 from uvms_sweep.stop_flag import point_task, ray_error_line, start_stop_flag

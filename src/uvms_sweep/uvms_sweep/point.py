@@ -166,7 +166,7 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
     from uvms_analysis.report import COLUMNS, LABEL_KEYS
     from uvms_analysis.series import load_run
     from uvms_bringup.graph import build_graph, run_graph
-    from uvms_bringup.scenario import load_scenario
+    from uvms_scenarios.scenario import load_scenario
 
     scenario = load_scenario(request['scenario_path'])
     overrides = {node: dict(values) for node, values in scenario.overrides.items()}
@@ -192,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the point process: ``python -m uvms_sweep.point REQUEST.json``."""
     from uvms_analysis.series import AnalysisError
     from uvms_bringup.graph import GraphError
-    from uvms_bringup.scenario import ScenarioError
+    from uvms_scenarios.scenario import ScenarioError
 
     _die_with_parent()
     args = sys.argv[1:] if argv is None else argv

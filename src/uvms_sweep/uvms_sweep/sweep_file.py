@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 from uvms_analysis.report import COLUMNS, LABEL_KEYS
-from uvms_bringup.scenario import (
+from uvms_scenarios.scenario import (
     _NAME_SEGMENT,
     NODE_SECTIONS,
     ParameterValue,
@@ -42,8 +42,8 @@ from uvms_bringup.scenario import (
     _parameter_value,
     read_yaml_file,
 )
-from uvms_bringup.scenario import type_error_message as _type_error
-from uvms_bringup.scenario import yaml_kind as _kind
+from uvms_scenarios.scenario import type_error_message as _type_error
+from uvms_scenarios.scenario import yaml_kind as _kind
 
 #: Node sections an axis may vary (the recorder's parameters change no result).
 AXIS_NODES = tuple(node for node in NODE_SECTIONS if node != 'recorder')

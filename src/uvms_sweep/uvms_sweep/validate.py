@@ -16,7 +16,7 @@ from dataclasses import replace
 
 from rclpy.parameter import Parameter
 from uvms_bringup.declared import as_declared_type, declared_parameters
-from uvms_bringup.scenario import (
+from uvms_scenarios.scenario import (
     ParameterValue,
     Scenario,
     load_scenario,

@@ -220,6 +220,6 @@ class Tuner:
 
 def _scenario_duration(path: Path) -> float:
     """A scenario file's duration_s (s)."""
-    from uvms_bringup.scenario import load_scenario
+    from uvms_scenarios.scenario import load_scenario
 
     return float(load_scenario(path).duration_s)

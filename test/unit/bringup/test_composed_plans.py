@@ -10,8 +10,8 @@ from uvms_bringup.composed import COMPOSED, node_groups
 from uvms_bringup.launch_costs import CostWatch, cpu_seconds
 from uvms_bringup.launch_helpers import resolve_scenario_path
 from uvms_bringup.launcher import plan_launch
-from uvms_bringup.scenario import load_scenario
 from uvms_common.scheduling import Scheduling
+from uvms_scenarios.scenario import load_scenario
 
 from uvms_common import process_stats
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from uvms_bringup.scenario import (
+from uvms_scenarios.scenario import (
     contact_estimate,
     load_scenario,
     parse_scenario,

@@ -15,7 +15,7 @@ from uvms_bringup.hardware_plan import (
     load_hardware_plan,
 )
 from uvms_bringup.launch_helpers import graph_nodes
-from uvms_bringup.scenario import load_scenario
+from uvms_scenarios.scenario import load_scenario
 
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 

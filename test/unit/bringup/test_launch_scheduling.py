@@ -6,8 +6,8 @@ from pathlib import Path
 
 from uvms_bringup.launch_helpers import LOOP_NODES, resolve_scenario_path
 from uvms_bringup.launcher import plan_launch
-from uvms_bringup.scenario import load_scenario
 from uvms_common.scheduling import Scheduling
+from uvms_scenarios.scenario import load_scenario
 
 
 def _arguments(command: tuple[str, ...]) -> list[str]:

@@ -14,8 +14,8 @@ from uvms_bringup.launch_helpers import resolve_scenario_path
 from uvms_bringup.launch_layout import describe_scheduling, sensor_priority
 from uvms_bringup.launcher import plan_launch
 from uvms_bringup.processes import NodeProcessSpec
-from uvms_bringup.scenario import load_scenario
 from uvms_common.scheduling import Scheduling
+from uvms_scenarios.scenario import load_scenario
 
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 

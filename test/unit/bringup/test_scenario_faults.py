@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from uvms_bringup.scenario import ScenarioError, parse_scenario
+from uvms_scenarios.scenario import ScenarioError, parse_scenario
 from uvms_thrusters.thruster_faults import ThrusterFault, parse_faults
 
 PATH = Path('x.yaml')

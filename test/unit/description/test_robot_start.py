@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from uvms_bringup.scenario import load_scenario
+from uvms_scenarios.scenario import load_scenario
 from uvms_sim.errors import SimParameterError
 from uvms_sim.parameters import default_joint_positions
 from uvms_sim.plant import initial_coordinates

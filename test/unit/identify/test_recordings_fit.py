@@ -105,7 +105,7 @@ def test_a_bad_recording_is_refused_in_one_line_naming_what_is_missing(
 
 def test_plan_writes_scenarios_within_the_thrust_limits(robot: RobotData, tmp_path: Path) -> None:
     """One scenario per axis, each valid, at most 60 s, every thrust within the limits."""
-    from uvms_bringup.scenario import load_scenario
+    from uvms_scenarios.scenario import load_scenario
     from uvms_thrusters.thruster_faults import parse_faults
 
     parser = argparse.ArgumentParser()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from uvms_bringup.scenario import contact_estimate, load_scenario
+from uvms_scenarios.scenario import contact_estimate, load_scenario
 from uvms_sweep.maps import log_scale
 from uvms_sweep.sweep_file import load_sweep
 

@@ -143,7 +143,7 @@ def test_two_by_one_map_shows_full_wrapped_axis_labels_and_units(tmp_path: Path)
 
 def test_nine_second_sweep_of_case2_warns_at_validation(tmp_path: Path) -> None:
     """duration_s 9 < 8.05 s first contact + 1 s ramp: a warning naming both; 20 s: none."""
-    from uvms_bringup.scenario import load_scenario
+    from uvms_scenarios.scenario import load_scenario
     from uvms_sweep.validate import duration_warning
 
     sweep = load_sweep(write_sweep(tmp_path))
