@@ -125,6 +125,10 @@ def test_netft_stamps_are_the_boxs_sample_times_under_two_busy_loops(busy_loops:
     assert len(settled) >= RATE_HZ
     # Consecutive records one record period apart (arrival stamps: the polls' intervals, and 0
     # between the records of one poll); the estimate may settle between polls by a little.
+    # The median spacing is the period times the estimated rate ratio of the two clocks: the
+    # skew fit over a few seconds is good to a few hundred ppm (seen: 4.99868 ms, 263 ppm, on
+    # one machine clock), far inside ATI's +-0.5 % and far from arrival stamps' 0 ms.
     near = [step for step in steps_s if abs(step - PERIOD_S) < 0.00005]
-    assert abs(statistics.median(steps_s) - PERIOD_S) < 1e-6 and len(near) >= 0.95 * len(steps_s)
+    assert abs(statistics.median(steps_s) - PERIOD_S) < 0.001 * PERIOD_S
+    assert len(near) >= 0.95 * len(steps_s)
     assert max(abs(e) for e in errors_s) < 0.002
