@@ -26,6 +26,9 @@ from uvms_common.scheduling import LOOP_RTTIME_S, fifo_refusal
 
 #: The guard must end a spinning loop within this long after it starts spinning (s).
 STOPPED_WITHIN_S = 5.0
+#: The hard limit's SIGKILL: 3 s of CPU, which a FIFO task gets at most 95 % of
+#: (sched_rt_runtime_us), then the launcher's report; 5.15 s seen in a suite run.
+KILLED_WITHIN_S = 8.0
 #: The test gives up (a stop request) after this long: the old code never stops the spinner.
 GIVE_UP_S = 20.0
 
@@ -43,7 +46,8 @@ while True:
 """
 #: The recorder's stand-in, on the spinner's CPU: a line every 50 ms, 'closed' on SIGINT.
 BEAT = """
-import os, time
+import os, signal, time
+signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # as a node's StopEvent does
 os.sched_setaffinity(0, {0})
 try:
     while True:
@@ -136,6 +140,6 @@ def test_a_spinning_loop_that_ignores_sigxcpu_is_killed_at_the_hard_limit(
                          f'loop ran {LOOP_RTTIME_S[1]:g} s without blocking '
                          "(RLIMIT_RTTIME's hard limit); stopped the other nodes")
     assert spinning is not None and reported is not None, out.text() + err.text()
-    assert reported - spinning < STOPPED_WITHIN_S
+    assert reported - spinning < KILLED_WITHIN_S
     assert status == EXIT_FAILURE
     assert launcher.processes[0].status == 0
