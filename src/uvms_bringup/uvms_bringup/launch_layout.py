@@ -40,16 +40,22 @@ def sensor_priority(loop_priority: int) -> int:
     return max(loop_priority - 1, 0)
 
 
-def node_scheduling(spec: NodeSpec, scheduling: Scheduling | None) -> Scheduling | None:
+def node_scheduling(spec: NodeSpec, scheduling: Scheduling | None,
+                    sensors_below_loop: bool = True) -> Scheduling | None:
     """What one node's process asks for: the loop's, lower for a sensor bridge; else None.
 
     Args:
         spec: The node.
         scheduling: What the loop processes (``LOOP_NODES``) ask for; None: nothing.
+        sensors_below_loop: The sensor bridges ``SENSOR_BELOW_LOOP`` lower. False beside the
+            twins (``--hardware twin``): there the sensors' own data comes from the twins'
+            and the simulator's processes at the loop's priority, which on 2 cores starved a
+            bridge below them (the Net F/T's wrench stalled, the controller stopped, the arm
+            tripped: a suite run on 2026-12-06), what the robot's own computer never has.
     """
     if scheduling is None or spec not in LOOP_NODES:
         return None
-    if spec in SENSOR_BRIDGES:
+    if spec in SENSOR_BRIDGES and sensors_below_loop:
         return replace(scheduling, priority=sensor_priority(scheduling.priority))
     return scheduling
 

@@ -223,7 +223,7 @@ def plan_launch(
         generated = parameters_dir / f'{spec.name}.yaml'
         generated.write_text(parameters_file_text({f'{fq_prefix}/{spec.name}': overrides}),
                              encoding='utf-8')
-        asks = node_scheduling(spec, scheduling)
+        asks = node_scheduling(spec, scheduling, hardware is None or not hardware.twins)
         command = [*node_executable(spec, bin_dir),
                    *ros_arguments(spec, namespace, [*files, generated], log_level,
                                   remaps if spec is SIMULATOR else (), asks)]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -20,9 +21,13 @@ from uvms_scenarios.scenario import load_scenario
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 
 
-def twin_plans(tmp_path: Path, scheduling: Scheduling) -> dict[str, NodeProcessSpec]:
-    """The processes of ``uvms launch bluerov2_alpha5_contact --hardware twin``, by node."""
-    hardware = load_hardware_plan(hardware_file_path('twin', CONFIG))
+def twin_plans(tmp_path: Path, scheduling: Scheduling,
+               twins: bool = False) -> dict[str, NodeProcessSpec]:
+    """The processes of ``uvms launch bluerov2_alpha5_contact --hardware FILE``, by node.
+
+    The twin file's bridges; ``twins`` False as a robot's own hardware file (no twins beside).
+    """
+    hardware = replace(load_hardware_plan(hardware_file_path('twin', CONFIG)), twins=twins)
     scenario = hardware_scenario(
         load_scenario(resolve_scenario_path('bluerov2_alpha5_contact')), hardware)
     plans = plan_launch(scenario, 'realtime', tmp_path, output_path=tmp_path / 'r.mcap',
@@ -42,9 +47,10 @@ def test_sensor_bridges_start_and_ask_10_below_the_control_loop(tmp_path: Path) 
     for name in ('dvl_bridge', 'netft_bridge'):
         assert (plans[name].rt_priority, asked_priority(plans[name])) == (40, 40)
         assert "rt_cpus:='1'" in plans[name].command
-    for name in ('simulator', 'hardware_twins', 'ardusub_bridge', 'alpha5_bridge', 'controller',
-                 'thruster_allocator', 'estimator'):
+    for name in ('ardusub_bridge', 'alpha5_bridge', 'controller', 'thruster_allocator',
+                 'estimator'):
         assert (plans[name].rt_priority, asked_priority(plans[name])) == (50, 50)
+    assert 'simulator' not in plans and 'hardware_twins' not in plans  # the robot's own
     for name in ('recorder', 'mission', 'visualizer'):
         assert (plans[name].rt_priority, asked_priority(plans[name])) == (0, None)
 
@@ -54,8 +60,15 @@ def test_the_launch_line_names_the_sensor_bridges_priority(tmp_path: Path) -> No
     scheduling = Scheduling(50)
     line = describe_scheduling(scheduling, twin_plans(tmp_path, scheduling).values())
     assert line.endswith('; dvl_bridge, netft_bridge: SCHED_FIFO 40')
-    assert line.startswith('; simulator, hardware_twins, ardusub_bridge, alpha5_bridge')
+    assert line.startswith('; ardusub_bridge, alpha5_bridge')
     assert ': SCHED_FIFO 50; ' in line
+
+
+def test_beside_the_twins_the_sensor_bridges_keep_the_loops_priority(tmp_path: Path) -> None:
+    """--hardware twin: the sensors' data comes from processes at 50: the bridges at 50 too."""
+    plans = twin_plans(tmp_path, Scheduling(50), twins=True)
+    for name in ('dvl_bridge', 'netft_bridge', 'hardware_twins', 'simulator', 'controller'):
+        assert (plans[name].rt_priority, asked_priority(plans[name])) == (50, 50)
 
 
 def test_without_priorities_the_sensor_bridges_ask_for_nothing_either(tmp_path: Path) -> None:
