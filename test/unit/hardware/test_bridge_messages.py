@@ -19,9 +19,12 @@ from uvms_sim import raw_conversions as sim_raw
 
 NAVIGATION = {k: p.value for k, p in robot_parameters('bluerov2_alpha5', 'estimator').items()}
 NOISE = bm.ImuNoise.from_navigation(NAVIGATION)
-HARDWARE = Path(__file__).resolve().parents[3] / 'src' / 'uvms_hardware' / 'uvms_hardware'
-PURE = ['t200_curve.py', 'dvl_protocol.py', 'dvl_link.py', 'ardusub_link.py', 'ardusub_wire.py',
-        'hardware_config.py', 'twins/ardusub_twin.py', 'twins/dvl_twin.py']
+SRC = Path(__file__).resolve().parents[3] / 'src'
+#: Modules by their path under src/: the hardware package's cores and the twins' package.
+PURE = [*(f'uvms_hardware/uvms_hardware/{name}' for name in (
+    't200_curve.py', 'dvl_protocol.py', 'dvl_link.py', 'ardusub_link.py', 'ardusub_wire.py',
+    'hardware_config.py')), 'uvms_twins/uvms_twins/ardusub_twin.py',
+    'uvms_twins/uvms_twins/dvl_twin.py']
 
 
 def test_frames_and_unused_variance_are_the_simulators() -> None:
@@ -75,7 +78,7 @@ def test_depth_from_bar30_pressure() -> None:
 @pytest.mark.parametrize('name', PURE)
 def test_cores_and_twins_import_no_ros(name: str) -> None:
     """The MAVLink and DVL cores, the curve and the twins import neither rclpy nor messages."""
-    tree = ast.parse((HARDWARE / name).read_text())
+    tree = ast.parse((SRC / name).read_text())
     roots = {alias.name.split('.')[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
              for alias in node.names}
     roots |= {node.module.split('.')[0] for node in ast.walk(tree)

@@ -7,9 +7,12 @@ from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[3] / 'src' / 'uvms_hardware' / 'uvms_hardware'
-PURE = ['reach_protocol.py', 'rdt_protocol.py', 'hardware_config.py', 'alpha5_core.py',
-        'netft_core.py', 'transport.py', 'twins/alpha5_twin.py', 'twins/netft_twin.py']
+SRC = Path(__file__).resolve().parents[3] / 'src'
+#: Modules by their path under src/: the hardware package's cores and the twins' package.
+PURE = [*(f'uvms_hardware/uvms_hardware/{name}' for name in (
+    'reach_protocol.py', 'rdt_protocol.py', 'hardware_config.py', 'alpha5_core.py',
+    'netft_core.py', 'transport.py')), 'uvms_twins/uvms_twins/alpha5_twin.py',
+    'uvms_twins/uvms_twins/netft_twin.py']
 FORBIDDEN = {'rclpy', 'launch', 'launch_ros', 'ament_index_python'}
 
 
@@ -17,7 +20,7 @@ FORBIDDEN = {'rclpy', 'launch', 'launch_ros', 'ament_index_python'}
 def test_module_imports_no_ros(name: str) -> None:
     """No rclpy and no message package in a codec, core, transport or twin."""
     roots = set()
-    for node in ast.walk(ast.parse((PACKAGE / name).read_text(encoding='utf-8'))):
+    for node in ast.walk(ast.parse((SRC / name).read_text(encoding='utf-8'))):
         if isinstance(node, ast.Import):
             roots.update(alias.name.split('.')[0] for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
