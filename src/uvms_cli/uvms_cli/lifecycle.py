@@ -23,6 +23,8 @@ from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
 
+from uvms_cli.service_call import call_service
+
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USAGE = 2
@@ -83,18 +85,9 @@ class LifecycleClient:
         self._change = node.create_client(ChangeState, f'{target}/change_state')
 
     def _call(self, client: Any, request: Any) -> Any:
-        import rclpy
-
-        if not client.wait_for_service(timeout_sec=self._timeout_s):
-            msg = (f'{client.srv_name} did not appear within {self._timeout_s:g} s (is the '
-                   'graph running on this ROS_DOMAIN_ID, and is the node managed?)')
-            raise LifecycleCallError(msg)
-        future = client.call_async(request)
-        rclpy.spin_until_future_complete(self._node, future, timeout_sec=self._timeout_s)
-        if not future.done() or future.result() is None:
-            msg = f'{client.srv_name} gave no answer within {self._timeout_s:g} s'
-            raise LifecycleCallError(msg)
-        return future.result()
+        return call_service(self._node, client, request, self._timeout_s, LifecycleCallError,
+                            ' (is the graph running on this ROS_DOMAIN_ID, and is the node '
+                            'managed?)')
 
     def state(self) -> str:
         """The node's current state label (``unconfigured``, ``inactive``, ``active``, ...)."""

@@ -25,6 +25,8 @@ from typing import Any
 import yaml
 from uvms_common.ros_environment import ros_environment_defaults
 
+from uvms_cli.service_call import call_service
+
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USAGE = 2
@@ -116,19 +118,9 @@ class ParamClient:
         self._set = node.create_client(SetParameters, f'{target}/set_parameters')
 
     def _call(self, client: Any, request: Any) -> Any:
-        import rclpy
-
-        if not client.wait_for_service(timeout_sec=self._timeout_s):
-            msg = (f'{client.srv_name} did not appear within {self._timeout_s:g} s: no node '
-                   f'{self._target} answers (is the graph running on this ROS_DOMAIN_ID, '
-                   'in this namespace?)')
-            raise ParamCallError(msg)
-        future = client.call_async(request)
-        rclpy.spin_until_future_complete(self._node, future, timeout_sec=self._timeout_s)
-        if not future.done() or future.result() is None:
-            msg = f'{client.srv_name} gave no answer within {self._timeout_s:g} s'
-            raise ParamCallError(msg)
-        return future.result()
+        return call_service(self._node, client, request, self._timeout_s, ParamCallError,
+                            f': no node {self._target} answers (is the graph running on this '
+                            'ROS_DOMAIN_ID, in this namespace?)')
 
     def names(self, prefix: str = '') -> list[str]:
         """Every parameter name of the node (under ``prefix`` if given), sorted."""
