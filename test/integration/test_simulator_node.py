@@ -21,6 +21,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool
 from tf2_msgs.msg import TFMessage
 from uvms_sim.errors import SimParameterError, SimulationError, StartupError
 from uvms_sim.simulator_node import SimulatorNode
@@ -500,6 +501,39 @@ def test_first_state_waits_for_the_recorder_to_subscribe(harness: Harness, mode:
     assert received['/clock'][0].clock.sec == received['/clock'][0].clock.nanosec == 0
     for topic in ('joint_states', 'odometry', 'wrench', 'ee_pose', 'contact'):
         assert stamp_ns(received[topic][0]) == 0, topic
+
+
+@pytest.mark.parametrize('mode', ['lockstep', 'realtime'])
+def test_first_state_waits_for_the_mission_to_be_ready(harness: Harness, mode: str) -> None:
+    """startup.mission: no state (and no simulated time) before the mission says it is ready.
+
+    What ``uvms launch`` of a scenario with a mission relies on: a mission still discovering
+    the controller's action server cannot start its goals late, physics waits for it.
+    """
+    overrides: dict[str, Any] = {'mode': mode, 'startup__mission': 'mission/ready',
+                                 'duration_s': 0.02}
+    if mode == 'realtime':
+        overrides['startup__hold'] = False  # no managed nodes here: the mission alone holds
+    sim = harness.start(**overrides)
+    harness.spin_for(1.0)
+    assert harness.responder.states == []
+    assert sim.sim_time_ns == 0
+    mission = rclpy.create_node('mission', namespace='uvms', context=harness.context)
+    ready = mission.create_publisher(Bool, 'mission/ready', QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    ready.publish(Bool(data=True))  # latched, as the mission node publishes it
+    try:
+        harness.spin_until(lambda: sim.finished)
+    finally:
+        mission.destroy_node()
+    assert harness.responder.states and stamp_ns(harness.responder.states[0]) == 0
+
+
+def test_a_mission_never_ready_stops_the_start_naming_the_topic(harness: Harness) -> None:
+    """After startup.timeout_s without mission/ready, the error names the topic and why."""
+    harness.start(startup__mission='mission/ready', startup__timeout_s=0.5)
+    with pytest.raises(StartupError, match=r'mission did not say it is ready .* mission/ready'):
+        harness.spin_for(2.0)
 
 
 def test_a_recorder_that_never_subscribes_stops_the_start_naming_it(harness: Harness) -> None:

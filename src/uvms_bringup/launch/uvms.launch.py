@@ -33,6 +33,7 @@ from uvms_bringup.launch_helpers import (
     RECORDER,
     file_parameters,
     graph_nodes,
+    mission_wait,
     node_parameters,
     parameters_file_text,
     recorder_wait,
@@ -75,6 +76,7 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
                                     foxglove_address, robot)
         overrides.update(recorder_wait(spec, bool(output_path)))
+        overrides.update(mission_wait(spec, mission))
         if spec is MISSION:
             assert scenario is not None
             overrides['mission_file'] = str(write_mission_file(

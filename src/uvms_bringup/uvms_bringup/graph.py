@@ -35,6 +35,7 @@ from uvms_bringup.launch_helpers import (
     SIMULATOR,
     config_dir,
     graph_nodes,
+    mission_wait,
     node_parameters,
     parameters_file_text,
     uses_estimator,
@@ -154,6 +155,7 @@ def build_graph(
             **node_parameters(spec, scenario, mode, duration_s,
                               None if output_path is None else str(output_path), foxglove,
                               robot),
+            **mission_wait(spec, scenario is not None and bool(scenario.mission)),
             **(extra_overrides or {}).get(spec.name, {}),
         }
         for spec in specs

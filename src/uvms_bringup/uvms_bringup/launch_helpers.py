@@ -15,6 +15,7 @@ from typing import Any
 
 import yaml
 from uvms_scenarios.scenario import ParameterValue, Scenario
+from uvms_tasks.mission_outcome import MISSION_READY_TOPIC
 from uvms_tasks.task_file import Yaml12Loader
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 
@@ -158,6 +159,16 @@ def recorder_wait(spec: NodeSpec, record: bool) -> dict[str, ParameterValue]:
     the graph runner builds the recorder before the first state goes out).
     """
     return {'startup.recorder': RECORDER.name} if spec is SIMULATOR and record else {}
+
+
+def mission_wait(spec: NodeSpec, mission: bool) -> dict[str, ParameterValue]:
+    """The simulator's ``startup.mission`` when the run has a mission.
+
+    The simulator then publishes its first state only once the mission has found the
+    controller's action server (its latched ``mission/ready``), so that no goal starts late
+    however long discovery takes (issue 48: a mission once did not find the server in 10 s).
+    """
+    return {'startup.mission': MISSION_READY_TOPIC} if spec is SIMULATOR and mission else {}
 
 
 def graph_nodes(record: bool, foxglove: bool = False, mission: bool = False,

@@ -43,6 +43,7 @@ from uvms_bringup.launch_helpers import (
     config_dir,
     file_parameters,
     graph_nodes,
+    mission_wait,
     node_parameters,
     parameters_file_text,
     recorder_wait,
@@ -205,6 +206,7 @@ def plan_launch(
         overrides: dict[str, Any] = {
             **node_parameters(spec, scenario, mode, duration_s, output, foxglove),
             **recorder_wait(spec, output is not None),
+            **mission_wait(spec, mission),
             **(extra_overrides or {}).get(spec.name, {}),
         }
         files = [config / file for file in spec.parameter_files]

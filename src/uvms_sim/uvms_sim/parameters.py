@@ -138,6 +138,14 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         '(both modes; uvms launch sets it when it records); empty: publish at once.',
     ),
     ParameterSpec(
+        'startup.mission', '',
+        "A mission's latched readiness topic (relative to the namespace, e.g. mission/ready) "
+        'on which True must arrive before the first state is published, so that no goal '
+        "can start late because the mission was still discovering the controller's action "
+        'server (both modes; uvms launch sets it when the scenario has a mission); empty: '
+        'publish at once.',
+    ),
+    ParameterSpec(
         'watchdog_timeout_s', 0.1,
         'Age in simulated time above which an actuator command is stale and thrusters and '
         'motors are set to zero (s).',
@@ -331,7 +339,8 @@ class SimulatorSettings:
             startup=StartupSettings(bool(checked['startup.hold']),
                                     round(float(checked['startup.timeout_s']) * 1e9),
                                     tuple(checked['startup.nodes']),
-                                    str(checked['startup.recorder'])),
+                                    str(checked['startup.recorder']),
+                                    str(checked['startup.mission'])),
             devices=DeviceTiming.from_values(checked),
         )
 

@@ -51,7 +51,12 @@ from uvms_sim.parameters import (
     default_joint_positions,
 )
 from uvms_sim.plant import Plant, initial_coordinates
-from uvms_sim.startup_watch import StartupWatch, SubscriberWait, recorded_publishers
+from uvms_sim.startup_watch import (
+    MissionWait,
+    StartupWatch,
+    SubscriberWait,
+    recorded_publishers,
+)
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
@@ -154,6 +159,7 @@ class SimulatorNode(Node):
         self._first_state = SubscriberWait(self, cfg.startup, recorded_publishers(  # first
             self.get_namespace(), [self._clock_pub, self._joint_pub, self._odom_pub,
                                    self._wrench_pub, self._ee_pub, self._contact_pub]))
+        self._mission = MissionWait(self, cfg.startup)
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
@@ -214,7 +220,7 @@ class SimulatorNode(Node):
 
     def _on_kick(self) -> None:
         """Lockstep start: publish the initial state once the executor runs (and recorder)."""
-        if not self._first_state.passed(self.get_clock().now().nanoseconds):
+        if not self._may_publish_first_state(self.get_clock().now().nanoseconds):
             return  # the kick timer asks again
         self._kick.cancel()
         self._publish_state()
@@ -279,6 +285,10 @@ class SimulatorNode(Node):
                 f'the simulation runs {behind_s * 1e3:.1f} ms behind real time (start-up)',
                 once=True)
 
+    def _may_publish_first_state(self, now_ns: int) -> bool:
+        """Whether the recorder subscribes and the mission is ready, as far as they are asked."""
+        return self._first_state.passed(now_ns) and self._mission.passed(now_ns)
+
     def _watch_startup(self) -> None:
         """Start watching for the loop to close, with a log line (after the first state)."""
         cfg = self._settings
@@ -318,7 +328,7 @@ class SimulatorNode(Node):
     def _loop_closed(self, now_ns: int) -> bool:
         """Real time: hold (re-publish) the initial state until the loop is closed."""
         if self._published == 0:
-            if not self._first_state.passed(now_ns):
+            if not self._may_publish_first_state(now_ns):
                 return False
             if not self._settings.startup.hold:
                 return True

@@ -52,12 +52,15 @@ class StartupSettings:
             must report ``active`` before physics starts.
         recorder: A node whose subscriptions to the state topics must be matched before
             the first state is published (``subscriber_matched``); '' none.
+        mission: A mission's latched readiness topic (``mission/ready``) on which True
+            must arrive before the first state is published; '' none.
     """
 
     hold: bool
     timeout_ns: int
     nodes: tuple[str, ...]
     recorder: str = ''
+    mission: str = ''
 
 
 class LoopStartup:

@@ -16,8 +16,15 @@ from typing import Any
 from lifecycle_msgs.srv import GetState
 from rclpy.node import Node
 from rclpy.publisher import Publisher
-from rclpy.qos import QoSCompatibility, QoSProfile, ReliabilityPolicy, qos_check_compatible
+from rclpy.qos import (
+    DurabilityPolicy,
+    QoSCompatibility,
+    QoSProfile,
+    ReliabilityPolicy,
+    qos_check_compatible,
+)
 from rclpy.task import Future
+from std_msgs.msg import Bool
 
 from uvms_msgs.msg import GeneralizedForce
 from uvms_sim.errors import StartupError
@@ -189,3 +196,60 @@ class SubscriberWait:
                 f'startup.timeout_s = {self._timeout_ns * 1e-9:g} s '
                 f'({(now_ns - self.start_ns) * 1e-9:.1f} s; startup.recorder): no matched '
                 f'subscription of it on {", ".join(self.missing)}')
+
+
+class MissionWait:
+    """Before the first state: whether the mission has found the controller's action server.
+
+    ``startup.mission``: the simulator publishes its first state only once True arrives on
+    the mission's latched readiness topic, so that a goal never starts late (or not at all)
+    because the mission was still discovering the action server while physics ran.
+    """
+
+    def __init__(self, node: Node, settings: StartupSettings) -> None:
+        """Subscribe to ``settings.mission`` (none: ``passed`` at once), from now.
+
+        The timeout is ``settings.timeout_ns`` of the node's clock (the simulator's: wall time).
+        """
+        self._node = node
+        self.topic = settings.mission
+        self.start_ns = node.get_clock().now().nanoseconds
+        self._timeout_ns = settings.timeout_ns
+        self.ready = not self.topic
+        self._passed = self.ready
+        self._subscription: Any = None
+        if self.topic:
+            self._subscription = node.create_subscription(
+                Bool, self.topic, self._on_ready, QoSProfile(
+                    depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.TRANSIENT_LOCAL))
+            node.get_logger().info(
+                f'publishing the first state once the mission is ready ({self.topic}, '
+                'startup.mission)')
+
+    def _on_ready(self, message: Bool) -> None:
+        self.ready = self.ready or bool(message.data)
+
+    def passed(self, now_ns: int) -> bool:
+        """Whether the mission said it is ready (True at once without one); raise past the timeout.
+
+        Raises:
+            StartupError: ``startup.timeout_s`` passed without it; the message names the topic.
+        """
+        if self._passed:
+            return True
+        if self.ready:
+            self._passed = True
+            self._node.get_logger().info(
+                f'the mission is ready after {(now_ns - self.start_ns) * 1e-9:.2f} s')
+            self._node.destroy_subscription(self._subscription)
+            self._subscription = None
+            return True
+        if 0 < self._timeout_ns <= now_ns - self.start_ns:
+            msg = (f'the mission did not say it is ready within startup.timeout_s = '
+                   f'{self._timeout_ns * 1e-9:g} s (no True on {self.topic}, '
+                   "startup.mission): it did not find the controller's action server, or "
+                   'it is not running')
+            self._node.get_logger().fatal(msg)
+            raise StartupError(msg)
+        return False

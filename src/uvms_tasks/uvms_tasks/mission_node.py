@@ -47,7 +47,12 @@ from uvms_msgs.msg import ControllerState
 from uvms_tasks.client import DISCOVERY_SETTLE_S, ContactTaskClient
 from uvms_tasks.errors import TaskError, TaskFileError
 from uvms_tasks.goals import TaskOutcome, describe_task, goal_from_task
-from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, MissionOutcome, write_outcome
+from uvms_tasks.mission_outcome import (
+    EXIT_MISSION_FAILED,
+    MISSION_READY_TOPIC,
+    MissionOutcome,
+    write_outcome,
+)
 from uvms_tasks.task_file import TaskSpec, load_task_file
 
 
@@ -260,8 +265,6 @@ class MissionNode(Node):
 
 #: Period of the wall-clock check for the action server until it is found (s).
 DISCOVERY_POLL_S = 0.05
-#: Latched topic on which the mission says it found the action server (True, once).
-MISSION_READY_TOPIC = 'mission/ready'
 
 
 def main(args: list[str] | None = None) -> None:

@@ -21,6 +21,10 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+#: Latched topic (std_msgs/Bool, relative to the namespace) on which the mission says, once,
+#: that it found the controller's action server; a simulator with ``startup.mission`` holds
+#: its first state until then.
+MISSION_READY_TOPIC = 'mission/ready'
 #: Exit status of a mission process whose mission failed (a task did not succeed); 0 when
 #: every task succeeded, 1 when the node could not start or crashed.
 EXIT_MISSION_FAILED = 3
