@@ -1,0 +1,1 @@
+"""uvms pilot: a person's inputs (terminal keys, a gamepad) onto the pilot topics (issue 51)."""
