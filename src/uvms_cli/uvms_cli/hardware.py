@@ -1,9 +1,12 @@
 """``uvms hardware check twin|FILE`` and ``uvms hardware restore ardusub``.
 
 ``check``: each device of a hardware file found and described; changes nothing on any device
-(``uvms_hardware.hardware_check`` says what it sends). Exit status 0 when every device
-answered and nothing stops its bridge from activating, 1 when something does (each problem on
-a line of its own), 2 for a bad command line or file.
+(``uvms_hardware.hardware_check`` says what it sends). First the bridges running on the graph
+(their ``/diagnostics``, ``hardware_check_graph``), then device by device: a line as each
+starts with the longest it may take, what it found, and its problems and time. Exit status 0
+when every device answered and nothing stops its bridge from activating (nor shows a running
+bridge stopped), 1 when something does (each problem on a line of its own), 2 for a bad
+command line or file.
 
 ``restore ardusub``: what an ardusub_bridge that did not end cleanly (a kill, a crash) left
 changed on the vehicle put back, as the bridge's own stop does (``uvms_hardware.
@@ -17,13 +20,14 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import Sequence
 
 from uvms_bringup.hardware_plan import HardwareFileError, hardware_file_path, load_hardware_plan
 from uvms_bringup.launch_helpers import config_dir
 from uvms_hardware.ardusub_restore import restore_ardusub
 from uvms_hardware.errors import HardwareError
-from uvms_hardware.hardware_check import check_hardware
+from uvms_hardware.hardware_check import BridgeStatus, CheckBounds, check_hardware
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
 #: The ardusub_bridge's default ``mavlink_url``.
@@ -42,6 +46,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     check.add_argument('--robot', default='bluerov2_alpha5',
                        help='robot folder whose hardware.yaml describes the devices '
                             '(default: bluerov2_alpha5)')
+    check.add_argument('--wait', type=float, default=CheckBounds.wait_s, metavar='S',
+                       help="seconds for each device's first answer (default "
+                            f"{CheckBounds.wait_s:g}; not the file's start-up waits)")
+    check.add_argument('--graph-wait', type=float, default=3.0, metavar='S',
+                       help='seconds to listen on /diagnostics for running bridges (default 3; '
+                            '0: do not look at the graph)')
     restore = sub.add_parser('restore', help='put back what a bridge that did not end cleanly '
                              'left changed on its device')
     restore.add_argument('device', choices=['ardusub'])
@@ -70,12 +80,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     except HardwareFileError as exc:
         print(f'uvms hardware: error: {exc}', file=sys.stderr)
         return EXIT_USAGE
+    try:
+        bounds = CheckBounds(wait_s=args.wait)
+    except ValueError as exc:
+        print(f'uvms hardware: error: --wait: {exc}', file=sys.stderr)
+        return EXIT_USAGE
+    start_s = time.monotonic()
     if plan.twins:
         print('uvms hardware: this file says twins: true; the twins run only inside '
-              '`uvms launch --hardware`: checking whatever answers at its addresses')
-    problems = check_hardware(args.robot, plan.bridges, lambda line: print(line, flush=True))
-    print(f'uvms hardware: {problems} problem(s); nothing was changed on any device')
+              '`uvms launch --hardware`: checking whatever answers at its addresses (a '
+              "running twin launch's)", flush=True)
+    graph = _running_bridges(list(plan.bridges), args.graph_wait)
+    problems = check_hardware(args.robot, plan.bridges, lambda line: print(line, flush=True),
+                              bounds, graph)
+    print(f'uvms hardware: {time.monotonic() - start_s:.1f} s: {problems} problem(s); '
+          'nothing was changed on any device')
     return EXIT_OK if problems == 0 else EXIT_PROBLEMS
+
+
+def _running_bridges(names: list[str], listen_s: float) -> dict[str, BridgeStatus]:
+    """The bridges of ``names`` on the graph, said on a line (none when ``listen_s`` is 0)."""
+    if listen_s <= 0.0:
+        return {}
+    print(f'graph: listening on /diagnostics for running bridges (at most {listen_s:g} s)',
+          flush=True)
+    from uvms_hardware.hardware_check_graph import running_bridges
+
+    start_s = time.monotonic()
+    graph = running_bridges(names, listen_s)
+    took = f'{time.monotonic() - start_s:.1f} s'
+    print('graph: ' + (', '.join(f'{s.name} {s.state}' for s in graph.values()) + f' ({took})'
+                       if graph else f'no bridge running ({took})'), flush=True)
+    return graph
 
 
 

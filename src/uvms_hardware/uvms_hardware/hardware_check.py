@@ -1,149 +1,95 @@
 """``uvms hardware check FILE``: find each device of a hardware file and say what it is.
 
-It changes nothing. The bring-up's first command (docs/hardware.md): before any bridge
-changes a parameter or arms anything, it connects to each device the hardware file names,
-prints what it found and what would stop the bridge from activating, and returns the number
-of problems. What it sends: MAVLink HEARTBEATs as a GCS and parameter *reads*, nothing the
-vehicle keeps; requests of the Alpha 5's identity, mode and limits. The DVL is only listened
-to. The Net F/T box is asked for records and told to stop again. No ROS: plain sockets
-through the bridges' own cores.
+It changes nothing. The bring-up's first command (docs/hardware.md), and the one to run beside
+a launch that misbehaves: it connects to each device the hardware file names, one after the
+other, and says as it goes what it checks, how long it waits at most, what it found and what
+would stop the bridge (or shows that a running bridge stopped), each such line a PROBLEM, and
+how long the device took. The bridges running on the graph (``hardware_check_graph``: their
+``/diagnostics``) say what the devices should look like (``hardware_check_status``): an
+ERROR of a bridge (a tripped arm, a silent device) is a problem too.
+
+What it sends: MAVLink HEARTBEATs as a GCS and parameter *reads*
+(``hardware_check_ardusub``); requests of the Alpha 5's identity, mode, limits, position,
+speed and HARDWARE_STATUS (``hardware_check_alpha5``). The DVL is only listened to. The Net
+F/T box is asked for records and told to stop again, unless a netft_bridge is active (the
+box streams to one requester: the check would take the bridge's stream). No ROS here: plain
+sockets through the bridges' own cores.
+
+Each device's waits are the check's own (`CheckBounds`, ``--wait``), not the hardware file's
+start-up waits: ``twin.yaml`` gives a launch's bridges 30 s for devices that start with it,
+which made a check of absent twins take 65 s (30 s for the vehicle's HEARTBEAT, 30 s of DVL
+connection retries).
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
 from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import parse_host_port
-from uvms_hardware.alpha5_core import check_device
-from uvms_hardware.alpha5_probe import probe_device
-from uvms_hardware.ardusub_link import ArduSubLink, LinkSettings
-from uvms_hardware.ardusub_restore import find_leftovers, leftovers_refusal
-from uvms_hardware.ardusub_watchdog import SCRIPT_NAME
 from uvms_hardware.dvl_link import DvlLink
 from uvms_hardware.errors import HardwareError
+from uvms_hardware.hardware_check_alpha5 import alpha5_bound_s, check_alpha5
+from uvms_hardware.hardware_check_ardusub import ardusub_bound_s, check_ardusub
+from uvms_hardware.hardware_check_status import BridgeStatus, CheckBounds, Device, Graph, Say
 from uvms_hardware.hardware_config import hardware_section, load_alpha5
-from uvms_hardware.reach_protocol import FrameSplitter
-from uvms_hardware.t200_curve import T200Curve
-from uvms_hardware.transport import UdpLink, collect, open_link, parse_connection
+from uvms_hardware.transport import UdpLink, collect
 
-#: Seconds to listen for a device's first words.
-LISTEN_S = 3.0
+__all__ = ['CHECKS', 'BridgeStatus', 'CheckBounds', 'check_hardware', 'device_bound_s']
 
-Say = Callable[[str], None]
+Check = Callable[[str, Mapping[str, Any], Device, CheckBounds, BridgeStatus | None], None]
 
 
-def check_ardusub(robot: str, values: Mapping[str, Any], say: Say) -> int:
-    """The vehicle: heartbeat, GCS id, failsafes, thruster outputs (leftovers), script, battery."""
-    _, section = hardware_section(robot, 'ardusub')
-    settings = LinkSettings(str(values['mavlink_url']),
-                            tuple(int(c) for c in section['thruster_channels']),
-                            tuple(int(d) for d in section['thruster_directions']),
-                            int(values.get('gcs_system_id', 255)))
-    link = ArduSubLink(settings, T200Curve.from_section(section['t200']))
-    problems = 0
-    try:
-        link.open()
-        link.wait_vehicle(float(values.get('heartbeat_timeout_s', LISTEN_S)))
-        v = link.vehicle
-        say(f'ardusub: system {v.system_id} component {v.component_id}, '
-            f'{"armed" if v.armed else "disarmed"}, custom mode {v.custom_mode}')
-        try:
-            name, gcs_id = link.check_gcs_id()
-            say(f'ardusub: {name} = {gcs_id}: our RC overrides will be obeyed')
-        except HardwareError as exc:
-            problems += 1
-            say(f'ardusub: PROBLEM: {exc}')
-        for warning in link.failsafe_warnings():
-            say(f'ardusub: warning: {warning}')
-        try:
-            for warning in link.check_other_gcs():
-                say(f'ardusub: warning: {warning}')
-        except HardwareError as exc:
-            problems += 1
-            say(f'ardusub: PROBLEM: {exc}')
-        functions = {c: link.read_param(f'SERVO{c}_FUNCTION') for c in settings.thruster_channels}
-        say('ardusub: thruster outputs SERVOn_FUNCTION: ' + ', '.join(
-            f'{c}={"?" if f is None else int(f)}' for c, f in functions.items())
-            + ' (passthrough mode sets RCIN 51..58 and puts these back)')
-        leftovers = find_leftovers(link)
-        if leftovers is not None:
-            problems += 1
-            say(f'ardusub: PROBLEM: {leftovers_refusal(leftovers, settings.url)}')
-        script_ms = link.wait_watchdog_script(1.5)
-        say(f'ardusub: {SCRIPT_NAME} heard (timeout {script_ms:g} ms): the thrusters stop '
-            'without the bridge' if script_ms is not None else
-            f'ardusub: warning: {SCRIPT_NAME} not heard: the bridge will use RC passthrough, '
-            'and only its process stops the thrusters (docs/hardware.md)')
-        end_s = time.monotonic() + 1.5
-        while math.isnan(v.voltage_v) and time.monotonic() < end_s:
-            link.service()
-            time.sleep(0.01)
-        say(f'ardusub: battery {v.voltage_v:.2f} V' if math.isfinite(v.voltage_v) else
-            'ardusub: battery: no SYS_STATUS heard (the bridge asks for it when it runs)')
-    except HardwareError as exc:
-        problems += 1
-        say(f'ardusub: PROBLEM: {exc}')
-    finally:
-        link.close()
-    return problems
+def check_dvl(robot: str, values: Mapping[str, Any], device: Device, bounds: CheckBounds,
+              bridge: BridgeStatus | None) -> None:
+    """The DVL: connection, then a velocity report with bottom lock (listening only).
 
-
-def check_dvl(robot: str, values: Mapping[str, Any], say: Say) -> int:
-    """The DVL: connection, a velocity report, bottom lock (listening only)."""
+    No bottom lock is a problem: the bridge publishes no velocity without it, so the
+    estimator has none. The first locked report within ``wait_s`` ends the listening.
+    """
     address = parse_host_port(str(values['address']), 16171, 'dvl_bridge.address')
-    link = DvlLink(address).start()
+    link = DvlLink(address, reconnect_period_s=0.2).start()
     try:
-        if not link.wait_connected(float(values.get('connect_timeout_s', LISTEN_S))):
-            say(f'dvl: PROBLEM: no connection to {address.host}:{address.port}: '
-                f'{link.last_error}')
-            return 1
-        end_s = time.monotonic() + LISTEN_S
-        reports = []
-        while not reports and time.monotonic() < end_s:
+        if not link.wait_connected(bounds.wait_s):
+            device.problem(f'no connection to {address.host}:{address.port} within '
+                           f'{bounds.wait_s:g} s: {link.last_error}')
+            return
+        end_s = time.monotonic() + bounds.wait_s
+        last = None
+        while time.monotonic() < end_s:
             reports = link.take()
+            if reports:
+                last = reports[-1][1]
+                if any(report.valid for _, report in reports):
+                    last = next(r for _, r in reversed(reports) if r.valid)
+                    break
             time.sleep(0.02)
-        if not reports:
-            say(f'dvl: PROBLEM: connected to {address.host}:{address.port}, no velocity report '
-                f'within {LISTEN_S:g} s')
-            return 1
-        _, report = reports[-1]
-        lock = 'bottom lock' if report.valid else 'NO bottom lock'
-        say(f'dvl: {address.host}:{address.port}: {lock}, fom {report.fom:.4f} m/s, '
-            f'altitude {report.altitude_m:.2f} m')
-        return 0
+        where = f'{address.host}:{address.port}'
+        if last is None:
+            device.problem(f'connected to {where}, no velocity report within {bounds.wait_s:g} s')
+            return
+        device.info(f'{where}: {"bottom lock" if last.valid else "NO bottom lock"}, fom '
+                    f'{last.fom:.4f} m/s, altitude {last.altitude_m:.2f} m')
+        if not last.valid:
+            device.problem(f'no bottom lock in {bounds.wait_s:g} s of reports (velocity_valid '
+                           'false): the bridge publishes no dvl without it and the estimator '
+                           "has no velocity; the bottom within the DVL's range?")
     finally:
         link.stop()
 
 
-def check_alpha5(robot: str, values: Mapping[str, Any], say: Say) -> int:
-    """The arm: every joint's device, its mode and its limits against the URDF's."""
-    arm = load_alpha5(robot)
-    link = open_link(parse_connection(str(values['connection']), arm.udp_port,
-                                      'alpha5_bridge.connection'))
-    timeout_s = float(values.get('answer_timeout_s', 0.2))
-    problems = 0
-    try:
-        for drive in arm.drives:
-            answers, mode = probe_device(link, FrameSplitter(), drive, timeout_s)
-            errors = check_device(drive, answers, timeout_s)
-            problems += len(errors)
-            for error in errors:
-                say(f'alpha5: PROBLEM: {error}')
-            if not errors:
-                say(f'alpha5: {drive.joint_name} (device {drive.device_id:#04x}): '
-                    f'{mode.name if mode is not None else "mode unknown"}, limits as the URDF')
-    finally:
-        link.close()
-    return problems
-
-
-def check_netft(robot: str, values: Mapping[str, Any], say: Say) -> int:
+def check_netft(robot: str, values: Mapping[str, Any], device: Device, bounds: CheckBounds,
+                bridge: BridgeStatus | None) -> None:
     """The force sensor: one RDT record (start, then stop again), its status word."""
     host, port = parse_host_port(str(values['address']), rdt.RDT_PORT, 'netft_bridge.address')
+    if bridge is not None and bridge.active:
+        device.info(f'{host}:{port}: not asked: netft_bridge is active and a start request '
+                    'would take its stream; its status word '
+                    f'{bridge.values.get("status", "?")}, {bridge.values.get("records", "?")} '
+                    'records')
+        return
     link = UdpLink(host, port)
     records: list[bytes] = []
 
@@ -155,31 +101,77 @@ def check_netft(robot: str, values: Mapping[str, Any], say: Say) -> int:
 
     try:
         link.send(rdt.encode_request(rdt.COMMAND_START_REALTIME))
-        collect(link, feed, [1], LISTEN_S)
+        collect(link, feed, [1], bounds.wait_s)
         link.send(rdt.encode_request(rdt.COMMAND_STOP))
     finally:
         link.close()
     if not records:
-        say(f'netft: PROBLEM: no RDT record from {host}:{port} within {LISTEN_S:g} s')
-        return 1
+        device.problem(f'no RDT record from {host}:{port} within {bounds.wait_s:g} s')
+        return
     record = rdt.decode_record(records[0])
-    say(f'netft: {host}:{port}: record {record.rdt_sequence}, status {record.status:#010x}'
-        + ('' if record.status == 0 else " (non-zero: see the box's manual)"))
-    return int(record.status != 0)
+    device.info(f'{host}:{port}: record {record.rdt_sequence}, status {record.status:#010x}'
+                + ('' if record.status == 0 else " (non-zero: see the box's manual)"))
+    if record.status != 0:
+        device.problem(f'status word {record.status:#010x} is not zero')
 
 
-CHECKS: dict[str, Callable[[str, Mapping[str, Any], Say], int]] = {
+CHECKS: dict[str, Check] = {
     'ardusub_bridge': check_ardusub, 'dvl_bridge': check_dvl,
     'alpha5_bridge': check_alpha5, 'netft_bridge': check_netft}
 
 
-def check_hardware(robot: str, bridges: Mapping[str, Mapping[str, Any]], say: Say) -> int:
-    """Check each bridge's device in turn; the number of problems found (0: ready)."""
+def device_bound_s(robot: str, name: str, bounds: CheckBounds) -> float:
+    """The longest the check of bridge ``name``'s device takes (s)."""
+    if name == 'ardusub_bridge':
+        _, section = hardware_section(robot, 'ardusub')
+        return ardusub_bound_s(len(section['thruster_channels']), bounds)
+    if name == 'alpha5_bridge':
+        return alpha5_bound_s(len(load_alpha5(robot).drives), bounds)
+    if name == 'dvl_bridge':
+        return 2 * bounds.wait_s
+    return bounds.wait_s
+
+
+def _where(values: Mapping[str, Any]) -> str:
+    for key in ('mavlink_url', 'address', 'connection'):
+        if key in values:
+            return str(values[key])
+    return '?'
+
+
+def check_hardware(robot: str, bridges: Mapping[str, Mapping[str, Any]], say: Say,
+                   bounds: CheckBounds | None = None, graph: Graph | None = None,
+                   clock: Callable[[], float] = time.monotonic) -> int:
+    """Check each bridge's device in turn, saying as it goes; the number of problems (0: ready).
+
+    Args:
+        robot: The robot folder whose hardware.yaml describes the devices.
+        bridges: Bridge name -> its section of the hardware file.
+        say: Where each line goes (printed and flushed at once by the CLI).
+        bounds: The check's waits (`CheckBounds()` if None).
+        graph: The bridges running now (``hardware_check_graph``); None or empty: none.
+        clock: Seconds, for the elapsed times.
+    """
+    bounds = bounds or CheckBounds()
+    graph = graph or {}
     problems = 0
     for name, values in bridges.items():
+        short = name.removesuffix('_bridge')
+        device = Device(short, say)
+        start_s = clock()
+        bridge = graph.get(name)
         try:
-            problems += CHECKS[name](robot, values, say)
+            device.info(f'checking {_where(values)} (at most '
+                        f'{device_bound_s(robot, name, bounds):.1f} s)')
+            if bridge is not None:
+                device.info(f'{bridge.describe()}')
+                if bridge.level >= 2:
+                    device.problem(f'{name} reports ERROR: {bridge.message}')
+            CHECKS[name](robot, values, device, bounds, bridge)
         except (HardwareError, ValueError, OSError) as exc:
-            problems += 1
-            say(f'{name.removesuffix("_bridge")}: PROBLEM: {exc}')
+            device.problem(str(exc))
+        elapsed_s = clock() - start_s
+        device.info(f'{device.problems or "no"} problem{"" if device.problems == 1 else "s"}, '
+                    f'{elapsed_s:.1f} s')
+        problems += device.problems
     return problems
