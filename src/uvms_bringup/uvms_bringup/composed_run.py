@@ -10,6 +10,7 @@ middleware's teardown to the process's end, as a node process does (issue 48).
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 from collections.abc import Sequence
 
@@ -21,6 +22,7 @@ from uvms_common.node_entry import process_ends_after_main
 from uvms_common.node_main import (
     ACK_WAIT_S,
     TeardownDeadline,
+    end_unbuilt,
     make_executor,
     middleware_teardown_skipped,
     profiled,
@@ -32,7 +34,7 @@ from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent
 
-from uvms_bringup.launch_helpers import NodeSpec
+from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, NodeSpec
 from uvms_common import process_stats
 
 #: Logger of the process's own lines (errors that are no one node's).
@@ -59,9 +61,16 @@ def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEve
     status = 0
     current = ''
     try:
+        bridges = tuple(HARDWARE_BRIDGES.values())
         for spec, args in groups:
             current = spec.name
-            nodes.append(build_node(spec, args))
+            # Until a bridge is built (its autostart changes the device), a stop ends the
+            # process at once, as it ends a node process's build (node_main.end_unbuilt).
+            no_device_yet = spec not in bridges and not any(
+                getattr(node, 'put_back_now', None) for node in nodes)
+            with (stop.ending(end_unbuilt) if no_device_yet and process_ends_after_main()
+                  else contextlib.nullcontext()):
+                nodes.append(build_node(spec, args))
             if stop.is_set():
                 break
         current = ''

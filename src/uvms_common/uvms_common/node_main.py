@@ -302,6 +302,19 @@ class TeardownDeadline:
         os._exit(self._status)
 
 
+def end_unbuilt() -> None:
+    """End a node process stopped while its node was being built: status 0, at once.
+
+    Called from the stop signal's handler: nothing was started that a stop must end, and
+    nothing outside the process was changed. The streams are flushed where they can be (a
+    signal that came in the middle of a write leaves that stream as it is).
+    """
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(0)
+
+
 def run_node(
     make_node: Callable[[], N],
     args: Sequence[str] | None,
@@ -310,6 +323,7 @@ def run_node(
     finished: Callable[[N], bool] | None = None,
     close_output: Callable[[N], None] | None = None,
     taken: Callable[[N], int] | None = None,
+    build_changes_nothing: bool = True,
 ) -> int:
     """Build a node and spin it until SIGINT/SIGTERM; return the process exit status.
 
@@ -325,6 +339,11 @@ def run_node(
             (``TeardownDeadline``).
         taken: A count of what the node took (the recorder's messages): after a clean stop
             the executor spins on while it grows (``drain_taken``), before ``close_output``.
+        build_changes_nothing: The node's build changes nothing outside the process (no
+            device, no file): in a node process a stop while it is being built ends the
+            process at once, status 0 (``end_unbuilt``). False (a bridge activating its
+            device, a recorder opening its file): the build is finished, then the node ends
+            as after any stop.
 
     Returns:
         0 after ``finished``, a signal or an external shutdown, each ending in a clean
@@ -333,7 +352,8 @@ def run_node(
 
     A ``StopEvent`` already installed (``uvms_common.node_entry``, before the node's
     imports) is taken over, so a signal received during the imports counts too; one received
-    while the node is being built ends it as soon as it is built (exit 0).
+    while the node is being built ends the process at once (``build_changes_nothing``, in a
+    node process) or as soon as it is built (exit 0).
     """
     ros_environment_defaults()
     earlier = active_stop_event()
@@ -345,9 +365,13 @@ def run_node(
     executor: Executor | None = None
     status = 0
     try:
-        # Not interrupted by a stop signal: an exception raised into the model's or Numba's
-        # loading (LLVM callbacks) leaves tracebacks; a stop then ends the node right after.
-        node = make_node()
+        # Not interrupted by an exception: one raised into the model's or Numba's loading
+        # (LLVM callbacks) leaves tracebacks. A stop ends a node process whose build changes
+        # nothing at once (issue 48: under load a build took 4-8 s to end), else right after.
+        building = (stop.ending(end_unbuilt) if build_changes_nothing
+                    and process_ends_after_main() else contextlib.nullcontext())
+        with building:
+            node = make_node()
         schedule_process(node)
         executor = make_executor()
         executor.add_node(node)

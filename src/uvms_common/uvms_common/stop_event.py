@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import FrameType
 
@@ -39,6 +39,7 @@ class StopEvent:
         self._event = threading.Event()
         self._previous: dict[int, object] = {}
         self._interrupting = False
+        self._end: Callable[[], None] | None = None
         self.signal_number = 0
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
@@ -49,6 +50,8 @@ class StopEvent:
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
         self.signal_number = signum
         self._event.set()
+        if self._end is not None:
+            self._end()
         if self._interrupting:
             raise KeyboardInterrupt
 
@@ -66,6 +69,23 @@ class StopEvent:
             yield
         finally:
             self._interrupting = False
+
+    @contextmanager
+    def ending(self, end: Callable[[], None]) -> Iterator[None]:
+        """Within the block a stop signal calls ``end``, which ends the process (``os._exit``).
+
+        For start-up work that changes nothing outside the process (a node's build: its
+        model, kernels and entities, seconds on a loaded machine), where nothing is lost by
+        leaving at once and an exception raised into it (LLVM callbacks) would leave
+        tracebacks; a stop that arrived before the block ends it at its start.
+        """
+        self._end = end
+        try:
+            if self._event.is_set():
+                end()
+            yield
+        finally:
+            self._end = None
 
     def is_set(self) -> bool:
         """Whether a stop signal arrived."""

@@ -248,4 +248,5 @@ def run_bridge(node_type: type[B], args: Sequence[str] | None, logger_name: str,
     sys.exit(run_node(node_type, args, logger_name,
                       (node_type.error_type, HardwareError, ParameterException,
                        *startup_errors),
-                      close_output=lambda node: node.put_back_now()))
+                      close_output=lambda node: node.put_back_now(),
+                      build_changes_nothing=False))  # autostart changes the device

@@ -376,7 +376,8 @@ def main(args: Sequence[str] | None = None) -> None:
     grace period (``uvms_common.node_main.run_node``).
     """
     sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException),
-                      close_output=RecorderNode.close, taken=RecorderNode.taken))
+                      close_output=RecorderNode.close, taken=RecorderNode.taken,
+                      build_changes_nothing=False))  # its file is opened and must be closed
 
 if __name__ == '__main__':
     main()
