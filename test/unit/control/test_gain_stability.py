@@ -38,11 +38,11 @@ def flat(tree: dict[str, Any], prefix: str = '') -> dict[str, Any]:
 
 
 def shipped_gains(robot: str) -> ControllerParameters:
-    """The controller gains of a robot folder (its controller.yaml, safety limits aside)."""
+    """The controller gains of a robot folder (controller.yaml; safety, pilot limits aside)."""
     text = (ROBOTS / robot / 'controller.yaml').read_text()
     values = flat(yaml.safe_load(text)['/**/controller']['ros__parameters'])
     return ControllerParameters.from_flat_dict(
-        {k: v for k, v in values.items() if not k.startswith('safety.')})
+        {k: v for k, v in values.items() if not k.startswith(('safety.', 'pilot.'))})
 
 
 def paper_task_inertia() -> np.ndarray:

@@ -39,6 +39,7 @@ class TaskReference:
         self.path: TaskPath | None = None
         self.force: ForceSetpoint | None = None
         self._hold: list[float] | None = None
+        self._hold_velocity: list[float] | None = None  # a pilot's moving hold point
 
     @property
     def has_force(self) -> bool:
@@ -71,6 +72,16 @@ class TaskReference:
         self.path = None
         self.force = None
         self._hold = None if position is None else list(position)
+        self._hold_velocity = None
+
+    def follow(self, position: Sequence[float], velocity: Sequence[float]) -> None:
+        """Hold a moving point: X_d = position (m), Ẋ_d = velocity (m/s), Ẍ_d = 0 (a pilot).
+
+        Ignored while a path runs; the force set-point is left as it is.
+        """
+        if self.path is None:
+            self._hold = list(position)
+            self._hold_velocity = None if not any(velocity) else list(velocity)
 
     def move_hold_toward(self, target: Sequence[float], max_distance_m: float) -> None:
         """Move the hold point toward a target by at most max_distance_m (m), at rest."""
@@ -88,6 +99,8 @@ class TaskReference:
             return self.path.evaluate_floats(t)
         if self._hold is None:
             raise RuntimeError('the reference holds no point yet (no step since activation)')
+        if self._hold_velocity is not None:
+            return [*self._hold, *self._hold_velocity, 0.0, 0.0, 0.0]
         return [*self._hold, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 
     @property
@@ -104,7 +117,7 @@ class TaskReference:
         self.path = TaskPath.from_state(
             t, self.state(t), t + goal.times, goal.path, goal.velocities, goal.accelerations
         )
-        self._hold = None
+        self._hold = self._hold_velocity = None
         if goal.force_n <= 0.0:
             if self.force is not None and (self.force.phase != ForcePhase.RELEASE):
                 self.force = None
@@ -126,6 +139,7 @@ class TaskReference:
         """Hold a point (m) at rest from t (s) while F_d ramps down over ramp_s (s), for good."""
         self.path = None
         self._hold = list(position)
+        self._hold_velocity = None
         self.release(t, ramp_s, final=True)
 
     def hold_reached(self, t: float) -> None:
@@ -156,7 +170,7 @@ class TaskReference:
         target = np.asarray(X, dtype=np.float64) - distance_m * direction
         self.path = TaskPath.from_state(t, start, np.array([t + duration_s]),
                                         target[np.newaxis, :])
-        self._hold = None
+        self._hold = self._hold_velocity = None
         self.release(t, duration_s, final=True)
 
     def force_sample(self, t: float, f_normal: float, x_normal: float, x_d_normal: float,

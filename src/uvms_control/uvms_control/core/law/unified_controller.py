@@ -218,8 +218,33 @@ class UnifiedForceController:
         self._t0: float | None = None
         self._t_prev = 0.0
         self._q0 = np.zeros(self._n_dof)
+        self._q0_dot: FloatArray | None = None  # the posture's rate, while a pilot moves it
         self.hybrid.reset()
         self.task.hold()
+
+    @property
+    def vehicle_reference(self) -> FloatArray | None:
+        """The vehicle pose η_0 (6,) the null-space posture holds; None before the first step."""
+        return None if self._t0 is None else self._q0[:6].copy()
+
+    def set_vehicle_reference(self, eta: npt.ArrayLike, eta_dot: npt.ArrayLike) -> bool:
+        """Move the vehicle part of the posture q_0 to eta (map_ned, m and rad) at eta_dot.
+
+        Station keeping and piloting: the null-space law (``null_space``) holds the vehicle
+        at η_0 and damps the velocity relative to η̇_0, so a moving posture is followed
+        without the lag D_n η̇_0 / K_n. False before the first step (q_0 is captured there).
+        """
+        if self._t0 is None:
+            return False
+        self._q0[:6] = np.asarray(eta, dtype=np.float64)
+        rate = np.asarray(eta_dot, dtype=np.float64)
+        if rate.any():
+            if self._q0_dot is None:
+                self._q0_dot = np.zeros(self._n_dof)
+            self._q0_dot[:6] = rate
+        else:
+            self._q0_dot = None
+        return True
 
     @property
     def start_time(self) -> float | None:
@@ -425,6 +450,8 @@ class UnifiedForceController:
         (M̂ = s M̃ = J̃⁺ M̂_q J⁺): two 9 x 9 and three 3 x 9 products in all.
         """
         tau = np.empty(self._n_dof)
+        if self._q0_dot is not None:
+            q_dot = q_dot - self._q0_dot  # the kernel damps q_dot alone (D_n q̇)
         null_space_torque(
             ts.J, ts.Jt_pinv, ts.J_dot_q_dot, ts.M, ts.zeta, ts.Jt_pinv_zeta, M_hat,
             self.params.mass_scale, q, self._q0, q_dot, self._null_gains,
