@@ -149,11 +149,11 @@ def test_bad_mapping_is_refused_naming_file_and_field(change: Any, field: str) -
 
 def test_missing_and_broken_files_are_named(tmp_path: Path) -> None:
     """A missing file and a file that is not YAML are refused with the path."""
-    with pytest.raises(MappingError, match='nope.yaml: cannot read'):
+    with pytest.raises(MappingError, match=r'nope\.yaml: cannot read'):
         load_mapping(tmp_path / 'nope.yaml')
     broken = tmp_path / 'broken.yaml'
     broken.write_text('axes: [\n')
-    with pytest.raises(MappingError, match='broken.yaml: not YAML'):
+    with pytest.raises(MappingError, match=r'broken\.yaml: not YAML'):
         load_mapping(broken)
 
 

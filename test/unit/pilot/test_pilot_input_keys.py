@@ -62,7 +62,7 @@ def test_released_key_is_zero_within_the_repeat_window() -> None:
 
 
 def test_opposite_key_takes_over_at_once() -> None:
-    """s right after w reverses surge; other axes keep their keys."""
+    """Key s right after w reverses surge; other axes keep their keys."""
     keys = KeyboardDemand()
     keys.press('w', 0.0)
     keys.press('e', 0.01)
