@@ -76,7 +76,7 @@ class Graph:
         from sensor_msgs.msg import Joy
         from uvms_pilot.gamepad_mapping import load_mapping
         from uvms_pilot.gamepad_state import GamepadState
-        from uvms_pilot.limits import DEFAULT_LIMITS
+        from uvms_pilot.limits import pilot_limits
         from uvms_pilot.link import PilotLink
         from uvms_pilot.session import PilotSession
 
@@ -84,7 +84,7 @@ class Graph:
         self.listener = Node('listener', namespace='uvms', context=context)
         self.link = PilotLink(self.pilot_node, 'base_link_frd', joy=True)
         self.mapping = load_mapping(SHIPPED)
-        self.session = PilotSession(self.link, DEFAULT_LIMITS, None,
+        self.session = PilotSession(self.link, pilot_limits('paper_uvms'), None,
                                     GamepadState(self.mapping, XPAD_RANGES))
         self.joy: list[Any] = []
         self.twists: list[Any] = []
@@ -164,7 +164,7 @@ def test_synthetic_events_reach_joy_and_the_vehicle_twist(graph: Graph) -> None:
         assert graph.wait(lambda: bool(graph.twists))
         with graph.lock:
             twist = graph.twists[-1].twist
-        assert twist.linear.x == pytest.approx(0.075)  # 0.3 m/s at 25 %
+        assert twist.linear.x == pytest.approx(0.075)  # paper_uvms: 0.3 m/s at 25 %
         device.send((ecodes.EV_ABS, ecodes.ABS_Y, 0))
         graph.session.tick(time.monotonic())
         assert graph.wait(lambda: graph.twists[-1].twist.linear.x == 0.0)

@@ -28,7 +28,11 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 #: Wall time to look for a /clock publisher at start (s): with one, stamps are sim time.
 CLOCK_DISCOVERY_S = 1.5
+#: Wall time to wait for the controller's answer naming its robot (s).
+ROBOT_QUERY_S = 2.0
 EE_FRAMES = {'body': 'base_link_frd', 'map': 'map_ned'}
+#: The robot of run and launch when none is named (uvms_description.DEFAULT_ROBOT).
+DEFAULT_ROBOT = 'paper_uvms'
 
 
 def _positive(text: str) -> float:
@@ -45,6 +49,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description='Drive the vehicle and the arm of a running graph from the terminal '
                     '(and a gamepad) on the pilot topics; hold, start and cancel a task; the '
                     'live state on screen. docs/piloting.md')
+    parser.add_argument('--robot', metavar='NAME|PATH',
+                        help="whose pilot limits the gears scale (the robot folder's "
+                             "controller.yaml pilot.*); default: the running controller's "
+                             f'robot_name, else {DEFAULT_ROBOT}')
     parser.add_argument('--task', type=Path, metavar='FILE.yaml',
                         help='task or mission file that the t key (or start button) sends')
     parser.add_argument('--ee-frame', choices=sorted(EE_FRAMES), default='body',
@@ -124,7 +132,7 @@ def _run_in_graph(args: argparse.Namespace, keys: Any, gamepad: Any, device: Any
 
     from uvms_pilot.command import Demand, command
     from uvms_pilot.gamepad import GamepadReader
-    from uvms_pilot.limits import DEFAULT_LIMITS
+    from uvms_pilot.limits import pilot_limits
     from uvms_pilot.link import PilotLink
     from uvms_pilot.session import PilotSession
 
@@ -139,13 +147,25 @@ def _run_in_graph(args: argparse.Namespace, keys: Any, gamepad: Any, device: Any
                      task_file=args.task)
     if args.use_sim_time == 'true' or (args.use_sim_time == 'auto' and _clock_published(node)):
         node.set_parameters([Parameter('use_sim_time', value=True)])
-    session = PilotSession(link, DEFAULT_LIMITS, keys, gamepad)
+    robot = args.robot or _robot_of_graph(node) or DEFAULT_ROBOT
+    try:
+        limits = pilot_limits(robot)
+    except ValueError as exc:
+        _error(f'robot {robot}: {exc}')
+        executor.shutdown(timeout_sec=1.0)
+        spinner.join(timeout=2.0)
+        link.destroy()
+        node.destroy_node()
+        rclpy.try_shutdown()
+        return EXIT_USAGE
+    session = PilotSession(link, limits, keys, gamepad)
     reader = None
     if device is not None:
         reader = GamepadReader(device, session.gamepad_event,
                                lambda why: (session.gamepad_lost(), link.note(why)))
         reader.start()
-    title = f'uvms pilot ({node.get_namespace()}, arm in {EE_FRAMES[args.ee_frame]})'
+    title = (f'uvms pilot ({node.get_namespace()}, {robot}, arm in '
+             f'{EE_FRAMES[args.ee_frame]})')
     try:
         if keys is not None:
             from uvms_pilot.tui import run_tui
@@ -160,7 +180,7 @@ def _run_in_graph(args: argparse.Namespace, keys: Any, gamepad: Any, device: Any
         # The parts still moving get their zero; the controller's deadman does the rest.
         session.keys = None
         session.gamepad = None
-        link.publish(session.parts_to_stop(), command(Demand(), DEFAULT_LIMITS, 1.0))
+        link.publish(session.parts_to_stop(), command(Demand(), limits, 1.0))
         if reader is not None:
             reader.stop()
         executor.shutdown(timeout_sec=1.0)
@@ -178,6 +198,26 @@ def _clock_published(node: Any) -> bool:
             return True
         time.sleep(0.05)
     return False
+
+
+def _robot_of_graph(node: Any) -> str | None:
+    """The running controller's robot_name parameter, or None (no controller answered)."""
+    from rcl_interfaces.srv import GetParameters
+
+    client = node.create_client(GetParameters, 'controller/get_parameters')
+    try:
+        if not client.wait_for_service(timeout_sec=ROBOT_QUERY_S):
+            return None
+        future = client.call_async(GetParameters.Request(names=['robot_name']))
+        deadline = time.monotonic() + ROBOT_QUERY_S
+        while not future.done() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        response = future.result() if future.done() else None
+        if response is None or not response.values or not response.values[0].string_value:
+            return None
+        return str(response.values[0].string_value)
+    finally:
+        node.destroy_client(client)
 
 
 def _run_headless(session: Any, link: Any, rate_hz: float, title: str) -> None:

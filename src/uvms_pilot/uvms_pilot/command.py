@@ -11,8 +11,8 @@ the limits into SI velocities in the frames of the pilot topics (docs/piloting.m
 
 Example::
 
-    >>> limits = PilotLimits(vehicle_m_s=(0.4, 0.4, 0.3), yaw_rad_s=0.5, ee_m_s=0.05,
-    ...                      jaw_m_s=0.01)
+    >>> limits = PilotLimits(vehicle_m_s=(0.4, 0.4, 0.3), yaw_rad_s=0.5,
+    ...                      ee_m_s=(0.05, 0.05, 0.05), jaw_m_s=0.01)
     >>> cmd = command(Demand(surge=1.0, yaw=-0.5), limits, gear=0.5)
     >>> cmd.vehicle_twist
     (0.2, 0.0, 0.0, 0.0, 0.0, -0.125)
@@ -31,27 +31,27 @@ GEARS = (0.25, 0.5, 1.0)
 
 @dataclass(frozen=True)
 class PilotLimits:
-    """The robot's pilot limits: the demand 1.0 at gear 1.0 on each axis.
+    """The robot's pilot limits: the demand 1.0 at gear 1.0 on each axis (0: axis held).
 
     Attributes:
-        vehicle_m_s: Surge, sway and heave speed limits (m/s), each > 0.
-        yaw_rad_s: Yaw rate limit (rad/s), > 0.
-        ee_m_s: End-effector speed limit per axis (m/s), > 0.
-        jaw_m_s: Jaw opening speed limit (m/s), > 0.
+        vehicle_m_s: Surge, sway and heave speed limits (m/s), each >= 0.
+        yaw_rad_s: Yaw rate limit (rad/s), >= 0.
+        ee_m_s: End-effector speed limits per axis of the pilot's frame (m/s), each >= 0.
+        jaw_m_s: Jaw opening speed limit (m/s), >= 0.
     """
 
     vehicle_m_s: tuple[float, float, float]
     yaw_rad_s: float
-    ee_m_s: float
+    ee_m_s: tuple[float, float, float]
     jaw_m_s: float
 
     def __post_init__(self) -> None:
         values = {'vehicle_m_s': self.vehicle_m_s, 'yaw_rad_s': (self.yaw_rad_s,),
-                  'ee_m_s': (self.ee_m_s,), 'jaw_m_s': (self.jaw_m_s,)}
+                  'ee_m_s': self.ee_m_s, 'jaw_m_s': (self.jaw_m_s,)}
         for name, entries in values.items():
-            if len(entries) != (3 if name == 'vehicle_m_s' else 1) or not all(
-                    math.isfinite(v) and v > 0.0 for v in entries):
-                msg = f'pilot limit {name}: expected finite values > 0, got {entries}'
+            size = 3 if name in ('vehicle_m_s', 'ee_m_s') else 1
+            if len(entries) != size or not all(math.isfinite(v) and v >= 0.0 for v in entries):
+                msg = f'pilot limit {name}: expected {size} finite value(s) >= 0, got {entries}'
                 raise ValueError(msg)
 
 
@@ -128,8 +128,8 @@ def command(demand: Demand, limits: PilotLimits, gear: float) -> PilotCommand:
     return PilotCommand(
         vehicle_twist=(gear * u_max * d.surge, gear * v_max * d.sway, gear * w_max * d.heave,
                        0.0, 0.0, gear * limits.yaw_rad_s * d.yaw),
-        ee_velocity_m_s=(gear * limits.ee_m_s * d.arm_x, gear * limits.ee_m_s * d.arm_y,
-                         gear * limits.ee_m_s * d.arm_z),
+        ee_velocity_m_s=(gear * limits.ee_m_s[0] * d.arm_x, gear * limits.ee_m_s[1] * d.arm_y,
+                         gear * limits.ee_m_s[2] * d.arm_z),
         jaw_m_s=gear * limits.jaw_m_s * d.jaw,
     )
 

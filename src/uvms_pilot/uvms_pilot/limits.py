@@ -1,16 +1,25 @@
-"""The pilot limits the input tools scale their demand by (the speed gear's 100 %).
+"""The pilot limits the input tools scale their demand by: the robot folder's ``pilot.*``.
 
-The controller clips every twist to the robot's own pilot limits whatever arrives; these are
-what full stick or a held key asks for. Until the robot folder carries the pilot limits (the
-controller's loader, issue 51 item 1), the input tools use ``DEFAULT_LIMITS``: a BlueROV2
-Heavy's gentle pool speeds and the controller's streamed-target speed for the arm.
+Read with the controller's own loader (``uvms_control.core.pilot.limits``), so full stick or
+a held key at the top gear asks for exactly what the controller allows; the controller still
+clips whatever arrives.
 """
 
 from __future__ import annotations
 
 from uvms_pilot.command import PilotLimits
 
-#: Surge, sway 0.3 m/s and heave 0.2 m/s, yaw 0.3 rad/s (17 deg/s); the end effector at
-#: 0.05 m/s (controller.yaml safety.max_target_speed_m_s); the jaw at 0.01 m/s.
-DEFAULT_LIMITS = PilotLimits(vehicle_m_s=(0.3, 0.3, 0.2), yaw_rad_s=0.3, ee_m_s=0.05,
-                             jaw_m_s=0.01)
+
+def pilot_limits(robot: str) -> PilotLimits:
+    """The input tools' limits of a robot folder (name, or a path with a /).
+
+    Raises:
+        ValueError: The folder cannot be read or a limit is out of range (the message says
+            which: ``RobotFolderError``, ``ControlParameterError``).
+    """
+    from uvms_control.core.pilot.limits import load_pilot_limits
+
+    limits = load_pilot_limits(robot)
+    return PilotLimits(vehicle_m_s=limits.vehicle_speed_m_s,
+                       yaw_rad_s=limits.vehicle_rate_rad_s[2],
+                       ee_m_s=limits.ee_speed_m_s, jaw_m_s=limits.jaw_speed_m_s)

@@ -15,7 +15,8 @@ from uvms_pilot.command import (
 )
 from uvms_pilot.keys import KEY_ACTIONS, KEY_AXES, KeyboardDemand
 
-LIMITS = PilotLimits(vehicle_m_s=(0.4, 0.3, 0.2), yaw_rad_s=0.5, ee_m_s=0.05, jaw_m_s=0.01)
+LIMITS = PilotLimits(vehicle_m_s=(0.4, 0.3, 0.2), yaw_rad_s=0.5, ee_m_s=(0.05, 0.05, 0.02),
+                     jaw_m_s=0.01)
 
 
 @pytest.mark.parametrize(('key', 'axis', 'sign'), [
@@ -94,7 +95,7 @@ def test_command_is_demand_times_gear_times_limit(gear: float) -> None:
     cmd = command(Demand(1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0, -1.0), LIMITS, gear)
     expected = (0.4 * gear, -0.3 * gear, 0.2 * gear, 0.0, 0.0, -0.5 * gear)
     assert cmd.vehicle_twist == pytest.approx(expected)
-    assert cmd.ee_velocity_m_s == pytest.approx((0.05 * gear, -0.05 * gear, 0.05 * gear))
+    assert cmd.ee_velocity_m_s == pytest.approx((0.05 * gear, -0.05 * gear, 0.02 * gear))
     assert cmd.jaw_m_s == pytest.approx(-0.01 * gear)
 
 
@@ -108,11 +109,27 @@ def test_command_never_exceeds_the_limits(value: float) -> None:
 
 
 def test_bad_gear_and_limits_are_refused_by_name() -> None:
-    """A gear outside (0, 1] and a non-positive limit name themselves."""
+    """A gear outside (0, 1] and a negative or infinite limit name themselves."""
     with pytest.raises(ValueError, match='speed gear'):
         command(Demand(), LIMITS, 1.5)
     with pytest.raises(ValueError, match='yaw_rad_s'):
-        PilotLimits(vehicle_m_s=(0.4, 0.3, 0.2), yaw_rad_s=0.0, ee_m_s=0.05, jaw_m_s=0.01)
+        PilotLimits(vehicle_m_s=(0.4, 0.3, 0.2), yaw_rad_s=-0.1, ee_m_s=(0.05,) * 3,
+                    jaw_m_s=0.01)
+    with pytest.raises(ValueError, match='ee_m_s'):
+        PilotLimits(vehicle_m_s=(0.4, 0.3, 0.2), yaw_rad_s=0.1, ee_m_s=(0.05, math.inf, 0.0),
+                    jaw_m_s=0.01)
+
+
+def test_limits_are_the_robot_folders_pilot_limits() -> None:
+    """The tools scale by the controller's own pilot.* values of the robot folder."""
+    from uvms_pilot.limits import pilot_limits
+
+    limits = pilot_limits('bluerov2_alpha5')
+    assert limits.vehicle_m_s == (0.5, 0.5, 0.3)
+    assert limits.yaw_rad_s == 0.5
+    assert limits.ee_m_s == (0.1, 0.1, 0.1)
+    full = command(Demand(surge=1.0), limits, 1.0)
+    assert full.vehicle_twist[0] == 0.5
 
 
 def test_gear_actions_select_and_step_within_the_gears() -> None:
