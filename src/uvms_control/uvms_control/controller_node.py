@@ -21,7 +21,9 @@ exchange never stalls) or at the control rate. Gains, the contact threshold, nul
 and ``safety.*`` change at run time (``set_parameters``, checked whole first, then ramped
 in); the rest is read-only. No exception escapes a callback (``controller_safety``).
 ``/diagnostics`` reports rates, input ages, rejections, faults, the allocator's state, the
-lifecycle state, the task and any safety limit reached.
+lifecycle state, the task and any safety limit reached. A person pilots through
+``pilot/vehicle_twist``, ``pilot/ee_twist`` and ``pilot/jaw``, with the owner on
+``controller/mode`` and ``controller/hold`` to stop (``controller_pilot``, docs/piloting.md).
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ from uvms_common.unconfigured import answer_while_unconfigured, controller_zero_
 
 from uvms_common import robot_parameters as robots
 from uvms_control import raw_conversions, task_conversions
+from uvms_control.controller_pilot import ControllerPilot
 from uvms_control.controller_reports import ControllerReports
 from uvms_control.controller_safety import ControllerSafety, safety_limits
 from uvms_control.core.errors import ControlInputError, ControlParameterError
@@ -72,7 +75,7 @@ SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
 
 
-class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
+class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, LifecycleNode):
     """Unified force controller: sensor topics and tasks in, generalized force and state out."""
 
     def __init__(self, **kwargs: Any) -> None:
@@ -90,6 +93,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._node_values = declare_parameters(self, CONTROLLER_NODE_PARAMETER_SPECS, robot)
         self._gains = declare_parameters(self, CONTROLLER_PARAMETER_SPECS, robot)
         self._safety = declare_parameters(self, SAFETY_PARAMETER_SPECS, robot)
+        self._declare_pilot(robot)
         robots.check_all_declared(self, robot)
         starting = declare_autostart(self)
         guard_change_state(self)
@@ -119,6 +123,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self._diagnostics = DiagnosticsPublisher(self, self._hardware_id())
         self._diagnostics.add('control', self._report_control)
         self._diagnostics.add('task', self._report_task)
+        self._diagnostics.add('pilot', self._report_pilot)
         answer_while_unconfigured(self, self._node_values['trigger_mode'] == 'lockstep',
                                   not starting, lambda: controller_zero_answer(self))
         if starting and not autostart(self):
@@ -147,6 +152,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
                                                1.0 / float(node['control_rate_hz']))
             self.supervisor = TaskSupervisor(self.core, safety_limits(self._safety))
             self._configure_topics(node, model.joint_names)
+            self._configure_pilot()
             self._watch_allocator(str(node['allocator_node']))
         except Exception as error:  # rclpy would turn it into ERROR silently
             self._release()
@@ -210,7 +216,9 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         self.tasks.finish(self.supervisor.reset())
         self._halted = None
         self._active = True
-        return super().on_activate(state)
+        result = super().on_activate(state)
+        self._activate_pilot()
+        return result
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """End running and queued tasks INACTIVE, drop the target, command zero."""
@@ -249,7 +257,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         for destroy, entity in reversed(self._entities):
             destroy(entity)
         self._entities = []
-        self.core = self.supervisor = None
+        self.core = self.supervisor = self.pilot = None
 
     def _failed(self, transition: str, error: Exception) -> TransitionCallbackReturn:
         self._error = error
@@ -380,6 +388,7 @@ class ControllerNode(ControllerReports, ControllerSafety, LifecycleNode):
         (positions, velocities), (eta, nu), force = (i.value for i in inputs if i is not None)
         t = t_ns * 1e-9
         try:
+            self._pilot_before_step(t_ns)
             result, events = self.supervisor.step(
                 t, np.concatenate((eta, positions)), np.concatenate((nu, velocities)), force)
         except ControlInputError as error:
