@@ -10,7 +10,9 @@ leaving is one info line, a dropped connection (a killed tab) included, with its
 (``foxglove_log``: the SDK's own log, formatted). Latched topics (/tf_static,
 /robot_description) are sent again to each client that subscribes to them, as a
 transient-local subscription would receive them. ``/diagnostics`` reports the server's
-address, its clients (subscribed, and connected) and the forwarded message rate.
+address, its clients (subscribed, and connected) and the forwarded message rate. Clients may
+publish on the pilot topics only (``foxglove_client_publish``: Foxglove's Teleop panel drives
+the vehicle); any other channel a client advertises is refused with one console line.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from uvms_recording.recorder_node import (
 )
 from uvms_recording.typestore import InterfaceError, message_definition
 
+from uvms_viz.foxglove_client_publish import ENCODINGS, ClientPublishing
 from uvms_viz.foxglove_defaults import FOXGLOVE_HOST, FOXGLOVE_PORT
 from uvms_viz.foxglove_log import SDK_LOGGER, SdkLogHandler, capture_sdk_log
 
@@ -105,6 +108,15 @@ class _Listener:
             self._node.get_logger().debug(
                 f'Foxglove client {client.id} unsubscribed from every topic')
 
+    def on_client_advertise(self, client: Any, channel: Any) -> None:
+        self._node.client_publishing.advertise(client.id, channel)
+
+    def on_client_unadvertise(self, client: Any, client_channel_id: int) -> None:
+        self._node.client_publishing.unadvertise(client.id, client_channel_id)
+
+    def on_message_data(self, client: Any, client_channel_id: int, data: bytes) -> None:
+        self._node.client_publishing.message(client.id, client_channel_id, data)
+
 
 class FoxgloveServerNode(Node):
     """Forwards the graph's topics, raw CDR, to Foxglove clients on ws://host:port."""
@@ -151,6 +163,7 @@ class FoxgloveServerNode(Node):
         self._latched_topics = {topic for topic in topics
                                 if publisher_qos(topic).durability == 'transient_local'}
         self._server: Any = None
+        self.client_publishing = ClientPublishing(self, self.get_logger().warning)
         self._listener = _Listener(self)
         self._address = f'ws://{host}:{port}'
         self._forwarded = 0
@@ -164,7 +177,8 @@ class FoxgloveServerNode(Node):
         try:
             self._server = foxglove.start_server(
                 name='uvms', host=host, port=port, context=self._foxglove_context,
-                capabilities=[foxglove.Capability.Time], supported_encodings=['cdr'],
+                capabilities=[foxglove.Capability.Time, foxglove.Capability.ClientPublish],
+                supported_encodings=list(ENCODINGS),
                 server_listener=self._listener, asset_handler=asset)
         except RuntimeError as exc:
             # foxglove-sdk raises RuntimeError('FoxgloveError: Failed to bind port: ...').
@@ -216,6 +230,7 @@ class FoxgloveServerNode(Node):
     def _report(self) -> Report:
         """/diagnostics: 'running' with address, clients and forwarded rate; WARN unserved."""
         values = {'address': self._address, 'topics': len(self._channels),
+                  'client_messages_published': self.client_publishing.forwarded,
                   'clients': self._listener.clients,
                   'connected_clients': self._sdk_log.connected, 'forwarded_rate_hz':
                   self._forward_meter.rate_hz(self._forwarded,
