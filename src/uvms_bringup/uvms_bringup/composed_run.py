@@ -18,11 +18,10 @@ import rclpy
 from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from uvms_common.node_entry import process_ends_after_main
+from uvms_common.node_entry import end_unbuilt, process_ends_after_main
 from uvms_common.node_main import (
     ACK_WAIT_S,
     TeardownDeadline,
-    end_unbuilt,
     make_executor,
     middleware_teardown_skipped,
     profiled,
@@ -65,7 +64,7 @@ def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEve
         for spec, args in groups:
             current = spec.name
             # Until a bridge is built (its autostart changes the device), a stop ends the
-            # process at once, as it ends a node process's build (node_main.end_unbuilt).
+            # process at once, as it ends a node process's build (node_entry.end_unbuilt).
             no_device_yet = spec not in bridges and not any(
                 getattr(node, 'put_back_now', None) for node in nodes)
             with (stop.ending(end_unbuilt) if no_device_yet and process_ends_after_main()

@@ -78,26 +78,41 @@ def end_process(status: int) -> None:
     os._exit(status)
 
 
+def end_unbuilt() -> None:
+    """End a node process stopped before its node was built: status 0, at once.
+
+    Called from the stop signal's handler (``StopEvent.ending``) while the node's module is
+    imported or the node is built: nothing was started that a stop must end, and nothing
+    outside the process was changed. The streams are flushed where they can be (a signal
+    that came in the middle of a write leaves that stream as it is).
+    """
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:  # a stream mid-write: leave it as it is
+            pass
+    os._exit(0)
+
+
 def run_node_module(module_name: str) -> None:
     """Import a node module with the stop handlers in place, run its ``main()``, end.
 
-    Exits 0 without building the node when a stop signal arrived during the import (which
-    it interrupts); else with the status of ``main``'s ``sys.exit`` (``end_process``). An
+    Exits 0 at once, without building the node, when a stop signal arrives during the
+    import (``end_unbuilt``); else with the status of ``main``'s ``sys.exit`` (``end_process``). An
     exception other than SystemExit leaves as usual, with its traceback.
     """
     stop = StopEvent()
     status = 0
     mark_process_ends_after_main()
     try:
-        # Interrupted by a stop: the import (rclpy, numpy, Pinocchio) took more than 10 s on
-        # a machine at load 14, so a stop waiting for it outlived the launcher's SIGTERM
-        # and SIGKILL (issue 48); nothing is built yet, so nothing is lost.
-        with stop.interrupting():
+        # Ended by a stop: the import (rclpy, numpy, Pinocchio) took more than 10 s on a
+        # machine at load 14, so a stop waiting for it outlived the launcher's SIGTERM and
+        # SIGKILL (issue 48); nothing is built yet, so nothing is lost. Not interrupted by an
+        # exception: one raised into a C extension's initialization (rclpy's pybind11
+        # module) comes out as an ImportError with a traceback (a soak cycle of issue 48).
+        with stop.ending(end_unbuilt):
             module = importlib.import_module(module_name)
-        if not stop.is_set():
-            module.main()
-    except KeyboardInterrupt:
-        status = 0
+        module.main()
     except SystemExit as exc:
         status = _exit_status(exc.code)
     finally:

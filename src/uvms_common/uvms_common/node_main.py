@@ -44,7 +44,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from uvms_common import process_stats
-from uvms_common.node_entry import flush_output, process_ends_after_main
+from uvms_common.node_entry import end_unbuilt, flush_output, process_ends_after_main
 from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import Scheduling, apply_scheduling, parse_cpus
@@ -300,19 +300,6 @@ class TeardownDeadline:
         faulthandler.dump_traceback(file=self._stream, all_threads=True)
         flush_output()
         os._exit(self._status)
-
-
-def end_unbuilt() -> None:
-    """End a node process stopped while its node was being built: status 0, at once.
-
-    Called from the stop signal's handler: nothing was started that a stop must end, and
-    nothing outside the process was changed. The streams are flushed where they can be (a
-    signal that came in the middle of a write leaves that stream as it is).
-    """
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(Exception):
-            stream.flush()
-    os._exit(0)
 
 
 def run_node(

@@ -38,7 +38,6 @@ class StopEvent:
     def __init__(self) -> None:
         self._event = threading.Event()
         self._previous: dict[int, object] = {}
-        self._interrupting = False
         self._end: Callable[[], None] | None = None
         self.signal_number = 0
         if threading.current_thread() is threading.main_thread():
@@ -52,23 +51,6 @@ class StopEvent:
         self._event.set()
         if self._end is not None:
             self._end()
-        if self._interrupting:
-            raise KeyboardInterrupt
-
-    @contextmanager
-    def interrupting(self) -> Iterator[None]:
-        """Within the block a stop signal also raises KeyboardInterrupt where the code is.
-
-        For start-up work that checks no event (building a model, loading kernels: seconds),
-        so that a stop then ends the process at once instead of after that work.
-        """
-        self._interrupting = True
-        try:
-            if self._event.is_set():
-                raise KeyboardInterrupt
-            yield
-        finally:
-            self._interrupting = False
 
     @contextmanager
     def ending(self, end: Callable[[], None]) -> Iterator[None]:

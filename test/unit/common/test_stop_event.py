@@ -51,16 +51,25 @@ def test_restore_puts_the_earlier_handler_back_and_forgets_the_event() -> None:
     assert active_stop_event() is not stop
 
 
-def test_a_signal_inside_interrupting_raises_and_outside_only_sets_the_event() -> None:
-    """Start-up work (model, kernels) ends at once on a stop; the spin loop polls instead."""
+class EndedError(Exception):
+    """Stands in for the process's end (os._exit) in ``ending``'s callback."""
+
+
+def end() -> None:
+    """The end: raises instead of ending the process."""
+    raise EndedError
+
+
+def test_a_signal_inside_ending_calls_the_end_and_outside_only_sets_the_event() -> None:
+    """Start-up work (imports, model, kernels) ends at once on a stop; the spin loop polls."""
     stop = StopEvent()
     try:
-        with pytest.raises(KeyboardInterrupt), stop.interrupting():
+        with pytest.raises(EndedError), stop.ending(end):
             os.kill(os.getpid(), signal.SIGINT)  # the handler runs as kill returns
         assert stop.is_set()
-        os.kill(os.getpid(), signal.SIGTERM)  # outside: no exception
+        os.kill(os.getpid(), signal.SIGTERM)  # outside: no end
         assert stop.signal_number == signal.SIGTERM
-        with pytest.raises(KeyboardInterrupt), stop.interrupting():
+        with pytest.raises(EndedError), stop.ending(end):
             pass  # a stop that came before the block ends it on entry
     finally:
         stop.restore()
