@@ -5,7 +5,8 @@ runs ``--cycles`` launches in turn over the scenarios (both shipped robots by de
 ``--twin`` also through ``--hardware twin``), each recording to an MCAP file, and stops each
 at a moment drawn from four, as a user's Ctrl-C would (SIGINT to the launch's process group):
 
-- ``startup``: 0.2-2 s after the command started, while node processes import and build;
+- ``startup``: 0.2-2 s after the launcher started its node processes (its first line),
+  while they import and build;
 - ``before_step``: once every node is up but before the first simulated step;
 - ``mid_task``: 0.5-5 s after the mission sent its goal;
 - ``end``: not at all: the launch runs to the scenario's duration.
@@ -48,6 +49,8 @@ DEFAULT_SCENARIOS = ('case1_ke1e4', 'bluerov2_alpha5_contact')
 #: Robots whose scenarios can also run through the protocol twins.
 TWIN_SCENARIOS = ('bluerov2_alpha5_contact',)
 MOMENTS = ('startup', 'before_step', 'mid_task', 'end')
+#: The launcher's first line, once its node processes are started.
+LAUNCHER_UP = 'uvms launch: '
 BUSY_LOOP = 'while True:\n    pass\n'
 #: Lines that a clean stop never prints.
 ERROR_LINE = re.compile(r'\[ERROR\]|Fatal Python error|Traceback|uvms launch: error|'
@@ -71,6 +74,8 @@ class Cycle:
     stop_s: float | None = None
     discovery_s: float | None = None
     problems: list[str] = field(default_factory=list)
+    #: The launch's console lines with their arrival (monotonic s).
+    lines: list[tuple[float, str]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -198,8 +203,13 @@ def run_cycle(cycle: Cycle, directory: Path, stop_limit_s: float,
     launch = Launch(cycle.scenario, cycle.twin, output)
     sent: float | None = None
     if cycle.moment == 'startup':
-        time.sleep(random.uniform(0.2, 2.0))
-        sent = launch.interrupt()
+        # Counted from the launcher's first line (its node processes started): before it,
+        # the stop would land in the launcher's own interpreter start-up (the ROS wheels'
+        # .pth re-executes it), where no code of ours runs yet and Python itself prints
+        # `Fatal Python error: init_import_site` for any console script.
+        if launch.wait_for(LAUNCHER_UP, 60.0) is not None:
+            time.sleep(random.uniform(0.2, 2.0))
+            sent = launch.interrupt()
     elif cycle.moment == 'before_step':
         if launch.wait_for('holding the initial state', 60.0) is not None:
             sent = launch.interrupt()
@@ -209,6 +219,7 @@ def run_cycle(cycle: Cycle, directory: Path, stop_limit_s: float,
             sent = launch.interrupt()
     cycle.status = launch.finish(600.0 if sent is None else 30.0)
     lines = launch.lines
+    cycle.lines = lines
     if sent is not None and cycle.status is not None:
         cycle.stop_s = launch.ended - sent
     judge(cycle, lines, sent, output, stop_limit_s, discovery_limit_s)
@@ -256,7 +267,7 @@ def soak(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix='uvms-soak-') as tmp:
         for index in range(args.cycles):
             scenario, twin = variants[index % len(variants)]
-            cycle = run_cycle(Cycle(scenario, twin, random.choice(MOMENTS)), Path(tmp),
+            cycle = run_cycle(Cycle(scenario, twin, random.choice(args.moments)), Path(tmp),
                               args.stop_limit, args.discovery_limit)
             cycles.append(cycle)
             stop = '-' if cycle.stop_s is None else f'{cycle.stop_s:.2f} s'
@@ -265,6 +276,10 @@ def soak(args: argparse.Namespace) -> int:
             print(f'{index + 1:4d} {name:34s} {cycle.moment:11s} status {cycle.status!s:>4} '
                   f'stop {stop:>7} goal {found:>7}  '
                   f'{"ok" if cycle.ok else "; ".join(cycle.problems)}', flush=True)
+            if args.logs is not None and not cycle.ok:
+                args.logs.mkdir(parents=True, exist_ok=True)
+                (args.logs / f'cycle{index + 1}.log').write_text(
+                    ''.join(f'{t:.3f} {line}\n' for t, line in cycle.lines), encoding='utf-8')
             for stale in Path(tmp).glob('*.mcap'):
                 stale.unlink()
     failed = [c for c in cycles if not c.ok]
@@ -304,6 +319,10 @@ def main() -> int:
     parser.add_argument('--stop-limit', type=float, default=2.0, help='s from signal to exit')
     parser.add_argument('--discovery-limit', type=float, default=3.0,
                         help="s from the mission's first line to its goal sent")
+    parser.add_argument('--moments', nargs='+', choices=MOMENTS, default=list(MOMENTS),
+                        help='the stop moments to draw from (default: all four)')
+    parser.add_argument('--logs', type=Path, default=None, metavar='DIR',
+                        help="write each failed cycle's console lines to DIR/cycleN.log")
     parser.add_argument('--test', help='a test (path or node id) to repeat instead')
     parser.add_argument('--runs', type=int, default=30)
     parser.add_argument('--netns', action='store_true',
