@@ -22,6 +22,9 @@ random seed, and overrides ROS parameters of the nodes of the graph::
         normal: [1.0, 0.0, 0.0]
         force_n: 150.0
         start_time_s: 2.0
+    pilot:                            # list, or a file name (relative to this file),
+      - {at_s: 1.0, for_s: 3.7, vehicle: [0.25, 0, 0, 0, 0, 0]}  # optional: timed pilot
+                                      # commands (uvms_control.core.pilot.script)
     faults:                           # mapping, optional: injected faults (plant side)
       thrusters:                      # list: one mapping per fault
         - {index: 2, kind: 'off', at_s: 10.0}     # index from 0 (robot's thrusters.yaml)
@@ -29,7 +32,10 @@ random seed, and overrides ROS parameters of the nodes of the graph::
                                       # (eta in [0, 1]), stuck (N), saturation (N > 0)
 
 ``faults`` becomes the thruster allocator's ``fault_injection.thrusters`` parameter
-(docs/controller.md "Thruster faults"), which a run can also change at run time.
+(docs/controller.md "Thruster faults"), which a run can also change at run time. ``pilot``
+becomes the controller's ``pilot.script`` (its YAML text): the controller plays the commands
+on its own clock through the checks pilot messages take, so a pilot session is a scenario
+(docs/piloting.md).
 
 Parameter values are booleans, integers, floats, strings or non-empty lists of one of
 them, as in a ROS 2 parameter file. Whether each overridden name is a parameter the node
@@ -50,6 +56,8 @@ from typing import Any, TypeAlias
 
 import numpy as np
 import yaml
+from uvms_control.core.errors import ControlParameterError
+from uvms_control.core.pilot.script import parse_script
 from uvms_tasks.errors import TaskFileError
 from uvms_tasks.task_file import TaskSpec, Yaml12Loader, parse_mission
 from uvms_thrusters.thruster_faults import PARAMETER as FAULT_PARAMETER
@@ -65,8 +73,11 @@ NODE_SECTIONS = ('simulator', 'controller', 'thruster_allocator', 'recorder', 'e
 
 _REQUIRED = {'name': 'str', 'description': 'str', 'duration_s': 'number (float, s)'}
 _OPTIONAL = {'paper': 'str', 'seed': 'int >= 0', 'robot': 'str', 'mission': 'list of tasks',
-             'faults': 'mapping with thrusters: a list of faults'}
+             'faults': 'mapping with thrusters: a list of faults',
+             'pilot': 'list of timed pilot commands, or a file holding one'}
 _KNOWN_KEYS = (*_REQUIRED, *_OPTIONAL, *NODE_SECTIONS)
+#: The controller parameter a scenario's ``pilot`` key sets.
+PILOT_PARAMETER = 'pilot.script'
 _NAME_SEGMENT = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 _MAX_SEED = 2**31 - 1
 
@@ -307,6 +318,13 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
                    'the injected faults; keep one')
             raise ScenarioError(msg)
         allocator[FAULT_PARAMETER] = faults
+    if data.get('pilot') is not None:
+        controller = overrides.setdefault('controller', {})
+        if PILOT_PARAMETER in controller:
+            msg = (f'{path}: key pilot and controller.{PILOT_PARAMETER} both set the pilot '
+                   'script; keep one')
+            raise ScenarioError(msg)
+        controller[PILOT_PARAMETER] = parse_pilot_key(data['pilot'], path)
     try:
         mission = tuple(parse_mission(data['mission'], str(path))) if 'mission' in data else ()
     except TaskFileError as exc:
@@ -322,6 +340,24 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         mission=mission,
         robot=robot,
     )
+
+
+def parse_pilot_key(value: Any, path: Path) -> str:
+    """The ``pilot`` key (a list of commands, or a file of one) as ``pilot.script`` text.
+
+    Raises:
+        ScenarioError: naming the file, the entry and key, and what is valid.
+    """
+    where = f'{path}: key pilot'
+    if isinstance(value, str):
+        source = Path(value) if Path(value).is_absolute() else path.parent / value
+        value = read_yaml_file(source, 'pilot script', ScenarioError)
+        where = f'{path}: key pilot ({source})'
+    try:
+        parse_script(value, 'pilot')
+    except ControlParameterError as exc:
+        raise ScenarioError(f'{where}: {exc}') from exc
+    return yaml.safe_dump(value, default_flow_style=None, sort_keys=False)
 
 
 def parse_faults_key(value: Any, path: Path) -> str:

@@ -162,7 +162,12 @@ class MissionNode(Node):
     def _on_state(self, data: bytes) -> None:
         if self._busy or self.finished or not self._server_settled():
             return
-        p = deserialize_message(data, ControllerState).desired_position
+        state = deserialize_message(data, ControllerState)
+        send_at_s = self.tasks[len(self.results)].send_at_s
+        stamp = state.header.stamp
+        if send_at_s is not None and stamp.sec + stamp.nanosec * 1e-9 < send_at_s:
+            return  # held until the controller's clock reaches it (after a pilot session)
+        p = state.desired_position
         self._target = (p.x, p.y, p.z)
         self._send_next()
 

@@ -24,6 +24,8 @@ a list of tasks sent one after another. Scenario files use the same list under t
         require_contact: true          # bool, default false
         start_time_s: 2.0              # when time 0 is on the controller's clock (s);
                                        # default: when the controller accepts the goal
+        send_at_s: 1.5                 # a mission's sender holds the goal until the
+                                       # controller's clock reaches it (s); default: at once
 
 A task gives either ``path`` with ``time_from_start_s`` or ``half_circle``. The half circle
 starts at X0: its ``start`` when given (the controller then reaches it by a transit first,
@@ -59,7 +61,7 @@ Vector3 = tuple[float, float, float]
 #: Keys of a task; a half circle replaces the four path keys.
 PATH_KEYS = ('path', 'time_from_start_s', 'velocity', 'acceleration')
 TASK_KEYS = ('name', *PATH_KEYS, 'half_circle', 'normal', 'force_n', 'force_ramp_s',
-             'require_contact', 'start_time_s')
+             'require_contact', 'start_time_s', 'send_at_s')
 HALF_CIRCLE_KEYS = ('duration_s', 'start', 'radius_m', 'toward', 'sweep', 'points')
 #: Defaults: the controller's force ramp (config/controller.yaml) and the paper's half circle.
 DEFAULT_FORCE_RAMP_S = 1.0
@@ -149,6 +151,8 @@ class TaskSpec:
         velocity: X_d_dot per waypoint (n, 3) in m/s, or None: the server chooses.
         acceleration: X_d_ddot per waypoint (n, 3) in m/s², or None: the server chooses.
         half_circle: The half circle still to be expanded from X0, or None.
+        send_at_s: A mission sends the goal once the controller's clock reaches it (s), as
+            after a pilot session; None: as soon as the previous task ended.
     """
 
     name: str
@@ -162,6 +166,7 @@ class TaskSpec:
     velocity: FloatArray | None = None
     acceleration: FloatArray | None = None
     half_circle: HalfCircle | None = None
+    send_at_s: float | None = None
 
     @property
     def needs_start(self) -> bool:
@@ -253,6 +258,8 @@ def parse_task(data: Any, source: str, key: str) -> TaskSpec:
         'require_contact': _boolean(data, 'require_contact', source, prefix),
         'start_time_s': (None if data.get('start_time_s') is None else
                          _number(data, 'start_time_s', source, prefix, 0.0, minimum=0.0)),
+        'send_at_s': (None if data.get('send_at_s') is None else
+                      _number(data, 'send_at_s', source, prefix, 0.0, minimum=0.0)),
     }
     if 'half_circle' in data:
         given = [name for name in PATH_KEYS if name in data]
