@@ -74,7 +74,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help='a key counts as held this long after its first press '
                              '(default 0.45 s: bridges the keyboard auto-repeat delay)')
     parser.add_argument('--repeat-hold', type=_positive, default=None, metavar='S',
-                        help='and this long after each auto-repeat (default 0.15 s)')
+                        help='and this long after each auto-repeat (default 0.25 s)')
     return parser
 
 

@@ -40,8 +40,9 @@ KEY_ACTIONS: dict[str, str] = {
 }
 #: Default time a key counts as held after its first press (s): bridges the auto-repeat delay.
 FIRST_HOLD_S = 0.45
-#: Default time a key counts as held after a repeat (s): a few auto-repeat intervals.
-REPEAT_HOLD_S = 0.15
+#: Default time a key counts as held after a repeat (s): several auto-repeat intervals (a
+#: loaded machine delivers them late), and with the 20 Hz tick still a zero within 0.3 s.
+REPEAT_HOLD_S = 0.25
 
 
 @dataclass
