@@ -8,6 +8,11 @@ when every device answered and nothing stops its bridge from activating (nor sho
 bridge stopped), 1 when something does (each problem on a line of its own), 2 for a bad
 command line or file.
 
+``reset-trip``: the alpha5_bridge's overspeed trip cleared without a deactivate (its
+``~/reset_trip`` service: refused while a joint still moves over the trip speed); the arm
+stays at VELOCITY 0 until the next command, which is taken again. Exit status 0 when cleared
+(or nothing was tripped), 1 when refused or the bridge did not answer.
+
 ``restore ardusub``: what an ardusub_bridge that did not end cleanly (a kill, a crash) left
 changed on the vehicle put back, as the bridge's own stop does (``uvms_hardware.
 ardusub_restore``): neutral, disarm, overrides released, then the thruster outputs'
@@ -52,6 +57,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     check.add_argument('--graph-wait', type=float, default=3.0, metavar='S',
                        help='seconds to listen on /diagnostics for running bridges (default 3; '
                             '0: do not look at the graph)')
+    reset = sub.add_parser('reset-trip', help="clear the alpha5_bridge's overspeed trip once "
+                           'the arm is still (docs/hardware.md, "Recovering the arm")')
+    reset.add_argument('--namespace', default='/uvms', metavar='NS',
+                       help="the graph's namespace (default /uvms)")
+    reset.add_argument('--timeout', type=float, default=10.0, metavar='S',
+                       help='seconds to wait for the service and its answer (default 10)')
     restore = sub.add_parser('restore', help='put back what a bridge that did not end cleanly '
                              'left changed on its device')
     restore.add_argument('device', choices=['ardusub'])
@@ -75,6 +86,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     if args.action == 'restore':
         return _restore(args)
+    if args.action == 'reset-trip':
+        return _reset_trip(args.namespace, args.timeout)
     try:
         plan = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
     except HardwareFileError as exc:
@@ -113,6 +126,35 @@ def _running_bridges(names: list[str], listen_s: float) -> dict[str, BridgeStatu
                        if graph else f'no bridge running ({took})'), flush=True)
     return graph
 
+
+
+def _reset_trip(namespace: str, timeout_s: float) -> int:
+    """``reset-trip``: the bridge's ``~/reset_trip`` called; its answer printed."""
+    import rclpy
+    from rclpy.node import Node
+    from std_srvs.srv import Trigger
+    from uvms_common.ros_environment import ros_environment_defaults
+
+    from uvms_cli.service_call import call_service
+
+    class ResetTripError(Exception):
+        """The service did not answer."""
+
+    ros_environment_defaults()
+    target = f'{namespace.rstrip("/")}/alpha5_bridge/reset_trip'
+    rclpy.init(args=[])
+    node = Node('uvms_hardware_reset_trip')
+    try:
+        answer = call_service(node, node.create_client(Trigger, target), Trigger.Request(),
+                              timeout_s, ResetTripError, ' (is an alpha5_bridge active?)')
+    except ResetTripError as exc:
+        print(f'uvms hardware: error: {exc}', file=sys.stderr)
+        return EXIT_PROBLEMS
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    print(f'{target}: {answer.message}')
+    return EXIT_OK if answer.success else EXIT_PROBLEMS
 
 
 def _restore(args: argparse.Namespace) -> int:

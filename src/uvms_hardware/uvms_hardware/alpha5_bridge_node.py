@@ -21,6 +21,14 @@ reject it as a bad input instead of seeing its joint states go stale. Each messa
 with the arrival of the oldest answer it holds, on the node clock: the protocol has no device
 clock, so arrival (read once per tick, every 2 ms at the defaults) is what the wire gives.
 
+A joint reported over ``overspeed_factor`` x its speed limit trips the bridge: VELOCITY 0 to
+every joint (the devices' own speed loop holds them), every command refused, and no
+joint_states (so the controller's input-age check zeroes its output instead of driving the
+vehicle around an arm that no longer follows). ``~/reset_trip`` (std_srvs/Trigger, ``uvms
+hardware reset-trip``) takes commands again once every joint reports under the trip speed;
+activate is refused while a joint is over it (each device asked its speed), naming it,
+rather than tripping at once.
+
 deactivate, shutdown, ``on_error``, SIGINT and SIGTERM (the base) stop the arm: VELOCITY 0 to
 every device at once, then, device by device and each read back, VELOCITY 0 (MODE Velocity,
 or Disable / Passive which ignore it) and the device's mode from before activate (Standby
@@ -43,12 +51,14 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
 from uvms_hardware.alpha5_core import (
     CONFIRM_TRIES,
     DEFAULT_CONFIRM_TIMEOUT_S,
     DEFAULT_OVERSPEED_FACTOR,
+    FEEDBACK_REQUEST,
     PUT_BACK_BUDGET_S,
     Alpha5Core,
     JointSample,
@@ -62,7 +72,7 @@ from uvms_hardware.bridge_node import REFUSALS, BridgeNode, run_bridge
 from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Drive, load_alpha5
-from uvms_hardware.reach_protocol import Mode
+from uvms_hardware.reach_protocol import Mode, encode_request
 from uvms_hardware.transport import Link, open_link, parse_connection
 from uvms_msgs.msg import ActuatorCommand
 
@@ -89,7 +99,8 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
      'A joint without an answer this long is silent: no joint_states, diagnostics ERROR (s)'),
     ('overspeed_factor', DEFAULT_OVERSPEED_FACTOR,
      'A joint reported faster than this many times its URDF speed limit trips the bridge: '
-     'VELOCITY 0 to every joint, commands refused until deactivate and activate (>= 1)'),
+     'VELOCITY 0 to every joint, commands refused until ~/reset_trip or deactivate and '
+     'activate (>= 1)'),
     ('confirm_timeout_s', DEFAULT_CONFIRM_TIMEOUT_S,
      f'Wait for a MODE read-back when activate or the put-back confirms a change (s); '
      f'{CONFIRM_TRIES} tries per change, and the whole put-back with every device silent '
@@ -164,6 +175,8 @@ class Alpha5BridgeNode(BridgeNode):
                                    self.create_publisher(JointState, 'joint_states', qos))
         self.own(self.destroy_subscription, self.create_subscription(
             ActuatorCommand, 'command/actuators', self._on_command, qos))
+        self.own(self.destroy_service, self.create_service(Trigger, '~/reset_trip',
+                                                           self._on_reset_trip))
         self._timer = self.device_timer(1.0 / (rate_hz * len(arm.drives)), self._on_tick)
         self._timer.cancel()  # polls from activate to the put-back only
         self.get_logger().info(
@@ -191,7 +204,49 @@ class Alpha5BridgeNode(BridgeNode):
         if problems:
             raise Alpha5BridgeError('; '.join(problems))
         self.core.stop_driving()  # nothing is driven until the first command
+        fast = self._fast_joints_now()
+        if fast:
+            raise Alpha5BridgeError(
+                f'{", ".join(fast)}: over {self.core.overspeed_factor:g} x the speed limit, '
+                'the bridge would trip at once; wait until the arm is still (after a trip: '
+                'docs/hardware.md, "Recovering the arm after a trip")')
         self._timer.reset()
+
+    def _fast_joints_now(self) -> list[str]:
+        """Each device asked its speed now: the joints over the trip speed (activate)."""
+        assert self.core is not None and self.link is not None
+        timeout_s = float(self.values['confirm_timeout_s'])
+        for drive in self.core.drives:
+            self.link.send(encode_request(drive.device_id, FEEDBACK_REQUEST))
+            deadline_s = self.now_s() + timeout_s
+            before = self.core.feedback[drive.device_id].velocity_s
+            while (self.core.feedback[drive.device_id].velocity_s == before
+                   and self.now_s() < deadline_s):
+                self.link.wait(deadline_s - self.now_s())
+                self.core.receive(self.link.read(), self.now_s())
+        fast = self.core.fast_joints()
+        self.core.stop_driving()  # a trip receive() just found is said by the refusal
+        return fast
+
+    def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        """``~/reset_trip``: take commands again once no joint moves over the trip speed."""
+        core = self.core
+        if core is None or not self.device_active:
+            response.success, response.message = False, 'not active: activate instead'
+            return response
+        tripped = core.overspeed
+        if not tripped:
+            response.success, response.message = True, 'not tripped: nothing to clear'
+            return response
+        why = core.reset_trip()
+        response.success = not why
+        response.message = why or f'trip cleared ({tripped}); commands are taken again'
+        if response.success:
+            self.get_logger().info(f'reset_trip: {response.message}')
+        else:
+            self.get_logger().warning(f'reset_trip refused: {response.message}')
+        self.update_diagnostics()
+        return response
 
     def put_device_back(self) -> list[str]:
         """VELOCITY 0 to every device at once, then each VELOCITY 0 and resting mode confirmed.
@@ -258,10 +313,11 @@ class Alpha5BridgeNode(BridgeNode):
         tripped = core.overspeed
         core.receive(link.read(), t_s)
         if core.overspeed and not tripped:
-            self.get_logger().error(f'tripped: {core.overspeed}: VELOCITY 0 to every joint; '
-                                    'commands refused until deactivate and activate')
+            self.get_logger().error(f'tripped: {core.overspeed}: VELOCITY 0 to every joint, no '
+                                    'joint_states; commands refused until `uvms hardware '
+                                    'reset-trip` (or deactivate and activate)')
         sample = core.next_joint_state(t_s)  # as soon as every joint answered again
-        if sample is not None:
+        if sample is not None and not core.overspeed:  # tripped: the arm is not driven
             self._joint_pub.publish(self._joint_state(sample, t_s))
         frames, _ = core.tick(t_s)
         link.send(frames)

@@ -55,7 +55,8 @@ HOLD_RESEND_S = 0.1
 #: A HARDWARE_STATUS error is reported this long after its last packet (s): it comes at 1 Hz.
 STATUS_HOLD_S = 2.5
 #: A joint reported faster than this many times its speed limit (the URDF's) trips the bridge:
-#: VELOCITY 0 to every joint, commands refused until deactivate and activate. In Current mode
+#: VELOCITY 0 to every joint, commands refused until `Alpha5Core.reset_trip` (the arm still) or
+#: deactivate and activate. In Current mode
 #: nothing on the device holds a joint to its speed limit (the device clamps VELOCITY and
 #: CURRENT setpoints, not the speed a current makes); a loop that lost its stability (found on
 #: the twin stand with joint feedback far under the control rate) spins a joint up.
@@ -234,7 +235,8 @@ class Alpha5Core:
         names = list(joint_names) or [d.joint_name for d in self.arm.joints]
         problem = ''
         if self.overspeed:
-            problem = f'tripped: {self.overspeed}; deactivate and activate to drive again'
+            problem = (f'tripped: {self.overspeed}; `uvms hardware reset-trip` once the arm is '
+                       'still (or deactivate and activate) to drive again')
         elif len(names) != len(torques_n_m):
             problem = f'{len(names)} joint names, {len(torques_n_m)} torques'
         elif set(names) != set(self._index):
@@ -289,6 +291,28 @@ class Alpha5Core:
     def restore_frames(self, modes: Mapping[int, Mode]) -> bytes:
         """The frames of `restore_settings`, in order."""
         return b''.join(s.frame for s in self.restore_settings(modes))
+
+    def fast_joints(self) -> list[str]:
+        """Joints whose last reported speed is over the trip speed, each with it (empty: none)."""
+        out = []
+        for d in self.drives:
+            speed = self.feedback[d.device_id].velocity
+            if abs(speed) > self.overspeed_factor * d.velocity_limit:
+                unit = _unit(d, PacketId.VELOCITY_LIMITS)
+                out.append(f'{describe(d)} at {speed:.3g} {unit}')
+        return out
+
+    def reset_trip(self) -> str:
+        """Clear the overspeed trip if no joint moves over the trip speed; why not, else ''.
+
+        The arm stays at VELOCITY 0 (the hold) until the next command, which is taken again.
+        """
+        fast = self.fast_joints()
+        if fast:
+            return (f'still over {self.overspeed_factor:g} x the speed limit: '
+                    f'{", ".join(fast)}; wait until the arm is still')
+        self.overspeed = ''
+        return ''
 
     def stop_driving(self) -> None:
         """Forget the last command and a trip (deactivate): nothing is driven until a new one."""

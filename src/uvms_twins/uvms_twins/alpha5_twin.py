@@ -106,6 +106,13 @@ class Alpha5Twin:
             for device, p, v in zip(self.devices.values(), positions, velocities, strict=False):
                 device.position, device.velocity = float(p), float(v)
 
+    def joint_state(self) -> tuple[dict[str, float], dict[str, float]]:
+        """({joint: position}, {joint: velocity}) as the plant last set them (SI)."""
+        with self._lock:
+            devices = list(self.devices.values())
+            return ({d.drive.joint_name: d.position for d in devices},
+                    {d.drive.joint_name: d.velocity for d in devices})
+
     def joint_commands(self) -> dict[str, tuple[Mode, float]]:
         """{joint: (mode, setpoint)}: rad, rad/s (jaw m, m/s) or mA by mode."""
         with self._lock:
@@ -114,8 +121,8 @@ class Alpha5Twin:
     def joint_torques_n_m(self) -> dict[str, float | None]:
         """{joint: torque (N m)} of the devices in Current mode (Kt, ratio, efficiency), else None.
 
-        The plant applies these; a joint in another mode follows its position or velocity
-        setpoint, or holds (Standby), which the plant models itself.
+        The plant applies these; in Velocity mode the plant's ``plant_side.ArmServo`` follows
+        the speed setpoint; the other modes make no torque.
         """
         with self._lock:
             return {d.drive.joint_name: current_to_torque_n_m(d.drive, d.setpoint)

@@ -13,7 +13,8 @@ between them and the simulator:
   lost the bottom);
 - at ``rate_hz`` on the steady clock: the ArduSub twin's servo outputs (PWM) -> thrusts through
   the T200 curve and the thrusters' dynamics, the arm twin's modes and setpoints -> joint
-  torques (``uvms_twins.plant_side``), published as ``/plant/command/actuators``.
+  torques (``uvms_twins.plant_side``: Current mode's I Kt N eta, Velocity mode's servo),
+  published as ``/plant/command/actuators``.
 
 Real devices need no such node; it is the test stand. Everything binds where the hardware
 file says (127.0.0.1 in ``config/hardware/twin.yaml``).
@@ -49,7 +50,14 @@ from uvms_twins.alpha5_twin import Alpha5Twin
 from uvms_twins.ardusub_twin import ArduSubTwin
 from uvms_twins.dvl_twin import DvlTwin
 from uvms_twins.netft_twin import NetFtTwin
-from uvms_twins.plant_side import ThrusterTwin, effort_limits_n_m, joint_torques
+from uvms_twins.plant_side import (
+    SERVO_BANDWIDTH_RAD_S,
+    ArmServo,
+    JointInertia,
+    ThrusterTwin,
+    effort_limits_n_m,
+    joint_torques,
+)
 
 #: Arm modes in which a bridge drives a joint (Standby, Disable, Passive: not driven).
 CONTROL_MODES = (Mode.CURRENT, Mode.VELOCITY, Mode.POSITION)
@@ -64,6 +72,8 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     'dvl_lost_s': (0.5, 'No DVL reading from the simulator for this long: no bottom lock (s)'),
     'dvl_idle_rate_hz': (2.0, 'Reports per second of the DVL twin while no reading comes (Hz; '
                               'assumed: a DVL without lock still answers its pings)'),
+    'arm_servo_bandwidth_rad_s': (SERVO_BANDWIDTH_RAD_S, "Bandwidth of the arm devices' own "
+                                  'speed loop in Velocity mode (rad/s; plant_side.ArmServo)'),
     'dvl_altitude_m': (1.85, 'Altitude the DVL twin reports (m; the simulated reading has '
                               'none)'),
     'ardusub_bridge.connection': ('udpout:127.0.0.1:14551', 'Where the ArduSub bridge '
@@ -129,6 +139,8 @@ class TwinsNode(Node):
         self._driven = False
         self._joints = tuple(d.joint_name for d in arm.drives)
         self._effort = effort_limits_n_m(robot)
+        self._servo = ArmServo(JointInertia(robot), self._effort,
+                               float(v['arm_servo_bandwidth_rad_s']))
         self._thrusters = ThrusterTwin.for_robot(robot)
         self._rot_sensor_from_link = np.array(DEFAULT_ROT_LINK_FROM_SENSOR).reshape(3, 3).T
         self._command_writer = ActuatorCommandWriter(len(self._thrusters.channels), self._joints)
@@ -248,7 +260,9 @@ class TwinsNode(Node):
                 return
             self.get_logger().info('the bridges drive the arm and the vehicle: actuator '
                                    'commands to the plant')
-        torques = joint_torques(commands, self.arm.joint_torques_n_m(), self._effort)
+        positions, velocities = self.arm.joint_state()
+        servo = self._servo.torques(commands, positions, velocities, dt_s)
+        torques = joint_torques(commands, self.arm.joint_torques_n_m(), self._effort, servo)
         self._command_pub.publish(self._command_writer.payload(
             plant_ns, thrust, [torques[j] for j in self._joints]))
         self._ticks += 1
