@@ -24,6 +24,8 @@ from typing import Any
 
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling
+from uvms_hardware.stop_report import ENV as STOP_REPORT_ENV
+from uvms_hardware.stop_report import read_stop_reports, stop_summary
 from uvms_scenarios.scenario import Scenario
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
@@ -343,12 +345,16 @@ def launch_graph(
                                 extra_overrides=extra, hardware=hardware,
                                 scheduling=scheduling, compose=compose)
             stats = Path(parameters_dir) / 'stats'
-            launcher = Launcher(plans, env={**os.environ, process_stats.ENV: str(stats)})
+            reports = Path(parameters_dir) / 'stop_reports'  # what each bridge put back
+            reports.mkdir()
+            launcher = Launcher(plans, env={**os.environ, process_stats.ENV: str(stats),
+                                            STOP_REPORT_ENV: str(reports)})
             line = describe_scheduling(scheduling, plans)
             # On the robot no simulator ends the run: it runs until Ctrl-C or a failure.
             plant = hardware is None or hardware.twins
             return run_launch(launcher, stop, mode, duration_s if plant else None, quiet,
-                              line, CostWatch(stats))
+                              line, CostWatch(stats), put_back=None if hardware is None else
+                              (reports, list(hardware.bridges)))
     finally:
         if own_stop is not None:
             own_stop.restore()
@@ -366,7 +372,8 @@ def _check_overrides(scenario: Scenario, namespace: str, config: Path | None) ->
 
 
 def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: float | None,
-               quiet: bool, scheduling: str, costs: CostWatch) -> int:
+               quiet: bool, scheduling: str, costs: CostWatch,
+               put_back: tuple[Path, list[str]] | None = None) -> int:
     """Start, watch and stop a launch; report its outcome, and what each process cost.
 
     Args:
@@ -378,6 +385,9 @@ def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: flo
         quiet: Report only errors and the closing line.
         scheduling: The loop processes' scheduling, worded for the launch line.
         costs: Where the processes' costs are measured.
+        put_back: The folder the bridges report their put-back to and their names: the
+            closing line says what each put back (``uvms_hardware.stop_report``); None: no
+            bridges.
 
     Returns:
         The exit status of ``launch_graph``.
@@ -427,18 +437,20 @@ def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: flo
         if other is not process and outcome != 'failed':
             launcher.report(f'uvms launch: error: node {other.name!r} {end_line(other)} '
                             'while stopping')
+    told_back = ('' if put_back is None else
+                 '; ' + stop_summary(read_stop_reports(put_back[0]), put_back[1]))
     if outcome == 'failed' and process is not None:
         launcher.report(f'uvms launch: error: node {process.name!r} ({process.plan.label}) '
-                        f'{end_line(process)}; stopped the other nodes')
+                        f'{end_line(process)}; stopped the other nodes{told_back}')
         return EXIT_FAILURE
     unclean = bool(launcher.unclean_stops())
     mission = '; the mission failed' if told else ''
     # The closing line is printed with --quiet too: it is the one summary of the launch.
     if outcome == 'stopped':
-        launcher.report(f'uvms launch: interrupted; every node stopped{mission}')
+        launcher.report(f'uvms launch: interrupted; every node stopped{mission}{told_back}')
         return EXIT_INTERRUPTED  # a stop asked for is 130, as a shell expects after Ctrl-C
     launcher.report(f'uvms launch: the simulator reached {duration_s or 0.0:g} s; '
-                    f'every node stopped{mission}')
+                    f'every node stopped{mission}{told_back}')
     if unclean:
         return EXIT_FAILURE
     return EXIT_MISSION_FAILED if told else EXIT_OK

@@ -73,6 +73,7 @@ from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Drive, load_alpha5
 from uvms_hardware.reach_protocol import Mode, encode_request
+from uvms_hardware.stop_report import write_stop_report
 from uvms_hardware.transport import Link, open_link, parse_connection
 from uvms_msgs.msg import ActuatorCommand
 
@@ -258,8 +259,16 @@ class Alpha5BridgeNode(BridgeNode):
         problems: list[str] = []
         if core is not None and link is not None:
             link.send(core.neutral_frames())  # every joint stops first, whatever follows
-            problems = self._confirm(core.restore_settings(self.modes_before))
+            settings = core.restore_settings(self.modes_before)
+            problems = self._confirm(settings)
             core.stop_driving()
+            rest = ', '.join(f'{s.drive.joint_name} {s.label.removeprefix("MODE ")}'
+                             for s in settings if s.label.startswith('MODE'))
+            done = (f'every joint VELOCITY 0, then its mode from before ({rest}), '
+                    + ('each read back' if not problems else
+                       f'{len(problems)} of {len(settings)} changes NOT confirmed'))
+            self.get_logger().info(f'put back: {done}')
+            write_stop_report(self.get_name(), done, problems)
         if self._timer is not None:
             with contextlib.suppress(Exception):  # a timer gone with its context polls no more
                 self._timer.cancel()

@@ -52,6 +52,7 @@ from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.device_journal import DeviceJournal
 from uvms_hardware.errors import DeviceCheckError, HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
+from uvms_hardware.stop_report import write_stop_report
 from uvms_hardware.t200_curve import T200Curve
 from uvms_hardware.watchdog import CommandWatchdog
 from uvms_msgs.msg import ActuatorCommand
@@ -233,7 +234,34 @@ class ArduSubBridgeNode(BridgeNode):
             del self._command
         if self.link is None or self.link.conn is None:
             return []
-        return self.link.restore()
+        link = self.link
+        changed = {c: v for c, v in link.changed_functions.items()}
+        problems = link.restore()
+        self._say_put_back(link, changed, problems)
+        return problems
+
+    def _say_put_back(self, link: ArduSubLink, changed: dict[int, float],
+                      problems: list[str]) -> None:
+        """One console line of what the stop put back (and the launcher's report)."""
+        if any('sent without confirmation' in p for p in problems):
+            done = ("vehicle silent: neutral, disarm, overrides released and the outputs' "
+                    'functions SENT, none confirmed')
+        else:
+            disarm = ('disarm NOT confirmed' if any(p.startswith(('disarm', 'arm:'))
+                                                     for p in problems) else 'disarmed')
+            done = f'thrusters neutral (1500 us), {disarm}, RC overrides released'
+            restored = {c: v for c, v in changed.items() if c not in link.changed_functions}
+            if restored:
+                done += ', SERVOn_FUNCTION restored and read back (' + ', '.join(
+                    f'{c}={v:g}' for c, v in sorted(restored.items())) + ')'
+            if link.changed_functions:
+                done += ', NOT read back: ' + ', '.join(
+                    f'SERVO{c}_FUNCTION' for c in sorted(link.changed_functions)) + \
+                    ' (journal kept: uvms hardware restore ardusub)'
+            if not changed:
+                done += f'; no parameter had been changed ({link.mode} mode)'
+        self.get_logger().info(f'put back: {done}')
+        write_stop_report(self.get_name(), done, problems)
 
     def release_device(self) -> None:
         """Close the link."""

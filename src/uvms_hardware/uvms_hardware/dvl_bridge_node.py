@@ -36,6 +36,7 @@ from uvms_hardware.dvl_link import DvlLink
 from uvms_hardware.dvl_protocol import VelocityReport, report_in_link, rot_link_from_dvl
 from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_config import Spec, hardware_section
+from uvms_hardware.stop_report import write_stop_report
 
 DEFAULT_PORT = 16171
 #: How often the link's queue is drained (s).
@@ -110,6 +111,13 @@ class DvlBridgeNode(BridgeNode):
                              self.create_publisher(TwistWithCovarianceStamped, 'dvl', qos))
         self.device_timer(DRAIN_PERIOD_S, self._drain)
         self.get_logger().info(f'DVL at {address.host}:{address.port}; publishing dvl')
+
+    def put_device_back(self) -> list[str]:
+        """Nothing to put back (the DVL is only listened to); said, for the launcher."""
+        done = 'nothing to put back: the DVL was only listened to'
+        self.get_logger().info(f'put back: {done}')
+        write_stop_report(self.get_name(), done, [])
+        return []
 
     def release_device(self) -> None:
         """Disconnect (a sensor: nothing on the device to put back)."""

@@ -39,6 +39,7 @@ from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.errors import HardwareError, ProtocolError
 from uvms_hardware.hardware_config import HardwareConfigError, NetFtHardware, load_netft
 from uvms_hardware.netft_core import DEFAULT_ROT_LINK_FROM_SENSOR, NetFtCore
+from uvms_hardware.stop_report import write_stop_report
 from uvms_hardware.transport import UdpLink, collect
 
 _LEVELS = {0: OK, 1: WARN, 2: ERROR}
@@ -193,6 +194,9 @@ class NetFtBridgeNode(BridgeNode):
         """Stop the stream (command 0)."""
         if self.link is not None:
             self.link.send(rdt.encode_request(rdt.COMMAND_STOP))
+            done = 'RDT stream stopped (command 0 sent; RDT has no acknowledgement)'
+            self.get_logger().info(f'put back: {done}')
+            write_stop_report(self.get_name(), done, [])
         return []
 
     def release_device(self) -> None:
