@@ -12,6 +12,7 @@ import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, TwistWithCovarianceStamped, WrenchStamped
+from lifecycle_msgs.srv import GetState
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -527,6 +528,40 @@ def test_first_state_waits_for_the_mission_to_be_ready(harness: Harness, mode: s
     finally:
         mission.destroy_node()
     assert harness.responder.states and stamp_ns(harness.responder.states[0]) == 0
+
+
+def test_realtime_hold_publishes_the_held_state_and_waits_for_the_mission(
+        harness: Harness) -> None:
+    """Real time with the hold: the state goes out at once, physics waits for the mission.
+
+    With ``--hardware twin`` the twins answer the bridges only once the plant has a state:
+    a first state held back for the mission made a slow mission fail the bridges' start.
+    """
+    relay_generalized_force(harness)
+    controller = rclpy.create_node('controller', namespace='uvms', context=harness.context)
+
+    def active(_: GetState.Request, response: GetState.Response) -> GetState.Response:
+        response.current_state.label = 'active'
+        return response
+
+    controller.create_service(GetState, 'controller/get_state', active)
+    harness.executor.add_node(controller)
+    sim = harness.start(mode='realtime', startup__nodes=['controller'], startup__timeout_s=0.0,
+                        startup__mission='mission/ready', duration_s=0.02)
+    harness.spin_for(1.5)  # the loop answers the held state; the mission is not ready
+    assert harness.responder.states
+    assert {stamp_ns(m) for m in harness.responder.states} == {0}
+    assert sim.sim_time_ns == 0
+    mission = rclpy.create_node('mission', namespace='uvms', context=harness.context)
+    ready = mission.create_publisher(Bool, 'mission/ready', QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    ready.publish(Bool(data=True))
+    try:
+        harness.spin_until(lambda: sim.finished)
+    finally:
+        mission.destroy_node()
+        harness.executor.remove_node(controller)
+        controller.destroy_node()
 
 
 def test_a_mission_never_ready_stops_the_start_naming_the_topic(harness: Harness) -> None:

@@ -140,10 +140,11 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec(
         'startup.mission', '',
         "A mission's latched readiness topic (relative to the namespace, e.g. mission/ready) "
-        'on which True must arrive before the first state is published, so that no goal '
-        "can start late because the mission was still discovering the controller's action "
-        'server (both modes; uvms launch sets it when the scenario has a mission); empty: '
-        'publish at once.',
+        'on which True must arrive before physics starts (lockstep: before the first state; '
+        'real time with startup.hold: the held state goes out, the hold waits for it too), '
+        "so that no goal can start late because the mission was still discovering the "
+        "controller's action server (uvms launch and uvms run set it when the scenario has "
+        'a mission); empty: none.',
     ),
     ParameterSpec(
         'watchdog_timeout_s', 0.1,

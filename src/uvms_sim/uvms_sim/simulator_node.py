@@ -159,7 +159,12 @@ class SimulatorNode(Node):
         self._first_state = SubscriberWait(self, cfg.startup, recorded_publishers(  # first
             self.get_namespace(), [self._clock_pub, self._joint_pub, self._odom_pub,
                                    self._wrench_pub, self._ee_pub, self._contact_pub]))
-        self._mission = MissionWait(self, cfg.startup)
+        # Lockstep: the first state waits for the mission. Real time with the start-up hold:
+        # the held state goes out at once (the twins serve the bridges only once the plant
+        # has a state) and physics waits for the mission with the rest of the loop.
+        self._mission_holds_physics = cfg.mode != 'lockstep' and cfg.startup.hold
+        self._mission = MissionWait(self, cfg.startup, 'starting physics' if
+                                    self._mission_holds_physics else 'publishing the first state')
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
@@ -286,8 +291,9 @@ class SimulatorNode(Node):
                 once=True)
 
     def _may_publish_first_state(self, now_ns: int) -> bool:
-        """Whether the recorder subscribes and the mission is ready, as far as they are asked."""
-        return self._first_state.passed(now_ns) and self._mission.passed(now_ns)
+        """Whether the recorder subscribes and (lockstep) the mission is ready, if asked."""
+        return self._first_state.passed(now_ns) and (
+            self._mission_holds_physics or self._mission.passed(now_ns))
 
     def _watch_startup(self) -> None:
         """Start watching for the loop to close, with a log line (after the first state)."""
@@ -338,7 +344,7 @@ class SimulatorNode(Node):
         watch = self._startup
         if watch is None:
             return True
-        if watch.core.closed:
+        if watch.core.closed and self._mission.passed(now_ns):
             self._startup_closed()
             return True
         self._check_startup_time()

@@ -199,17 +199,21 @@ class SubscriberWait:
 
 
 class MissionWait:
-    """Before the first state: whether the mission has found the controller's action server.
+    """Whether the mission has found the controller's action server, before physics starts.
 
-    ``startup.mission``: the simulator publishes its first state only once True arrives on
-    the mission's latched readiness topic, so that a goal never starts late (or not at all)
-    because the mission was still discovering the action server while physics ran.
+    ``startup.mission``: the simulator starts physics only once True arrives on the mission's
+    latched readiness topic, so that a goal never starts late (or not at all) because the
+    mission was still discovering the action server while physics ran. In lockstep the
+    first state waits for it; in real time the held initial state goes out at once and the
+    loop's start-up hold waits for it too.
     """
 
-    def __init__(self, node: Node, settings: StartupSettings) -> None:
+    def __init__(self, node: Node, settings: StartupSettings,
+                 waiting: str = 'publishing the first state') -> None:
         """Subscribe to ``settings.mission`` (none: ``passed`` at once), from now.
 
-        The timeout is ``settings.timeout_ns`` of the node's clock (the simulator's: wall time).
+        The timeout is ``settings.timeout_ns`` of the node's clock (the simulator's: wall time);
+        ``waiting`` says in the log line what waits for the mission.
         """
         self._node = node
         self.topic = settings.mission
@@ -224,8 +228,7 @@ class MissionWait:
                     depth=1, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.TRANSIENT_LOCAL))
             node.get_logger().info(
-                f'publishing the first state once the mission is ready ({self.topic}, '
-                'startup.mission)')
+                f'{waiting} once the mission is ready ({self.topic}, startup.mission)')
 
     def _on_ready(self, message: Bool) -> None:
         self.ready = self.ready or bool(message.data)
