@@ -12,6 +12,8 @@ marked slow.
 from __future__ import annotations
 
 import argparse
+import os
+import queue
 import shutil
 import subprocess
 import sys
@@ -35,6 +37,8 @@ ADDED_MASS_FACTOR = (1.4, 0.65, 1.3, 1.5, 0.7, 1.35)
 LINEAR_FACTOR = (1.3, 1.0, 0.65, 1.0, 1.4, 1.0)  # the shipped zeros stay zero
 QUADRATIC_FACTOR = (0.6, 1.4, 0.65, 1.3, 1.5, 0.7)
 BUOYANCY_CHANGE_N = 2.0
+#: The second concurrent run's ROS domain: the module's plus this (test modules use 1-100).
+SECOND_DOMAIN_OFFSET = 100
 
 pytestmark = pytest.mark.slow
 
@@ -62,7 +66,8 @@ def altered_robot(directory: Path) -> Path:
 
 
 @pytest.mark.timeout(1800)  # six runs and the fit: about 10 min on 2 loaded cores
-def test_the_plan_on_another_robot_recovers_its_hull(tmp_path: Path) -> None:
+def test_the_plan_on_another_robot_recovers_its_hull(tmp_path: Path,
+                                                     module_ros_domain: int) -> None:
     """Well-determined terms within 10 %, the 10 s prediction error halved or better."""
     folder = altered_robot(tmp_path)
     parser = argparse.ArgumentParser()
@@ -73,15 +78,25 @@ def test_the_plan_on_another_robot_recovers_its_hull(tmp_path: Path) -> None:
     scenarios = sorted(plan.glob('identify_*.yaml'))
     recordings = [tmp_path / f'{scenario.stem}.mcap' for scenario in scenarios]
 
+    # Two at a time, each on a ROS domain of its own (two graphs on one domain answer each
+    # other's states): lockstep runs are deterministic whatever else the cores do, and the
+    # experiments are independent (as a user may run them on two machines).
+    domains: queue.Queue[int] = queue.Queue()
+    for domain in (module_ros_domain, module_ros_domain + SECOND_DOMAIN_OFFSET):
+        domains.put(domain)
+
     def run(scenario: Path, recording: Path) -> subprocess.CompletedProcess[str]:
         # One `uvms run` process per experiment, as a user runs them (in one process, the
         # fourth run of a sequence once diverged where the same run alone did not).
-        return subprocess.run([*UVMS, 'run', str(scenario), '--robot', str(folder),
-                               '--output', str(recording), '--quiet'],
-                              capture_output=True, text=True, timeout=900, check=False)
+        domain = domains.get()
+        try:
+            return subprocess.run([*UVMS, 'run', str(scenario), '--robot', str(folder),
+                                   '--output', str(recording), '--quiet'],
+                                  capture_output=True, text=True, timeout=900, check=False,
+                                  env={**os.environ, 'ROS_DOMAIN_ID': str(domain)})
+        finally:
+            domains.put(domain)
 
-    # Two at a time: lockstep runs are deterministic whatever else the cores do, and the
-    # experiments are independent (as a user may run them on two machines).
     with ThreadPoolExecutor(max_workers=2) as pool:
         for done in pool.map(run, scenarios, recordings):
             assert done.returncode == 0, done.stderr[-2000:]
