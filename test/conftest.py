@@ -10,8 +10,10 @@ destroying one of them (rmw's ``destroy_participant`` spinning in
 gdb, CI run of 2026-12-04, a test's teardown in ``destroy_node`` for minutes).
 """
 
+import atexit
 import itertools
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 
@@ -22,7 +24,10 @@ from uvms_common.ros_environment import ros_environment_defaults
 ros_environment_defaults()
 # The hardware bridges journal what they change on a device (uvms_hardware.device_journal):
 # the tests' journals go to a folder of the run's own, never to the user's ~/.local/state.
-os.environ.setdefault('UVMS_JOURNAL_DIR', tempfile.mkdtemp(prefix='uvms-test-journal-'))
+if 'UVMS_JOURNAL_DIR' not in os.environ:
+    os.environ['UVMS_JOURNAL_DIR'] = tempfile.mkdtemp(prefix='uvms-test-journal-')
+    # Removed with the pytest process (a suite run made 70 of them, left behind in /tmp).
+    atexit.register(shutil.rmtree, os.environ['UVMS_JOURNAL_DIR'], ignore_errors=True)
 
 #: Domains handed to test modules in turn (1-100: their UDP ports stay below Linux's
 #: ephemeral range); 0 is left to whatever runs outside the tests. tools/run_suite.py starts
