@@ -26,6 +26,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.serialization import serialize_message
 from std_msgs.msg import Float64
+from test_pilot_tui import spin_in_thread
 from uvms_viz.foxglove_server_node import FoxgloveServerNode
 
 #: Client Message Data opcode (Foxglove WebSocket protocol, sent by clients).
@@ -75,11 +76,10 @@ def graph() -> Iterator[Graph]:
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(server)
     executor.add_node(listener)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
+    end = spin_in_thread(executor)
     yield graph
+    end()
     executor.shutdown(timeout_sec=2.0)
-    spinner.join(timeout=2.0)
     server.destroy_node()
     listener.destroy_node()
     rclpy.try_shutdown(context=context)

@@ -18,6 +18,7 @@ from typing import Any
 
 import pytest
 from evdev import AbsInfo, InputEvent, ecodes
+from test_pilot_tui import spin_in_thread
 
 REPO = Path(__file__).resolve().parents[2]
 SHIPPED = REPO / 'config' / 'pilot' / 'xbox.yaml'
@@ -95,8 +96,7 @@ class Graph:
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.pilot_node)
         self.executor.add_node(self.listener)
-        self._thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self._thread.start()
+        self._end_spin = spin_in_thread(self.executor)
 
     def _keep(self, store: list[Any]) -> Callable[[Any], None]:
         def on_message(msg: Any) -> None:
@@ -116,8 +116,8 @@ class Graph:
 
     def close(self) -> None:
         """Stop spinning and destroy the nodes."""
+        self._end_spin()
         self.executor.shutdown(timeout_sec=2.0)
-        self._thread.join(timeout=2.0)
         self.link.destroy()
         self.pilot_node.destroy_node()
         self.listener.destroy_node()

@@ -19,6 +19,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -83,6 +84,26 @@ class Tmux:
         subprocess.run([*self.base, 'kill-server'], capture_output=True)
 
 
+def spin_in_thread(executor: Any) -> Callable[[], None]:
+    """Spin in short turns in a thread; the returned call stops and joins it.
+
+    (``executor.spin`` in a thread races ``executor.shutdown``: rclpy then raises in it.)
+    """
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=0.05)
+
+    thread = threading.Thread(target=spin, daemon=True)
+    thread.start()
+
+    def end() -> None:
+        stop.set()
+        thread.join(timeout=5.0)
+    return end
+
+
 @pytest.fixture(scope='module')
 def graph() -> Iterator[tuple[object, Received]]:
     """A node in /uvms taking the pilot topics, spun in a thread; (node, received)."""
@@ -106,9 +127,9 @@ def graph() -> Iterator[tuple[object, Received]]:
     node.create_subscription(TwistStamped, 'pilot/ee_twist', keep(received.ee), 10)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
+    end = spin_in_thread(executor)
     yield node, received
+    end()
     executor.shutdown(timeout_sec=2.0)
     node.destroy_node()
     rclpy.try_shutdown(context=context)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from test_pilot_tui import Tmux, hold_key
+from test_pilot_tui import Tmux, hold_key, spin_in_thread
 
 pytestmark = pytest.mark.skipif(shutil.which('tmux') is None,
                                 reason='tmux is not installed (apt-get install tmux)')
@@ -29,6 +29,16 @@ pytestmark = pytest.mark.skipif(shutil.which('tmux') is None,
 REPO = Path(__file__).resolve().parents[2]
 #: paper_uvms: pilot.max_vehicle_speed_m_s surge 0.3 m/s, the first gear 25 %.
 SURGE_GEAR1_M_S = 0.075
+#: A motion-only task of the t key: a 2 cm half circle over 20 s from wherever X_d is.
+TASK = """\
+name: pilot_test_arc
+half_circle:
+  radius_m: 0.02
+  duration_s: 20.0
+normal: [1.0, 0.0, 0.0]
+force_n: 0.0
+require_contact: false
+"""
 
 
 @dataclass
@@ -92,16 +102,15 @@ def observed(launched: subprocess.Popen[str]) -> Iterator[Observed]:
     node.create_subscription(TwistStamped, 'pilot/vehicle_twist', on_twist, 10)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
+    end = spin_in_thread(executor)
     deadline = time.monotonic() + 120.0
     while not seen.odometry and time.monotonic() < deadline:
         assert launched.poll() is None, launched.stdout.read() if launched.stdout else ''
         time.sleep(0.2)
     assert seen.odometry, 'no odometry from uvms launch in 120 s'
     yield seen
+    end()
     executor.shutdown(timeout_sec=2.0)
-    spinner.join(timeout=2.0)
     node.destroy_node()
     rclpy.try_shutdown(context=context)
 
@@ -110,13 +119,15 @@ def observed(launched: subprocess.Popen[str]) -> Iterator[Observed]:
 def pilot(observed: Observed, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Tmux]:
     """``uvms pilot`` in tmux on the launched graph (sim time found from /clock)."""
     folder = tmp_path_factory.mktemp('tmux')
+    (folder / 'task.yaml').write_text(TASK)
     env = {key: os.environ[key] for key in ('ROS_DOMAIN_ID', 'RMW_IMPLEMENTATION',
                                             'FASTRTPS_DEFAULT_PROFILES_FILE',
                                             'ROS_AUTOMATIC_DISCOVERY_RANGE', 'PYTHONPATH')
            if key in os.environ}
     command = ' '.join([
         'env', *(f'{key}={shlex.quote(value)}' for key, value in env.items()),
-        shlex.quote(sys.executable), '-m', 'uvms_pilot.cli',
+        shlex.quote(sys.executable), '-m', 'uvms_pilot.cli', '--task',
+        shlex.quote(str(folder / 'task.yaml')),
         '2>', shlex.quote(str(folder / 'stderr.txt')), '||', 'sleep 30'])
     tmux = Tmux(folder / 'socket', f'cd {shlex.quote(str(REPO))} && {command}')
     try:
@@ -163,7 +174,7 @@ def test_keys_move_the_launched_robot_and_release_holds_it(pilot: Tmux,
           f'{stopped_at - last_key if stopped_at else None} s after the last key; moved '
           f'{after[-1][2] - x_start:.3f} m')
     assert 'mode: pilot' in screen or pilot_at is not None
-    assert pilot_at is not None and pilot_at < t0 + 1.0
+    assert pilot_at is not None and pilot_at < t0 + 2.0
     with observed.lock:
         asked = [u for t, u in observed.twists if t0 < t <= last_key]
     # A key arriving later than the repeat window (send-keys under load) is a release: a zero
@@ -182,12 +193,33 @@ def test_keys_move_the_launched_robot_and_release_holds_it(pilot: Tmux,
 def test_hold_key_gets_the_controllers_answer(pilot: Tmux) -> None:
     """Key h: the controller's hold service answers, and the answer is on the screen."""
     pilot.keys('h')
-    screen = pilot.wait_for('hold', 5.0)
+    screen = pilot.wait_for('> hold', 5.0)
     deadline = time.monotonic() + 5.0
     while 'hold: asked' in screen and time.monotonic() < deadline:
         time.sleep(0.1)
         screen = pilot.screen()
     assert '> hold' in screen and 'no service' not in screen, screen
+
+
+def test_task_key_starts_the_task_file_and_cancel_key_cancels_it(pilot: Tmux,
+                                                                  observed: Observed) -> None:
+    """Key t sends the task file (mode task, its feedback on screen); c cancels it (CANCELED)."""
+    t0 = time.monotonic()
+    pilot.keys('t')
+    pilot.wait_for('pilot_test_arc', 10.0)
+    deadline = time.monotonic() + 10.0
+    while _mode_after(observed, t0, 'task') is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert _mode_after(observed, t0, 'task') is not None
+    time.sleep(1.0)
+    pilot.keys('c')
+    pilot.wait_for('> cancel: asked', 5.0)
+    screen = pilot.wait_for('CANCELED', 30.0)  # after the retreat, slower under load
+    assert 'pilot_test_arc: CANCELED' in screen, screen
+    deadline = time.monotonic() + 10.0
+    while not _hold_now(observed) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert _hold_now(observed)
 
 
 def test_leaving_the_pilot_leaves_the_robot_held(pilot: Tmux, observed: Observed) -> None:

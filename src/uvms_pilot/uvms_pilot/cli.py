@@ -141,23 +141,24 @@ def _run_in_graph(args: argparse.Namespace, keys: Any, gamepad: Any, device: Any
     node = Node(f'uvms_pilot_{os.getpid()}', namespace=args.namespace)
     executor = make_executor('single')
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, name='ros', daemon=True)
-    spinner.start()
     link = PilotLink(node, EE_FRAMES[args.ee_frame], joy=gamepad is not None,
                      task_file=args.task)
+    # Before the executor spins in its thread: rclpy entities destroyed while another thread
+    # waits on them break that thread's executor (the robot query's client).
     if args.use_sim_time == 'true' or (args.use_sim_time == 'auto' and _clock_published(node)):
         node.set_parameters([Parameter('use_sim_time', value=True)])
-    robot = args.robot or _robot_of_graph(node) or DEFAULT_ROBOT
+    robot = args.robot or _robot_of_graph(node, executor) or DEFAULT_ROBOT
     try:
         limits = pilot_limits(robot)
     except ValueError as exc:
         _error(f'robot {robot}: {exc}')
-        executor.shutdown(timeout_sec=1.0)
-        spinner.join(timeout=2.0)
         link.destroy()
         node.destroy_node()
         rclpy.try_shutdown()
         return EXIT_USAGE
+    stop = threading.Event()
+    spinner = threading.Thread(target=_spin, args=(executor, stop), name='ros', daemon=True)
+    spinner.start()
     session = PilotSession(link, limits, keys, gamepad)
     reader = None
     if device is not None:
@@ -183,8 +184,9 @@ def _run_in_graph(args: argparse.Namespace, keys: Any, gamepad: Any, device: Any
         link.publish(session.parts_to_stop(), command(Demand(), limits, 1.0))
         if reader is not None:
             reader.stop()
-        executor.shutdown(timeout_sec=1.0)
+        stop.set()
         spinner.join(timeout=2.0)
+        executor.shutdown(timeout_sec=1.0)
         link.destroy()
         node.destroy_node()
         rclpy.try_shutdown()
@@ -200,7 +202,13 @@ def _clock_published(node: Any) -> bool:
     return False
 
 
-def _robot_of_graph(node: Any) -> str | None:
+def _spin(executor: Any, stop: threading.Event) -> None:
+    """Spin in short turns until ``stop`` (executor.spin would race the shutdown)."""
+    while not stop.is_set():
+        executor.spin_once(timeout_sec=0.1)
+
+
+def _robot_of_graph(node: Any, executor: Any) -> str | None:
     """The running controller's robot_name parameter, or None (no controller answered)."""
     from rcl_interfaces.srv import GetParameters
 
@@ -209,9 +217,7 @@ def _robot_of_graph(node: Any) -> str | None:
         if not client.wait_for_service(timeout_sec=ROBOT_QUERY_S):
             return None
         future = client.call_async(GetParameters.Request(names=['robot_name']))
-        deadline = time.monotonic() + ROBOT_QUERY_S
-        while not future.done() and time.monotonic() < deadline:
-            time.sleep(0.02)
+        executor.spin_until_future_complete(future, timeout_sec=ROBOT_QUERY_S)
         response = future.result() if future.done() else None
         if response is None or not response.values or not response.values[0].string_value:
             return None

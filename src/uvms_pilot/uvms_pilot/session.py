@@ -84,7 +84,13 @@ class PilotSession:
             self.act(action)
 
     def act(self, action: str) -> None:
-        """Act on a key's or a button's action."""
+        """Act on a key's or a button's action; a failure is a note, never the loop's end."""
+        try:
+            self._act(action)
+        except Exception as exc:  # a callback boundary: the input loop must go on
+            self.link.note(f'{action} failed: {type(exc).__name__}: {exc}')
+
+    def _act(self, action: str) -> None:
         if action == 'stop':
             if self.keys is not None:
                 self.keys.release_all()
