@@ -169,7 +169,8 @@ class PublishGate:
     def stop_all(self) -> tuple[str, ...]:
         """Every part, to publish one zero each now (the stop key); then all are still.
 
-        The zeros are pilot input: a running task is canceled as a cancel does.
+        Zeros neither take control nor cancel a running task (docs/piloting.md, "Modes and
+        hand-over"): they stop what the pilot drives; c or h end a task.
         """
         self._moving = dict.fromkeys(self.PARTS, False)
         return self.PARTS
