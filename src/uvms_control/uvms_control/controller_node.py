@@ -61,6 +61,7 @@ from uvms_control.core.parameter_specs import (
     SAFETY_PARAMETER_SPECS,
 )
 from uvms_control.core.parameters import ControllerParameters, topic_for, validate_node_parameters
+from uvms_control.core.pilot.supervisor import PilotedSupervisor
 from uvms_control.core.task.contact_task import TaskCode, TaskGoalError
 from uvms_control.core.task.task_supervisor import TaskSupervisor
 from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
@@ -150,7 +151,7 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
                                             f'robot {self.robot_name!r}') from error
             self.core = UnifiedForceController(gains, model,
                                                1.0 / float(node['control_rate_hz']))
-            self.supervisor = TaskSupervisor(self.core, safety_limits(self._safety))
+            self.supervisor = PilotedSupervisor(self.core, safety_limits(self._safety))
             self._configure_topics(node, model.joint_names)
             self._configure_pilot()
             self._watch_allocator(str(node['allocator_node']))

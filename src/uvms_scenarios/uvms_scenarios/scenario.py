@@ -57,7 +57,7 @@ from typing import Any, TypeAlias
 import numpy as np
 import yaml
 from uvms_control.core.errors import ControlParameterError
-from uvms_control.core.pilot.script import parse_script
+from uvms_control.core.pilot.script import script_text
 from uvms_tasks.errors import TaskFileError
 from uvms_tasks.task_file import TaskSpec, Yaml12Loader, parse_mission
 from uvms_thrusters.thruster_faults import PARAMETER as FAULT_PARAMETER
@@ -324,7 +324,10 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
             msg = (f'{path}: key pilot and controller.{PILOT_PARAMETER} both set the pilot '
                    'script; keep one')
             raise ScenarioError(msg)
-        controller[PILOT_PARAMETER] = parse_pilot_key(data['pilot'], path)
+        try:
+            controller[PILOT_PARAMETER] = script_text(data['pilot'], path.parent)
+        except ControlParameterError as exc:
+            raise ScenarioError(f'{path}: {exc}') from exc
     try:
         mission = tuple(parse_mission(data['mission'], str(path))) if 'mission' in data else ()
     except TaskFileError as exc:
@@ -340,24 +343,6 @@ def parse_scenario(data: Any, path: Path) -> Scenario:
         mission=mission,
         robot=robot,
     )
-
-
-def parse_pilot_key(value: Any, path: Path) -> str:
-    """The ``pilot`` key (a list of commands, or a file of one) as ``pilot.script`` text.
-
-    Raises:
-        ScenarioError: naming the file, the entry and key, and what is valid.
-    """
-    where = f'{path}: key pilot'
-    if isinstance(value, str):
-        source = Path(value) if Path(value).is_absolute() else path.parent / value
-        value = read_yaml_file(source, 'pilot script', ScenarioError)
-        where = f'{path}: key pilot ({source})'
-    try:
-        parse_script(value, 'pilot')
-    except ControlParameterError as exc:
-        raise ScenarioError(f'{where}: {exc}') from exc
-    return yaml.safe_dump(value, default_flow_style=None, sort_keys=False)
 
 
 def parse_faults_key(value: Any, path: Path) -> str:

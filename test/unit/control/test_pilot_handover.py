@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from closed_loop_plant import WALL_X, X_A, Loop, press_goal
 from uvms_control.core.pilot.handover import PilotHandover, PilotMode
 from uvms_control.core.pilot.inputs import PilotTwist
 from uvms_control.core.pilot.limits import PilotLimits
+from uvms_control.core.pilot.supervisor import PilotedSupervisor
 from uvms_control.core.task.contact_task import SafetyLimits, TaskCode
 from uvms_control.core.task.task_supervisor import SupervisorState
-
-from closed_loop_plant import WALL_X, X_A, Loop, press_goal
 
 #: A wall out of reach, for free driving.
 FAR = 10.0
@@ -29,18 +29,19 @@ class PilotLoop(Loop):
 
     def __init__(self, limits: PilotLimits = LIMITS, wall_x: float = WALL_X) -> None:
         super().__init__(SafetyLimits(), wall_x=wall_x)
+        self.supervisor = PilotedSupervisor(self.controller, SafetyLimits())
         self.pilot = PilotHandover(self.supervisor, limits)
         self.modes: list[tuple[float, PilotMode]] = []
         self.notes: list[str] = []
 
-    def step(self):  # noqa: ANN201 (the base's type)
+    def step(self):
         """The hand-over, then the supervisor's step and the plant's period."""
         self.pilot.before_step(self.t)
         self.modes += [(self.t, s.mode) for s in self.pilot.take_switches()]
         self.notes += self.pilot.take_notes()
         return super().step()
 
-    def drive(self, duration_s: float, vehicle=(0.0,) * 6, ee=None) -> None:  # noqa: ANN001
+    def drive(self, duration_s: float, vehicle=(0.0,) * 6, ee=None) -> None:
         """Send a vehicle twist (and an end-effector velocity) every step for duration_s."""
         for _ in range(round(duration_s / self.dt)):
             self.pilot.vehicle(self.t, PilotTwist(tuple(vehicle[:3]), tuple(vehicle[3:])))
@@ -109,7 +110,7 @@ def test_a_contact_refuses_the_pilot_when_the_robot_says_so() -> None:
     loop.run(0.2)
     loop.supervisor.submit('press', press_goal(), loop.t)
     loop.run(3.6)
-    assert loop.supervisor.in_contact
+    assert loop.pilot._in_contact()
     loop.drive(0.2, (0.1, 0.0, 0.0, 0.0, 0.0, 0.0))
     assert loop.supervisor.state == SupervisorState.FOLLOWING
     assert loop.events == []

@@ -34,7 +34,7 @@ def test_a_pilot_file_next_to_the_scenario_is_read(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(('pilot', 'named'), [
     ('[{at_s: 1.0, for_s: 1.0, vehicle: [1, 2]}]', 'pilot[0].vehicle'),
-    ('missing.yaml', 'cannot read the pilot script'),
+    ('missing.yaml', 'a readable YAML pilot script'),
     ('{at_s: 1}', 'a list of timed commands'),
 ])
 def test_a_wrong_pilot_key_is_named_before_anything_runs(tmp_path: Path, pilot: str,

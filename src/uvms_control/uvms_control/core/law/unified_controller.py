@@ -228,22 +228,16 @@ class UnifiedForceController:
         return None if self._t0 is None else self._q0[:6].copy()
 
     def set_vehicle_reference(self, eta: npt.ArrayLike, eta_dot: npt.ArrayLike) -> bool:
-        """Move the vehicle part of the posture q_0 to eta (map_ned, m and rad) at eta_dot.
+        """Move the posture's vehicle part to η_0 = eta (m, rad; map_ned) at η̇_0 = eta_dot.
 
-        Station keeping and piloting: the null-space law (``null_space``) holds the vehicle
-        at η_0 and damps the velocity relative to η̇_0, so a moving posture is followed
-        without the lag D_n η̇_0 / K_n. False before the first step (q_0 is captured there).
+        The null space then damps q̇ - q̇_0, so it follows a moving η_0 without lag (a pilot;
+        ``null_space``). False before the first step, where q_0 is captured.
         """
         if self._t0 is None:
             return False
         self._q0[:6] = np.asarray(eta, dtype=np.float64)
         rate = np.asarray(eta_dot, dtype=np.float64)
-        if rate.any():
-            if self._q0_dot is None:
-                self._q0_dot = np.zeros(self._n_dof)
-            self._q0_dot[:6] = rate
-        else:
-            self._q0_dot = None
+        self._q0_dot = np.concatenate((rate, np.zeros(self._n_dof - 6))) if rate.any() else None
         return True
 
     @property
@@ -333,13 +327,8 @@ class UnifiedForceController:
         x0, x1, x2 = X
         f_normal = n0 * f0 + n1 * f1 + n2 * f2
         v_e = n0 * v0 + n1 * v1 + n2 * v2
-        setpoint = self.task.force_sample(
-            t,
-            f_normal,
-            n0 * x0 + n1 * x1 + n2 * x2,
-            n0 * d0 + n1 * d1 + n2 * d2,
-            n0 * w0 + n1 * w1 + n2 * w2,
-        )
+        setpoint = self.task.force_sample(t, f_normal, n0 * x0 + n1 * x1 + n2 * x2,
+                                          n0 * d0 + n1 * d1 + n2 * d2, n0 * w0 + n1 * w1 + n2 * w2)
         if setpoint.phase == ForcePhase.IDLE and self.hybrid.integral != 0.0:
             self.hybrid.integral = 0.0
         force = self.task.force
@@ -450,8 +439,7 @@ class UnifiedForceController:
         (M̂ = s M̃ = J̃⁺ M̂_q J⁺): two 9 x 9 and three 3 x 9 products in all.
         """
         tau = np.empty(self._n_dof)
-        if self._q0_dot is not None:
-            q_dot = q_dot - self._q0_dot  # the kernel damps q_dot alone (D_n q̇)
+        q_dot = q_dot if self._q0_dot is None else q_dot - self._q0_dot  # D_n (q̇ - q̇_0)
         null_space_torque(
             ts.J, ts.Jt_pinv, ts.J_dot_q_dot, ts.M, ts.zeta, ts.Jt_pinv_zeta, M_hat,
             self.params.mass_scale, q, self._q0, q_dot, self._null_gains,

@@ -28,8 +28,9 @@ import numpy as np
 from uvms_control.core.pilot.inputs import PilotTwist
 from uvms_control.core.pilot.limits import PilotLimits
 from uvms_control.core.pilot.motion import PilotMotion
+from uvms_control.core.pilot.supervisor import PilotedSupervisor
 from uvms_control.core.task.safety_checks import MAX_MOTION_STEP_S
-from uvms_control.core.task.task_supervisor import SupervisorState, TaskSupervisor
+from uvms_control.core.task.task_supervisor import SupervisorState
 
 
 class PilotMode(enum.Enum):
@@ -56,11 +57,11 @@ class PilotHandover:
     """Modes and hand-over between the pilot, the tasks and the hold.
 
     Args:
-        supervisor: the task supervisor (and through it, the controller).
+        supervisor: the task supervisor (and through it, the controller), piloted.
         limits: the robot's pilot limits.
     """
 
-    def __init__(self, supervisor: TaskSupervisor, limits: PilotLimits) -> None:
+    def __init__(self, supervisor: PilotedSupervisor, limits: PilotLimits) -> None:
         self.supervisor = supervisor
         self.limits = limits
         self.motion = PilotMotion(limits)
@@ -104,12 +105,12 @@ class PilotHandover:
         goal = supervisor.goal_id
         if goal is not None:
             if supervisor.state == SupervisorState.RETREATING:
-                return False, f'not now: {supervisor.pilot_refusal()}; the hold follows it'
+                return False, f'not now: {self.refusal_now()}; the hold follows it'
             supervisor.cancel(goal)
             return True, ('the task is canceled: its force is released, the arm backs off, '
                           'then holds')
         if supervisor.safe_hold:
-            return True, f'already holding: {supervisor.pilot_refusal()}'
+            return True, f'already holding: {self.refusal_now()}'
         if self.mode == PilotMode.PILOT:
             self._switch(PilotMode.HOLD, 'hold asked: the pilot is released, the pose reached '
                                          'is held')
@@ -137,14 +138,14 @@ class PilotHandover:
         if supervisor.last_result is None and not supervisor.has_goal:
             self.reset()  # activation or a re-captured hold: nothing to drive from yet
             if asked:
-                self._refuse(f'pilot input refused: {supervisor.pilot_refusal()}')
+                self._refuse(f'pilot input refused: {self.refusal_now()}')
             return
         if supervisor.has_goal:
             self._during_task(asked)
         elif self.mode == PilotMode.TASK:
             self._canceled = self._refused_goal = None
             self._switch(PilotMode.HOLD, 'the task ended: station keeping')
-        refusal = supervisor.pilot_refusal()
+        refusal = self.refusal_now()
         if refusal is not None and not supervisor.has_goal:
             if asked:
                 self._refuse(f'pilot input refused: {refusal}')
@@ -170,6 +171,26 @@ class PilotHandover:
 
     # ------------------------------------------------------------------ helpers
 
+    def refusal_now(self) -> str | None:
+        """Why a pilot may not move the hold point now, or None when it may."""
+        supervisor = self.supervisor
+        if supervisor.safe_hold:
+            return (f'the controller is in {supervisor.breach}; clear it with '
+                    '`uvms lifecycle controller reset`')
+        if supervisor.state == SupervisorState.RETREATING:
+            return 'the arm is backing off'
+        if supervisor.has_goal:
+            return 'a task runs'
+        if supervisor.releasing:
+            return 'the arm is letting go of a contact'
+        return None if supervisor.last_result is not None else 'no state since activation'
+
+    def _in_contact(self) -> bool:
+        """The running task measured a contact at the last step (force along its normal)."""
+        progress = self.supervisor.progress()
+        threshold = self.supervisor.controller.task.contact_threshold_n
+        return progress is not None and progress.force_n >= threshold
+
     def _during_task(self, asked: bool) -> None:
         supervisor = self.supervisor
         goal = supervisor.goal_id
@@ -187,9 +208,9 @@ class PilotHandover:
             return
         self.motion.stop()
         if supervisor.state == SupervisorState.RETREATING:
-            self._refuse(f'pilot input ignored: {supervisor.pilot_refusal()}')
+            self._refuse(f'pilot input ignored: {self.refusal_now()}')
             return
-        if self.limits.refuse_during_contact and supervisor.in_contact:
+        if self.limits.refuse_during_contact and self._in_contact():
             if goal != self._refused_goal:
                 self._refused_goal = goal
                 self._refuse('pilot input refused: the task holds a contact '
@@ -215,7 +236,7 @@ class PilotHandover:
         controller = self.supervisor.controller
         controller.set_vehicle_reference(reference.eta, reference.eta_dot)
         if ee:  # in a task, the task owns X_d: the vehicle's posture slows down alone
-            self.supervisor.pilot_hold(reference.X_d, reference.X_dot_d)
+            self.supervisor.follow(reference.X_d.tolist(), reference.X_dot_d.tolist())
 
     def _switch(self, mode: PilotMode, reason: str) -> None:
         self.mode = mode

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -101,6 +102,30 @@ def parse_script(data: Any, where: str = 'pilot.script') -> tuple[ScriptCommand,
             raise ControlParameterError(at, entry, 'vehicle, ee, jaw or hold: true')
         commands.append(command)
     return tuple(sorted(commands, key=lambda c: c.at_s))
+
+
+def script_text(value: Any, directory: Path) -> str:
+    """A scenario's ``pilot:`` (a list of commands, or a file of one) as ``pilot.script`` text.
+
+    Args:
+        value: the list, or the name of a YAML file holding it (relative to ``directory``).
+        directory: where a relative file name is looked up (the scenario's folder).
+
+    Raises:
+        ControlParameterError: a file that cannot be read or is not YAML, or a wrong entry,
+            named (``pilot[1].vehicle``).
+    """
+    where = 'pilot'
+    if isinstance(value, str):
+        path = Path(value) if Path(value).is_absolute() else directory / value
+        where = f'pilot ({path})'
+        try:
+            value = yaml.safe_load(path.read_text(encoding='utf-8'))
+        except (OSError, yaml.YAMLError) as error:
+            raise ControlParameterError(where, str(path),
+                                        f'a readable YAML pilot script: {error}') from error
+    parse_script(value, where)
+    return yaml.safe_dump(value, default_flow_style=None, sort_keys=False)
 
 
 def load_script_text(text: str) -> tuple[ScriptCommand, ...]:

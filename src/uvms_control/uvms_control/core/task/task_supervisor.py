@@ -102,47 +102,6 @@ class TaskSupervisor:
         """In SAFE_HOLD (latched until ``reset``)."""
         return self.state == SupervisorState.SAFE_HOLD
 
-    @property
-    def has_goal(self) -> bool:
-        """A goal runs (its retreat included) or waits for the first step."""
-        return self._running is not None or bool(self._queued)
-
-    @property
-    def in_contact(self) -> bool:
-        """The last step measured a force along the normal at or above the contact threshold."""
-        last = self._last
-        if last is None:
-            return False
-        normal = self._running.normal if self._running is not None else self.controller.n
-        return float(normal @ last.F_e) >= self.controller.task.contact_threshold_n
-
-    def pilot_refusal(self) -> str | None:
-        """Why a pilot may not move the hold point now, or None when it may."""
-        if self._last is None:
-            return 'no state since activation'
-        if self.state == SupervisorState.SAFE_HOLD:
-            return (f'the controller is in safe hold ({self._safe_hold_reason}); clear it '
-                    'with `uvms lifecycle controller reset`')
-        if self._retreating is not None:
-            return f'the arm is backing off ({self._retreating.message})'
-        if self._running is not None or self._queued:
-            return 'a task runs'
-        if self._release is not None:
-            return 'the arm is letting go of a contact'
-        return None
-
-    def pilot_hold(self, X_d: npt.ArrayLike, X_dot_d: npt.ArrayLike) -> bool:
-        """Move the hold point to X_d (m) at X_dot_d (m/s), map_ned: a pilot drives.
-
-        False (nothing changes) unless ``pilot_refusal`` is None; a streamed target is dropped.
-        """
-        if self.pilot_refusal() is not None:
-            return False
-        self._target = None
-        self.controller.task.follow(np.asarray(X_d, dtype=np.float64).tolist(),
-                                    np.asarray(X_dot_d, dtype=np.float64).tolist())
-        return True
-
     def progress(self) -> TaskProgress | None:
         """The running task's feedback, or None."""
         running, last = self._running, self._last
