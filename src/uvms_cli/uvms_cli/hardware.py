@@ -121,7 +121,7 @@ def _running_bridges(names: list[str], listen_s: float) -> dict[str, BridgeStatu
 
     start_s = time.monotonic()
     graph = running_bridges(names, listen_s)
-    took = f'{time.monotonic() - start_s:.1f} s'
+    took = f'{time.monotonic() - start_s:.1f} s with starting ROS'
     print('graph: ' + (', '.join(f'{s.name} {s.state}' for s in graph.values()) + f' ({took})'
                        if graph else f'no bridge running ({took})'), flush=True)
     return graph

@@ -121,7 +121,7 @@ CHECKS: dict[str, Check] = {
 
 
 def device_bound_s(robot: str, name: str, bounds: CheckBounds) -> float:
-    """The longest the check of bridge ``name``'s device takes (s)."""
+    """The longest the check of bridge ``name``'s device waits for answers (s)."""
     if name == 'ardusub_bridge':
         _, section = hardware_section(robot, 'ardusub')
         return ardusub_bound_s(len(section['thruster_channels']), bounds)
@@ -161,8 +161,8 @@ def check_hardware(robot: str, bridges: Mapping[str, Mapping[str, Any]], say: Sa
         start_s = clock()
         bridge = graph.get(name)
         try:
-            device.info(f'checking {_where(values)} (at most '
-                        f'{device_bound_s(robot, name, bounds):.1f} s)')
+            device.info(f'checking {_where(values)} (waits at most '
+                        f'{device_bound_s(robot, name, bounds):.1f} s for answers)')
             if bridge is not None:
                 device.info(f'{bridge.describe()}')
                 if bridge.level >= 2:
