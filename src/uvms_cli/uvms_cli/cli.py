@@ -126,6 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help=ROBOT_HELP)
     run.add_argument('--quiet', '-q', action='store_true',
                      help='no progress bar, only warnings, errors and the summary line')
+    run.add_argument('--pilot', metavar='FILE',
+                     help="timed pilot commands played by the controller (YAML list; over the "
+                          "scenario's pilot:, docs/piloting.md)")
     _add_params_file_argument(run)
     _add_foxglove_arguments(run)
     launch = sub.add_parser(
@@ -336,6 +339,9 @@ def _run_in_process(
             scenario = load_scenario(resolve_scenario_path(args.scenario))
             scenario = scenario.with_changes(duration_s=args.duration,
                                              seed=getattr(args, 'seed', None))
+            if getattr(args, 'pilot', None):
+                from uvms_scenarios.pilot import with_pilot
+                scenario = with_pilot(scenario, args.pilot)
             warning = short_duration_warning(scenario, scenario.duration_s)
         duration = args.duration if scenario is None else scenario.duration_s
         scenario = _with_params_files(scenario, args.params_file)
