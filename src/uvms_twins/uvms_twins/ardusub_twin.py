@@ -18,6 +18,10 @@ bridge; each behaviour names its source:
   65535 ignore (the old override stays), 0 release; 9-18, 0 or 65535 ignore, 65534 release.
   Each channel's override expires ``RC_OVERRIDE_TIME`` s after it was last set (-1 never;
   0 disables overrides).
+- RC inputs read at 50 Hz: ArduSub's ``fifty_hz_loop`` calls ``rc().read_input()`` (the
+  scheduler table of ``ArduSub/ArduSub.cpp``), which takes each channel's override in force
+  into its input (``RC_Channel::update``); an output that follows an RC input, and the
+  script's ``rc:get_pwm``, change only at those reads, whatever rate the overrides come at.
 - Outputs: SERVOn_FUNCTION 51..66 (RCIN1..16, ``k_rcin1`` = 51) outputs RC channel k; 1
   (RCPassThru) channel n; 33..40 (Motor1..8) neutral 1500 (no pilot input is modelled);
   0 no pulse (0). A passthrough output follows its RC channel's input, which keeps the last
@@ -61,6 +65,9 @@ MODE_MANUAL = 19
 K_RCIN1 = 51
 #: SERVOn_FUNCTION of Motor1 (``k_motor1``); Motor8 is 40.
 K_MOTOR1 = 33
+#: Rate at which ArduSub reads its RC inputs, overrides included (Hz): ``fifty_hz_loop`` ->
+#: ``rc().read_input()``, scheduled at 50 Hz in ``ArduSub/ArduSub.cpp``.
+RC_READ_HZ = 50.0
 #: MAV_PARAM_TYPE of each kind of parameter, as ArduPilot declares them.
 INT8, INT16, REAL32 = MAV.MAV_PARAM_TYPE_INT8, MAV.MAV_PARAM_TYPE_INT16, MAV.MAV_PARAM_TYPE_REAL32
 TELEMETRY_IDS = (MAV.MAVLINK_MSG_ID_ATTITUDE_QUATERNION, MAV.MAVLINK_MSG_ID_RAW_IMU,
@@ -106,7 +113,9 @@ class OverrideRecord:
 class _Channel:
     value_us: int = 0
     set_s: float = -math.inf
-    last_us: int = 0  # last override value: what a passthrough output keeps (unknown, unsafe)
+    #: The RC input (``radio_in``) as of the last RC read: the override in force then, else
+    #: the last one (no receiver fitted): what a passthrough output keeps (unknown, unsafe).
+    last_us: int = 0
 
 
 @dataclass
@@ -123,6 +132,8 @@ class TwinState:
     commands: list[tuple[int, tuple[float, ...]]] = field(default_factory=list)
     #: The watchdog script's output overrides: output -> (PWM, local time it expires, s).
     script_overrides: dict[int, tuple[int, float]] = field(default_factory=dict)
+    #: When the RC inputs were read (monotonic s), the latest last.
+    rc_reads: deque[float] = field(default_factory=lambda: deque(maxlen=2000))
     #: Telemetry sent: (message name, wall time of its time field, s since the epoch).
     sent: deque[tuple[str, float]] = field(default_factory=lambda: deque(maxlen=20000))
 
@@ -133,7 +144,7 @@ class ArduSubTwin:
     def __init__(self, port: int = 0, host: str = LOOPBACK, system_id: int = 1,
                  component_id: int = 1, gcs_param: str = 'MAV_GCS_SYSID',
                  parameters: dict[str, float] | None = None,
-                 watchdog_script: bool = False) -> None:
+                 watchdog_script: bool = False, rc_read_hz: float = RC_READ_HZ) -> None:
         self.gcs_param = gcs_param
         self.params = default_parameters(gcs_param)
         for name, value in (parameters or {}).items():
@@ -152,6 +163,8 @@ class ArduSubTwin:
         self.script = WatchdogScript(ScriptSettings.from_source()) if watchdog_script else None
         self.script_running = watchdog_script
         self._next_script_s = 0.0
+        self._rc_period_s = 1.0 / rc_read_hz
+        self._next_rc_s = 0.0
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._boot_s = time.monotonic()
@@ -217,6 +230,11 @@ class ArduSubTwin:
         with self._lock:
             return list(self.state.overrides)
 
+    def rc_read_times(self) -> list[float]:
+        """When the RC inputs were read (monotonic s), oldest first (at most the last 2000)."""
+        with self._lock:
+            return list(self.state.rc_reads)
+
     @property
     def armed(self) -> bool:
         """The vehicle's armed state."""
@@ -264,11 +282,24 @@ class ArduSubTwin:
                 continue
             if msg is not None and msg.get_type() != 'BAD_DATA':
                 self._handle(msg, now_s)
+            if now_s >= self._next_rc_s:
+                self._next_rc_s = max(self._next_rc_s + self._rc_period_s, now_s)
+                self._read_rc(now_s)
             if now_s >= next_heartbeat_s:
                 next_heartbeat_s = now_s + 1.0
                 self._heartbeat()
             self._telemetry(now_s)
             self._run_script(now_s)
+
+    def _read_rc(self, now_s: float) -> None:
+        """ArduSub's RC read: each channel's override in force becomes its input."""
+        with self._lock:
+            timeout_s = self.params['RC_OVERRIDE_TIME'][0]
+            for ch in self.state.channels.values():
+                expired = timeout_s > 0.0 and now_s - ch.set_s > timeout_s
+                if ch.value_us != 0 and timeout_s != 0.0 and not expired:
+                    ch.last_us = ch.value_us
+            self.state.rc_reads.append(now_s)
 
     def _run_script(self, now_s: float) -> None:
         script = self.script
@@ -361,7 +392,7 @@ class ArduSubTwin:
                 if value == 0 or (k > 8 and value == 65534):
                     ch.value_us = 0  # release (a passthrough output keeps last_us: unknown)
                     continue
-                ch.value_us, ch.set_s, ch.last_us = value, now_s, value
+                ch.value_us, ch.set_s = value, now_s  # the input takes it at the RC read
 
     def _telemetry(self, now_s: float) -> None:
         with self._lock:

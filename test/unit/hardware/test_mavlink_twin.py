@@ -73,6 +73,8 @@ def test_channel_semantics_ignore_and_release(twin: ArduSubTwin) -> None:
     override(conn, [65535, 1450] + [65535] * 6)
     wait(lambda: twin.active_override_us(2) == 1450, 1.0, 'channel 2 changed')
     assert twin.active_override_us(1) == 1600
+    # The input takes it at the next 50 Hz RC read (one released before it is never read).
+    wait(lambda: twin.servo_outputs_us()[1] == 1450, 1.0, 'the RC read of channel 2')
     override(conn, [0] * 8)
     wait(lambda: twin.active_override_us(1) == 0, 1.0, 'the release')
     assert twin.servo_outputs_us()[:2] == [1600, 1450]  # unknown in the docs: unsafe reading
