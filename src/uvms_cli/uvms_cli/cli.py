@@ -59,6 +59,8 @@ DELEGATED = {
                                       'recordings (plan, fit)'),
     'param': ('uvms_cli.param', "list, get or set a running node's parameters (as ros2 "
                                 'param)'),
+    'pilot': ('uvms_pilot.cli', 'drive the vehicle and the arm from the terminal or a gamepad; '
+                                'hold, start and cancel a task'),
     'doctor': ('uvms_cli.doctor', 'show rclpy, rmw and DDS profile in use and check the '
                                       'messages'),
 }
