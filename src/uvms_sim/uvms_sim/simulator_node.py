@@ -51,12 +51,7 @@ from uvms_sim.parameters import (
     default_joint_positions,
 )
 from uvms_sim.plant import Plant, initial_coordinates
-from uvms_sim.startup_watch import (
-    MissionWait,
-    StartupWatch,
-    SubscriberWait,
-    recorded_publishers,
-)
+from uvms_sim.startup_watch import StartGates, StartupWatch, recorded_publishers
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
@@ -156,15 +151,11 @@ class SimulatorNode(Node):
         # Until the loop is closed (docs/running.md, start-up): None once it is, or unwatched.
         self._startup: StartupWatch | None = None
         self._held_published_ns = 0
-        self._first_state = SubscriberWait(self, cfg.startup, recorded_publishers(  # first
+        # Before the first state and physics: the recorder and the mission, when asked.
+        self._gates = StartGates(self, cfg.startup, recorded_publishers(
             self.get_namespace(), [self._clock_pub, self._joint_pub, self._odom_pub,
-                                   self._wrench_pub, self._ee_pub, self._contact_pub]))
-        # Lockstep: the first state waits for the mission. Real time with the start-up hold:
-        # the held state goes out at once (the twins serve the bridges only once the plant
-        # has a state) and physics waits for the mission with the rest of the loop.
-        self._mission_holds_physics = cfg.mode != 'lockstep' and cfg.startup.hold
-        self._mission = MissionWait(self, cfg.startup, 'starting physics' if
-                                    self._mission_holds_physics else 'publishing the first state')
+                                   self._wrench_pub, self._ee_pub, self._contact_pub]),
+            realtime_hold=cfg.mode != 'lockstep' and cfg.startup.hold)
         if cfg.mode == 'lockstep':
             self._kick = self.create_timer(1e-3, self._on_kick)
             period = min(max(cfg.lockstep_timeout_s / 4.0, 1e-3), 0.25)
@@ -225,7 +216,7 @@ class SimulatorNode(Node):
 
     def _on_kick(self) -> None:
         """Lockstep start: publish the initial state once the executor runs (and recorder)."""
-        if not self._may_publish_first_state(self.get_clock().now().nanoseconds):
+        if not self._gates.first_state(self.get_clock().now().nanoseconds):
             return  # the kick timer asks again
         self._kick.cancel()
         self._publish_state()
@@ -290,11 +281,6 @@ class SimulatorNode(Node):
                 f'the simulation runs {behind_s * 1e3:.1f} ms behind real time (start-up)',
                 once=True)
 
-    def _may_publish_first_state(self, now_ns: int) -> bool:
-        """Whether the recorder subscribes and (lockstep) the mission is ready, if asked."""
-        return self._first_state.passed(now_ns) and (
-            self._mission_holds_physics or self._mission.passed(now_ns))
-
     def _watch_startup(self) -> None:
         """Start watching for the loop to close, with a log line (after the first state)."""
         cfg = self._settings
@@ -334,7 +320,7 @@ class SimulatorNode(Node):
     def _loop_closed(self, now_ns: int) -> bool:
         """Real time: hold (re-publish) the initial state until the loop is closed."""
         if self._published == 0:
-            if not self._may_publish_first_state(now_ns):
+            if not self._gates.first_state(now_ns):
                 return False
             if not self._settings.startup.hold:
                 return True
@@ -344,7 +330,7 @@ class SimulatorNode(Node):
         watch = self._startup
         if watch is None:
             return True
-        if watch.core.closed and self._mission.passed(now_ns):
+        if watch.core.closed and self._gates.physics(now_ns):
             self._startup_closed()
             return True
         self._check_startup_time()

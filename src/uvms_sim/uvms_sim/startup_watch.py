@@ -256,3 +256,30 @@ class MissionWait:
             self._node.get_logger().fatal(msg)
             raise StartupError(msg)
         return False
+
+
+class StartGates:
+    """What the first state and physics wait for besides the control loop: recorder, mission.
+
+    In lockstep (and real time without the start-up hold) the first state waits for both.
+    In real time with the hold the held state goes out once the recorder subscribes (with
+    ``--hardware twin`` the twins answer the bridges only once the plant has a state), and
+    physics waits for the mission beside the loop's own start-up.
+    """
+
+    def __init__(self, node: Node, settings: StartupSettings, publishers: Sequence[Publisher],
+                 realtime_hold: bool) -> None:
+        """The recorder's wait on ``publishers`` and the mission's, as ``settings`` ask."""
+        self.recorder = SubscriberWait(node, settings, publishers)
+        self._mission_holds_physics = realtime_hold
+        self.mission = MissionWait(node, settings, 'starting physics' if realtime_hold
+                                   else 'publishing the first state')
+
+    def first_state(self, now_ns: int) -> bool:
+        """Whether the first state may go out (raises past ``startup.timeout_s``)."""
+        return self.recorder.passed(now_ns) and (
+            self._mission_holds_physics or self.mission.passed(now_ns))
+
+    def physics(self, now_ns: int) -> bool:
+        """Whether physics may start as far as the mission goes (raises past the timeout)."""
+        return self.mission.passed(now_ns)
