@@ -5,7 +5,7 @@ and the arm tripped again at once, and after ``uvms lifecycle controller reset``
 hold said ``|X_d - X| = 1.795 m``. docs/hardware.md, "Recovering the arm after a trip":
 ``uvms lifecycle controller reset`` then ``uvms hardware reset-trip``. The test trips the arm
 by sending it a large joint torque beside the controller, runs both commands as a user would
-(the second once the twin's arm, held by its VELOCITY 0, is under 0.3 rad/s; asked again when
+(the second once the twin's arm, held by its VELOCITY 0, is under 0.5 rad/s; asked again when
 refused), and watches the hold for 10 s of wall time: joint states flow, every joint under the
 trip speed, no new trip.
 """
@@ -62,9 +62,9 @@ class Probe:
             self.executor.spin_once(timeout_sec=0.02)
 
     def still(self, since_s: float) -> bool:
-        """The plant's arm under 0.3 rad/s at every joint for its last 50 states."""
-        recent = [v for t, v in self.plant_states[-50:] if t >= since_s]
-        return len(recent) == 50 and all(abs(x) < 0.3 for v in recent for x in v)
+        """The plant's arm under 0.5 rad/s at every joint for its last 25 states (0.1 s)."""
+        recent = [v for t, v in self.plant_states[-25:] if t >= since_s]
+        return len(recent) == 25 and all(abs(x) < 0.5 for v in recent for x in v)
 
     def close(self) -> None:
         """Spinning stopped, node and context gone."""
@@ -114,7 +114,7 @@ def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path
         assert reset.returncode == 0, reset.stderr
         reset_s = time.monotonic()
         for _ in range(3):  # refused while a joint is over the trip speed: wait, ask again
-            wait_for(lambda s=reset_s: probe.still(s), 60.0, 'the tripped arm is not held still',
+            wait_for(lambda s=reset_s: probe.still(s), 120.0, 'the tripped arm is not held still',
                      log)
             cleared = uvms(env, 'hardware', 'reset-trip')
             if cleared.returncode == 0:
