@@ -30,6 +30,7 @@ SCHEMAS = {
     '/uvms/command/generalized_force': 'uvms_msgs/msg/GeneralizedForce',
     '/uvms/controller/state': 'uvms_msgs/msg/ControllerState',
     '/uvms/controller/task_record': 'uvms_msgs/msg/ContactTaskRecord',
+    '/uvms/controller/mode': 'std_msgs/msg/String',  # pilot, task or hold (latched)
     '/uvms/command/actuators': 'uvms_msgs/msg/ActuatorCommand',
     '/uvms/thrusters/state': 'uvms_msgs/msg/ThrusterState',
     '/uvms/thrusters/health': 'uvms_msgs/msg/ThrusterHealth',
@@ -68,7 +69,8 @@ def stamps(path: Path) -> dict[str, list[int]]:
     result: dict[str, list[int]] = defaultdict(list)
     with AnyReader([path]) as reader:
         for connection, _, raw in reader.messages():
-            if connection.topic in ('/robot_description', '/uvms/markers'):
+            if connection.topic in ('/robot_description', '/uvms/markers',
+                                    '/uvms/controller/mode'):
                 continue  # no header of their own
             msg = reader.deserialize(raw, connection.msgtype)
             stamp = msg.clock if connection.topic == '/clock' else (

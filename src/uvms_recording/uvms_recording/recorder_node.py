@@ -45,6 +45,7 @@ DEFAULT_TOPICS = (
     'command/generalized_force:uvms_msgs/msg/GeneralizedForce',
     'controller/state:uvms_msgs/msg/ControllerState',
     'controller/task_record:uvms_msgs/msg/ContactTaskRecord',
+    'controller/mode:std_msgs/msg/String',
     'command/actuators:uvms_msgs/msg/ActuatorCommand',
     'thrusters/state:uvms_msgs/msg/ThrusterState',
     'thrusters/health:uvms_msgs/msg/ThrusterHealth',
