@@ -8,10 +8,11 @@ when every device answered and nothing stops its bridge from activating (nor sho
 bridge stopped), 1 when something does (each problem on a line of its own), 2 for a bad
 command line or file.
 
-``reset-trip``: the alpha5_bridge's overspeed trip cleared without a deactivate (its
-``~/reset_trip`` service: refused while a joint still moves over the trip speed); the arm
-stays at VELOCITY 0 until the next command, which is taken again. Exit status 0 when cleared
-(or nothing was tripped), 1 when refused or the bridge did not answer.
+``reset-trip``: the controller reset (deactivate, activate: its hold taken where the arm is),
+then 0.5 s later the alpha5_bridge's overspeed trip cleared (its ``~/reset_trip`` service:
+refused while a joint still moves over the trip speed), so that the first command the bridge
+takes again is the controller's holding torque. Exit status 0 when cleared (or nothing was
+tripped), 1 when refused or a node did not answer.
 
 ``restore ardusub``: what an ardusub_bridge that did not end cleanly (a kill, a crash) left
 changed on the vehicle put back, as the bridge's own stop does (``uvms_hardware.
@@ -35,6 +36,8 @@ from uvms_hardware.errors import HardwareError
 from uvms_hardware.hardware_check import BridgeStatus, CheckBounds, check_hardware
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
+#: After the controller's reset, before the trip is cleared: it steps and holds first (s).
+CONTROLLER_SETTLE_S = 0.5
 #: The ardusub_bridge's default ``mavlink_url``.
 DEFAULT_MAVLINK_URL = 'udpout:127.0.0.1:14550'
 
@@ -63,6 +66,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                        help="the graph's namespace (default /uvms)")
     reset.add_argument('--timeout', type=float, default=10.0, metavar='S',
                        help='seconds to wait for the service and its answer (default 10)')
+    reset.add_argument('--no-controller-reset', action='store_true',
+                       help='clear the trip only (by default the controller is reset first, '
+                            f'{CONTROLLER_SETTLE_S:g} s before: its hold where the arm is)')
     restore = sub.add_parser('restore', help='put back what a bridge that did not end cleanly '
                              'left changed on its device')
     restore.add_argument('device', choices=['ardusub'])
@@ -87,7 +93,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.action == 'restore':
         return _restore(args)
     if args.action == 'reset-trip':
-        return _reset_trip(args.namespace, args.timeout)
+        return _reset_trip(args.namespace, args.timeout, not args.no_controller_reset)
     try:
         plan = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
     except HardwareFileError as exc:
@@ -128,26 +134,44 @@ def _running_bridges(names: list[str], listen_s: float) -> dict[str, BridgeStatu
 
 
 
-def _reset_trip(namespace: str, timeout_s: float) -> int:
-    """``reset-trip``: the bridge's ``~/reset_trip`` called; its answer printed."""
+def _reset_trip(namespace: str, timeout_s: float, controller: bool) -> int:
+    """``reset-trip``: the controller reset, then the bridge's ``~/reset_trip``; printed.
+
+    Back to back in one process: reset separately, a command line at a time beside the
+    SCHED_FIFO graph (4-70 s apart on a loaded machine), the controller's hold breached its
+    tracking limit while the bridge still refused its arm torques, and the arm tripped again.
+    """
     import rclpy
     from rclpy.node import Node
     from std_srvs.srv import Trigger
     from uvms_common.ros_environment import ros_environment_defaults
 
+    from uvms_cli.lifecycle import LifecycleCallError, LifecycleClient
     from uvms_cli.service_call import call_service
 
-    class ResetTripError(Exception):
-        """The service did not answer."""
-
     ros_environment_defaults()
-    target = f'{namespace.rstrip("/")}/alpha5_bridge/reset_trip'
+    base = namespace.rstrip('/')
+    target = f'{base}/alpha5_bridge/reset_trip'
     rclpy.init(args=[])
     node = Node('uvms_hardware_reset_trip')
     try:
-        answer = call_service(node, node.create_client(Trigger, target), Trigger.Request(),
-                              timeout_s, ResetTripError, ' (is an alpha5_bridge active?)')
-    except ResetTripError as exc:
+        client = node.create_client(Trigger, target)
+        if not client.wait_for_service(timeout_sec=timeout_s):
+            raise LifecycleCallError(f'{target} did not appear within {timeout_s:g} s (is an '
+                                     'alpha5_bridge active?)')
+        if controller:
+            lifecycle = LifecycleClient(node, f'{base}/controller', timeout_s)
+            states = [lifecycle.state()]
+            steps = ('deactivate', 'activate') if states[0] == 'active' else ('activate',)
+            states += [lifecycle.transition(step) for step in steps]
+            print(f'{base}/controller: {" -> ".join(states)} (its hold taken where the arm is)',
+                  flush=True)
+            end_s = time.monotonic() + CONTROLLER_SETTLE_S
+            while time.monotonic() < end_s:  # the controller steps and holds first
+                rclpy.spin_once(node, timeout_sec=0.05)
+        answer = call_service(node, client, Trigger.Request(), timeout_s, LifecycleCallError,
+                              ' (is an alpha5_bridge active?)')
+    except LifecycleCallError as exc:
         print(f'uvms hardware: error: {exc}', file=sys.stderr)
         return EXIT_PROBLEMS
     finally:
