@@ -99,3 +99,53 @@ def test_a_stop_mid_build_of_a_node_that_changes_things_waits_for_its_end(
     assert process.returncode == 0, err
     assert 'Traceback' not in err, err
     assert marker.read_text() == 'built and ended'
+
+
+BRIDGE_STAND_IN = textwrap.dedent("""\
+    import sys
+    import time
+    from pathlib import Path
+
+    from rclpy.node import Node
+    from uvms_common.node_main import run_node
+    from uvms_common.stop_event import defer_stop_end
+
+    MARKER = Path(sys.argv[1])
+
+
+    class Bridge(Node):
+        def __init__(self):
+            super().__init__('slow_bridge', namespace='/stop_while_building')
+            time.sleep(0.5)  # configure: the device checked, nothing changed
+            defer_stop_end()  # activate: the device is about to change
+            MARKER.write_text('changed')
+            print('building', flush=True)
+            time.sleep({build_s})
+            MARKER.write_text('changed, built')
+
+        def destroy_node(self):
+            MARKER.write_text(MARKER.read_text() + ', put back')
+            super().destroy_node()
+
+
+    def main():
+        sys.exit(run_node(Bridge, [], 'slow_bridge'))
+""").format(build_s=BUILD_S)
+
+
+@pytest.mark.timeout(120)
+def test_a_stop_after_a_bridge_started_changing_its_device_waits_for_the_put_back(
+        tmp_path: Path) -> None:
+    """defer_stop_end (a bridge's activate): the build finishes, the node puts back, status 0."""
+    (tmp_path / 'slow_bridge_node.py').write_text(BRIDGE_STAND_IN, encoding='utf-8')
+    marker = tmp_path / 'marker'
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join([str(tmp_path), *sys.path])}
+    process = subprocess.Popen(
+        [sys.executable, '-c', 'from uvms_common.node_entry import run_node_module; '
+         'run_node_module("slow_bridge_node")', str(marker)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    assert process.stdout is not None and process.stdout.readline().strip() == 'building'
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=BUILD_S + 60.0)
+    assert process.returncode == 0, err
+    assert marker.read_text() == 'changed, built, put back'

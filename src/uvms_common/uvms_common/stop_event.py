@@ -69,6 +69,10 @@ class StopEvent:
         finally:
             self._end = None
 
+    def defer_end(self) -> None:
+        """From now on a stop only sets the event: the process changed what it must put back."""
+        self._end = None
+
     def is_set(self) -> bool:
         """Whether a stop signal arrived."""
         return self._event.is_set()
@@ -89,3 +93,15 @@ class StopEvent:
 def active_stop_event() -> StopEvent | None:
     """The StopEvent whose handlers are installed in this process now, if any."""
     return _active[-1] if _active else None
+
+
+def defer_stop_end() -> None:
+    """Say that this process is about to change a device: a stop must not end it at once.
+
+    A node's build may end at once on a stop (``StopEvent.ending``); a bridge whose
+    activation starts changing its device calls this first, so that a stop from then on
+    waits for the build and the node's own end, which puts the device back.
+    """
+    stop = active_stop_event()
+    if stop is not None:
+        stop.defer_end()

@@ -19,7 +19,9 @@ What the base guarantees, on every way out (as ros2_control's hardware component
   is released. A configure while a device is still held (after an error) puts that device
   back before it lets go of it: a second configure never loses the first's changes.
 - activate: ``device_changed`` is set before the hook runs, so a refusal or an exception
-  half-way through puts back whatever the hook had changed before the node answers.
+  half-way through puts back whatever the hook had changed before the node answers. A stop
+  during the node's build ends the process at once until then (configure changes nothing);
+  from activate on it waits for the build and the put-back (``defer_stop_end``).
 - deactivate, shutdown, ``on_error``, SIGINT and SIGTERM (``run_bridge``'s last word before
   the middleware teardown) put the device back; ``put_device_back`` is called at most once
   per activation and each of its problems is one error line.
@@ -43,6 +45,7 @@ from uvms_common.diagnostics import ERROR, WARN, DiagnosticsPublisher, Report
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
 from uvms_common.robot_parameters import declare_robot_name
+from uvms_common.stop_event import defer_stop_end
 
 from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import HardwareError
@@ -149,6 +152,7 @@ class BridgeNode(LifecycleNode):
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Change the device for driving; whatever fails half-way is put back."""
         self.refusal = ''
+        defer_stop_end()  # a stop now waits for the build and the put-back
         self.device_changed = True
         result = self._guarded('activate', self.activate_device)
         if result != SUCCESS:
@@ -248,5 +252,4 @@ def run_bridge(node_type: type[B], args: Sequence[str] | None, logger_name: str,
     sys.exit(run_node(node_type, args, logger_name,
                       (node_type.error_type, HardwareError, ParameterException,
                        *startup_errors),
-                      close_output=lambda node: node.put_back_now(),
-                      build_changes_nothing=False))  # autostart changes the device
+                      close_output=lambda node: node.put_back_now()))
