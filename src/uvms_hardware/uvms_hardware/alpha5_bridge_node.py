@@ -23,8 +23,9 @@ clock, so arrival (read once per tick, every 2 ms at the defaults) is what the w
 
 A joint reported over ``overspeed_factor`` x its speed limit trips the bridge: VELOCITY 0 to
 every joint (the devices' own speed loop holds them), every command refused; joint_states go
-on, so that a controller reset takes its hold where the arm is and is already computing the
-torque that holds it (gravity included) when commands are taken again: a command of zero
+on, so that a controller reset (``uvms hardware reset-trip`` makes one 0.5 s before it clears
+the trip) takes its hold where the arm is and is already computing the torque that holds it
+(gravity included) when commands are taken again: a command of zero
 torque in Current mode lets the light joints fall (measured: a trip again 45 ms after the
 reset, with the controller inactive). ``~/reset_trip`` (std_srvs/Trigger, ``uvms hardware
 reset-trip``) takes commands again once every joint reports under the trip speed; activate
@@ -325,8 +326,8 @@ class Alpha5BridgeNode(BridgeNode):
         core.receive(link.read(), t_s)
         if core.overspeed and not tripped:
             self.get_logger().error(f'tripped: {core.overspeed}: VELOCITY 0 to every joint; '
-                                    'commands refused until `uvms lifecycle controller reset` '
-                                    'then `uvms hardware reset-trip` (docs/hardware.md)')
+                                    'commands refused until `uvms hardware reset-trip` '
+                                    '(docs/hardware.md, "Recovering the arm after a trip")')
         sample = core.next_joint_state(t_s)  # as soon as every joint answered again
         if sample is not None:
             self._joint_pub.publish(self._joint_state(sample, t_s))
