@@ -310,7 +310,6 @@ def run_node(
     finished: Callable[[N], bool] | None = None,
     close_output: Callable[[N], None] | None = None,
     taken: Callable[[N], int] | None = None,
-    build_changes_nothing: bool = True,
 ) -> int:
     """Build a node and spin it until SIGINT/SIGTERM; return the process exit status.
 
@@ -326,11 +325,6 @@ def run_node(
             (``TeardownDeadline``).
         taken: A count of what the node took (the recorder's messages): after a clean stop
             the executor spins on while it grows (``drain_taken``), before ``close_output``.
-        build_changes_nothing: The node's build changes nothing outside the process (no
-            device, no file): in a node process a stop while it is being built ends the
-            process at once, status 0 (``end_unbuilt``). False (a bridge activating its
-            device, a recorder opening its file): the build is finished, then the node ends
-            as after any stop.
 
     Returns:
         0 after ``finished``, a signal or an external shutdown, each ending in a clean
@@ -339,8 +333,9 @@ def run_node(
 
     A ``StopEvent`` already installed (``uvms_common.node_entry``, before the node's
     imports) is taken over, so a signal received during the imports counts too; one received
-    while the node is being built ends the process at once (``build_changes_nothing``, in a
-    node process) or as soon as it is built (exit 0).
+    while the node is being built ends a node process at once (``end_unbuilt``, status 0),
+    unless the build has begun to change what a stop must put back (``defer_stop_end``: a
+    bridge's activate, the recorder's file), when it ends as soon as it is built.
     """
     ros_environment_defaults()
     earlier = active_stop_event()
@@ -353,10 +348,10 @@ def run_node(
     status = 0
     try:
         # Not interrupted by an exception: one raised into the model's or Numba's loading
-        # (LLVM callbacks) leaves tracebacks. A stop ends a node process whose build changes
-        # nothing at once (issue 48: under load a build took 4-8 s to end), else right after.
-        building = (stop.ending(end_unbuilt) if build_changes_nothing
-                    and process_ends_after_main() else contextlib.nullcontext())
+        # (LLVM callbacks) leaves tracebacks. A stop ends a node process at once (issue 48:
+        # under load a build took 4-26 s to end) until the build defers it (defer_stop_end).
+        building = (stop.ending(end_unbuilt) if process_ends_after_main()
+                    else contextlib.nullcontext())
         with building:
             node = make_node()
         schedule_process(node)

@@ -23,6 +23,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
+from uvms_common.stop_event import defer_stop_end
 
 from uvms_recording.errors import RecordingError
 from uvms_recording.mcap_writer import (
@@ -235,6 +236,7 @@ class RecorderNode(Node):
                 metadata['mission'] = mission
         path = Path(output_path)
         path.parent.mkdir(parents=True, exist_ok=True)
+        defer_stop_end()  # a stop until here ends the build at once; from here the file is closed
         self._recorder = McapRecorder(
             path,
             compression=compression,
@@ -377,8 +379,7 @@ def main(args: Sequence[str] | None = None) -> None:
     grace period (``uvms_common.node_main.run_node``).
     """
     sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException),
-                      close_output=RecorderNode.close, taken=RecorderNode.taken,
-                      build_changes_nothing=False))  # its file is opened and must be closed
+                      close_output=RecorderNode.close, taken=RecorderNode.taken))
 
 if __name__ == '__main__':
     main()
