@@ -166,6 +166,8 @@ def test_synthetic_events_reach_joy_and_the_vehicle_twist(graph: Graph) -> None:
             twist = graph.twists[-1].twist
         assert twist.linear.x == pytest.approx(0.075)  # paper_uvms: 0.3 m/s at 25 %
         device.send((ecodes.EV_ABS, ecodes.ABS_Y, 0))
+        # The reader's thread takes the event; the tick after it (not before) publishes zero.
+        assert graph.wait(lambda: graph.joy[-1].axes[axis_index(graph, 'left_y')] == 0.0)
         graph.session.tick(time.monotonic())
         assert graph.wait(lambda: graph.twists[-1].twist.linear.x == 0.0)
     finally:
