@@ -14,6 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
+from uvms_analysis.pilot_plots import mode_changes
+from uvms_analysis.plots import plot_recording
+from uvms_analysis.series import load_run
 from uvms_bringup.graph import build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
@@ -113,3 +116,12 @@ def test_then_the_vehicle_holds_where_the_pilot_released_it(session: Session) ->
     distance = np.linalg.norm(held - released, axis=1)
     print(f'hold: the vehicle at most {np.max(distance) * 100:.1f} cm from its release position')
     assert np.max(distance) < 0.05
+
+
+def test_uvms_plot_draws_the_session_shaded_by_mode(session: Session, tmp_path: Path) -> None:
+    """pilot_session.png from the recording: every mode of the session in its shading."""
+    written = plot_recording(session.path, tmp_path)
+    assert tmp_path / 'pilot_session.png' in written
+    modes = [mode for _, mode in mode_changes(session.path, load_run(session.path).time_origin_ns)]
+    assert {'pilot', 'task', 'hold'} <= set(modes)
+    assert modes.index('pilot') < modes.index('task')  # the pilot drove, then the task ran

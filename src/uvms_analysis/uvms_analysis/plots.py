@@ -10,6 +10,7 @@ so no display and no global figure state are involved.
 | position_errors_weight.png | 10: position errors X_d - X and fuzzy weight W |
 | vehicle_motion.png | 14: vehicle position and attitude change |
 | thrusters.png | (extra) thrusts, propeller speeds; η̂, faults and detections (health) |
+| pilot_session.png | (extra, where a pilot drove) vehicle, heading, arm, force by mode |
 | fuzzy_membership.png | 4: membership functions of the fuzzy switch (``--fuzzy``) |
 | fuzzy_surface.png | 5: switching surface W(F_e/F_d, v_e) (``--fuzzy``) |
 """
@@ -29,6 +30,7 @@ from matplotlib.figure import Figure
 from uvms_analysis.figure_style import FIGSIZE_TALL, _figure, _save
 from uvms_analysis.fuzzy_plots import plot_fuzzy
 from uvms_analysis.metrics import SETTLING_BAND, compute_metrics, contact_intervals, normal_force
+from uvms_analysis.pilot_plots import PILOT_SESSION_FIGURE, figure_pilot_session
 from uvms_analysis.series import AnalysisError, CurrentSeries, FloatArray, Run, load_run
 from uvms_analysis.thruster_health import draw_health_panel, injected_faults
 
@@ -262,20 +264,12 @@ def figure_vehicle_motion(run: Run) -> Figure | None:
         _draw_current(axes[2], run, current)
     displacement_mm = (odom.position - odom.position[0]) * 1e3
     for k, axis in enumerate('xyz'):
-        ax_p.plot(
-            odom.t,
-            displacement_mm[:, k],
-            color=AXIS_COLORS[k],
-            label=f'{axis} - {axis}$_0$ ({odom.position[0, k]:+.3f} m)',
-        )
+        ax_p.plot(odom.t, displacement_mm[:, k], color=AXIS_COLORS[k],
+                  label=f'{axis} - {axis}$_0$ ({odom.position[0, k]:+.3f} m)')
     rpy_deg = np.degrees(np.unwrap(odom.rpy, axis=0) - odom.rpy[0])
     for k, angle in enumerate(('roll φ', 'pitch θ', 'yaw ψ')):
-        ax_a.plot(
-            odom.t,
-            rpy_deg[:, k],
-            color=AXIS_COLORS[k],
-            label=f'{angle} ({math.degrees(odom.rpy[0, k]):+.2f}° at start)',
-        )
+        ax_a.plot(odom.t, rpy_deg[:, k], color=AXIS_COLORS[k],
+                  label=f'{angle} ({math.degrees(odom.rpy[0, k]):+.2f}° at start)')
     ax_p.set_ylabel('position change, map_ned (mm)')
     ax_a.set_ylabel('attitude change (deg)')
     axes[-1].set_xlabel('time t (s)')
@@ -369,6 +363,9 @@ def plot_run(run: Run, out_dir: str | Path) -> list[Path]:
             print(f'uvms plot: skipped {name}: the recording has no {needs}', file=sys.stderr)
             continue
         written.append(_save(fig, out / name))
+    pilot = figure_pilot_session(run)  # only where a pilot drove: no note otherwise
+    if pilot is not None:
+        written.append(_save(pilot, out / PILOT_SESSION_FIGURE))
     return written
 
 
