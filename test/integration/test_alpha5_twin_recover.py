@@ -18,6 +18,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import rclpy
@@ -82,11 +83,13 @@ def uvms(env: dict[str, str], *args: str) -> subprocess.CompletedProcess[str]:
                           stdin=subprocess.DEVNULL)
 
 
-def wait_for(done: object, timeout_s: float, what: str, log: Path) -> None:
+def wait_for(done: object, timeout_s: float, what: str | Callable[[], str], log: Path) -> None:
     """Poll ``done()`` until true, or fail naming ``what`` with the launch's last lines."""
     deadline = time.monotonic() + timeout_s
     while not done():  # type: ignore[operator]
-        assert time.monotonic() < deadline, f'{what}:\n{log.read_text()[-3000:]}'
+        if time.monotonic() >= deadline:
+            said = what() if callable(what) else what
+            raise AssertionError(f'{said}:\n{log.read_text()[-3000:]}')
         time.sleep(0.1)
 
 
@@ -112,8 +115,9 @@ def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path
         wait_for(lambda: 'tripped:' in log.read_text(), 30.0, 'the arm did not trip', log)
         reset_s = time.monotonic()
         for _ in range(3):  # refused while a joint is over the trip speed: wait, ask again
-            wait_for(lambda s=reset_s: probe.still(s), 120.0, 'the tripped arm is not held still',
-                     log)
+            wait_for(lambda s=reset_s: probe.still(s), 120.0,
+                     lambda: 'the tripped arm is not held still (last plant joint rates, '
+                     f'rad/s: {probe.plant_states[-3:]})', log)
             cleared = uvms(env, 'hardware', 'reset-trip', '--timeout', '60')
             if cleared.returncode == 0:
                 break
