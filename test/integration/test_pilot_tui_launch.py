@@ -1,8 +1,9 @@
 """``uvms pilot`` in tmux moves the robot of ``uvms launch``; input stopped: zero, then hold.
 
-The graph is ``uvms launch`` (real time, the default robot paper_uvms) on the module's ROS
-domain; the pilot runs in a tmux server of the test's own (``test_pilot_tui.Tmux``). A node
-of the test takes the vehicle's odometry, the controller's mode and the pilot's twists.
+The graph is ``uvms launch`` of open water (real time, the default robot paper_uvms, no
+wall) on the module's ROS domain; the pilot runs in a tmux server of the test's own
+(``test_pilot_tui.Tmux``). A node of the test takes the vehicle's odometry, the controller's
+mode and the pilot's twists.
 """
 
 from __future__ import annotations
@@ -51,10 +52,24 @@ class Observed:
     lock: threading.Lock = field(default_factory=threading.Lock)
 
 
+#: Open water: the keys drive the vehicle forward and the task key's arc must not meet the
+#: Case I wall (with it, a suite run's arc met it after the drive: FORCE_LIMIT, not CANCELED).
+OPEN_WATER = """\
+name: pilot_open_water
+description: the paper robot in open water, no mission; the pilot drives it
+duration_s: 20.0
+simulator:
+  wall_enabled: false
+"""
+
+
 @pytest.fixture(scope='module')
-def launched() -> Iterator[subprocess.Popen[str]]:
-    """``uvms launch`` until SIGINT."""
-    process = subprocess.Popen([sys.executable, '-m', 'uvms_cli.cli', 'launch', '--quiet'],
+def launched(tmp_path_factory: pytest.TempPathFactory) -> Iterator[subprocess.Popen[str]]:
+    """``uvms launch`` of open water until SIGINT."""
+    scenario = tmp_path_factory.mktemp('open_water') / 'pilot_open_water.yaml'
+    scenario.write_text(OPEN_WATER, encoding='utf-8')
+    process = subprocess.Popen([sys.executable, '-m', 'uvms_cli.cli', 'launch', str(scenario),
+                                '--duration', '0', '--quiet'],
                                cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                text=True, env=dict(os.environ, PYTHONUNBUFFERED='1'))
     yield process
