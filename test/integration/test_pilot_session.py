@@ -31,6 +31,7 @@ class Session:
     """The recording's vehicle poses, end-effector positions and contact forces, by time."""
 
     def __init__(self, path: Path, outcome: object) -> None:
+        self.path = path
         self.outcome = outcome
         odometry, state, contact = [], [], []
         with AnyReader([path]) as reader:
