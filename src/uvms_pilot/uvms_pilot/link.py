@@ -93,6 +93,7 @@ class PilotLink:
         self._tasks = ContactTaskClient(node)
         self._queue: list[Any] = []
         self._goal: Any = None
+        self._task_name = ''  # the running task's, on its feedback lines
 
     def _update(self, **changes: Any) -> None:
         with self._live_lock:  # the executor's thread and the input loop's both write
@@ -174,13 +175,14 @@ class PilotLink:
                                             state.desired_position.z)
         self._update(task=f'sending {describe_task(task)}')
         self._goal = task
+        self._task_name = task.name
         future = self._tasks.send_goal_async(goal_from_task(task, start), self._on_feedback)
         future.add_done_callback(lambda f: self._on_answer(task, f))
 
     def _on_feedback(self, feedback: Any) -> None:
         from uvms_tasks.goals import describe_feedback
 
-        self._update(task=describe_feedback(feedback))
+        self._update(task=f'{self._task_name}: {describe_feedback(feedback)}')
 
     def _on_answer(self, task: Any, future: Any) -> None:
         from uvms_tasks.goals import TaskOutcome
