@@ -99,8 +99,8 @@ def wait_for(done: object, timeout_s: float, what: str | Callable[[], str], log:
         time.sleep(0.1)
 
 
-# Known defect, not a pass: the recovery held in 4 of 9 runs on 2026-12-06 (3 of 4, then 1 of
-# 5 with the stamp-judged check); the others saw a joint at 1.3-1.6 rad/s after reset-trip
+# Known defect, not a pass: the recovery held in 6 of 11 runs on 2026-12-06 (3 of 4, then 3 of
+# 7, the stamp-judged check in 3 of them); the others saw a joint at 1.3-1.6 rad/s after reset-trip
 # without a new trip, or the twin's Velocity-mode hold leave joints at 0.65 rad/s for 120 s.
 # It runs in every suite (XFAIL / XPASS in the summary) until the recovery is fixed (issue 52).
 @pytest.mark.xfail(reason='the twin arm recovery holds in about half the runs (issue 52 item 3)',
