@@ -57,14 +57,15 @@ STAND_IN = textwrap.dedent("""\
 """).format(build_s=BUILD_S)
 
 
-def start_stand_in(tmp_path: Path) -> tuple[subprocess.Popen[str], Path]:
-    """The stand-in as a node process, once it says it is building; and its marker file."""
-    (tmp_path / 'slow_build_node.py').write_text(STAND_IN, encoding='utf-8')
+def start_stand_in(tmp_path: Path, source: str = STAND_IN,
+                   module: str = 'slow_build_node') -> tuple[subprocess.Popen[str], Path]:
+    """A stand-in as a node process, once it says it is building; and its marker file."""
+    (tmp_path / f'{module}.py').write_text(source, encoding='utf-8')
     marker = tmp_path / 'marker'
     env = {**os.environ, 'PYTHONPATH': os.pathsep.join([str(tmp_path), *sys.path])}
     process = subprocess.Popen(
         [sys.executable, '-c', 'from uvms_common.node_entry import run_node_module; '
-         'run_node_module("slow_build_node")', str(marker)],
+         f'run_node_module({module!r})', str(marker)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     assert process.stdout is not None
     line = process.stdout.readline()
@@ -123,14 +124,7 @@ BRIDGE_STAND_IN = textwrap.dedent("""\
 def test_a_stop_after_a_bridge_started_changing_its_device_waits_for_the_put_back(
         tmp_path: Path) -> None:
     """defer_stop_end (a bridge's activate): the build finishes, the node puts back, status 0."""
-    (tmp_path / 'slow_bridge_node.py').write_text(BRIDGE_STAND_IN, encoding='utf-8')
-    marker = tmp_path / 'marker'
-    env = {**os.environ, 'PYTHONPATH': os.pathsep.join([str(tmp_path), *sys.path])}
-    process = subprocess.Popen(
-        [sys.executable, '-c', 'from uvms_common.node_entry import run_node_module; '
-         'run_node_module("slow_bridge_node")', str(marker)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    assert process.stdout is not None and process.stdout.readline().strip() == 'building'
+    process, marker = start_stand_in(tmp_path, BRIDGE_STAND_IN, 'slow_bridge_node')
     process.send_signal(signal.SIGINT)
     _, err = process.communicate(timeout=BUILD_S + 60.0)
     assert process.returncode == 0, err
