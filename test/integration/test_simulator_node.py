@@ -504,6 +504,14 @@ def test_first_state_waits_for_the_recorder_to_subscribe(harness: Harness, mode:
         assert stamp_ns(received[topic][0]) == 0, topic
 
 
+def mission_says_ready(harness: Harness) -> Node:
+    """A node named mission publishing True on mission/ready, latched as the mission does."""
+    mission = rclpy.create_node('mission', namespace='uvms', context=harness.context)
+    mission.create_publisher(Bool, 'mission/ready', QoSProfile(
+        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)).publish(Bool(data=True))
+    return mission
+
+
 @pytest.mark.parametrize('mode', ['lockstep', 'realtime'])
 def test_first_state_waits_for_the_mission_to_be_ready(harness: Harness, mode: str) -> None:
     """startup.mission: no state (and no simulated time) before the mission says it is ready.
@@ -519,10 +527,7 @@ def test_first_state_waits_for_the_mission_to_be_ready(harness: Harness, mode: s
     harness.spin_for(1.0)
     assert harness.responder.states == []
     assert sim.sim_time_ns == 0
-    mission = rclpy.create_node('mission', namespace='uvms', context=harness.context)
-    ready = mission.create_publisher(Bool, 'mission/ready', QoSProfile(
-        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
-    ready.publish(Bool(data=True))  # latched, as the mission node publishes it
+    mission = mission_says_ready(harness)
     try:
         harness.spin_until(lambda: sim.finished)
     finally:
@@ -552,10 +557,7 @@ def test_realtime_hold_publishes_the_held_state_and_waits_for_the_mission(
     assert harness.responder.states
     assert {stamp_ns(m) for m in harness.responder.states} == {0}
     assert sim.sim_time_ns == 0
-    mission = rclpy.create_node('mission', namespace='uvms', context=harness.context)
-    ready = mission.create_publisher(Bool, 'mission/ready', QoSProfile(
-        depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
-    ready.publish(Bool(data=True))
+    mission = mission_says_ready(harness)
     try:
         harness.spin_until(lambda: sim.finished)
     finally:
