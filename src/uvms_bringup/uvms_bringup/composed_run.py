@@ -33,7 +33,7 @@ from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent
 
-from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, NodeSpec
+from uvms_bringup.launch_helpers import NodeSpec
 from uvms_common import process_stats
 
 #: Logger of the process's own lines (errors that are no one node's).
@@ -60,18 +60,16 @@ def run_composed(groups: Sequence[tuple[NodeSpec, Sequence[str]]], stop: StopEve
     status = 0
     current = ''
     try:
-        bridges = tuple(HARDWARE_BRIDGES.values())
-        for spec, args in groups:
-            current = spec.name
-            # Until a bridge is built (its autostart changes the device), a stop ends the
-            # process at once, as it ends a node process's build (node_entry.end_unbuilt).
-            no_device_yet = spec not in bridges and not any(
-                getattr(node, 'put_back_now', None) for node in nodes)
-            with (stop.ending(end_unbuilt) if no_device_yet and process_ends_after_main()
-                  else contextlib.nullcontext()):
+        # A stop ends the process at once, as it ends a node process's build
+        # (node_entry.end_unbuilt), until a bridge's activate starts changing its device
+        # (defer_stop_end, for the rest of the builds): then it waits and puts back.
+        with (stop.ending(end_unbuilt) if process_ends_after_main()
+              else contextlib.nullcontext()):
+            for spec, args in groups:
+                current = spec.name
                 nodes.append(build_node(spec, args))
-            if stop.is_set():
-                break
+                if stop.is_set():
+                    break
         current = ''
         schedule_process(nodes[0])
         executor = make_executor()
