@@ -185,3 +185,48 @@ def test_malformed_navigation_payloads_are_counted_and_survived(
     report = estimator._report()
     assert report.values['malformed_inputs'] == len(garbage) * len(publishers)
     assert capfd.readouterr().err.count('malformed input payloads') == 1
+
+
+def test_the_estimate_starts_at_the_first_depth_never_at_the_start_guess(graph: Graph) -> None:
+    """IMU readings without a depth: nothing published; the first estimate has the depth's z.
+
+    Started on the IMU alone, the filter published the start guess's z = 0 and jumped to the
+    depth a few periods later, and a controller holding its first estimate drove at the jump
+    (the twin stand's arm tripped on it, docs/hardware.md).
+    """
+    from rosgraph_msgs.msg import Clock
+
+    filtered = graph.collect('odometry/filtered', Odometry)
+    estimator = graph.add(EstimatorNode, use_sim_time=True)
+    assert isinstance(estimator, EstimatorNode)
+    imu = graph.probe.create_publisher(Imu, 'imu', 10)
+    depth = graph.probe.create_publisher(PoseWithCovarianceStamped, 'depth', 10)
+    clock = graph.probe.create_publisher(Clock, '/clock', 10)
+    graph.spin_until(lambda: imu.get_subscription_count() == 1
+                     and depth.get_subscription_count() == 1, timeout_s=10.0)
+
+    def step(t_ns: int, with_depth: bool) -> None:
+        stamp = rclpy.time.Time(nanoseconds=t_ns).to_msg()
+        reading = Imu()
+        reading.header.stamp = stamp
+        reading.orientation.w = 1.0
+        reading.linear_acceleration.z = -9.80665
+        imu.publish(reading)
+        if with_depth:
+            sample = PoseWithCovarianceStamped()
+            sample.header.stamp = stamp
+            sample.pose.pose.position.z = 2.5
+            sample.pose.covariance[14] = 1e-4
+            depth.publish(sample)
+        clock.publish(Clock(clock=stamp))
+        for _ in range(10):
+            graph.executor.spin_once(timeout_sec=0.01)
+
+    for k in range(10):
+        step(k * 10_000_000, with_depth=False)
+    assert filtered == []
+    assert 'waiting for the first depth reading' in estimator._report().message
+    step(100_000_000, with_depth=True)
+    step(110_000_000, with_depth=False)
+    graph.spin_until(lambda: len(filtered) > 0, timeout_s=10.0)
+    assert filtered[0].pose.pose.position.z == pytest.approx(2.5, abs=1e-6)

@@ -84,6 +84,7 @@ class EstimatorNode(LifecycleNode):
         self._active = False
         self._error: Exception | None = None
         self._depth: float | None = None
+        self._first_attitude: tuple[int, np.ndarray] | None = None
         self._started = False
         self._early_clock_ns: int | None = None
         self._readers = {'imu': raw_conversions.imu_reader(),
@@ -137,6 +138,7 @@ class EstimatorNode(LifecycleNode):
                 (PoseWithCovarianceStamped, 'position_fix', self._on_fix),
                 (Clock, '/clock', self._on_clock))]
         self._started = False
+        self._depth = self._first_attitude = None
         self.get_logger().info('error-state EKF on imu, dvl, depth, position_fix; publishing '
                                'odometry/filtered')
         return SUCCESS
@@ -196,13 +198,8 @@ class EstimatorNode(LifecycleNode):
             self.get_logger().error('imu: non-finite reading rejected', throttle_duration_sec=1.0)
             return
         if not self._started:
-            p0 = np.array(self._values['estimator.initial_position_m'], dtype=float)
-            if self._depth is not None:
-                p0[2] = self._depth
-            self.ekf.reset_from_ahrs(t_ns, p0, rpy)
-            self._started = True
-            if self._early_clock_ns is not None:  # its /clock came first: answer it now
-                self._publish(self._early_clock_ns)
+            self._first_attitude = (t_ns, rpy)
+            self._start()
             return
         self.ekf.predict(t_ns, w_m, f_m)
         self.ekf.update_attitude(rpy)
@@ -212,9 +209,31 @@ class EstimatorNode(LifecycleNode):
             self.ekf.update_dvl(v)
 
     def _on_depth(self, t_ns: int, depth: float) -> None:
-        self._depth = depth
-        if self.ekf is not None and self._started and np.isfinite(depth):
-            self.ekf.update_depth(depth)
+        if self.ekf is None or not np.isfinite(depth):
+            return
+        if not self._started:
+            self._depth = depth
+            self._start()
+            return
+        self.ekf.update_depth(depth)
+
+    def _start(self) -> None:
+        """Start the filter once it has an attitude (imu) and a depth, never before.
+
+        A filter started without its depth would publish the start guess's z as the estimate
+        and jump by the depth reading's offset a few periods later; a controller holding the
+        first estimate then drives the vehicle (and the arm, through the whole-body task) at
+        that jump the moment physics runs.
+        """
+        if self.ekf is None or self._first_attitude is None or self._depth is None:
+            return
+        t_ns, rpy = self._first_attitude
+        p0 = np.array(self._values['estimator.initial_position_m'], dtype=float)
+        p0[2] = self._depth
+        self.ekf.reset_from_ahrs(t_ns, p0, rpy)
+        self._started = True
+        if self._early_clock_ns is not None:  # its /clock came first: answer it now
+            self._publish(self._early_clock_ns)
 
     def _on_fix(self, t_ns: int, p: np.ndarray, sigma: np.ndarray) -> None:
         if self.ekf is not None and self._started and np.isfinite(p).all():
@@ -238,7 +257,10 @@ class EstimatorNode(LifecycleNode):
         state = state_label(self)
         malformed = {'malformed_inputs': self.malformed}
         if self.ekf is None or not self._started:
-            return Report(WARN, f'{state}: waiting for the first imu reading',
+            waiting = ' and '.join(name for name, seen in (
+                ('imu', self._first_attitude is not None), ('depth', self._depth is not None))
+                if not seen) or 'imu'
+            return Report(WARN, f'{state}: waiting for the first {waiting} reading',
                           {'lifecycle_state': state, **malformed})
         level, message, values = self._health.report(self.ekf)
         return Report(_LEVELS[level], message, {'lifecycle_state': state, **values, **malformed})
