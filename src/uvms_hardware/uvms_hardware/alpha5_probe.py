@@ -21,9 +21,14 @@ from uvms_hardware.reach_protocol import Mode, PacketId
 from uvms_hardware.transport import Link, collect
 
 
-def probe_device(link: Link, splitter: rp.FrameSplitter, drive: Drive, timeout_s: float
-                 ) -> tuple[dict[int, rp.Packet], Mode | None]:
+def probe_device(link: Link, splitter: rp.FrameSplitter, drive: Drive, timeout_s: float,
+                 tries: int = CONFIRM_TRIES) -> tuple[dict[int, rp.Packet], Mode | None]:
     """Ask one Alpha 5 device for its identity, mode and limits, one request at a time.
+
+    A request whose answers did not all come within ``timeout_s`` is asked again for the
+    missing ones, ``tries`` times in all: a datagram lost on UDP, or a bridge or twin late on
+    a loaded computer (a twin stand's LIMITS answer missed 0.2 s beside 2 busy loops), is not
+    a device that does not answer.
 
     Returns:
         (packet id -> its answer, the device's mode or None when it did not say).
@@ -36,8 +41,12 @@ def probe_device(link: Link, splitter: rp.FrameSplitter, drive: Drive, timeout_s
         return [p.packet_id for p in found]
 
     for request in (IDENTITY_REQUEST, LIMITS_REQUEST):
-        link.send(rp.encode_request(drive.device_id, request))
-        collect(link, feed, request, timeout_s)
+        for _ in range(tries):
+            missing = tuple(i for i in request if i not in answers)
+            if not missing:
+                break
+            link.send(rp.encode_request(drive.device_id, missing))
+            collect(link, feed, missing, timeout_s)
         if PacketId.MODEL not in answers:
             break
     answer = answers.get(PacketId.MODE)

@@ -33,8 +33,12 @@ STATE_REQUEST = (*FEEDBACK_REQUEST, PacketId.HARDWARE_STATUS)
 
 
 def alpha5_bound_s(drives: int, bounds: CheckBounds) -> float:
-    """The longest the arm's check takes (s): three requests per device, each ``reply_s``."""
-    return drives * 3 * bounds.reply_s
+    """The longest the arm's check takes (s).
+
+    Per device: its identity and its limits requests, each tried ``retries`` times, then its
+    state request, each try ``reply_s``.
+    """
+    return drives * (2 * bounds.retries + 1) * bounds.reply_s
 
 
 def check_alpha5(robot: str, values: Mapping[str, Any], device: Device, bounds: CheckBounds,
@@ -48,7 +52,7 @@ def check_alpha5(robot: str, values: Mapping[str, Any], device: Device, bounds: 
     try:
         for drive in arm.drives:
             splitter = FrameSplitter()
-            answers, mode = probe_device(link, splitter, drive, bounds.reply_s)
+            answers, mode = probe_device(link, splitter, drive, bounds.reply_s, bounds.retries)
             errors = check_device(drive, answers, bounds.reply_s)
             for error in errors:
                 device.problem(error)

@@ -63,7 +63,7 @@ class CheckBounds:
         wait_s: For a device's first answer: a HEARTBEAT, a DVL connection, a bottom lock, an
             RDT record (s).
         reply_s: For each answer after that: a MAVLink parameter, an Alpha 5 REQUEST (s).
-        retries: Tries of a MAVLink parameter read.
+        retries: Tries of a MAVLink parameter read and of an Alpha 5 REQUEST.
     """
 
     wait_s: float = 3.0
