@@ -21,7 +21,6 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-import pytest
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -99,12 +98,11 @@ def wait_for(done: object, timeout_s: float, what: str | Callable[[], str], log:
         time.sleep(0.1)
 
 
-# Known defect, not a pass: the recovery held in 6 of 11 runs on 2026-12-06 (3 of 4, then 3 of
-# 7, the stamp-judged check in 3 of them); the others saw a joint at 1.3-1.6 rad/s after reset-trip
-# without a new trip, or the twin's Velocity-mode hold leave joints at 0.65 rad/s for 120 s.
-# It runs in every suite (XFAIL / XPASS in the summary) until the recovery is fixed (issue 52).
-@pytest.mark.xfail(reason='the twin arm recovery holds in about half the runs (issue 52 item 3)',
-                   strict=False)
+# At a quarter speed: at half speed the stand wants 188 % of 2 cores (SCHED_FIFO), and the
+# control path stalled a few times a minute beside 2 busy loops, the recovered arm falling
+# meanwhile; with the estimator's start fixed (docs/hardware.md, "What the twin test stand
+# shows") 3 runs of 3 quiet and 3 of 3 beside 2 busy loops held (2026-12-06), where at half
+# speed 6 of 11 had.
 def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path) -> None:
     """Trip, then reset-trip: the hold goes on for 10 s without a new trip."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p),
@@ -113,12 +111,14 @@ def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path
     with log.open('w') as out:
         launch = subprocess.Popen(
             [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'idle_wall', '--robot',
-             'bluerov2_alpha5', '--hardware', 'twin', '--real-time-factor', '0.5', '--duration',
+             'bluerov2_alpha5', '--hardware', 'twin', '--real-time-factor', '0.25', '--duration',
              '0'], env=env, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
     probe = Probe()
     try:
-        wait_for(lambda: 'actuator commands to the plant' in log.read_text(), 180.0,
+        wait_for(lambda: launch.poll() is not None
+                 or 'actuator commands to the plant' in log.read_text(), 180.0,
                  'physics never started', log)
+        assert launch.poll() is None, f'the launch ended:\n{log.read_text()[-3000:]}'
         end_s = time.monotonic() + 0.5
         while time.monotonic() < end_s and 'tripped:' not in log.read_text():
             probe.command.publish(ActuatorCommand(joint_names=JOINTS,

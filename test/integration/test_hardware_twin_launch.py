@@ -35,7 +35,7 @@ def test_the_graph_runs_on_the_bridges_against_the_twins(tmp_path: Path) -> None
                PYTHONUNBUFFERED='1')
     process = subprocess.run(
         [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'idle_wall', '--robot',
-         'bluerov2_alpha5', '--hardware', 'twin', '--duration', '5', '--real-time-factor', '0.5',
+         'bluerov2_alpha5', '--hardware', 'twin', '--duration', '5', '--real-time-factor', '0.25',
          '--output', str(output)],
         env=env, capture_output=True, text=True, timeout=240, stdin=subprocess.DEVNULL)
     assert process.returncode == 0, process.stderr[-3000:]
