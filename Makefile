@@ -92,7 +92,7 @@ SETUP_312 := $(if $(PYTHON_312),$(VENV_312)/.interfaces $(VENV_312)/.kernels)
 # and the kernel compilation of one overlap the other's), each target's output kept together.
 test:
 	$(MAKE) --no-print-directory -j2 --output-sync=target setup $(SETUP_312)
-	tools/ensure-debian-packages tmux=tmux
+	tools/ensure-debian-packages tmux=tmux chrt=util-linux
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(SUITE_GUARD) tools/loopback-netns $(BIN)/python tools/run_suite.py

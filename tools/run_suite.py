@@ -6,14 +6,22 @@ signal nor SIGINT reaches it (CI of 2026-12-03 and 12-04). So every integration 
 modules that start DDS participants and node processes) runs in a pytest process of its own;
 the unit tests run one process per sub-folder, two at a time (pure CPU work: on two cores
 they take half the time), the scenario tests in one (their runs are shared across modules
-and happen in child processes, two at a time, with their own time limit). Each process gets
+and happen in child processes, two at a time, with their own time limit).
+
+The unit and scenario tests keep no periods and wait on no clock: what they compute does not
+depend on when they get the CPU. They run in a lane of their own beside the rest, at
+SCHED_IDLE (``chrt --idle``), so they take only the CPU time the integration tests leave
+(those wait on their nodes' real-time periods much of the time) and never delay one of them:
+a runnable SCHED_IDLE task yields to every other task at once. ``--one-lane`` runs the
+groups one after the other, as before. Each process gets
 a time limit (``--group-limit``, the scenario group ``--scenario-limit``); past it the process
 gets SIGABRT, on which Python's faulthandler (enabled by pytest) prints every thread's stack,
 then its whole process group is killed. The rest of the suite runs on, and the
 summary names the group, the test it was in (the progress file written by test/conftest.py)
 and its stacks above.
 
-    tools/run_suite.py [--group-limit S] [--scenario-limit S] [--list] [PYTEST_ARG ...] [PATH ...]
+    tools/run_suite.py [--group-limit S] [--scenario-limit S] [--one-lane] [--list]
+                       [PYTEST_ARG ...] [PATH ...]
 
 Arguments that are existing paths under test/ select groups; every other argument goes to
 each pytest. The last line is pytest's: ``N passed, N failed, N skipped`` (or ``N errors``)
@@ -24,10 +32,12 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -45,6 +55,12 @@ WHOLE = ('scenarios', 'ros2_way')
 #: output shown as it ends: the unit tests start no node processes and keep no periods, so
 #: two of them share the two cores of CI without changing what they test.
 CONCURRENT = {'unit': 2}
+#: Top-level test folders whose groups run in the idle lane (SCHED_IDLE, beside the others):
+#: they keep no periods, so when they get the CPU changes nothing they check.
+IDLE_LANE = ('unit', 'scenarios')
+#: How much longer than its limit an idle-lane group may take: it gets the CPU only when the
+#: other lane leaves it (the integration tests want most of 2 cores at moments).
+IDLE_LIMIT_FACTOR = 2.0
 #: Hypothesis's pytest plugin, loaded by every pytest process where hypothesis is installed
 #: (0.6 s of imports each, about 25 s a suite); left out of groups whose modules do not use
 #: hypothesis (the library works without it; the plugin adds its options and statistics).
@@ -69,7 +85,13 @@ class Group:
     last_test: str = ''
     took_s: float = 0.0
     batch: str = ''
+    idle: bool = False
     process: subprocess.Popen[bytes] | None = field(default=None, repr=False)
+
+    @property
+    def wall_limit_s(self) -> float:
+        """Seconds it may take: longer in the idle lane, which gets the CPU left over."""
+        return self.limit_s * (IDLE_LIMIT_FACTOR if self.idle else 1.0)
 
 
 def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float) -> list[Group]:
@@ -103,6 +125,7 @@ def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float)
         groups[group.name] = group
     for group in groups.values():
         group.paths.sort()
+        group.idle = group.paths[0].relative_to(TESTS).parts[0] in IDLE_LANE
     return list(groups.values())
 
 
@@ -136,16 +159,18 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
                '-o', 'addopts=-ra --strict-markers', f'--junitxml={junit}',
                *pytest_args,
                *(str(p.relative_to(ROOT) if p.is_relative_to(ROOT) else p) for p in group.paths)]
+    if group.idle:
+        command = ['chrt', '--idle', '0', *command]
     start = time.monotonic()
     sink = None if output is None else output.open('wb')
     process = subprocess.Popen(command, cwd=ROOT, env=env, start_new_session=True,
                                stdout=sink, stderr=subprocess.STDOUT if sink else None)
     group.process = process
     try:
-        group.status = process.wait(timeout=group.limit_s)
+        group.status = process.wait(timeout=group.wall_limit_s)
     except subprocess.TimeoutExpired:
         group.timed_out = True
-        print(f'\nrun_suite: {group.name} still running after {group.limit_s:.0f} s: '
+        print(f'\nrun_suite: {group.name} still running after {group.wall_limit_s:.0f} s: '
               "SIGABRT (its threads' stacks follow), then SIGKILL", flush=True)
         process.send_signal(signal.SIGABRT)
         try:
@@ -168,15 +193,17 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
 
 
 def run_batch(batch: list[Group], first: int, total: int, pytest_args: list[str],
-              work: Path) -> None:
-    """Run one group streaming, or a batch in a pool, each one's output printed as it ends."""
-    if len(batch) == 1:
+              work: Path, stream: bool = True) -> None:
+    """Run one group, streamed (or its output printed at its end), or a batch in a pool."""
+    if len(batch) == 1 and stream:
         print(f'\n== run_suite [{first + 1}/{total}] {batch[0].name}', flush=True)
         run_group(batch[0], first, pytest_args, work)
         return
     workers = CONCURRENT.get(batch[0].batch, 1)
-    print(f'\n== run_suite [{first + 1}-{first + len(batch)}/{total}] {len(batch)} groups of '
-          f'test/{batch[0].batch}, {workers} at a time', flush=True)
+    lane = ' (idle lane)' if batch[0].idle else ''
+    if len(batch) > 1:
+        print(f'\n== run_suite [{first + 1}-{first + len(batch)}/{total}] {len(batch)} groups '
+              f'of test/{batch[0].batch}, {workers} at a time{lane}', flush=True)
     logs = {id(group): work / f'{first + k}.log' for k, group in enumerate(batch)}
     pool = ThreadPoolExecutor(max_workers=workers)
     futures = {pool.submit(run_group, group, first + k, pytest_args, work, logs[id(group)]):
@@ -186,7 +213,7 @@ def run_batch(batch: list[Group], first: int, total: int, pytest_args: list[str]
             group = futures[future]
             future.result()
             log = logs[id(group)]
-            print(f'\n== run_suite: {group.name} ({group.took_s:.0f} s)', flush=True)
+            print(f'\n== run_suite: {group.name} ({group.took_s:.0f} s){lane}', flush=True)
             sys.stdout.buffer.write(log.read_bytes() if log.exists() else b'')
             sys.stdout.flush()
     except KeyboardInterrupt:
@@ -196,6 +223,51 @@ def run_batch(batch: list[Group], first: int, total: int, pytest_args: list[str]
                 group.process.send_signal(signal.SIGINT)
         raise
     pool.shutdown()
+
+
+def batches(groups: list[Group]) -> list[tuple[int, list[Group]]]:
+    """(index of the first group, groups run together): a pooled folder's groups together."""
+    out: list[tuple[int, list[Group]]] = []
+    index = 0
+    while index < len(groups):
+        batch = [groups[index]]
+        while (batch[0].batch and index + len(batch) < len(groups)
+               and groups[index + len(batch)].batch == batch[0].batch):
+            batch.append(groups[index + len(batch)])
+        out.append((index, batch))
+        index += len(batch)
+    return out
+
+
+def run_lanes(groups: list[Group], pytest_args: list[str], work: Path, one_lane: bool) -> None:
+    """The idle lane's batches in a thread of their own, the others here, one after the other."""
+    if one_lane or shutil.which('chrt') is None:
+        for group in groups:
+            group.idle = False
+    lanes: dict[bool, list[tuple[int, list[Group]]]] = {False: [], True: []}
+    for first, batch in batches(groups):
+        lanes[batch[0].idle].append((first, batch))
+    if lanes[True]:
+        count = sum(len(batch) for _, batch in lanes[True])
+        print(f'run_suite: {count} groups in the idle lane (SCHED_IDLE), beside the other '
+              f'{len(groups) - count}', flush=True)
+
+    def idle_lane() -> None:
+        for first, batch in lanes[True]:
+            run_batch(batch, first, len(groups), pytest_args, work, stream=False)
+
+    beside = threading.Thread(target=idle_lane, name='idle-lane', daemon=True)
+    beside.start()
+    try:
+        for first, batch in lanes[False]:
+            run_batch(batch, first, len(groups), pytest_args, work)
+        beside.join()
+    except KeyboardInterrupt:
+        for group in groups:
+            if group.process is not None and group.process.poll() is None:
+                group.process.send_signal(signal.SIGINT)
+        beside.join(timeout=60.0)
+        raise
 
 
 def _kill_group(pgid: int) -> None:
@@ -235,7 +307,7 @@ def summary(groups: list[Group], took_s: float) -> list[str]:
         lines.append(f'  {group.took_s:7.1f} s  {group.name}')
     for group in groups:
         if group.timed_out:
-            lines.append(f'TIMED OUT {group.name} after {group.limit_s:.0f} s, in test '
+            lines.append(f'TIMED OUT {group.name} after {group.wall_limit_s:.0f} s, in test '
                          f'{group.last_test or "(before its first test)"}')
         elif _crashed(group):
             lines.append(f'CRASHED {group.name} (exit status {group.status}), in test '
@@ -259,30 +331,26 @@ def split_arguments(arguments: list[str]) -> tuple[list[Path], list[str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the groups one after the other; print the summary; 0 when all passed."""
+    """Run the groups in their lanes; print the summary; 0 when all passed."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--group-limit', type=float, default=900.0, metavar='S',
                         help='seconds one group may take (default 900)')
     parser.add_argument('--scenario-limit', type=float, default=1500.0, metavar='S',
                         help='seconds the scenario group may take (default 1500)')
+    parser.add_argument('--one-lane', action='store_true',
+                        help='run every group one after the other (no idle lane)')
     parser.add_argument('--list', action='store_true', help='print the groups and stop')
     options, arguments = parser.parse_known_args(argv)
     paths, pytest_args = split_arguments(arguments)
     groups = groups_for(paths, options.group_limit, options.scenario_limit)
     if options.list:
         for group in groups:
-            print(f'{group.name} ({len(group.paths)} modules, limit {group.limit_s:.0f} s)')
+            lane = ', idle lane' if group.idle and not options.one_lane else ''
+            print(f'{group.name} ({len(group.paths)} modules, limit {group.limit_s:.0f} s{lane})')
         return 0
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='uvms-suite-') as work:
-        index = 0
-        while index < len(groups):
-            batch = [groups[index]]
-            while (batch[0].batch and index + len(batch) < len(groups)
-                   and groups[index + len(batch)].batch == batch[0].batch):
-                batch.append(groups[index + len(batch)])
-            run_batch(batch, index, len(groups), pytest_args, Path(work))
-            index += len(batch)
+        run_lanes(groups, pytest_args, Path(work), options.one_lane)
     for line in summary(groups, time.monotonic() - start):
         print(line)
     if all(g.status == NO_TESTS for g in groups):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import os
 import sys
 from pathlib import Path
 
@@ -94,3 +95,32 @@ def test_hypothesis_plugin_is_loaded_only_where_a_module_uses_hypothesis() -> No
     unit = run_suite.Group('u', [ROOT / 'test/unit/control/test_supervisor_properties.py'], 9.0)
     graph = run_suite.Group('g', [ROOT / 'test/integration/test_graph.py'], 9.0)
     assert run_suite.uses_hypothesis(unit) and not run_suite.uses_hypothesis(graph)
+
+
+def test_unit_and_scenario_groups_run_in_the_idle_lane_the_others_in_the_main_one() -> None:
+    """The groups that keep no periods are marked for the idle lane, with a longer limit."""
+    groups = run_suite.groups_for([ROOT / 'test'], 900.0, 1500.0)
+    idle = {g.name for g in groups if g.idle}
+    assert 'test/scenarios' in idle and 'test/unit/control' in idle
+    assert not any(name.startswith(('test/integration', 'test/ros2_way')) for name in idle)
+    scenarios = next(g for g in groups if g.name == 'test/scenarios')
+    assert scenarios.wall_limit_s == 1500.0 * run_suite.IDLE_LIMIT_FACTOR
+
+
+def test_an_idle_lane_group_runs_at_sched_idle_beside_the_main_lane(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The idle group's pytest is SCHED_IDLE, the other's is not; both run, both print."""
+    for name in ('idle', 'main'):
+        (tmp_path / f'test_{name}.py').write_text(
+            'import os\n'
+            f'def test_{name}():\n'
+            f'    print("{name} policy", os.sched_getscheduler(0))\n')
+    groups = [run_suite.Group(f'g{name}', [tmp_path / f'test_{name}.py'], 60.0,
+                              idle=name == 'idle') for name in ('idle', 'main')]
+    run_suite.run_lanes(groups, ['-s', '-q', '--rootdir', str(tmp_path)], tmp_path,
+                        one_lane=False)
+    out = capsys.readouterr().out
+    assert [g.status for g in groups] == [0, 0]
+    assert f'idle policy {os.SCHED_IDLE}' in out
+    assert f'main policy {os.SCHED_IDLE}' not in out
+    assert '== run_suite: gidle' in out  # its output printed whole at its end
