@@ -16,6 +16,10 @@ rates (WARN), is stamped at its arrival and counted. A report is published once,
 arrives: a silent DVL publishes nothing. The connection is retried
 every ``reconnect_period_s``. /diagnostics: lost lock (WARN), a silent or disconnected DVL
 (ERROR), malformed lines counted, the clock offset, skew, spread and arrival jitter.
+
+The device is `uvms_hardware.dvl_component.DvlComponent` (no ROS); this node only turns its
+lifecycle hooks into the component's, its drain timer into ``read`` and its state and report
+into messages.
 """
 
 from __future__ import annotations
@@ -29,40 +33,23 @@ from uvms_common.parameter_declaration import declare_specs
 
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
-from uvms_hardware.address import LOOPBACK, parse_host_port
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
-from uvms_hardware.device_time import DeviceClockEstimator
+from uvms_hardware.component import logger_log
+from uvms_hardware.dvl_component import DEFAULT_PORT, SPECS, DvlBridgeError, DvlComponent
 from uvms_hardware.dvl_link import DvlLink
-from uvms_hardware.dvl_protocol import VelocityReport, report_in_link, rot_link_from_dvl
+from uvms_hardware.dvl_protocol import rot_link_from_dvl
 from uvms_hardware.errors import HardwareError
-from uvms_hardware.hardware_config import Spec, hardware_section
-from uvms_hardware.stop_report import write_stop_report
+from uvms_hardware.hardware_config import hardware_section
 
-DEFAULT_PORT = 16171
+__all__ = ['DEFAULT_PORT', 'DRAIN_PERIOD_S', 'SPECS', 'DvlBridgeError', 'DvlBridgeNode', 'main']
+
+LEVELS = (OK, WARN, ERROR)
 #: How often the link's queue is drained (s).
 DRAIN_PERIOD_S = 0.01
-_US = 1e-6
-
-SPECS = (
-    Spec('address', LOOPBACK, 'The DVL: HOST[:PORT] (TCP; port 16171 when not given)'),
-    Spec('connect_timeout_s', 10.0, 'Wait for the connection at configure (s): the DVL may '
-         'come up after the bridge (launch order)', 0.1, 120.0),
-    Spec('reconnect_period_s', 1.0, 'Between connection attempts (s)', 0.05, 60.0),
-    Spec('timeout_s', 1.0, 'No report this long: the DVL is silent, ERROR (s)', 0.1, 30.0),
-    Spec('mounting_rpy_rad', [0.0, 0.0, 0.0], "The DVL's own frame in base_link_frd (rad)"),
-    Spec('clock_window_s', 30.0, "Reports the DVL clock's offset is estimated over (s)",
-         2.0, 600.0),
-    Spec('clock_reset_s', 0.2, "The DVL clock's offset jumps by more than this: estimated "
-         'again from the next report (s; an NTP step on the DVL)', 0.01, 10.0),
-)
-
-
-class DvlBridgeError(HardwareError, ValueError):
-    """A parameter of the DVL bridge is invalid, or no DVL answers at configure."""
 
 
 class DvlBridgeNode(BridgeNode):
-    """Water Linked DVL reports -> ``dvl``."""
+    """Water Linked DVL reports (a `DvlComponent`) -> ``dvl``."""
 
     error_type = DvlBridgeError
     diagnostics_task = 'dvl'
@@ -79,107 +66,70 @@ class DvlBridgeNode(BridgeNode):
         robot = {name: RobotParameter(section[key], source) for name, key in (
             ('mounting_rpy_rad', 'mounting_rpy_rad'), ('timeout_s', 'timeout_s'))
             if key in section}
-        self.default_port = int(section.get('port', DEFAULT_PORT))
-        self.values = declare_specs(self, SPECS, robot, lambda spec, exc: DvlBridgeError(
+        values = declare_specs(self, SPECS, robot, lambda spec, exc: DvlBridgeError(
             f'invalid parameter {spec.name!r}: {exc}'))
-        self.rot = rot_link_from_dvl([float(a) for a in self.values['mounting_rpy_rad']],
-                                     [float(a) for a in link_rpy])
+        rot = rot_link_from_dvl([float(a) for a in values['mounting_rpy_rad']],
+                                [float(a) for a in link_rpy])
         mounted_m = [float(x) for x in section.get('mounting_position_m', link_position_m)]
         if mounted_m != link_position_m:
             # The estimator's lever arm is navigation.yaml's: a DVL elsewhere biases it.
             self.get_logger().warning(
                 f'hardware.yaml dvl.mounting_position_m {mounted_m} differs from navigation.yaml '
                 f'navigation.dvl.position_m {link_position_m}, the lever arm the estimator uses')
-        self.link: DvlLink | None = None
-        self.clock: DeviceClockEstimator | None = None
-        self.published = 0
-        self.stamped_at_arrival = 0
+        self.component = DvlComponent(
+            values, rot, int(section.get('port', DEFAULT_PORT)), self.get_name(),
+            clock=self.now_s, local_clock=lambda: self.get_clock().now().nanoseconds * 1e-9,
+            log=logger_log(self.get_logger()))
         self.start()
 
+    @property
+    def values(self) -> dict[str, Any]:
+        """The settings (parameters) of the component."""
+        return self.component.values
+
+    @property
+    def link(self) -> DvlLink | None:
+        """The component's TCP link (None while unconfigured)."""
+        return self.component.link
+
+    @property
+    def published(self) -> int:
+        """Messages published on dvl (one per valid report while active)."""
+        return self.component.published
+
     def configure_device(self) -> None:
-        """Connect to the DVL (refused when it does not answer), make the publisher."""
-        v = self.values
-        address = parse_host_port(str(v['address']), self.default_port, 'address')
-        window_s = float(v['clock_window_s'])
-        self.clock = DeviceClockEstimator(window_s, window_s / 30.0, float(v['clock_reset_s']))
-        self.link = link = DvlLink(address, float(v['reconnect_period_s']),
-                                   arrival_clock=self._local_s).start()
-        if not link.wait_connected(float(v['connect_timeout_s'])):
-            raise DvlBridgeError(f'no DVL at {address.host}:{address.port} ({link.last_error})')
+        """Connect (refused when no DVL answers), make the publisher and the drain timer."""
+        self.component.configure()
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._dvl = self.own(self.destroy_publisher,
                              self.create_publisher(TwistWithCovarianceStamped, 'dvl', qos))
         self.device_timer(DRAIN_PERIOD_S, self._drain)
+        address = self.component.address
+        assert address is not None
         self.get_logger().info(f'DVL at {address.host}:{address.port}; publishing dvl')
+
+    def activate_device(self) -> None:
+        """Publish from now on (nothing on the DVL changes)."""
+        self.component.activate()
 
     def put_device_back(self) -> list[str]:
         """Nothing to put back (the DVL is only listened to); said, for the launcher."""
-        done = 'nothing to put back: the DVL was only listened to'
-        self.get_logger().info(f'put back: {done}')
-        write_stop_report(self.get_name(), done, [])
-        return []
+        return self.component.put_back()
 
     def release_device(self) -> None:
-        """Disconnect (a sensor: nothing on the device to put back)."""
-        if self.link is not None:
-            self.link.stop()
-        self.link, self.clock = None, None
-
-    def _local_s(self) -> float:
-        """The node clock (s): what stamps are in (``/clock`` beside the simulator)."""
-        return self.get_clock().now().nanoseconds * 1e-9
-
-    def stamp_s(self, report: VelocityReport, arrival_s: float) -> float:
-        """When the report's velocity was measured, on the node clock (s)."""
-        clock = self.clock
-        sent_us = report.time_of_transmission_us or report.time_of_validity_us
-        if clock is None or sent_us is None or report.time_of_validity_us is None:
-            self.stamped_at_arrival += 1
-            return arrival_s
-        clock.add(sent_us * _US, arrival_s)
-        if not clock.rates_agree:
-            self.stamped_at_arrival += 1
-            return arrival_s
-        return clock.to_local(report.time_of_validity_us * _US) or arrival_s
+        """Disconnect."""
+        self.component.release()
 
     def _drain(self) -> None:
-        link = self.link
-        if link is None:
-            return
-        for arrival_s, report in link.take():
-            stamp_s = self.stamp_s(report, arrival_s)  # every report times the clock
-            if not (self.device_active and report.valid):
-                continue
-            v, cov = report_in_link(report, self.rot)
-            self._dvl.publish(bm.dvl_message(round(stamp_s * 1e9), v.tolist(),
-                                             cov.ravel().tolist()))
-            self.published += 1
+        self.component.read(self.now_s())
+        for m in self.component.state().measurements:
+            self._dvl.publish(bm.dvl_message(round(m.stamp_s * 1e9), m.v_m_s.tolist(),
+                                             m.covariance.ravel().tolist()))
 
     def device_report(self) -> Report:
-        """Connection, lock, silence, counters."""
-        link = self.link
-        if link is None:
-            return Report(WARN, 'not connected', {})
-        age_s = link.clock() - link.last_report_s
-        p = link.parser
-        values = {'connected': link.connected,
-                  'report_age_s': age_s, 'bottom_lock': link.last_valid,
-                  'reports': p.reports, 'published': self.published,
-                  'malformed_lines': p.malformed, 'ignored_reports': p.ignored,
-                  'connects': link.connects, 'last_error': link.last_error or p.last_error,
-                  'stamped_at_arrival': self.stamped_at_arrival,
-                  **(self.clock.report() if self.clock is not None else {})}
-        if not link.connected:
-            return Report(ERROR, f'DVL disconnected: {link.last_error}', values)
-        if age_s > float(self.values['timeout_s']):
-            return Report(ERROR, f'DVL silent for {age_s:.1f} s', values)
-        if link.last_valid is False:
-            return Report(WARN, 'no bottom lock: velocity not published', values)
-        if self.clock is not None and not self.clock.rates_agree:
-            return Report(WARN, "the DVL's clock does not run at the node clock's rate (beside "
-                          "a simulator, the twin must run on the plant's time): stamped at "
-                          'arrival', values)
-        return Report(OK, 'bottom lock', values)
+        """The component's report."""
+        report = self.component.report(self.now_s())
+        return Report(LEVELS[report.level], report.message, dict(report.values))
 
 
 def main(args: list[str] | None = None) -> None:
