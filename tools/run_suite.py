@@ -69,6 +69,8 @@ HYPOTHESIS_PLUGIN = 'hypothesispytest'
 ABORT_GRACE_S = 10.0
 #: pytest's own "no tests collected" status (every test deselected): not a failure.
 NO_TESTS = 5
+#: Set on Ctrl-C (or the suite's own time limit): no group starts after it.
+STOPPING = threading.Event()
 
 
 @dataclass
@@ -149,7 +151,12 @@ def uses_hypothesis(group: Group) -> bool:
 
 def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
               output: Path | None = None) -> None:
-    """Run one group's pytest to its end or its time limit, its output streamed or to a file."""
+    """Run one group's pytest to its end or its time limit, its output streamed or to a file.
+
+    Nothing starts once the suite is stopping (the group keeps no status: not run).
+    """
+    if STOPPING.is_set():
+        return
     junit = work / f'{index}.xml'
     progress = work / f'{index}.progress'
     env = dict(os.environ, UVMS_TEST_PROGRESS=str(progress),
@@ -217,6 +224,7 @@ def run_batch(batch: list[Group], first: int, total: int, pytest_args: list[str]
             sys.stdout.buffer.write(log.read_bytes() if log.exists() else b'')
             sys.stdout.flush()
     except KeyboardInterrupt:
+        STOPPING.set()
         pool.shutdown(wait=False, cancel_futures=True)
         for group in batch:
             if group.process is not None and group.process.poll() is None:
@@ -263,6 +271,7 @@ def run_lanes(groups: list[Group], pytest_args: list[str], work: Path, one_lane:
             run_batch(batch, first, len(groups), pytest_args, work)
         beside.join()
     except KeyboardInterrupt:
+        STOPPING.set()
         for group in groups:
             if group.process is not None and group.process.poll() is None:
                 group.process.send_signal(signal.SIGINT)

@@ -124,3 +124,14 @@ def test_an_idle_lane_group_runs_at_sched_idle_beside_the_main_lane(
     assert f'idle policy {os.SCHED_IDLE}' in out
     assert f'main policy {os.SCHED_IDLE}' not in out
     assert '== run_suite: gidle' in out  # its output printed whole at its end
+
+
+def test_no_group_starts_once_the_suite_is_stopping(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """After Ctrl-C the idle lane starts nothing more: the group is left not run."""
+    (tmp_path / 'test_a.py').write_text('def test_a():\n    pass\n')
+    monkeypatch.setattr(run_suite, 'STOPPING', run_suite.threading.Event())
+    run_suite.STOPPING.set()
+    group = run_suite.Group('ga', [tmp_path / 'test_a.py'], 60.0, idle=True)
+    run_suite.run_group(group, 0, ['-q', '--rootdir', str(tmp_path)], tmp_path)
+    assert group.status is None and group.process is None
