@@ -58,9 +58,14 @@ CONCURRENT = {'unit': 2}
 #: Top-level test folders whose groups run in the idle lane (SCHED_IDLE, beside the others):
 #: they keep no periods, so when they get the CPU changes nothing they check.
 IDLE_LANE = ('unit', 'scenarios')
-#: How much longer than its limit an idle-lane group may take: it gets the CPU only when the
-#: other lane leaves it (the integration tests want most of 2 cores at moments).
+#: How much longer than its limit an idle-lane group, and each of its tests (pyproject's
+#: pytest-timeout and faulthandler_timeout), may take: it gets the CPU only when the other
+#: lane leaves it (the integration tests want most of 2 cores at moments). These limits catch
+#: hangs; a test waiting for the CPU is not one.
 IDLE_LIMIT_FACTOR = 2.0
+#: pyproject.toml's per-test limits (s), scaled for the idle lane.
+TEST_TIMEOUT_S = 300.0
+FAULTHANDLER_TIMEOUT_S = 240.0
 #: Hypothesis's pytest plugin, loaded by every pytest process where hypothesis is installed
 #: (0.6 s of imports each, about 25 s a suite); left out of groups whose modules do not use
 #: hypothesis (the library works without it; the plugin adds its options and statistics).
@@ -167,7 +172,10 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
                *pytest_args,
                *(str(p.relative_to(ROOT) if p.is_relative_to(ROOT) else p) for p in group.paths)]
     if group.idle:
-        command = ['chrt', '--idle', '0', *command]
+        command = ['chrt', '--idle', '0', *command[:3],
+                   f'--timeout={TEST_TIMEOUT_S * IDLE_LIMIT_FACTOR:g}',
+                   '-o', f'faulthandler_timeout={FAULTHANDLER_TIMEOUT_S * IDLE_LIMIT_FACTOR:g}',
+                   *command[3:]]
     start = time.monotonic()
     sink = None if output is None else output.open('wb')
     process = subprocess.Popen(command, cwd=ROOT, env=env, start_new_session=True,
