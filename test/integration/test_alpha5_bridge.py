@@ -124,20 +124,23 @@ def test_watchdog_sends_velocity_0_to_every_joint_within_0_2_s(rig: Rig) -> None
     assert rig.bridge is not None and rig.bridge.core is not None and rig.bridge.core.holding
 
 
-def test_joint_states_carry_the_jaw_in_metres(rig: Rig) -> None:
-    """The twin's jaw at 0.012 m (12 mm on the wire) is 0.012 in joint_states."""
+def test_jaw_state_carries_the_jaw_in_metres_apart_from_joint_states(rig: Rig) -> None:
+    """The twin's jaw at 0.012 m (12 mm on the wire) is 0.012 on jaw_state; joint_states: 4."""
+    jaws: list[JointState] = []
+    rig.probe.create_subscription(JointState, 'jaw_state', jaws.append, 100)
     rig.twin.set_joint_state([0.5, -1.0, 1.5, 2.0, 0.012], [0.01, 0.0, 0.0, 0.0, 0.001])
     rig.start_bridge(jaw_joint='jaw')
-    rig.spin_until(lambda: len(rig.states) >= 5)
-    state = rig.states[-1]
-    assert list(state.name) == [*JOINTS, 'jaw']
-    assert list(state.position) == pytest.approx([0.5, -1.0, 1.5, 2.0, 0.012], abs=1e-6)
-    assert state.velocity[4] == pytest.approx(0.001)
+    rig.spin_until(lambda: len(rig.states) >= 5 and len(jaws) >= 2)
+    assert list(rig.states[-1].name) == JOINTS
+    assert list(rig.states[-1].position) == pytest.approx([0.5, -1.0, 1.5, 2.0], abs=1e-6)
+    assert list(jaws[-1].name) == ['jaw']
+    assert jaws[-1].position[0] == pytest.approx(0.012, abs=1e-6)
+    assert jaws[-1].velocity[0] == pytest.approx(0.001)
 
 
 def test_joint_states_without_jaw_name_only_the_urdf_joints(rig: Rig) -> None:
-    """By default the jaw is not driven: four joints, and no packet goes to device 0x01."""
-    rig.start_bridge()
+    """jaw_joint empty: the jaw is not driven: four joints, no packet goes to device 0x01."""
+    rig.start_bridge(jaw_joint='')
     rig.spin_until(lambda: len(rig.states) >= 3)
     assert list(rig.states[-1].name) == JOINTS
     assert rig.twin.received(0x01) == []

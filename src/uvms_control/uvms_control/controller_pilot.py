@@ -3,12 +3,17 @@
 A mixin of ``ControllerNode`` (as ``controller_safety`` is). Subscribes ``pilot/vehicle_twist``
 and ``pilot/ee_twist`` (geometry_msgs/TwistStamped) and ``pilot/jaw`` (std_msgs/Float64);
 publishes ``controller/mode`` (std_msgs/String, latched: 'pilot', 'task' or 'hold') at every
-switch; serves ``controller/hold`` (std_srvs/Trigger). Messages are checked and bounded by
-``core.pilot.inputs`` against the robot's ``pilot.*`` limits, each kind of refusal named once
-per topic; the hand-over (``core.pilot.handover``) runs in the control step, before the task
-supervisor's. ``pilot.script`` (a scenario's ``pilot:``) plays timed commands through the same
-checks, stamped with the step's time, so a pilot session runs the same in every lockstep run.
-Each switch is one console line and an immediate /diagnostics report ('pilot').
+switch; serves ``controller/hold`` (std_srvs/Trigger). The jaw has one owner, the controller:
+at every control step it publishes ``command/jaw`` (std_msgs/Float64, m/s, + opens), the
+pilot's jaw speed in pilot mode (deadman-limited, within ``pilot.max_jaw_speed_m_s``) and zero
+in hold and task mode; the Alpha 5 bridge drives the jaws from it (its watchdog stops them
+when the steps stop, as it stops the joints when ``command/actuators`` stops). Messages are
+checked and bounded by ``core.pilot.inputs`` against the robot's ``pilot.*`` limits, each kind
+of refusal named once per topic; the hand-over (``core.pilot.handover``) runs in the control
+step, before the task supervisor's. ``pilot.script`` (a scenario's ``pilot:``) plays timed
+commands through the same checks, stamped with the step's time, so a pilot session runs the
+same in every lockstep run. Each switch is one console line and an immediate /diagnostics
+report ('pilot').
 """
 
 from __future__ import annotations
@@ -40,6 +45,8 @@ from uvms_control.ros_parameters import declare_parameters
 VEHICLE_TOPIC = 'pilot/vehicle_twist'
 EE_TOPIC = 'pilot/ee_twist'
 JAW_TOPIC = 'pilot/jaw'
+#: The jaw speed the controller forwards to the arm's bridge (m/s, + opens).
+JAW_COMMAND_TOPIC = 'command/jaw'
 MODE_TOPIC = 'controller/mode'
 HOLD_SERVICE = 'controller/hold'
 
@@ -87,8 +94,10 @@ class ControllerPilot:
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self._mode_pub = node.create_publisher(String, MODE_TOPIC, latched)
+        self._jaw_pub = node.create_publisher(Float64, JAW_COMMAND_TOPIC, qos)
         self._entities += [
             (node.destroy_publisher, self._mode_pub),
+            (node.destroy_publisher, self._jaw_pub),
             (node.destroy_subscription, node.create_subscription(
                 TwistStamped, VEHICLE_TOPIC, self._on_pilot_vehicle, qos)),
             (node.destroy_subscription, node.create_subscription(
@@ -116,7 +125,10 @@ class ControllerPilot:
     # ------------------------------------------------------------------ the step
 
     def _pilot_before_step(self, t_ns: int) -> None:
-        """Play the script's commands due now, then the hand-over; log and publish switches."""
+        """Play the script's commands due now, then the hand-over; log and publish switches.
+
+        Then ``command/jaw``: the jaw speed of this step (zero unless the pilot drives).
+        """
         pilot = self.pilot
         if pilot is None:
             return
@@ -136,6 +148,7 @@ class ControllerPilot:
         if switches:
             self._publish_mode(pilot.mode.value)
             self._diagnostics.update()
+        self._jaw_pub.publish(Float64(data=pilot.jaw_command_m_s()))
 
     def _play(self, t: float, command: ScriptCommand) -> None:
         """One script command at t (s), through the checks a message takes."""
@@ -213,9 +226,6 @@ class ControllerPilot:
         if clipped:
             self._refused(topic, Refusal.CLIPPED, f'{topic}: {speed} m/s beyond '
                           f'pilot.max_jaw_speed_m_s: {bounded} m/s')
-        node: Any = self
-        node.get_logger().info(f'{topic}: this robot has no jaw joint: jaw commands are '
-                               'checked and ignored', once=True)
         pilot.jaw(now_s, bounded)
 
     def _refused(self, topic: str, kind: Refusal, message: str) -> None:

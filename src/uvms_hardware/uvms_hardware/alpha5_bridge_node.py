@@ -40,9 +40,18 @@ device. With every device silent that takes ``put_back_bound_s`` (0.9 s for five
 the defaults). ``/diagnostics``: bad frames, silent joints, HARDWARE_STATUS, watchdog.
 
 Joints: robot.urdf of bluerov2_alpha5 has four arm joints joint_1..joint_4 = devices E, D, C, B
-(0x05..0x02); the jaw (0x01) is no URDF joint and is not driven unless ``jaw_joint`` names
-it (then reported in m, as every ROS-facing length). The device's own angle zero is assumed
-to be the URDF's (unknown from the documents).
+(0x05..0x02). The device's own angle zero is assumed to be the URDF's (unknown from the
+documents).
+
+The jaws (0x01) are no URDF joint. When the robot's hardware file names them
+(``alpha5.jaw.joint_name``: the ``jaw_joint`` parameter's default; empty: not driven),
+the bridge takes ``command/jaw`` (std_msgs/Float64, opening speed m/s, + opens: the
+controller's, zero unless a pilot drives) and drives the jaws in Velocity mode (mm/s on the
+wire), with the joints' watchdog timeout: no jaw command for ``watchdog_timeout_s`` and they
+get VELOCITY 0. Their opening (POSITION, mm on the wire) and speed go to ``jaw_state``
+(sensor_msgs/JointState, the one jaw joint, m and m/s), never to ``joint_states``, whose
+arm joints the controller takes whole. activate, the put-back (their mode from before) and a
+trip treat them as every device.
 """
 
 from __future__ import annotations
@@ -54,6 +63,7 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time import Time
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
@@ -94,7 +104,9 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
      'current: torque as CURRENT mA (Kt, gear, efficiency); velocity: a fallback, '
      'VELOCITY = velocity_gain_rad_s_per_n_m * torque'),
     ('velocity_gain_rad_s_per_n_m', 0.1, 'Admittance of the velocity fallback (rad/s per N m)'),
-    ('jaw_joint', '', "The jaws' joint name; empty: the jaws are not driven (no URDF joint)"),
+    ('jaw_joint', None,
+     "The jaws' joint name, driven from command/jaw; empty: the jaws are not driven. "
+     "Default: hardware.yaml's alpha5.jaw.joint_name (empty where it names none)"),
     ('answer_timeout_s', 0.2, 'Time a device has to answer at configure (s)'),
     ('startup_wait_s', 10.0,
      'While no device answers at all, configure asks again for this long (s): the arm or its '
@@ -112,6 +124,15 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
 )
 
 
+def _jaw_default(robot_name: str) -> str:
+    """The jaws' joint name the robot's hardware file gives ('' where none or unreadable)."""
+    try:
+        jaw = load_alpha5(robot_name, None).jaw
+    except HardwareError:
+        return ''  # configure names what is wrong with the file
+    return '' if jaw is None else jaw.joint_name
+
+
 class Alpha5BridgeError(HardwareError):
     """A parameter of the bridge is invalid, or the arm refuses configure or activate."""
 
@@ -125,7 +146,8 @@ class Alpha5BridgeNode(BridgeNode):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('alpha5_bridge', **kwargs)
         self.values = {name: self.declare_parameter(
-            name, default, ParameterDescriptor(description=text, read_only=True)).value
+            name, _jaw_default(self.robot_name) if default is None else default,
+            ParameterDescriptor(description=text, read_only=True)).value
             for name, default, text in PARAMETERS}
         self.core: Alpha5Core | None = None
         self.link: Link | None = None
@@ -181,12 +203,18 @@ class Alpha5BridgeNode(BridgeNode):
             ActuatorCommand, 'command/actuators', self._on_command, qos))
         self.own(self.destroy_service, self.create_service(Trigger, '~/reset_trip',
                                                            self._on_reset_trip))
-        self._timer = self.device_timer(1.0 / (rate_hz * len(arm.drives)), self._on_tick)
+        if arm.jaw is not None:
+            self._jaw_pub = self.own(self.destroy_publisher,
+                                     self.create_publisher(JointState, 'jaw_state', qos))
+            self.own(self.destroy_subscription, self.create_subscription(
+                Float64, 'command/jaw', self._on_jaw_command, qos))
+        self._timer = self.device_timer(core.poll_period_s(rate_hz), self._on_tick)
         self._timer.cancel()  # polls from activate to the put-back only
         self.get_logger().info(
             f'{len(arm.drives)} devices checked on {v["connection"]}: ' + ', '.join(
                 f'{d.joint_name}={d.device_id:#04x}' for d in arm.drives)
-            + ('' if arm.jaw else '; the jaws (0x01) are not driven'))
+            + (' (from command/jaw, to jaw_state)' if arm.jaw else
+               '; the jaws (0x01) are not driven'))
 
     def _check(self, link: Link, core: Alpha5Core, drive: Drive) -> list[str]:
         timeout_s = float(self.values['answer_timeout_s'])
@@ -317,6 +345,14 @@ class Alpha5BridgeNode(BridgeNode):
                                     throttle_duration_sec=1.0)
         self.link.send(frames)
 
+    def _on_jaw_command(self, msg: Float64) -> None:
+        if not self.device_active or self.core is None or self.link is None:
+            return
+        frames, refused = self.core.jaw_command(self.now_s(), float(msg.data))
+        if refused:
+            self.get_logger().error(f'jaw command refused: {refused}', throttle_duration_sec=1.0)
+        self.link.send(frames)
+
     def _on_tick(self) -> None:
         core, link = self.core, self.link
         if core is None or link is None or not self.device_active:
@@ -331,6 +367,9 @@ class Alpha5BridgeNode(BridgeNode):
         sample = core.next_joint_state(t_s)  # as soon as every joint answered again
         if sample is not None:
             self._joint_pub.publish(self._joint_state(sample, t_s))
+        jaw = core.next_jaw_state(t_s)
+        if jaw is not None:
+            self._jaw_pub.publish(self._joint_state(jaw, t_s))
         frames, _ = core.tick(t_s)
         link.send(frames)
 

@@ -8,6 +8,8 @@ The node (``alpha5_bridge_node``) owns the link and the clock and calls, per per
     core.receive(link.read(), t_s)                  # every period
     frames, round_done = core.tick(t_s)             # next feedback REQUEST, watchdog neutral
     sample = core.next_joint_state(t_s)             # every joint answered again, or None
+    link.send(core.jaw_command(t_s, 0.002)[0])      # the jaws at 2 mm/s (when driven)
+    jaw = core.next_jaw_state(t_s)                  # the jaws answered again, or None
 
 Feedback asks one device at a time (REQUEST POSITION, VELOCITY), never all at once: broadcast
 requests collide on RS-485. Commands: joint torque as CURRENT mA through Kt, gear ratio and
@@ -20,6 +22,14 @@ faster than ``overspeed_factor`` times its speed limit trips the core: VELOCITY 
 joint as the watchdog does, every command refused until ``stop_driving`` (deactivate).
 Activate's MODE Standby and the put-back's VELOCITY 0 and resting modes are `Setting`s, each
 confirmed by its device's MODE read back (``alpha5_probe.confirm_setting``).
+
+The jaws (device 0x01, when ``arm.jaw`` names them) are driven apart from the joints: a jaw
+speed (m/s, ``jaw_command``) becomes VELOCITY (mm/s on the wire), sent when it changes and
+again every ``HOLD_RESEND_S`` while it is fed; a watchdog of the same timeout sends VELOCITY 0
+when jaw commands stop, and repeats it while it holds. They are asked their POSITION and
+VELOCITY once every ``JAW_POLL_ROUNDS`` rounds of the joints (a slot of their own, so the
+joints keep their rate), and their state comes from `next_jaw_state`, never in the joints'
+sample. activate, the put-back and a trip treat them as every device.
 
 A silent joint is silent: `next_joint_state` gives a joint state only when every driven
 joint has answered since the last one it gave, within ``silent_timeout_s``; so no answer is
@@ -74,6 +84,9 @@ DEFAULT_CONFIRM_TIMEOUT_S = 0.03
 #: The longest a put-back may take with every device silent (s): well under the 2 s a
 #: launcher's stop leaves a bridge (the other bridges share it).
 PUT_BACK_BUDGET_S = 1.0
+#: The jaws are asked their state once every this many rounds of the joints (25 Hz at the
+#: default 125 Hz): a pilot watches them open, no control loop closes on them.
+JAW_POLL_ROUNDS = 5
 
 
 def describe(drive: Drive) -> str:
@@ -204,6 +217,7 @@ class Alpha5Core:
             raise ValueError(f'silent_timeout_s = {silent_timeout_s!r}: expected seconds > 0')
         self.arm = arm
         self.drives = arm.drives
+        self.jaw = arm.jaw
         self.command_mode = command_mode
         self.velocity_gain = velocity_gain_rad_s_per_n_m
         self.silent_timeout_s = silent_timeout_s
@@ -215,13 +229,20 @@ class Alpha5Core:
         self.feedback = {d.device_id: DeviceFeedback() for d in self.drives}
         self._index = {d.joint_name: i for i, d in enumerate(arm.joints)}
         self._drive_of = {d.device_id: d for d in self.drives}
+        self._slots = list(arm.joints) * (JAW_POLL_ROUNDS if arm.jaw else 1) + (
+            [arm.jaw] if arm.jaw else [])
         self._next = 0
         self._holding = False
         self._driving = False
         self._last_hold_s = -math.inf
-        self._given_s = [-math.inf] * len(self.drives)
+        self._given_s = [-math.inf] * len(arm.joints)
         self.rejected_commands = 0
         self.last_rejection = ''
+        self.jaw_watchdog = CommandWatchdog(watchdog_timeout_s)
+        self._jaw_driving = self._jaw_holding = False
+        self._jaw_sent = math.nan
+        self._jaw_sent_s = self._jaw_hold_s = -math.inf
+        self._jaw_given_s = -math.inf
 
     # -- commands -----------------------------------------------------------------------------
     def command(self, t_s: float, joint_names: Sequence[str],
@@ -252,6 +273,39 @@ class Alpha5Core:
         by_name = dict(zip(names, torques_n_m, strict=True))
         return b''.join(self._command_frame(d, float(by_name[d.joint_name]))
                         for d in self.arm.joints)
+
+    def jaw_command(self, t_s: float, speed_m_s: float) -> tuple[bytes, str]:
+        """(frames, why refused or '') of a jaw speed (m/s, + opens) at ``t_s``.
+
+        Clamped at the jaws' speed limit; sent as VELOCITY when it differs from the last
+        sent or that is ``HOLD_RESEND_S`` old (a lost datagram is repaired), else b''.
+        Refused without driven jaws, while tripped, or for a non-finite speed (the jaws'
+        watchdog is not fed then).
+        """
+        jaw = self.jaw
+        problem = ''
+        if jaw is None:
+            problem = 'the jaws are not driven (no jaw joint named)'
+        elif self.overspeed:
+            problem = f'tripped: {self.overspeed}'
+        elif not math.isfinite(speed_m_s):
+            problem = f'non-finite jaw speed {speed_m_s!r}'
+        if problem or jaw is None:
+            self.rejected_commands += 1
+            self.last_rejection = problem
+            return b'', problem
+        self.jaw_watchdog.feed(t_s)
+        self._jaw_driving, self._jaw_holding = True, False
+        speed = max(-jaw.velocity_limit, min(jaw.velocity_limit, float(speed_m_s)))
+        if speed == self._jaw_sent and t_s - self._jaw_sent_s < HOLD_RESEND_S:
+            return b'', ''
+        self._jaw_sent, self._jaw_sent_s = speed, t_s
+        return rp.encode_velocity(jaw.device_id, speed), ''
+
+    @property
+    def jaw_holding(self) -> bool:
+        """True while the jaws' watchdog holds them at VELOCITY 0."""
+        return self._jaw_holding
 
     def _command_frame(self, drive: Drive, torque_n_m: float) -> bytes:
         if self.command_mode == 'current':
@@ -317,6 +371,8 @@ class Alpha5Core:
     def stop_driving(self) -> None:
         """Forget the last command and a trip (deactivate): nothing is driven until a new one."""
         self._driving = self._holding = False
+        self._jaw_driving = self._jaw_holding = False
+        self._jaw_sent, self._jaw_sent_s = math.nan, -math.inf
         self.overspeed = ''
 
     def _check_speed(self, drive: Drive, velocity: float) -> None:
@@ -328,24 +384,39 @@ class Alpha5Core:
         self.overspeed = (f'{describe(drive)} at {velocity:.3g} {unit}, over '
                           f'{self.overspeed_factor:g} x its limit {drive.velocity_limit:g} {unit}')
         self._driving, self._holding, self._last_hold_s = False, True, -math.inf
+        self._jaw_driving, self._jaw_holding = False, self.jaw is not None
+        self._jaw_sent, self._jaw_hold_s = math.nan, -math.inf
 
     # -- the period ---------------------------------------------------------------------------
     def tick(self, t_s: float) -> tuple[bytes, bool]:
         """(frames to send now, True when this request starts a new feedback round).
 
-        The frames: VELOCITY 0 to every joint when the watchdog trips and while it holds,
-        then one feedback REQUEST to the next device in turn.
+        The frames: VELOCITY 0 to every joint when the watchdog trips and while it holds
+        (the jaws too, on their own watchdog), then one feedback REQUEST to the next device
+        in turn (the jaws once every ``JAW_POLL_ROUNDS`` rounds).
         """
         frames = b''
         if self._driving and self.watchdog.expired(t_s):
             self._driving, self._holding, self._last_hold_s = False, True, -math.inf
         if self._holding and t_s - self._last_hold_s >= HOLD_RESEND_S:
-            frames += self.neutral_frames()
+            frames += b''.join(rp.encode_velocity(d.device_id, 0.0) for d in self.arm.joints)
             self._last_hold_s = t_s
-        drive = self.drives[self._next]
-        round_done = self._next == 0
-        self._next = (self._next + 1) % len(self.drives)
+        if self.jaw is not None:
+            if self._jaw_driving and self.jaw_watchdog.expired(t_s):
+                self._jaw_driving, self._jaw_holding, self._jaw_hold_s = False, True, -math.inf
+                self._jaw_sent = math.nan
+            if self._jaw_holding and t_s - self._jaw_hold_s >= HOLD_RESEND_S:
+                frames += rp.encode_velocity(self.jaw.device_id, 0.0)
+                self._jaw_hold_s = t_s
+        drive = self._slots[self._next]
+        round_done = self._next % len(self.arm.joints) == 0 and drive is not self.jaw
+        self._next = (self._next + 1) % len(self._slots)
         return frames + rp.encode_request(drive.device_id, FEEDBACK_REQUEST), round_done
+
+    def poll_period_s(self, rate_hz: float) -> float:
+        """The period of `tick` (s) that asks every joint ``rate_hz`` times a second."""
+        rounds = JAW_POLL_ROUNDS if self.jaw is not None else 1
+        return rounds / (rate_hz * len(self._slots))
 
     @property
     def holding(self) -> bool:
@@ -377,15 +448,32 @@ class Alpha5Core:
         return ([d.joint_name for d in self.drives], [v.position for v in values],
                 [v.velocity for v in values])
 
+    def next_jaw_state(self, t_s: float) -> JointSample | None:
+        """The jaws' state (m, m/s) to publish at ``t_s``, or None (not driven, not fresh).
+
+        As `next_joint_state` for the one device: both answers new since the last sample,
+        within ``silent_timeout_s``, finite.
+        """
+        if self.jaw is None:
+            return None
+        v = self.feedback[self.jaw.device_id]
+        if not (t_s - v.oldest_s <= self.silent_timeout_s and v.oldest_s > self._jaw_given_s
+                and math.isfinite(v.position) and math.isfinite(v.velocity)):
+            return None
+        self._jaw_given_s = v.oldest_s
+        return JointSample([self.jaw.joint_name], [v.position], [v.velocity], v.oldest_s)
+
     def next_joint_state(self, t_s: float) -> JointSample | None:
         """The joint state to publish at ``t_s``, or None while it would not be fresh.
 
-        None unless every driven joint has answered both position and velocity since the last
+        None unless every arm joint has answered both position and velocity since the last
         sample given, within ``silent_timeout_s``, with finite values: a sample never repeats
         an answer, so a joint that stops answering stops the samples at once (and a joint
-        whose answer was lost in one round skips that round's sample).
+        whose answer was lost in one round skips that round's sample). The jaws are never in
+        it (`next_jaw_state`).
         """
-        values = [self.feedback[d.device_id] for d in self.drives]
+        drives = self.arm.joints
+        values = [self.feedback[d.device_id] for d in drives]
         if not all(t_s - v.oldest_s <= self.silent_timeout_s and v.oldest_s > given_s
                    for v, given_s in zip(values, self._given_s, strict=True)):
             return None
@@ -393,7 +481,7 @@ class Alpha5Core:
         if not all(math.isfinite(x) for x in positions + velocities):
             return None
         self._given_s = [v.oldest_s for v in values]
-        return JointSample([d.joint_name for d in self.drives], positions, velocities,
+        return JointSample([d.joint_name for d in drives], positions, velocities,
                            min(self._given_s))
 
     # -- health -------------------------------------------------------------------------------
@@ -416,6 +504,8 @@ class Alpha5Core:
             'crc_errors': s.crc_errors, 'length_errors': s.length_errors,
             'cobs_errors': s.cobs_errors, 'packets': s.packets,
             'watchdog_trips': self.watchdog.trips, 'holding_velocity_0': self.holding,
+            **({'jaw_watchdog_trips': self.jaw_watchdog.trips,
+                'jaw_holding_velocity_0': self.jaw_holding} if self.jaw else {}),
             'rejected_commands': self.rejected_commands, 'silent_joints': ' '.join(silent),
             'overspeed': self.overspeed,
             **{f'hardware_status.{k}': v for k, v in status.items()}}
@@ -426,11 +516,13 @@ class Alpha5Core:
             problems.append(f'HARDWARE_STATUS errors: {", ".join(status)}')
         if problems:
             return 2, '; '.join(problems), values
-        if s.bad_frames or self.rejected_commands or self.holding:
+        if s.bad_frames or self.rejected_commands or self.holding or self.jaw_holding:
             parts = [f'{s.bad_frames} bad frames dropped'] if s.bad_frames else []
             if self.rejected_commands:
                 parts.append(f'{self.rejected_commands} commands refused ({self.last_rejection})')
             if self.holding:
                 parts.append('no command: holding at VELOCITY 0')
+            if self.jaw_holding:
+                parts.append('no jaw command: the jaws at VELOCITY 0')
             return 1, '; '.join(parts), values
         return 0, 'running', values

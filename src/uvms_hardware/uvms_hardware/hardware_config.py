@@ -84,12 +84,17 @@ class Drive:
 
 @dataclass(frozen=True)
 class Alpha5Hardware:
-    """The arm's drives: ``joints`` base to wrist (URDF order), ``jaw`` if it is driven."""
+    """The arm's drives: ``joints`` base to wrist (URDF order), ``jaw`` if it is driven.
+
+    ``jaw_device`` is the jaws' device as the hardware file describes it (``alpha5.jaw``),
+    driven or not: the twin serves it whenever the arm has it, as a real Alpha 5 does.
+    """
 
     joints: tuple[Drive, ...]
     jaw: Drive | None
     udp_port: int
     serial_baud: int
+    jaw_device: Drive | None = None
 
     @property
     def drives(self) -> tuple[Drive, ...]:
@@ -188,8 +193,12 @@ def _number(path: Path, where: str, item: Mapping[str, Any], key: str) -> float:
     return float(value)
 
 
-def load_alpha5(robot_name: str, jaw_joint: str = '') -> Alpha5Hardware:
+def load_alpha5(robot_name: str, jaw_joint: str | None = '') -> Alpha5Hardware:
     """The Alpha 5 drives of ``robot_name``; the jaw is driven only when named ``jaw_joint``.
+
+    ``jaw_joint`` None: the name the hardware file gives the jaws (``alpha5.jaw.joint_name``),
+    driven when it gives one; '' (the default): the jaws are not driven (the plant's joints
+    only, as the twin stand's plant and the hardware check take them).
 
     Raises:
         HardwareConfigError: A missing section or key, or a joint of ``hardware.yaml`` that
@@ -216,20 +225,33 @@ def load_alpha5(robot_name: str, jaw_joint: str = '') -> Alpha5Hardware:
         drives.append(Drive(str(name), int(_number(path, where, item, 'device_id')),
                             str(item.get('axis', '?')), (lower, upper), velocity,
                             _number(path, where, item, 'current_limit_ma'), per_ma))
-    jaw = None
-    if jaw_joint:
-        item = section.get('jaw')
-        if not isinstance(item, Mapping):
-            raise HardwareConfigError(f'{path}: no alpha5.jaw section for jaw {jaw_joint!r}')
-        limits = item.get('position_limits_m')
-        if not (isinstance(limits, list) and len(limits) == 2):
-            raise HardwareConfigError(f'{path}: alpha5.jaw.position_limits_m: expected [lo, hi]')
-        jaw = Drive(jaw_joint, int(_number(path, 'alpha5.jaw', item, 'device_id')),
-                    str(item.get('axis', 'A')), (float(limits[0]), float(limits[1])),
-                    _number(path, 'alpha5.jaw', item, 'velocity_limit_m_s'),
-                    _number(path, 'alpha5.jaw', item, 'current_limit_ma'), 0.0)
+    item = section.get('jaw')
+    named = str(item.get('joint_name') or '') if isinstance(item, Mapping) else ''
+    if jaw_joint is None:
+        jaw_joint = named
+    jaw_device = None
+    if isinstance(item, Mapping) or jaw_joint:
+        jaw_device = _jaw_drive(path, item, jaw_joint or named or 'jaw')
+    jaw = jaw_device if jaw_joint else None
     return Alpha5Hardware(tuple(drives), jaw, int(section.get('udp_port', 6789)),
-                          int(section.get('serial_baud', 115200)))
+                          int(section.get('serial_baud', 115200)), jaw_device)
+
+
+def _jaw_drive(path: Path, item: object, joint_name: str) -> Drive:
+    """The jaws' drive of the ``alpha5.jaw`` section, as joint ``joint_name`` (m, m/s).
+
+    Raises:
+        HardwareConfigError: No such section, or a key missing or malformed.
+    """
+    if not isinstance(item, Mapping):
+        raise HardwareConfigError(f'{path}: no alpha5.jaw section for jaw {joint_name!r}')
+    limits = item.get('position_limits_m')
+    if not (isinstance(limits, list) and len(limits) == 2):
+        raise HardwareConfigError(f'{path}: alpha5.jaw.position_limits_m: expected [lo, hi]')
+    return Drive(joint_name, int(_number(path, 'alpha5.jaw', item, 'device_id')),
+                 str(item.get('axis', 'A')), (float(limits[0]), float(limits[1])),
+                 _number(path, 'alpha5.jaw', item, 'velocity_limit_m_s'),
+                 _number(path, 'alpha5.jaw', item, 'current_limit_ma'), 0.0)
 
 
 def load_netft(robot_name: str) -> NetFtHardware:

@@ -28,6 +28,14 @@ answers ``model_data`` (default: the ASCII text ``'alpha5'``). HARDWARE_STATUS' 
 not documented either: the twin sends the bytes set by `set_hardware_status`, at 1 Hz to the
 last host while any is non-zero.
 
+The jaws (device 0x01, axis A): the twin serves them whenever the hardware file describes
+them (``arm.jaw_device``), driven by the bridge or not, as the real arm has them. The
+simulator has no jaw joint, so unless the plant sets them (``arm.jaw`` among the drives:
+`set_joint_state`'s last value) the twin moves them itself: in Velocity mode at the setpoint,
+in Position mode toward it at the speed limit, stopped at the position limits; still in the
+other modes (Current makes no known speed: no Kt for the jaws). `jaw_state` and `jaw_command`
+read them.
+
 Faults a test can set: `set_silent` (a device answers and takes nothing: a broken cable, an
 unpowered joint; the others go on), and ``drop_first_datagrams`` / `drop_datagrams` (the
 next datagrams the server receives are lost before any device sees them, as on a lossy link).
@@ -35,6 +43,7 @@ next datagrams the server receives are lost before any device sees them, as on a
 
 from __future__ import annotations
 
+import math
 import select
 import socket
 import threading
@@ -83,9 +92,17 @@ class Alpha5Twin:
 
     def __init__(self, arm: Alpha5Hardware, host: str = LOOPBACK, port: int = DEFAULT_PORT,
                  model_data: bytes = b'alpha5', drop_first_datagrams: int = 0) -> None:
+        drives = list(arm.drives)
+        jaw = arm.jaw_device
+        if jaw is not None and all(d.device_id != jaw.device_id for d in drives):
+            drives.append(jaw)
         self.devices = {d.device_id: TwinDevice(
             d, position_limits=d.position_limits, velocity_limit=d.velocity_limit,
-            current_limit_ma=d.current_limit_ma) for d in arm.drives}
+            current_limit_ma=d.current_limit_ma) for d in drives}
+        #: The jaws' device when the twin moves them itself (the plant has no jaw), else None.
+        self._own_jaw = jaw.device_id if jaw is not None and arm.jaw is None else None
+        self._plant_ids = {d.device_id for d in arm.drives}
+        self._jaw_moved_s: float | None = None
         self.model_data = model_data
         self.splitter = rp.FrameSplitter()
         self._address = (host, port)
@@ -106,17 +123,56 @@ class Alpha5Twin:
             for device, p, v in zip(self.devices.values(), positions, velocities, strict=False):
                 device.position, device.velocity = float(p), float(v)
 
+    def _plant_devices(self) -> list[TwinDevice]:
+        return [d for i, d in self.devices.items() if i in self._plant_ids]
+
     def joint_state(self) -> tuple[dict[str, float], dict[str, float]]:
         """({joint: position}, {joint: velocity}) as the plant last set them (SI)."""
         with self._lock:
-            devices = list(self.devices.values())
+            devices = self._plant_devices()
             return ({d.drive.joint_name: d.position for d in devices},
                     {d.drive.joint_name: d.velocity for d in devices})
 
     def joint_commands(self) -> dict[str, tuple[Mode, float]]:
-        """{joint: (mode, setpoint)}: rad, rad/s (jaw m, m/s) or mA by mode."""
+        """{joint: (mode, setpoint)} of the plant's joints: rad, rad/s (jaw m, m/s) or mA."""
         with self._lock:
-            return {d.drive.joint_name: (d.mode, d.setpoint) for d in self.devices.values()}
+            return {d.drive.joint_name: (d.mode, d.setpoint) for d in self._plant_devices()}
+
+    def jaw_state(self) -> tuple[float, float] | None:
+        """The jaws' (opening m, speed m/s) now, or None without jaws."""
+        with self._lock:
+            device = self.devices.get(rp.DeviceId.JAWS)
+            if device is None:
+                return None
+            self._move_jaw(time.monotonic())
+            return device.position, device.velocity
+
+    def jaw_command(self) -> tuple[Mode, float] | None:
+        """The jaws' (mode, setpoint: m, m/s or mA by mode), or None without jaws."""
+        with self._lock:
+            device = self.devices.get(rp.DeviceId.JAWS)
+            return None if device is None else (device.mode, device.setpoint)
+
+    def _move_jaw(self, t_s: float) -> None:
+        """Move the jaws the twin moves itself up to ``t_s`` (monotonic s); lock held."""
+        if self._own_jaw is None:
+            return
+        device = self.devices[self._own_jaw]
+        dt_s = 0.0 if self._jaw_moved_s is None else max(0.0, t_s - self._jaw_moved_s)
+        self._jaw_moved_s = t_s
+        lower, upper = device.position_limits
+        if device.mode == Mode.VELOCITY:
+            speed = device.setpoint
+        elif device.mode == Mode.POSITION:
+            gap = device.setpoint - device.position
+            speed = math.copysign(min(device.velocity_limit, abs(gap) / dt_s), gap) if (
+                dt_s > 0.0) else 0.0
+        else:
+            speed = 0.0
+        position = min(upper, max(lower, device.position + speed * dt_s))
+        device.velocity = (position - device.position) / dt_s if dt_s > 0.0 else (
+            speed if lower < position < upper else 0.0)
+        device.position = position
 
     def joint_torques_n_m(self) -> dict[str, float | None]:
         """{joint: torque (N m)} of the devices in Current mode (Kt, ratio, efficiency), else None.
@@ -157,6 +213,7 @@ class Alpha5Twin:
     def handle(self, packet: rp.Packet, t_s: float = 0.0) -> bytes:
         """Apply one packet; return the frames answering it (empty if none)."""
         with self._lock:
+            self._move_jaw(time.monotonic())
             if packet.device_id == rp.DeviceId.ALL:
                 for device in self.devices.values():
                     device.received.append((t_s, packet))

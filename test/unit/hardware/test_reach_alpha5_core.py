@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from uvms_hardware.alpha5_core import Alpha5Core, check_device
+from uvms_hardware.alpha5_core import JAW_POLL_ROUNDS, Alpha5Core, check_device
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId
 from uvms_twins.alpha5_twin import Alpha5Twin
@@ -124,7 +124,7 @@ def test_jaw_feedback_is_in_metres() -> None:
     arm = load_alpha5('bluerov2_alpha5', jaw_joint='jaw')
     core, twin = Alpha5Core(arm), Alpha5Twin(arm, port=0)
     twin.set_joint_state([0.1, 0.2, 0.3, 0.4, 0.01], [0.0] * 5)
-    for _ in range(5):
+    for _ in range(4 * JAW_POLL_ROUNDS + 1):  # the jaws are asked once every 5 rounds
         frames, _ = core.tick(0.0)
         for packet in packets(frames):
             core.receive(twin.handle(packet), 0.0)

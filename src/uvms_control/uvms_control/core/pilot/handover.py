@@ -92,6 +92,15 @@ class PilotHandover:
         self.motion.command_jaw(t_s, speed_m_s)
         self._asked |= speed_m_s != 0.0
 
+    def jaw_command_m_s(self) -> float:
+        """The jaw speed to forward now (m/s, + opens): the pilot's, in pilot mode only.
+
+        Deadman-limited and within ``limits.jaw_speed_m_s`` (``PilotMotion``: a jaw message
+        older than the deadman is a zero target, reached within 0.1 s); zero in hold and task
+        mode, so a task or a released pilot never leaves the jaw moving.
+        """
+        return self.motion.jaw_speed_m_s if self.mode == PilotMode.PILOT else 0.0
+
     def hold(self) -> tuple[bool, str]:
         """Switch to hold now (the hold service): (success, message).
 
