@@ -24,6 +24,7 @@ robot_localization consumes them:
 from __future__ import annotations
 
 from collections import deque
+from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -153,8 +154,9 @@ class NavigationTopics:
         self._raw = RawNavigationMessages(self._gyro_var, self._accel_var)
         self._depth_bias_var = params.depth.bias_max_m ** 2 / 3.0
         self._last: tuple[int, np.ndarray] | None = None
-        self._last_imu: bytes | None = None
-        self._imu_sent_to = 0  # subscriptions matched when the last IMU sample went out
+        #: The last IMU and depth payloads, and the subscriptions matched when each went out.
+        self._last_sent: dict[str, bytes] = {}
+        self._sent_to = {'imu': 0, 'depth': 0}
 
     def publish(self, t_ns: int, q: np.ndarray, w: np.ndarray) -> None:
         """Measure the vehicle state (q, w of the plant) at ``t_ns`` and publish what is due."""
@@ -180,36 +182,43 @@ class NavigationTopics:
             for _, reading in due:
                 self._send(reading)
 
-    def republish_imu(self) -> None:
-        """Send the last IMU sample again if a subscriber joined since it went out.
+    def republish_held(self) -> None:
+        """Send the last IMU and depth samples again if a subscriber joined since they went out.
 
         Real time, while the initial state is held: the estimator starts on its first IMU
-        sample and publishes on /clock only after it; a held state's sensors are sampled
-        once (time stands still), so an estimator whose subscription was matched after that
-        sample never started and the loop never closed (seen on a loaded machine, `uvms
-        launch case1_estimated`, 60 s then an error). Sent again only when the number of
-        matched subscriptions grew, so a started estimator sees the sample at most once more
-        per late subscriber, at the same stamp (a prediction of zero length).
+        and depth samples and publishes on /clock only after them; a held state's sensors are
+        sampled once (time stands still), so an estimator whose subscription was matched after
+        those samples never started and the loop never closed (seen on a loaded machine,
+        `uvms launch case1_estimated`, 60 s then an error). Sent again only when the number of
+        matched subscriptions grew, so a started estimator sees a sample at most once more per
+        late subscriber, at the same stamp (a prediction of zero length, the same depth).
         """
-        count = self._imu.get_subscription_count()
-        if self._last_imu is not None and count > self._imu_sent_to:
-            self._imu_sent_to = count
-            self._imu.publish(self._last_imu)
+        for publisher, kind in ((self._imu, 'imu'), (self._depth, 'depth')):
+            count = publisher.get_subscription_count()
+            last = self._last_sent.get(kind)
+            if last is not None and count > self._sent_to[kind]:
+                self._sent_to[kind] = count
+                publisher.publish(last)
+
+    def _remember(self, kind: str, publisher: Any, payload: bytes) -> None:
+        """Publish ``payload`` and keep it (and who got it) for ``republish_held``."""
+        self._last_sent[kind] = payload
+        self._sent_to[kind] = publisher.get_subscription_count()
+        publisher.publish(payload)
 
     def _send(self, reading: Reading) -> None:
         raw = self._raw
         if isinstance(reading, ImuReading):
-            self._last_imu = bytes(raw.imu(reading.t_ns, reading.rpy, reading.rpy_sigma,
-                                           reading.w_body, reading.f_body))
-            self._imu_sent_to = self._imu.get_subscription_count()
-            self._imu.publish(self._last_imu)
+            self._remember('imu', self._imu, bytes(raw.imu(
+                reading.t_ns, reading.rpy, reading.rpy_sigma, reading.w_body, reading.f_body)))
         elif isinstance(reading, DvlReading):
             if reading.valid:
                 self._dvl.publish(raw.dvl(reading.t_ns, reading.v_dvl, reading.sigma_m_s))
         elif isinstance(reading, DepthReading):
             variance = reading.sigma_m ** 2 + self._depth_bias_var
-            self._depth.publish(raw.pose(reading.t_ns, (0.0, 0.0, reading.depth_m),
-                                         (UNUSED_VARIANCE, UNUSED_VARIANCE, variance)))
+            self._remember('depth', self._depth, bytes(raw.pose(
+                reading.t_ns, (0.0, 0.0, reading.depth_m),
+                (UNUSED_VARIANCE, UNUSED_VARIANCE, variance))))
         elif self._fix is not None:
             self._fix.publish(raw.pose(reading.t_ns, reading.p_ned,
                                        (reading.sigma_m ** 2).tolist()))

@@ -336,7 +336,7 @@ class SimulatorNode(Node):
         self._check_startup_time()
         if now_ns - self._held_published_ns >= _HOLD_REPUBLISH_S * 1e9:
             if self._navigation is not None:  # before /clock, as _publish_state sends it
-                self._navigation.republish_imu()
+                self._navigation.republish_held()
             self._publish_state()
             self._held_published_ns = now_ns
         watch.poll(now_ns)
