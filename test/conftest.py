@@ -31,9 +31,14 @@ if 'UVMS_JOURNAL_DIR' not in os.environ:
 
 #: Domains handed to test modules in turn (1-100: their UDP ports stay below Linux's
 #: ephemeral range); 0 is left to whatever runs outside the tests. tools/run_suite.py starts
-#: each of its pytest processes at another one (UVMS_TEST_DOMAIN_START).
-_FIRST_DOMAIN = int(os.environ.get('UVMS_TEST_DOMAIN_START', '1'))
-_MODULE_DOMAINS = itertools.cycle([*range(_FIRST_DOMAIN, 101), *range(1, _FIRST_DOMAIN)])
+#: each of its pytest processes at another one (UVMS_TEST_DOMAIN_START), within the range of
+#: its lane (UVMS_TEST_DOMAINS, ``LOW-HIGH``), so that tests running at once in its two lanes
+#: never share a domain.
+_LOW, _, _HIGH = os.environ.get('UVMS_TEST_DOMAINS', '1-100').partition('-')
+_FIRST_DOMAIN = min(max(int(os.environ.get('UVMS_TEST_DOMAIN_START', _LOW)), int(_LOW)),
+                    int(_HIGH))
+_MODULE_DOMAINS = itertools.cycle([*range(_FIRST_DOMAIN, int(_HIGH) + 1),
+                                   *range(int(_LOW), _FIRST_DOMAIN)])
 #: tools/run_suite.py's progress file: the test now running, named in its summary when the
 #: process has to be killed.
 _PROGRESS = os.environ.get('UVMS_TEST_PROGRESS')

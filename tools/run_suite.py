@@ -63,6 +63,11 @@ IDLE_LANE = ('unit', 'scenarios')
 #: lane leaves it (the integration tests want most of 2 cores at moments). These limits catch
 #: hangs; a test waiting for the CPU is not one.
 IDLE_LIMIT_FACTOR = 2.0
+#: ROS domains of each lane's test modules (test/conftest.py hands them out in turn): the two
+#: lanes' tests run at once and must not hear each other. The scenario runs have their own
+#: (test/scenarios/scenario_runs.py, from 150).
+MAIN_DOMAINS = (1, 70)
+IDLE_DOMAINS = (71, 100)
 #: pyproject.toml's per-test limits (s), scaled for the idle lane.
 TEST_TIMEOUT_S = 300.0
 FAULTHANDLER_TIMEOUT_S = 240.0
@@ -164,8 +169,10 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
         return
     junit = work / f'{index}.xml'
     progress = work / f'{index}.progress'
+    low, high = IDLE_DOMAINS if group.idle else MAIN_DOMAINS
     env = dict(os.environ, UVMS_TEST_PROGRESS=str(progress),
-               UVMS_TEST_DOMAIN_START=str(1 + (index * 7) % 100))
+               UVMS_TEST_DOMAINS=f'{low}-{high}',
+               UVMS_TEST_DOMAIN_START=str(low + (index * 7) % (high - low + 1)))
     plugins = [] if uses_hypothesis(group) else ['-p', f'no:{HYPOTHESIS_PLUGIN}']
     command = [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider', *plugins,
                '-o', 'addopts=-ra --strict-markers', f'--junitxml={junit}',

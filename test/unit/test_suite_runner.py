@@ -108,22 +108,24 @@ def test_unit_and_scenario_groups_run_in_the_idle_lane_the_others_in_the_main_on
 
 
 def test_an_idle_lane_group_runs_at_sched_idle_beside_the_main_lane(
-        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+        tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
     """The idle group's pytest is SCHED_IDLE with longer test limits; the other's is not."""
     for name in ('idle', 'main'):
         (tmp_path / f'test_{name}.py').write_text(
             'import os\n'
             f'def test_{name}(request):\n'
             f'    print("{name} policy", os.sched_getscheduler(0),\n'
-            f'          "timeout", request.config.getoption("timeout"))\n')
+            f'          "timeout", request.config.getoption("timeout"),\n'
+            f'          "domains", os.environ["UVMS_TEST_DOMAINS"])\n')
     groups = [run_suite.Group(f'g{name}', [tmp_path / f'test_{name}.py'], 60.0,
                               idle=name == 'idle') for name in ('idle', 'main')]
     run_suite.run_lanes(groups, ['-s', '-q', '--rootdir', str(tmp_path)], tmp_path,
                         one_lane=False)
-    out = capsys.readouterr().out
+    out = capfd.readouterr().out  # the main lane streams: its pytest writes to fd 1
     assert [g.status for g in groups] == [0, 0]
     # Its per-test hang limit scaled as its group's: a test waiting for the CPU is no hang.
-    assert f'idle policy {os.SCHED_IDLE} timeout 600.0' in out
+    assert f'idle policy {os.SCHED_IDLE} timeout 600.0 domains 71-100' in out
+    assert 'domains 1-70' in out  # the lanes' tests never share a ROS domain
     assert f'main policy {os.SCHED_IDLE}' not in out
     assert '== run_suite: gidle' in out  # its output printed whole at its end
 
