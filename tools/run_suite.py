@@ -98,6 +98,8 @@ class Group:
     took_s: float = 0.0
     batch: str = ''
     idle: bool = False
+    #: The interpreter whose pytest runs the group.
+    python: str = sys.executable
     process: subprocess.Popen[bytes] | None = field(default=None, repr=False)
 
     @property
@@ -141,6 +143,26 @@ def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float)
     return list(groups.values())
 
 
+#: Top-level test folders the second interpreter does not run again: the colcon workspace is
+#: built by the ROS 2 tools of the first (its test builds and runs the installed packages).
+FIRST_ONLY = ('ros2_way',)
+
+
+def python_label(python: str) -> str:
+    """``py3.12`` for an interpreter (asked, as it reports itself)."""
+    version = subprocess.run([python, '-c', 'import sys; print(*sys.version_info[:2], sep=".")'],
+                             capture_output=True, text=True, check=True).stdout.strip()
+    return f'py{version}'
+
+
+def groups_again(groups: list[Group], python: str) -> list[Group]:
+    """The groups once more on another interpreter, named after it (the colcon ones not)."""
+    label = python_label(python)
+    return [Group(f'{label} {g.name}', list(g.paths), g.limit_s, batch=g.batch and
+                  f'{label} {g.batch}', idle=g.idle, python=python)
+            for g in groups if g.paths[0].relative_to(TESTS).parts[0] not in FIRST_ONLY]
+
+
 def read_junit(group: Group, path: Path) -> None:
     """Counts and failed test ids of a group from its JUnit XML (absent when it was killed)."""
     if not path.exists():
@@ -174,7 +196,7 @@ def run_group(group: Group, index: int, pytest_args: list[str], work: Path,
                UVMS_TEST_DOMAINS=f'{low}-{high}',
                UVMS_TEST_DOMAIN_START=str(low + (index * 7) % (high - low + 1)))
     plugins = [] if uses_hypothesis(group) else ['-p', f'no:{HYPOTHESIS_PLUGIN}']
-    command = [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider', *plugins,
+    command = [group.python, '-m', 'pytest', '-p', 'no:cacheprovider', *plugins,
                '-o', 'addopts=-ra --strict-markers', f'--junitxml={junit}',
                *pytest_args,
                *(str(p.relative_to(ROOT) if p.is_relative_to(ROOT) else p) for p in group.paths)]
@@ -221,11 +243,13 @@ def run_batch(batch: list[Group], first: int, total: int, pytest_args: list[str]
         print(f'\n== run_suite [{first + 1}/{total}] {batch[0].name}', flush=True)
         run_group(batch[0], first, pytest_args, work)
         return
-    workers = CONCURRENT.get(batch[0].batch, 1)
+    label, _, folder = batch[0].batch.rpartition(' ')  # 'py3.12 unit': another interpreter's
+    workers = CONCURRENT.get(folder, 1)
     lane = ' (idle lane)' if batch[0].idle else ''
     if len(batch) > 1:
         print(f'\n== run_suite [{first + 1}-{first + len(batch)}/{total}] {len(batch)} groups '
-              f'of test/{batch[0].batch}, {workers} at a time{lane}', flush=True)
+              f'of {label + " " if label else ""}test/{folder}, {workers} at a time{lane}',
+              flush=True)
     logs = {id(group): work / f'{first + k}.log' for k, group in enumerate(batch)}
     pool = ThreadPoolExecutor(max_workers=workers)
     futures = {pool.submit(run_group, group, first + k, pytest_args, work, logs[id(group)]):
@@ -337,6 +361,11 @@ def summary(groups: list[Group], took_s: float) -> list[str]:
             lines.append(f'CRASHED {group.name} (exit status {group.status}), in test '
                          f'{group.last_test or "(before its first test)"}')
         lines.extend(f'FAILED {test_id}' for test_id in group.failed)
+    pythons = list(dict.fromkeys(g.python for g in groups))
+    if len(pythons) > 1:
+        for python in pythons:
+            lines.append(f'{python_label(python)}: '
+                         f'{closing_line([g for g in groups if g.python == python])}')
     lines.append(closing_line(groups))
     return lines
 
@@ -361,12 +390,17 @@ def main(argv: list[str] | None = None) -> int:
                         help='seconds one group may take (default 900)')
     parser.add_argument('--scenario-limit', type=float, default=1500.0, metavar='S',
                         help='seconds the scenario group may take (default 1500)')
+    parser.add_argument('--also-python', metavar='PYTHON',
+                        help='run every group again on this interpreter (its own venv), '
+                             'the colcon workspace tests excepted, in the same two lanes')
     parser.add_argument('--one-lane', action='store_true',
                         help='run every group one after the other (no idle lane)')
     parser.add_argument('--list', action='store_true', help='print the groups and stop')
     options, arguments = parser.parse_known_args(argv)
     paths, pytest_args = split_arguments(arguments)
     groups = groups_for(paths, options.group_limit, options.scenario_limit)
+    if options.also_python:
+        groups += groups_again(groups, options.also_python)
     if options.list:
         for group in groups:
             lane = ', idle lane' if group.idle and not options.one_lane else ''

@@ -139,3 +139,16 @@ def test_no_group_starts_once_the_suite_is_stopping(
     group = run_suite.Group('ga', [tmp_path / 'test_a.py'], 60.0, idle=True)
     run_suite.run_group(group, 0, ['-q', '--rootdir', str(tmp_path)], tmp_path)
     assert group.status is None and group.process is None
+
+
+def test_a_second_interpreter_runs_every_group_again_but_the_colcon_workspace() -> None:
+    """--also-python: the same groups, named after the interpreter, in the same lanes."""
+    groups = run_suite.groups_for([ROOT / 'test'], 900.0, 1500.0)
+    again = run_suite.groups_again(groups, sys.executable)
+    label = run_suite.python_label(sys.executable)
+    assert label == f'py{sys.version_info[0]}.{sys.version_info[1]}'
+    kept = [g for g in groups if not g.name.startswith('test/ros2_way')]
+    assert [g.name for g in again] == [f'{label} {g.name}' for g in kept]
+    assert [(g.paths, g.idle, g.limit_s) for g in again] == [(g.paths, g.idle, g.limit_s)
+                                                              for g in kept]
+    assert {g.batch for g in again if g.batch} == {f'{label} unit'}
