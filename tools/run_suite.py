@@ -400,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
     paths, pytest_args = split_arguments(arguments)
     groups = groups_for(paths, options.group_limit, options.scenario_limit)
     if options.also_python:
-        groups += groups_again(groups, options.also_python)
+        groups += groups_again(groups, os.path.abspath(options.also_python))
     if options.list:
         for group in groups:
             lane = ', idle lane' if group.idle and not options.one_lane else ''
