@@ -9,10 +9,12 @@ the link last heard, so that a test (or a loop replaying a log) drives it withou
     decision = core.poll(now_s, link_age_s)     # at each read: lost link, re-request due
     thrusts_n = core.output(now_s)              # at each write; None: 1500 us on every one
 
-and the words at the edges: `choose_mode` (script or passthrough, from what configure heard),
-`put_back_summary` (the console line of a stop) and `health` (the report's level and line).
+`Exchange` decides a request's tries (when to send it again, when no answer can come any
+more) for the link's parameter reads and commands. The words at the edges: `choose_mode`
+(script or passthrough, from what configure heard), `put_back_summary` (the console line of
+a stop) and `ArduSubCore.health` (the report's level and line).
 The link's conversations that wait for the vehicle's answers (configure, activate, restore,
-each bounded) stay in `uvms_hardware.ardusub_link`; the running path never waits.
+each bounded) are driven in `uvms_hardware.ardusub_link`; the running path never waits.
 """
 
 from __future__ import annotations
@@ -117,6 +119,37 @@ class ArduSubCore:
         if active and self.watchdog.expired(now_s):
             return WARN, 'no command: thrusters neutral'
         return (WARN, warnings[0]) if warnings else (OK, 'running')
+
+
+class Exchange:
+    """One request and its answer: sent up to ``tries`` times, ``reply_timeout_s`` apart.
+
+    Pure (the caller passes its steady time, s, and sends): each try waits
+    ``reply_timeout_s`` for the answer, and nothing is sent or waited for past ``end_s``::
+
+        exchange = Exchange(tries=3, reply_timeout_s=0.5)
+        while not answered:
+            if exchange.due(now_s): send(confirmation=exchange.sent - 1)
+            elif exchange.over(now_s): break          # no answer
+    """
+
+    def __init__(self, tries: int, reply_timeout_s: float, end_s: float = math.inf) -> None:
+        self.tries, self.reply_timeout_s, self.end_s = tries, reply_timeout_s, end_s
+        #: Tries sent so far.
+        self.sent = 0
+        self._try_end_s = -math.inf
+
+    def due(self, now_s: float) -> bool:
+        """True when the request is to be sent now (counted): the first, or a try ran out."""
+        if now_s >= self.end_s or self.sent >= self.tries or now_s < self._try_end_s:
+            return False
+        self.sent += 1
+        self._try_end_s = min(self.end_s, now_s + self.reply_timeout_s)
+        return True
+
+    def over(self, now_s: float) -> bool:
+        """True when no answer can come in time: ``end_s`` passed, or every try ran out."""
+        return now_s >= self.end_s or (self.sent >= self.tries and now_s >= self._try_end_s)
 
 
 def choose_mode(wanted: str, heard_timeout_ms: float | None, script_outputs: Sequence[int],

@@ -35,6 +35,7 @@ import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from uvms_hardware.ardusub_core import Exchange
 from uvms_hardware.ardusub_wire import (
     DISARM_SHARE,
     GCS_ID_PARAMS,
@@ -83,6 +84,23 @@ class ArduSubLink(ArduSubWire):
             time.sleep(0.002)
         return None
 
+    def _ask(self, send: Callable[[int], None], match: Callable[[Any], bool],
+             exchange: Exchange) -> Any:
+        """The answer that matches, sending the request when ``exchange`` says; None when over.
+
+        ``send(confirmation)`` gets the try's index (MAVLink's confirmation field counts them).
+        """
+        while True:
+            now_s = self.clock()
+            if exchange.due(now_s):
+                send(exchange.sent - 1)
+            elif exchange.over(now_s):
+                return None
+            for msg in self.service():
+                if match(msg):
+                    return msg
+            time.sleep(0.002)
+
     # -- configure ---------------------------------------------------------------------
     def wait_vehicle(self, timeout_s: float) -> None:
         """Wait for ArduSub's HEARTBEAT (MAV_TYPE_SUBMARINE, ArduPilot).
@@ -115,13 +133,11 @@ class ArduSubLink(ArduSubWire):
     def read_param(self, name: str) -> float | None:
         """A vehicle parameter by PARAM_REQUEST_READ; None when not answered."""
         v = self.vehicle
-        for _ in range(self.settings.retries):
-            self.conn.mav.param_request_read_send(v.system_id, v.component_id,
-                                                  name.encode(), -1)
-            msg = self._wait(lambda m: self._is_param(m, name), self.settings.reply_timeout_s)
-            if msg is not None:
-                return float(msg.param_value)
-        return None
+        msg = self._ask(lambda confirmation: self.conn.mav.param_request_read_send(
+            v.system_id, v.component_id, name.encode(), -1),
+            lambda m: self._is_param(m, name), Exchange(self.settings.retries,
+                                                       self.settings.reply_timeout_s))
+        return None if msg is None else float(msg.param_value)
 
     def set_param(self, name: str, value: float, param_type: int = MAV.MAV_PARAM_TYPE_INT16
                   ) -> float | None:
@@ -263,16 +279,11 @@ class ArduSubLink(ArduSubWire):
         waiting past ``end_s`` (local seconds).
         """
         v, padded = self.vehicle, (list(params) + [0.0] * 7)[:7]
-        for confirmation in range(self.settings.retries):
-            if self.clock() >= end_s:
-                break
-            self.conn.mav.command_long_send(v.system_id, v.component_id, command,
-                                            confirmation, *padded)
-            timeout_s = min(self.settings.reply_timeout_s, end_s - self.clock())
-            ack = self._wait(lambda m: self._is_ack(m, command), timeout_s)
-            if ack is not None:
-                return int(ack.result)
-        return None
+        ack = self._ask(lambda confirmation: self.conn.mav.command_long_send(
+            v.system_id, v.component_id, command, confirmation, *padded),
+            lambda m: self._is_ack(m, command),
+            Exchange(self.settings.retries, self.settings.reply_timeout_s, end_s))
+        return None if ack is None else int(ack.result)
 
     # -- activate / deactivate ---------------------------------------------------------
     def enable_passthrough(self) -> None:

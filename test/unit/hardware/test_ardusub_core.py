@@ -10,6 +10,7 @@ from uvms_hardware.ardusub_core import (
     SCRIPT,
     WARN,
     ArduSubCore,
+    Exchange,
     choose_mode,
     put_back_summary,
 )
@@ -110,3 +111,24 @@ def test_put_back_summary() -> None:
 def test_mode_words_are_the_wires() -> None:
     """The core's mode words are ardusub_wire's (the link's `mode`)."""
     assert (PASSTHROUGH, SCRIPT) == (ardusub_wire.PASSTHROUGH, ardusub_wire.SCRIPT)
+
+
+def test_an_exchange_sends_each_try_after_the_last_one_s_wait() -> None:
+    """Three tries 0.5 s apart; over once the third try's wait ran out."""
+    exchange = Exchange(tries=3, reply_timeout_s=0.5)
+    assert exchange.due(0.0) and exchange.sent == 1
+    assert not exchange.due(0.4) and not exchange.over(0.4)
+    assert exchange.due(0.5) and exchange.sent == 2
+    assert exchange.due(1.0) and exchange.sent == 3
+    assert not exchange.due(1.2) and not exchange.over(1.2)
+    assert not exchange.due(1.5) and exchange.over(1.5)
+
+
+def test_an_exchange_never_sends_or_waits_past_its_end() -> None:
+    """end_s cuts the tries and the last wait (a restore's budget)."""
+    exchange = Exchange(tries=3, reply_timeout_s=0.5, end_s=0.7)
+    assert exchange.due(0.0)
+    assert exchange.due(0.5) and exchange.sent == 2
+    assert not exchange.due(0.69) and exchange.over(0.7) and not exchange.due(0.7)
+    late = Exchange(tries=3, reply_timeout_s=0.5, end_s=1.0)
+    assert not late.due(1.0) and late.over(1.0) and late.sent == 0
