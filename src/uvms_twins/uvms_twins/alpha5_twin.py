@@ -33,8 +33,8 @@ them (``arm.jaw_device``), driven by the bridge or not, as the real arm has them
 simulator has no jaw joint, so unless the plant sets them (``arm.jaw`` among the drives:
 `set_joint_state`'s last value) the twin moves them itself: in Velocity mode at the setpoint,
 in Position mode toward it at the speed limit, stopped at the position limits; still in the
-other modes (Current makes no known speed: no Kt for the jaws). `jaw_state` and `jaw_command`
-read them.
+other modes (Current makes no known speed: no Kt for the jaws), on ``clock`` (default: the
+steady clock; a stand would give the plant's). `jaw_state` and `jaw_command` read them.
 
 Faults a test can set: `set_silent` (a device answers and takes nothing: a broken cable, an
 unpowered joint; the others go on), and ``drop_first_datagrams`` / `drop_datagrams` (the
@@ -49,7 +49,7 @@ import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from uvms_hardware.address import LOOPBACK
@@ -91,7 +91,8 @@ class Alpha5Twin:
     """Protocol server of an Alpha 5 (devices of ``arm.drives``) on UDP ``host:port``."""
 
     def __init__(self, arm: Alpha5Hardware, host: str = LOOPBACK, port: int = DEFAULT_PORT,
-                 model_data: bytes = b'alpha5', drop_first_datagrams: int = 0) -> None:
+                 model_data: bytes = b'alpha5', drop_first_datagrams: int = 0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
         drives = list(arm.drives)
         jaw = arm.jaw_device
         if jaw is not None and all(d.device_id != jaw.device_id for d in drives):
@@ -103,6 +104,7 @@ class Alpha5Twin:
         self._own_jaw = jaw.device_id if jaw is not None and arm.jaw is None else None
         self._plant_ids = {d.device_id for d in arm.drives}
         self._jaw_moved_s: float | None = None
+        self._clock = clock
         self.model_data = model_data
         self.splitter = rp.FrameSplitter()
         self._address = (host, port)
@@ -144,7 +146,7 @@ class Alpha5Twin:
             device = self.devices.get(rp.DeviceId.JAWS)
             if device is None:
                 return None
-            self._move_jaw(time.monotonic())
+            self._move_jaw(self._clock())
             return device.position, device.velocity
 
     def jaw_command(self) -> tuple[Mode, float] | None:
@@ -154,25 +156,26 @@ class Alpha5Twin:
             return None if device is None else (device.mode, device.setpoint)
 
     def _move_jaw(self, t_s: float) -> None:
-        """Move the jaws the twin moves itself up to ``t_s`` (monotonic s); lock held."""
+        """Move the jaws the twin moves itself up to ``t_s`` (s of ``clock``); lock held."""
         if self._own_jaw is None:
             return
         device = self.devices[self._own_jaw]
         dt_s = 0.0 if self._jaw_moved_s is None else max(0.0, t_s - self._jaw_moved_s)
         self._jaw_moved_s = t_s
         lower, upper = device.position_limits
+        speed = 0.0
         if device.mode == Mode.VELOCITY:
             speed = device.setpoint
         elif device.mode == Mode.POSITION:
             gap = device.setpoint - device.position
-            speed = math.copysign(min(device.velocity_limit, abs(gap) / dt_s), gap) if (
-                dt_s > 0.0) else 0.0
-        else:
-            speed = 0.0
+            step = abs(gap) if dt_s <= 0.0 else min(abs(gap), device.velocity_limit * dt_s)
+            device.position += math.copysign(step, gap)
+            device.velocity = 0.0 if step == abs(gap) else math.copysign(
+                device.velocity_limit, gap)
+            return
         position = min(upper, max(lower, device.position + speed * dt_s))
-        device.velocity = (position - device.position) / dt_s if dt_s > 0.0 else (
-            speed if lower < position < upper else 0.0)
-        device.position = position
+        at_stop = (position >= upper and speed > 0.0) or (position <= lower and speed < 0.0)
+        device.position, device.velocity = position, 0.0 if at_stop else speed
 
     def joint_torques_n_m(self) -> dict[str, float | None]:
         """{joint: torque (N m)} of the devices in Current mode (Kt, ratio, efficiency), else None.
@@ -213,7 +216,7 @@ class Alpha5Twin:
     def handle(self, packet: rp.Packet, t_s: float = 0.0) -> bytes:
         """Apply one packet; return the frames answering it (empty if none)."""
         with self._lock:
-            self._move_jaw(time.monotonic())
+            self._move_jaw(self._clock())
             if packet.device_id == rp.DeviceId.ALL:
                 for device in self.devices.values():
                     device.received.append((t_s, packet))
