@@ -6,7 +6,7 @@ and the graph; a quarter speed: at half speed the stand wants more than 2 cores)
 node in /uvms publishes ``pilot/vehicle_twist`` (surge, base_link_frd) and ``pilot/jaw``
 stamped with the graph's clock (/clock), and watches the simulator's ground truth
 (``odometry``), the controller's mode, the forwarded ``command/jaw`` and the bridge's
-``jaw_state``. The twin moves the jaws itself (the simulator has no jaw), in wall time.
+``jaw_state``. The twin moves the jaws itself (the simulator has no jaw), on the plant's clock.
 """
 
 from __future__ import annotations
@@ -209,4 +209,5 @@ def test_the_pilot_drives_the_stand_and_opens_the_jaw(launched: subprocess.Popen
     assert all(c == 0.0 for t, c in jaw_commands if t > hold_s[0] + 0.05)
     bridge_lines = [line for line in log.read_text().splitlines()
                     if 'alpha5_bridge' in line or 'hardware_twins' in line or 'jaw' in line]
-    assert jaw_open_m > 0.002, (jaw_open_m, jaw_states[::20], bridge_lines[-30:])
+    # 2 mm/s for 1 s of the plant's time and the 0.3 s deadman: 2.6 mm (2.6 mm measured).
+    assert jaw_open_m > 0.0015, (jaw_open_m, jaw_states[::20], bridge_lines[-30:])

@@ -127,7 +127,9 @@ class TwinsNode(Node):
         if link.kind != 'udp':
             raise AddressError(f'alpha5_bridge.connection = {link}: the Alpha 5 twin serves '
                                'UDP only (a serial bridge needs the real arm)')
-        self.arm = Alpha5Twin(arm, host=link.target, port=link.number)
+        # The jaws, which the plant does not have, move on the plant's clock as the joints do.
+        self.arm = Alpha5Twin(arm, host=link.target, port=link.number,
+                              clock=lambda: self.get_clock().now().nanoseconds * 1e-9)
         host, port = parse_host_port(str(v['netft_bridge.connection']), load_netft(robot).port)
         self.netft = NetFtTwin(host=host, port=port, rate_hz=float(v['netft_rate_hz']))
         # A device always has a state, so a twin serves only once the plant has given it one:
