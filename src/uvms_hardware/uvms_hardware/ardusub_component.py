@@ -30,7 +30,7 @@ from typing import Any
 
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.ardusub_core import ArduSubCore, choose_mode, put_back_summary
-from uvms_hardware.ardusub_link import SCRIPT, ArduSubLink, LinkSettings
+from uvms_hardware.ardusub_link import PASSTHROUGH, SCRIPT, ArduSubLink, LinkSettings
 from uvms_hardware.ardusub_restore import find_leftovers, leftovers_refusal
 from uvms_hardware.ardusub_stamps import TelemetryStamper
 from uvms_hardware.ardusub_watchdog import SCRIPT_NAME, ScriptSettings
@@ -155,6 +155,8 @@ class ArduSubComponent(HardwareComponent):
                                 float(self.values['link_timeout_s']))
         self.stamper = TelemetryStamper(device_time=device_time)
         self.warnings: list[str] = []
+        #: The vehicle's GCS id parameter and its value (configure's check).
+        self.gcs_param, self.gcs_id = '', 0
         self.telemetry_rates_hz: dict[str, float] = {}
         self.pressure_pa = math.nan
         self._imu: list[ImuSample] = []
@@ -207,7 +209,7 @@ class ArduSubComponent(HardwareComponent):
     def _choose_mode(self, link: ArduSubLink) -> None:
         """Script mode when the autopilot's watchdog script is heard (and wanted)."""
         wanted = str(self.values['autopilot_watchdog'])
-        timeout_ms = None if wanted == 'passthrough' else link.wait_watchdog_script(
+        timeout_ms = None if wanted == PASSTHROUGH else link.wait_watchdog_script(
             float(self.values['script_wait_s']))
         script = ScriptSettings.from_source() if timeout_ms is not None else ScriptSettings()
         mode = choose_mode(wanted, timeout_ms, script.outputs, link.settings.thruster_channels,
@@ -231,7 +233,7 @@ class ArduSubComponent(HardwareComponent):
     def activate(self) -> None:
         """Passthrough mode: journal and set RCIN; then arm (neutral until a command)."""
         assert self.link is not None
-        if self.link.mode == 'passthrough':
+        if self.link.mode == PASSTHROUGH:
             self.link.enable_passthrough()
         self.link.arm(True)
         self.core.activated()
