@@ -19,9 +19,9 @@ NOISE = bm.ImuNoise(1e-4, 1e-3, (1e-3, 1e-3, 1e-2))
 
 
 def settings(url: str, **changes: object) -> dict[str, object]:
-    """The node's defaults on ``url``, short waits."""
+    """The node's defaults on ``url`` (passthrough, no listening for the script)."""
     values: dict[str, object] = {spec.name: spec.default for spec in SPECS}
-    values.update(mavlink_url=url, heartbeat_timeout_s=3.0, reply_timeout_s=0.3,
+    values.update(mavlink_url=url, reply_timeout_s=0.3,
                   script_wait_s=0.0, autopilot_watchdog='passthrough')
     values.update(changes)
     return values
