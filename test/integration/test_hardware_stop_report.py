@@ -22,9 +22,10 @@ from uvms_hardware.stop_report import stop_summary
 BRIDGE_LINES = {
     'ardusub_bridge': 'put back: thrusters neutral (1500 us), disarmed, RC overrides released; '
                       'no parameter had been changed (script mode)',
+    # The jaws too: bluerov2_alpha5's hardware.yaml names them (the bridge drives them).
     'alpha5_bridge': 'put back: every joint VELOCITY 0, then its mode from before (joint_1 '
-                     'Standby, joint_2 Standby, joint_3 Standby, joint_4 Standby), each read '
-                     'back',
+                     'Standby, joint_2 Standby, joint_3 Standby, joint_4 Standby, jaw Standby), '
+                     'each read back',
     'netft_bridge': 'put back: RDT stream stopped',
     'dvl_bridge': 'put back: nothing to put back: the DVL was only listened to',
 }
