@@ -19,7 +19,7 @@ from uvms_hardware.alpha5_core import CONFIRM_TRIES, DEFAULT_CONFIRM_TIMEOUT_S, 
 from uvms_hardware.alpha5_probe import Confirmation
 from uvms_hardware.reach_protocol import Mode, PacketId, decode_frame, encode_mode
 
-from uvms_hardware import alpha5_bridge_node
+from uvms_hardware import alpha5_component
 from uvms_hardware import reach_protocol as rp
 
 #: Devices of the four arm joints, in drive order (joint_1..joint_4).
@@ -63,7 +63,7 @@ def test_activate_raising_half_way_puts_every_device_back(
     the node ends unconfigured.
     """
     set_modes(rig, MODES_BEFORE)
-    real = alpha5_bridge_node.confirm_setting
+    real = alpha5_component.confirm_setting
     calls = []
 
     def half_way(*args: Any, **kwargs: Any) -> Confirmation:
@@ -72,7 +72,7 @@ def test_activate_raising_half_way_puts_every_device_back(
             raise RuntimeError('a bug half-way through activate')
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(alpha5_bridge_node, 'confirm_setting', half_way)
+    monkeypatch.setattr(alpha5_component, 'confirm_setting', half_way)
     bridge = rig.start_bridge(autostart=False)
     assert bridge.trigger_configure() == SUCCESS
     started_s = time.monotonic()

@@ -52,6 +52,10 @@ get VELOCITY 0. Their opening (POSITION, mm on the wire) and speed go to ``jaw_s
 (sensor_msgs/JointState, the one jaw joint, m and m/s), never to ``joint_states``, whose
 arm joints the controller takes whole. activate, the put-back (their mode from before) and a
 trip treat them as every device.
+
+The device is `uvms_hardware.alpha5_component.Alpha5Component` (no ROS); this node only turns
+its lifecycle hooks into the component's, its poll timer into ``read``, the command topics
+into ``write`` and ``write_jaw``, and its state and report into messages.
 """
 
 from __future__ import annotations
@@ -67,74 +71,23 @@ from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 
-from uvms_hardware.alpha5_core import (
-    CONFIRM_TRIES,
-    DEFAULT_CONFIRM_TIMEOUT_S,
-    DEFAULT_OVERSPEED_FACTOR,
-    FEEDBACK_REQUEST,
-    PUT_BACK_BUDGET_S,
-    Alpha5Core,
-    JointSample,
-    Setting,
-    check_device,
-    describe,
-    put_back_bound_s,
+from uvms_hardware.alpha5_component import (
+    PARAMETERS,
+    Alpha5BridgeError,
+    Alpha5Component,
+    jaw_default,
 )
-from uvms_hardware.alpha5_probe import confirm_setting, probe_device
-from uvms_hardware.bridge_node import REFUSALS, BridgeNode, run_bridge
+from uvms_hardware.alpha5_core import Alpha5Core, JointSample
+from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.component import logger_log
 from uvms_hardware.device_clock import stop_requested
-from uvms_hardware.errors import HardwareError
-from uvms_hardware.hardware_config import Drive, load_alpha5
-from uvms_hardware.reach_protocol import Mode, encode_request
-from uvms_hardware.stop_report import write_stop_report
-from uvms_hardware.transport import Link, open_link, parse_connection
+from uvms_hardware.reach_protocol import Mode
+from uvms_hardware.transport import Link
 from uvms_msgs.msg import ActuatorCommand
 
+__all__ = ['PARAMETERS', 'Alpha5BridgeError', 'Alpha5BridgeNode', 'main']
+
 _LEVELS = {0: OK, 1: WARN, 2: ERROR}
-
-#: name, default, description (unit).
-PARAMETERS: tuple[tuple[str, Any, str], ...] = (
-    ('connection', 'udp:127.0.0.1:6789',
-     'udp:HOST:PORT, or serial:DEVICE[:BAUD] (8N1, 115200 unless given)'),
-    ('watchdog_timeout_s', 0.1, 'No command for this long: VELOCITY 0 to every joint (s)'),
-    ('feedback_rate_hz', 125.0,
-     'Each device is asked this often, joint_states published once per round (Hz); above '
-     '100 so that a late timer on a busy host still gives >= 100 Hz per joint'),
-    ('command_mode', 'current',
-     'current: torque as CURRENT mA (Kt, gear, efficiency); velocity: a fallback, '
-     'VELOCITY = velocity_gain_rad_s_per_n_m * torque'),
-    ('velocity_gain_rad_s_per_n_m', 0.1, 'Admittance of the velocity fallback (rad/s per N m)'),
-    ('jaw_joint', None,
-     "The jaws' joint name, driven from command/jaw; empty: the jaws are not driven. "
-     "Default: hardware.yaml's alpha5.jaw.joint_name (empty where it names none)"),
-    ('answer_timeout_s', 0.2, 'Time a device has to answer at configure (s)'),
-    ('startup_wait_s', 10.0,
-     'While no device answers at all, configure asks again for this long (s): the arm or its '
-     'link may come up after the bridge (launch order); 0 asks once'),
-    ('silent_timeout_s', 0.2,
-     'A joint without an answer this long is silent: no joint_states, diagnostics ERROR (s)'),
-    ('overspeed_factor', DEFAULT_OVERSPEED_FACTOR,
-     'A joint reported faster than this many times its URDF speed limit trips the bridge: '
-     'VELOCITY 0 to every joint, commands refused until ~/reset_trip or deactivate and '
-     'activate (>= 1)'),
-    ('confirm_timeout_s', DEFAULT_CONFIRM_TIMEOUT_S,
-     f'Wait for a MODE read-back when activate or the put-back confirms a change (s); '
-     f'{CONFIRM_TRIES} tries per change, and the whole put-back with every device silent '
-     f'must fit {PUT_BACK_BUDGET_S:g} s'),
-)
-
-
-def _jaw_default(robot_name: str) -> str:
-    """The jaws' joint name the robot's hardware file gives ('' where none or unreadable)."""
-    try:
-        jaw = load_alpha5(robot_name, None).jaw
-    except HardwareError:
-        return ''  # configure names what is wrong with the file
-    return '' if jaw is None else jaw.joint_name
-
-
-class Alpha5BridgeError(HardwareError):
-    """A parameter of the bridge is invalid, or the arm refuses configure or activate."""
 
 
 class Alpha5BridgeNode(BridgeNode):
@@ -145,57 +98,47 @@ class Alpha5BridgeNode(BridgeNode):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('alpha5_bridge', **kwargs)
-        self.values = {name: self.declare_parameter(
-            name, _jaw_default(self.robot_name) if default is None else default,
+        values = {name: self.declare_parameter(
+            name, jaw_default(self.robot_name) if default is None else default,
             ParameterDescriptor(description=text, read_only=True)).value
             for name, default, text in PARAMETERS}
-        self.core: Alpha5Core | None = None
-        self.link: Link | None = None
-        self.modes_before: dict[int, Mode] = {}
-        #: Every reason the last configure was refused, one per device problem.
-        self.configure_errors: list[str] = []
+        self.component = Alpha5Component(values, self.robot_name, self.get_name(),
+                                         clock=self.now_s, log=logger_log(self.get_logger()),
+                                         stop_requested=stop_requested)
         self._timer: Any = None
         self.start()
 
+    @property
+    def values(self) -> dict[str, Any]:
+        """The settings (parameters) of the component."""
+        return self.component.values
+
+    @property
+    def core(self) -> Alpha5Core | None:
+        """The component's protocol core (None while unconfigured)."""
+        return self.component.core
+
+    @property
+    def link(self) -> Link | None:
+        """The component's link (None while unconfigured)."""
+        return self.component.link
+
+    @property
+    def modes_before(self) -> dict[int, Mode]:
+        """Each device's mode before activate, by device id (configure read them)."""
+        return self.component.modes_before
+
+    @property
+    def configure_errors(self) -> list[str]:
+        """Every reason the last configure was refused, one per device problem."""
+        return self.component.configure_errors
+
     # -- the base's hooks ------------------------------------------------------------------
     def configure_device(self) -> None:
-        """Check parameters, open the link, check every device in turn, create the entities."""
-        self.configure_errors = []
-        try:
-            self._configure()
-        except REFUSALS as exc:
-            self.configure_errors = self.configure_errors or [str(exc)]
-            raise
-
-    def _configure(self) -> None:
-        v = self.values
-        arm = load_alpha5(self.robot_name, str(v['jaw_joint']))
-        core = Alpha5Core(arm, float(v['watchdog_timeout_s']), str(v['command_mode']),
-                          float(v['velocity_gain_rad_s_per_n_m']),
-                          float(v['silent_timeout_s']), float(v['overspeed_factor']))
-        rate_hz = float(v['feedback_rate_hz'])
-        if not rate_hz > 0.0:
-            raise Alpha5BridgeError(f'feedback_rate_hz = {rate_hz}: expected > 0')
-        bound_s = put_back_bound_s(len(arm.drives), CONFIRM_TRIES, float(v['confirm_timeout_s']))
-        if not 0.0 < bound_s <= PUT_BACK_BUDGET_S:
-            raise Alpha5BridgeError(
-                f'confirm_timeout_s = {v["confirm_timeout_s"]}: the put-back of '
-                f'{len(arm.drives)} devices could take {bound_s:g} s, more than '
-                f'{PUT_BACK_BUDGET_S:g} s (or is no time at all)')
-        self.link = link = open_link(parse_connection(str(v['connection']), arm.udp_port))
-        deadline_s = self.now_s() + float(v['startup_wait_s'])
-        while True:
-            self.modes_before.clear()
-            errors = [e for drive in arm.drives for e in self._check(link, core, drive)]
-            answered = all(d.device_id in self.modes_before for d in arm.drives)
-            if answered or self.now_s() >= deadline_s or stop_requested():
-                break
-            self.get_logger().info(f'not every device answers on {v["connection"]} yet: '
-                                   'asking again', throttle_duration_sec=2.0)
-        if errors:
-            self.configure_errors = errors
-            raise Alpha5BridgeError('; '.join(errors))
-        self.core = core
+        """The component's configure; then the topics, ~/reset_trip and the poll timer."""
+        self.component.configure()
+        core = self.component.core
+        assert core is not None
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._joint_pub = self.own(self.destroy_publisher,
                                    self.create_publisher(JointState, 'joint_states', qos))
@@ -203,103 +146,28 @@ class Alpha5BridgeNode(BridgeNode):
             ActuatorCommand, 'command/actuators', self._on_command, qos))
         self.own(self.destroy_service, self.create_service(Trigger, '~/reset_trip',
                                                            self._on_reset_trip))
-        if arm.jaw is not None:
+        if core.arm.jaw is not None:
             self._jaw_pub = self.own(self.destroy_publisher,
                                      self.create_publisher(JointState, 'jaw_state', qos))
             self.own(self.destroy_subscription, self.create_subscription(
                 Float64, 'command/jaw', self._on_jaw_command, qos))
-        self._timer = self.device_timer(core.poll_period_s(rate_hz), self._on_tick)
+        self._timer = self.device_timer(self.component.poll_period_s(), self._on_tick)
         self._timer.cancel()  # polls from activate to the put-back only
+        drives = core.arm.drives
         self.get_logger().info(
-            f'{len(arm.drives)} devices checked on {v["connection"]}: ' + ', '.join(
-                f'{d.joint_name}={d.device_id:#04x}' for d in arm.drives)
-            + (' (from command/jaw, to jaw_state)' if arm.jaw else
+            f'{len(drives)} devices checked on {self.values["connection"]}: ' + ', '.join(
+                f'{d.joint_name}={d.device_id:#04x}' for d in drives)
+            + (' (from command/jaw, to jaw_state)' if core.arm.jaw else
                '; the jaws (0x01) are not driven'))
 
-    def _check(self, link: Link, core: Alpha5Core, drive: Drive) -> list[str]:
-        timeout_s = float(self.values['answer_timeout_s'])
-        answers, mode = probe_device(link, core.splitter, drive, timeout_s)
-        if mode is not None:
-            self.modes_before[drive.device_id] = mode
-        return check_device(drive, answers, timeout_s)
-
     def activate_device(self) -> None:
-        """MODE Standby to every device, each read back; then poll and accept commands.
-
-        Raises:
-            Alpha5BridgeError: A device did not confirm Standby (named); the base then puts
-                back every device.
-        """
-        assert self.core is not None and self.link is not None
-        self.link.read()  # answers still in flight from configure
-        problems = self._confirm(self.core.standby_settings())
-        if problems:
-            raise Alpha5BridgeError('; '.join(problems))
-        self.core.stop_driving()  # nothing is driven until the first command
-        fast = self._fast_joints_now()
-        if fast:
-            raise Alpha5BridgeError(
-                f'{", ".join(fast)}: over {self.core.overspeed_factor:g} x the speed limit, '
-                'the bridge would trip at once; wait until the arm is still (after a trip: '
-                'docs/hardware.md, "Recovering the arm after a trip")')
+        """The component's activate (Standby confirmed, no joint over the trip speed); poll."""
+        self.component.activate()
         self._timer.reset()
 
-    def _fast_joints_now(self) -> list[str]:
-        """Each device asked its speed now: the joints over the trip speed (activate)."""
-        assert self.core is not None and self.link is not None
-        timeout_s = float(self.values['confirm_timeout_s'])
-        for drive in self.core.drives:
-            self.link.send(encode_request(drive.device_id, FEEDBACK_REQUEST))
-            deadline_s = self.now_s() + timeout_s
-            before = self.core.feedback[drive.device_id].velocity_s
-            while (self.core.feedback[drive.device_id].velocity_s == before
-                   and self.now_s() < deadline_s):
-                self.link.wait(deadline_s - self.now_s())
-                self.core.receive(self.link.read(), self.now_s())
-        fast = self.core.fast_joints()
-        self.core.stop_driving()  # a trip receive() just found is said by the refusal
-        return fast
-
-    def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
-        """``~/reset_trip``: take commands again once no joint moves over the trip speed."""
-        core = self.core
-        if core is None or not self.device_active:
-            response.success, response.message = False, 'not active: activate instead'
-            return response
-        tripped = core.overspeed
-        if not tripped:
-            response.success, response.message = True, 'not tripped: nothing to clear'
-            return response
-        why = core.reset_trip()
-        response.success = not why
-        response.message = why or f'trip cleared ({tripped}); commands are taken again'
-        if response.success:
-            self.get_logger().info(f'reset_trip: {response.message}')
-        else:
-            self.get_logger().warning(f'reset_trip refused: {response.message}')
-        self.update_diagnostics()
-        return response
-
     def put_device_back(self) -> list[str]:
-        """VELOCITY 0 to every device at once, then each VELOCITY 0 and resting mode confirmed.
-
-        Returns:
-            One line per change a device did not confirm, naming it.
-        """
-        core, link = self.core, self.link
-        problems: list[str] = []
-        if core is not None and link is not None:
-            link.send(core.neutral_frames())  # every joint stops first, whatever follows
-            settings = core.restore_settings(self.modes_before)
-            problems = self._confirm(settings)
-            core.stop_driving()
-            rest = ', '.join(f'{s.drive.joint_name} {s.label.removeprefix("MODE ")}'
-                             for s in settings if s.label.startswith('MODE'))
-            done = (f'every joint VELOCITY 0, then its mode from before ({rest}), '
-                    + ('each read back' if not problems else
-                       f'{len(problems)} of {len(settings)} changes NOT confirmed'))
-            self.get_logger().info(f'put back: {done}')
-            write_stop_report(self.get_name(), done, problems)
+        """The component's put-back; the poll stops."""
+        problems = self.component.put_back()
         if self._timer is not None:
             with contextlib.suppress(Exception):  # a timer gone with its context polls no more
                 self._timer.cancel()
@@ -307,71 +175,39 @@ class Alpha5BridgeNode(BridgeNode):
 
     def release_device(self) -> None:
         """Close the link."""
-        if self.link is not None:
-            self.link.close()
-        self.link, self.core, self._timer = None, None, None
+        self.component.release()
+        self._timer = None
 
     def device_report(self) -> Report:
-        """Bad frames, silent joints, HARDWARE_STATUS, watchdog; OK while not driving."""
-        if self.core is None:
-            return Report(WARN, 'not configured', {})
-        if not self.device_active:
-            return Report(OK, 'not driving', {})
-        level, message, values = self.core.report(self.now_s())
-        return Report(_LEVELS[level], message, values)
+        """The component's report."""
+        report = self.component.report(self.now_s())
+        return Report(_LEVELS[report.level], report.message, dict(report.values))
 
     # -- the period ------------------------------------------------------------------------
-    def _confirm(self, settings: list[Setting]) -> list[str]:
-        """Each setting sent and read back (``confirm_setting``); what did not confirm."""
-        assert self.core is not None and self.link is not None
-        timeout_s = float(self.values['confirm_timeout_s'])
-        problems = []
-        for setting in settings:
-            result = confirm_setting(self.link, self.core.splitter, setting, CONFIRM_TRIES,
-                                     timeout_s)
-            if not result.confirmed:
-                seen = ('no MODE answer' if result.mode is None
-                        else f'MODE reads {result.mode.name.capitalize()}')
-                problems.append(f'{describe(setting.drive)}: {setting.label} not confirmed '
-                                f'after {result.tries} tries of {timeout_s:g} s ({seen})')
-        return problems
+    def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        """``~/reset_trip``: take commands again once no joint moves over the trip speed."""
+        response.success, response.message = self.component.reset_trip()
+        if response.success:
+            self.get_logger().info(f'reset_trip: {response.message}')
+        else:
+            self.get_logger().warning(f'reset_trip refused: {response.message}')
+        self.update_diagnostics()
+        return response
 
     def _on_command(self, msg: ActuatorCommand) -> None:
-        if not self.device_active or self.core is None or self.link is None:
-            return
-        frames = self.core.command(self.now_s(), list(msg.joint_names), list(msg.joint_torques))
-        if not frames:
-            self.get_logger().error(f'command refused: {self.core.last_rejection}',
-                                    throttle_duration_sec=1.0)
-        self.link.send(frames)
+        self.component.write(self.now_s(), (msg.joint_names, msg.joint_torques))
 
     def _on_jaw_command(self, msg: Float64) -> None:
-        if not self.device_active or self.core is None or self.link is None:
-            return
-        frames, refused = self.core.jaw_command(self.now_s(), float(msg.data))
-        if refused:
-            self.get_logger().error(f'jaw command refused: {refused}', throttle_duration_sec=1.0)
-        self.link.send(frames)
+        self.component.write_jaw(self.now_s(), float(msg.data))
 
     def _on_tick(self) -> None:
-        core, link = self.core, self.link
-        if core is None or link is None or not self.device_active:
-            return
         t_s = self.now_s()
-        tripped = core.overspeed
-        core.receive(link.read(), t_s)
-        if core.overspeed and not tripped:
-            self.get_logger().error(f'tripped: {core.overspeed}: VELOCITY 0 to every joint; '
-                                    'commands refused until `uvms hardware reset-trip` '
-                                    '(docs/hardware.md, "Recovering the arm after a trip")')
-        sample = core.next_joint_state(t_s)  # as soon as every joint answered again
-        if sample is not None:
-            self._joint_pub.publish(self._joint_state(sample, t_s))
-        jaw = core.next_jaw_state(t_s)
-        if jaw is not None:
-            self._jaw_pub.publish(self._joint_state(jaw, t_s))
-        frames, _ = core.tick(t_s)
-        link.send(frames)
+        self.component.read(t_s)
+        state = self.component.state()
+        if state.joints is not None:
+            self._joint_pub.publish(self._joint_state(state.joints, t_s))
+        if state.jaw is not None:
+            self._jaw_pub.publish(self._joint_state(state.jaw, t_s))
 
     def _joint_state(self, sample: JointSample, t_s: float) -> JointState:
         """The message of a sample, stamped with its oldest answer's arrival (node clock)."""

@@ -1,0 +1,363 @@
+"""The Reach Alpha 5 as a hardware component: no ROS, no waiting per period.
+
+What the ``alpha5_bridge`` node did with its device, behind `HardwareComponent`'s lifecycle
+(``uvms_hardware.component``), so that a bridge node or one real-time loop runs it:
+
+- configure asks each device in turn (never a broadcast: answers collide on RS-485) for
+  MODEL, MODE and its three limits (``uvms_hardware.alpha5_probe``, each request tried
+  ``CONFIRM_TRIES`` times), asking again for ``startup_wait_s`` while not every device
+  answers; refused, naming the joint and both values, where a limit differs from the URDF's
+  (position, speed) or hardware.yaml's (current), or a device stays silent.
+- activate sends MODE Standby to every device, each read back; refused, naming the device,
+  where one does not confirm, or where a joint already moves over the trip speed.
+- `read` drains the link (answers, HARDWARE_STATUS), trips on an overspeed, makes the round's
+  joint state (and the jaws') once every driven joint answered again, and sends what this
+  period asks of the wire: the next device's POSITION and VELOCITY request and, after
+  ``watchdog_timeout_s`` without a command, VELOCITY 0 to every joint (``Alpha5Core.tick``).
+- `write` turns joint torques into CURRENT mA per joint (or the velocity fallback);
+  `write_jaw` the jaws' speed into VELOCITY (mm/s on the wire).
+- put_back: VELOCITY 0 to every device at once, then device by device, each read back,
+  VELOCITY 0 and the mode from before activate; what is not confirmed is a problem line.
+
+``now_s`` is the steady clock (s) of the wire's timeouts.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from uvms_hardware.alpha5_core import (
+    CONFIRM_TRIES,
+    DEFAULT_CONFIRM_TIMEOUT_S,
+    DEFAULT_OVERSPEED_FACTOR,
+    FEEDBACK_REQUEST,
+    PUT_BACK_BUDGET_S,
+    Alpha5Core,
+    JointSample,
+    Setting,
+    check_device,
+    describe,
+    put_back_bound_s,
+)
+from uvms_hardware.alpha5_probe import confirm_setting, probe_device
+from uvms_hardware.component import (
+    OK,
+    WARN,
+    ComponentReport,
+    HardwareComponent,
+    LogFn,
+    Throttle,
+    python_log,
+)
+from uvms_hardware.errors import HardwareError
+from uvms_hardware.hardware_config import Drive, load_alpha5
+from uvms_hardware.reach_protocol import Mode, encode_request
+from uvms_hardware.stop_report import write_stop_report
+from uvms_hardware.transport import Link, open_link, parse_connection
+
+__all__ = ['PARAMETERS', 'Alpha5BridgeError', 'Alpha5Component', 'Alpha5State',
+           'jaw_default']
+
+#: The settings (the bridge node's parameters): name, default, description (unit). The
+#: jaw_joint default (None) is the robot's hardware file's (`jaw_default`).
+PARAMETERS: tuple[tuple[str, Any, str], ...] = (
+    ('connection', 'udp:127.0.0.1:6789',
+     'udp:HOST:PORT, or serial:DEVICE[:BAUD] (8N1, 115200 unless given)'),
+    ('watchdog_timeout_s', 0.1, 'No command for this long: VELOCITY 0 to every joint (s)'),
+    ('feedback_rate_hz', 125.0,
+     'Each device is asked this often, joint_states published once per round (Hz); above '
+     '100 so that a late timer on a busy host still gives >= 100 Hz per joint'),
+    ('command_mode', 'current',
+     'current: torque as CURRENT mA (Kt, gear, efficiency); velocity: a fallback, '
+     'VELOCITY = velocity_gain_rad_s_per_n_m * torque'),
+    ('velocity_gain_rad_s_per_n_m', 0.1, 'Admittance of the velocity fallback (rad/s per N m)'),
+    ('jaw_joint', None,
+     "The jaws' joint name, driven from command/jaw; empty: the jaws are not driven. "
+     "Default: hardware.yaml's alpha5.jaw.joint_name (empty where it names none)"),
+    ('answer_timeout_s', 0.2, 'Time a device has to answer at configure (s)'),
+    ('startup_wait_s', 10.0,
+     'While no device answers at all, configure asks again for this long (s): the arm or its '
+     'link may come up after the bridge (launch order); 0 asks once'),
+    ('silent_timeout_s', 0.2,
+     'A joint without an answer this long is silent: no joint_states, diagnostics ERROR (s)'),
+    ('overspeed_factor', DEFAULT_OVERSPEED_FACTOR,
+     'A joint reported faster than this many times its URDF speed limit trips the bridge: '
+     'VELOCITY 0 to every joint, commands refused until ~/reset_trip or deactivate and '
+     'activate (>= 1)'),
+    ('confirm_timeout_s', DEFAULT_CONFIRM_TIMEOUT_S,
+     f'Wait for a MODE read-back when activate or the put-back confirms a change (s); '
+     f'{CONFIRM_TRIES} tries per change, and the whole put-back with every device silent '
+     f'must fit {PUT_BACK_BUDGET_S:g} s'),
+)
+
+
+def jaw_default(robot_name: str) -> str:
+    """The jaws' joint name the robot's hardware file gives ('' where none or unreadable)."""
+    try:
+        jaw = load_alpha5(robot_name, None).jaw
+    except HardwareError:
+        return ''  # configure names what is wrong with the file
+    return '' if jaw is None else jaw.joint_name
+
+
+class Alpha5BridgeError(HardwareError):
+    """A parameter of the bridge is invalid, or the arm refuses configure or activate."""
+
+
+@dataclass(frozen=True)
+class Alpha5State:
+    """What the last `read` gave.
+
+    Attributes:
+        joints: The arm joints' round, once every driven joint answered again (None: not
+            yet); its ``oldest_answer_s`` on the steady clock.
+        jaw: The jaws' opening (m) and speed (m/s), as a one-joint sample (None: no new one).
+        tripped: The overspeed trip, when this read tripped ('' otherwise).
+    """
+
+    joints: JointSample | None = None
+    jaw: JointSample | None = None
+    tripped: str = ''
+
+
+class Alpha5Component(HardwareComponent):
+    """Reach Alpha 5: its devices checked, driven in Current mode, put back as found."""
+
+    def __init__(self, values: Mapping[str, Any], robot_name: str, name: str = 'alpha5_bridge',
+                 clock: Callable[[], float] | None = None, log: LogFn = python_log,
+                 stop_requested: Callable[[], bool] = lambda: False) -> None:
+        """Settings as `PARAMETERS` names them, for robot ``robot_name``."""
+        super().__init__()
+        self.values = dict(values)
+        self.robot_name = robot_name
+        self.name = name
+        self.clock = clock or time.monotonic
+        self.log = log
+        self.stop_requested = stop_requested
+        self.core: Alpha5Core | None = None
+        self.link: Link | None = None
+        self.modes_before: dict[int, Mode] = {}
+        #: Every reason the last configure was refused, one per device problem.
+        self.configure_errors: list[str] = []
+        self.feedback_rate_hz = 0.0
+        self._state = Alpha5State()
+        self._refused = Throttle(1.0)
+        self._jaw_refused = Throttle(1.0)
+        self._asking = Throttle(2.0)
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def configure(self) -> None:
+        """Check the settings, open the link, check every device in turn.
+
+        Raises:
+            Alpha5BridgeError: A bad setting, or a device that is silent or whose limits
+                differ (every device's problems in ``configure_errors``).
+            HardwareError, ValueError, OSError: The hardware file, a setting, the link.
+        """
+        self.configure_errors = []
+        try:
+            self._configure()
+        except (HardwareError, ValueError, OSError) as exc:
+            self.configure_errors = self.configure_errors or [str(exc)]
+            raise
+
+    def _configure(self) -> None:
+        v = self.values
+        arm = load_alpha5(self.robot_name, str(v['jaw_joint']))
+        core = Alpha5Core(arm, float(v['watchdog_timeout_s']), str(v['command_mode']),
+                          float(v['velocity_gain_rad_s_per_n_m']),
+                          float(v['silent_timeout_s']), float(v['overspeed_factor']))
+        rate_hz = float(v['feedback_rate_hz'])
+        if not rate_hz > 0.0:
+            raise Alpha5BridgeError(f'feedback_rate_hz = {rate_hz}: expected > 0')
+        bound_s = put_back_bound_s(len(arm.drives), CONFIRM_TRIES, float(v['confirm_timeout_s']))
+        if not 0.0 < bound_s <= PUT_BACK_BUDGET_S:
+            raise Alpha5BridgeError(
+                f'confirm_timeout_s = {v["confirm_timeout_s"]}: the put-back of '
+                f'{len(arm.drives)} devices could take {bound_s:g} s, more than '
+                f'{PUT_BACK_BUDGET_S:g} s (or is no time at all)')
+        self.configured = True
+        self.link = link = open_link(parse_connection(str(v['connection']), arm.udp_port))
+        deadline_s = self.clock() + float(v['startup_wait_s'])
+        while True:
+            self.modes_before.clear()
+            errors = [e for drive in arm.drives for e in self._check(link, core, drive)]
+            answered = all(d.device_id in self.modes_before for d in arm.drives)
+            if answered or self.clock() >= deadline_s or self.stop_requested():
+                break
+            if self._asking(self.clock()):
+                self.log('info', f'not every device answers on {v["connection"]} yet: '
+                         'asking again')
+        if errors:
+            self.configure_errors = errors
+            raise Alpha5BridgeError('; '.join(errors))
+        self.core = core
+        self.feedback_rate_hz = rate_hz
+
+    def _check(self, link: Link, core: Alpha5Core, drive: Drive) -> list[str]:
+        timeout_s = float(self.values['answer_timeout_s'])
+        answers, mode = probe_device(link, core.splitter, drive, timeout_s)
+        if mode is not None:
+            self.modes_before[drive.device_id] = mode
+        return check_device(drive, answers, timeout_s)
+
+    def activate(self) -> None:
+        """MODE Standby to every device, each read back; then commands are taken.
+
+        Raises:
+            Alpha5BridgeError: A device did not confirm Standby, or a joint moves over the
+                trip speed (named); the runner then puts back every device.
+        """
+        assert self.core is not None and self.link is not None
+        self.link.read()  # answers still in flight from configure
+        problems = self._confirm(self.core.standby_settings())
+        if problems:
+            raise Alpha5BridgeError('; '.join(problems))
+        self.core.stop_driving()  # nothing is driven until the first command
+        fast = self._fast_joints_now()
+        if fast:
+            raise Alpha5BridgeError(
+                f'{", ".join(fast)}: over {self.core.overspeed_factor:g} x the speed limit, '
+                'the bridge would trip at once; wait until the arm is still (after a trip: '
+                'docs/hardware.md, "Recovering the arm after a trip")')
+        self._state = Alpha5State()
+        super().activate()
+
+    def _fast_joints_now(self) -> list[str]:
+        """Each device asked its speed now: the joints over the trip speed (activate)."""
+        assert self.core is not None and self.link is not None
+        timeout_s = float(self.values['confirm_timeout_s'])
+        for drive in self.core.drives:
+            self.link.send(encode_request(drive.device_id, FEEDBACK_REQUEST))
+            deadline_s = self.clock() + timeout_s
+            before = self.core.feedback[drive.device_id].velocity_s
+            while (self.core.feedback[drive.device_id].velocity_s == before
+                   and self.clock() < deadline_s):
+                self.link.wait(deadline_s - self.clock())
+                self.core.receive(self.link.read(), self.clock())
+        fast = self.core.fast_joints()
+        self.core.stop_driving()  # a trip receive() just found is said by the refusal
+        return fast
+
+    def put_back(self) -> list[str]:
+        """VELOCITY 0 to every device at once, then each VELOCITY 0 and resting mode confirmed.
+
+        Returns:
+            One line per change a device did not confirm, naming it.
+        """
+        self.active = False
+        core, link = self.core, self.link
+        problems: list[str] = []
+        if core is not None and link is not None:
+            link.send(core.neutral_frames())  # every joint stops first, whatever follows
+            settings = core.restore_settings(self.modes_before)
+            problems = self._confirm(settings)
+            core.stop_driving()
+            rest = ', '.join(f'{s.drive.joint_name} {s.label.removeprefix("MODE ")}'
+                             for s in settings if s.label.startswith('MODE'))
+            done = (f'every joint VELOCITY 0, then its mode from before ({rest}), '
+                    + ('each read back' if not problems else
+                       f'{len(problems)} of {len(settings)} changes NOT confirmed'))
+            self.log('info', f'put back: {done}')
+            write_stop_report(self.name, done, problems)
+        return problems
+
+    def release(self) -> None:
+        """Close the link."""
+        if self.link is not None:
+            self.link.close()
+        self.link, self.core = None, None
+        super().release()
+
+    def _confirm(self, settings: Sequence[Setting]) -> list[str]:
+        """Each setting sent and read back (``confirm_setting``); what did not confirm."""
+        assert self.core is not None and self.link is not None
+        timeout_s = float(self.values['confirm_timeout_s'])
+        problems = []
+        for setting in settings:
+            result = confirm_setting(self.link, self.core.splitter, setting, CONFIRM_TRIES,
+                                     timeout_s)
+            if not result.confirmed:
+                seen = ('no MODE answer' if result.mode is None
+                        else f'MODE reads {result.mode.name.capitalize()}')
+                problems.append(f'{describe(setting.drive)}: {setting.label} not confirmed '
+                                f'after {result.tries} tries of {timeout_s:g} s ({seen})')
+        return problems
+
+    # -- the loop ----------------------------------------------------------------------------
+    def poll_period_s(self) -> float:
+        """How often `read` should run (s): one device asked per call, each at the rate."""
+        assert self.core is not None
+        return self.core.poll_period_s(self.feedback_rate_hz)
+
+    def read(self, now_s: float) -> None:
+        """Answers taken, a trip found, the round's state made; this period's requests sent.
+
+        Never waits. Only while active (nothing is asked of an arm not driven).
+        """
+        core, link = self.core, self.link
+        self._state = Alpha5State()
+        if core is None or link is None or not self.active:
+            return
+        tripped = core.overspeed
+        core.receive(link.read(), now_s)
+        newly = core.overspeed if core.overspeed and not tripped else ''
+        if newly:
+            self.log('error', f'tripped: {newly}: VELOCITY 0 to every joint; commands refused '
+                     'until `uvms hardware reset-trip` (docs/hardware.md, "Recovering the arm '
+                     'after a trip")')
+        self._state = Alpha5State(core.next_joint_state(now_s), core.next_jaw_state(now_s),
+                                  newly)
+        frames, _ = core.tick(now_s)
+        link.send(frames)
+
+    def write(self, now_s: float, commands: Any = None) -> None:
+        """Joint torques (N m) as ``(joint names, torques)`` to CURRENT (or VELOCITY) frames.
+
+        Refused (one error line a second, nothing sent) while tripped or for a bad command.
+        """
+        core, link = self.core, self.link
+        if commands is None or core is None or link is None or not self.active:
+            return
+        names, torques = commands
+        frames = core.command(now_s, list(names), list(torques))
+        if not frames and self._refused(now_s):
+            self.log('error', f'command refused: {core.last_rejection}')
+        link.send(frames)
+
+    def write_jaw(self, now_s: float, speed_m_s: float) -> None:
+        """The jaws' opening speed (m/s, + opens) to VELOCITY; refused while tripped."""
+        core, link = self.core, self.link
+        if core is None or link is None or not self.active:
+            return
+        frames, refused = core.jaw_command(now_s, float(speed_m_s))
+        if refused and self._jaw_refused(now_s):
+            self.log('error', f'jaw command refused: {refused}')
+        link.send(frames)
+
+    def reset_trip(self) -> tuple[bool, str]:
+        """Take commands again once no joint moves over the trip speed: (done, what was said)."""
+        core = self.core
+        if core is None or not self.active:
+            return False, 'not active: activate instead'
+        tripped = core.overspeed
+        if not tripped:
+            return True, 'not tripped: nothing to clear'
+        why = core.reset_trip()
+        return not why, why or f'trip cleared ({tripped}); commands are taken again'
+
+    def state(self) -> Alpha5State:
+        """What the last `read` gave (a round only when every joint answered afresh)."""
+        return self._state
+
+    def report(self, now_s: float) -> ComponentReport:
+        """Bad frames, silent joints, HARDWARE_STATUS, watchdog; OK while not driving."""
+        if self.core is None:
+            return ComponentReport(WARN, 'not configured', {})
+        if not self.active:
+            return ComponentReport(OK, 'not driving', {})
+        level, message, values = self.core.report(now_s)
+        return ComponentReport(level, message, values)
