@@ -15,7 +15,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 from test_alpha5_bridge import FAILURE, SUCCESS, Rig
 from uvms_common.lifecycle import state_label
-from uvms_hardware.alpha5_core import CONFIRM_TRIES, DEFAULT_CONFIRM_TIMEOUT_S, put_back_bound_s
+from uvms_hardware.alpha5_checks import CONFIRM_TRIES, DEFAULT_CONFIRM_TIMEOUT_S, put_back_bound_s
 from uvms_hardware.alpha5_probe import Confirmation
 from uvms_hardware.reach_protocol import Mode, PacketId, decode_frame, encode_mode
 

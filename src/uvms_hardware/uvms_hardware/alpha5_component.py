@@ -29,18 +29,20 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from uvms_hardware.alpha5_core import (
+from uvms_hardware.alpha5_checks import (
     CONFIRM_TRIES,
     DEFAULT_CONFIRM_TIMEOUT_S,
-    DEFAULT_OVERSPEED_FACTOR,
-    FEEDBACK_REQUEST,
     PUT_BACK_BUDGET_S,
-    Alpha5Core,
-    JointSample,
     Setting,
     check_device,
     describe,
     put_back_bound_s,
+)
+from uvms_hardware.alpha5_core import (
+    DEFAULT_OVERSPEED_FACTOR,
+    FEEDBACK_REQUEST,
+    Alpha5Core,
+    JointSample,
 )
 from uvms_hardware.alpha5_probe import confirm_setting, probe_device
 from uvms_hardware.component import (

@@ -1,9 +1,9 @@
 """The Alpha 5 bridge's core: frames out, packets in, joint state and health; no ROS, no I/O.
 
-The node (``alpha5_bridge_node``) owns the link and the clock and calls, per period::
+The component (``alpha5_component``) owns the link and the clock and calls, per period
+(configure's checks of each device are ``alpha5_checks``)::
 
     core = Alpha5Core(load_alpha5('bluerov2_alpha5'), watchdog_timeout_s=0.1)
-    errors = core.check_device(drive, answers)      # configure: limits and MODEL, per device
     link.send(core.command(t_s, names, torques))    # on each ActuatorCommand
     core.receive(link.read(), t_s)                  # every period
     frames, round_done = core.tick(t_s)             # next feedback REQUEST, watchdog neutral
@@ -46,20 +46,14 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from uvms_hardware import reach_protocol as rp
-from uvms_hardware.errors import ProtocolError
+from uvms_hardware.alpha5_checks import Setting, describe, unit_of
 from uvms_hardware.hardware_config import Alpha5Hardware, Drive
 from uvms_hardware.reach_protocol import Mode, PacketId
 from uvms_hardware.watchdog import CommandWatchdog
 
 #: Command modes of the bridge.
 COMMAND_MODES = ('current', 'velocity')
-#: Packets asked of every device at configure.
-IDENTITY_REQUEST = (PacketId.MODEL, PacketId.MODE)
-LIMITS_REQUEST = (PacketId.POSITION_LIMITS, PacketId.VELOCITY_LIMITS, PacketId.CURRENT_LIMITS)
 FEEDBACK_REQUEST = (PacketId.POSITION, PacketId.VELOCITY)
-#: Largest difference between a device's limit and ours that still agrees (float32 and the
-#: URDF's two decimals; rad, m/s, mA alike).
-LIMIT_TOLERANCE = 1e-3
 #: While the watchdog holds, VELOCITY 0 is sent again this often (s).
 HOLD_RESEND_S = 0.1
 #: A HARDWARE_STATUS error is reported this long after its last packet (s): it comes at 1 Hz.
@@ -75,91 +69,9 @@ DEFAULT_OVERSPEED_FACTOR = 1.5
 RESTING_MODES = (Mode.STANDBY, Mode.DISABLE, Mode.PASSIVE)
 #: Modes that ignore control packets (the document): a VELOCITY 0 has nothing to stop there.
 IGNORING_MODES = frozenset({Mode.DISABLE, Mode.PASSIVE})
-#: Sends of one confirmed setting before it counts as not confirmed.
-CONFIRM_TRIES = 3
-#: Wait for the MODE answer of one try (s). The bus needs about 2 ms for a REQUEST and its
-#: answer at 115200 baud (robots/bluerov2_heavy_alpha5.md); the device's own answer time is
-#: not documented: 30 ms is 15 times the wire's and still fits the put-back in 0.9 s.
-DEFAULT_CONFIRM_TIMEOUT_S = 0.03
-#: The longest a put-back may take with every device silent (s): well under the 2 s a
-#: launcher's stop leaves a bridge (the other bridges share it).
-PUT_BACK_BUDGET_S = 1.0
 #: The jaws are asked their state once every this many rounds of the joints (25 Hz at the
 #: default 125 Hz): a pilot watches them open, no control loop closes on them.
 JAW_POLL_ROUNDS = 5
-
-
-def describe(drive: Drive) -> str:
-    """``joint_2 (device 0x04, D)``: how messages name a joint."""
-    return f'{drive.joint_name} (device {drive.device_id:#04x}, {drive.axis})'
-
-
-def _unit(drive: Drive, packet_id: int) -> str:
-    if packet_id == PacketId.CURRENT_LIMITS:
-        return 'mA'
-    jaw = rp.is_length_packet(drive.device_id, PacketId.POSITION)
-    if packet_id == PacketId.VELOCITY_LIMITS:
-        return 'm/s' if jaw else 'rad/s'
-    return 'm' if jaw else 'rad'
-
-
-def expected_limits(drive: Drive) -> dict[int, tuple[float, float]]:
-    """Our [max, min] per limits packet: URDF position and speed, hardware.yaml current."""
-    return {PacketId.POSITION_LIMITS: (drive.position_limits[1], drive.position_limits[0]),
-            PacketId.VELOCITY_LIMITS: (drive.velocity_limit, -drive.velocity_limit),
-            PacketId.CURRENT_LIMITS: (drive.current_limit_ma, -drive.current_limit_ma)}
-
-
-def check_device(drive: Drive, answers: Mapping[int, rp.Packet],
-                 timeout_s: float) -> list[str]:
-    """What is wrong with a device given its answers to the configure requests (empty: fine).
-
-    Each message names the joint, and for a limit both values: the device's and ours.
-    """
-    name = describe(drive)
-    if PacketId.MODEL not in answers:
-        return [f'{name}: silent: no MODEL answer within {timeout_s:g} s']
-    errors = []
-    for packet_id, ours in expected_limits(drive).items():
-        label = PacketId(packet_id).name
-        packet = answers.get(packet_id)
-        if packet is None:
-            errors.append(f'{name}: no {label} answer within {timeout_s:g} s')
-            continue
-        try:
-            values = rp.packet_values_si(packet)
-        except ProtocolError as exc:
-            errors.append(f'{name}: {label}: {exc}')
-            continue
-        unit = _unit(drive, packet_id)
-        if len(values) != 2 or any(abs(a - b) > LIMIT_TOLERANCE for a, b in zip(
-                values, ours, strict=True)):
-            shown = ', '.join(f'{v:.4g}' for v in values)
-            errors.append(f'{name}: {label} [max, min] on the device [{shown}] {unit}, '
-                          f'expected [{ours[0]:.4g}, {ours[1]:.4g}] {unit} (URDF / hardware.yaml)')
-    return errors
-
-
-@dataclass(frozen=True)
-class Setting:
-    """A change of one device that is confirmed by reading its MODE back.
-
-    Attributes:
-        drive: The device.
-        frame: What to send (again on each try).
-        accepted: The MODE values that confirm it.
-        label: How messages name it (``MODE Standby``, ``VELOCITY 0``).
-    """
-
-    drive: Drive
-    frame: bytes
-    accepted: frozenset[Mode]
-    label: str
-
-
-def put_back_bound_s(devices: int, tries: int, timeout_s: float) -> float:
-    """The longest a put-back takes (s): two settings per device, each ``tries`` waits."""
-    return 2 * devices * tries * timeout_s
 
 
 @dataclass
@@ -352,7 +264,7 @@ class Alpha5Core:
         for d in self.drives:
             speed = self.feedback[d.device_id].velocity
             if abs(speed) > self.overspeed_factor * d.velocity_limit:
-                unit = _unit(d, PacketId.VELOCITY_LIMITS)
+                unit = unit_of(d, PacketId.VELOCITY_LIMITS)
                 out.append(f'{describe(d)} at {speed:.3g} {unit}')
         return out
 
@@ -380,7 +292,7 @@ class Alpha5Core:
         limit = self.overspeed_factor * drive.velocity_limit
         if self.overspeed or not abs(velocity) > limit:  # NaN is no speed: not published
             return
-        unit = _unit(drive, PacketId.VELOCITY_LIMITS)
+        unit = unit_of(drive, PacketId.VELOCITY_LIMITS)
         self.overspeed = (f'{describe(drive)} at {velocity:.3g} {unit}, over '
                           f'{self.overspeed_factor:g} x its limit {drive.velocity_limit:g} {unit}')
         self._driving, self._holding, self._last_hold_s = False, True, -math.inf

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 from uvms_hardware import reach_protocol as rp
-from uvms_hardware.alpha5_core import (
+from uvms_hardware.alpha5_checks import (
     CONFIRM_TRIES,
     DEFAULT_CONFIRM_TIMEOUT_S,
     IDENTITY_REQUEST,

@@ -15,13 +15,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from uvms_hardware import reach_protocol as rp
-from uvms_hardware.alpha5_core import (
-    DEFAULT_OVERSPEED_FACTOR,
-    FEEDBACK_REQUEST,
-    RESTING_MODES,
-    check_device,
-    describe,
-)
+from uvms_hardware.alpha5_checks import check_device, describe
+from uvms_hardware.alpha5_core import DEFAULT_OVERSPEED_FACTOR, FEEDBACK_REQUEST, RESTING_MODES
 from uvms_hardware.alpha5_probe import probe_device
 from uvms_hardware.hardware_check_status import BridgeStatus, CheckBounds, Device
 from uvms_hardware.hardware_config import Drive, load_alpha5

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from uvms_hardware.alpha5_core import check_device
+from uvms_hardware.alpha5_checks import check_device
 from uvms_hardware.alpha5_probe import probe_device
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import PacketId

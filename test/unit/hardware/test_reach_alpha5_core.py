@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from uvms_hardware.alpha5_core import JAW_POLL_ROUNDS, Alpha5Core, check_device
+from uvms_hardware.alpha5_checks import check_device
+from uvms_hardware.alpha5_core import JAW_POLL_ROUNDS, Alpha5Core
 from uvms_hardware.hardware_config import load_alpha5
 from uvms_hardware.reach_protocol import Mode, PacketId
 from uvms_twins.alpha5_twin import Alpha5Twin
