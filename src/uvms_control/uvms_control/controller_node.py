@@ -53,6 +53,7 @@ from uvms_control.controller_pilot import ControllerPilot
 from uvms_control.controller_reports import ControllerReports
 from uvms_control.controller_safety import ControllerSafety, safety_limits
 from uvms_control.core.errors import ControlInputError, ControlParameterError
+from uvms_control.core.law.held_command import held_slot_horizon_s
 from uvms_control.core.law.task_path import load_interpolation
 from uvms_control.core.law.unified_controller import UnifiedForceController
 from uvms_control.core.parameter_specs import (
@@ -149,8 +150,10 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
                 text = robots.with_robot_source(str(error), self._robot_files)
                 raise ControlParameterError('robot parameters', text,
                                             f'robot {self.robot_name!r}') from error
-            self.core = UnifiedForceController(gains, model,
-                                               1.0 / float(node['control_rate_hz']))
+            self.core = UnifiedForceController(
+                gains, model, 1.0 / float(node['control_rate_hz']),
+                held_slot_horizon_s(float(node['arm.command_rate_hz']),
+                                    float(node['arm.force_latency_s'])))
             self.supervisor = PilotedSupervisor(self.core, safety_limits(self._safety))
             self._configure_topics(node, model.joint_names)
             self._configure_pilot()

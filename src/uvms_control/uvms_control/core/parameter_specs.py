@@ -52,6 +52,22 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         "'<name>/transition_event' tells the controller when it is not active: the controller "
         "then ends a running task INPUTS_STALE and commands zero. '' watches no allocator.",
     ),
+    ParameterSpec(
+        'arm.command_rate_hz', 0.0,
+        'Rate at which the arm applies joint commands, each held until the next (Hz; the '
+        "Alpha 5's bus: 77 Hz, robots/bluerov2_alpha5/device_timing.yaml). Above 0 the "
+        'control law cancels the contact force predicted for the middle of a held slot '
+        '(core/law/held_command.py, eq. 29 and 35); 0: every command at once (ideal devices, '
+        'the paper).',
+        0.0, 10000.0,
+    ),
+    ParameterSpec(
+        'arm.force_latency_s', 0.0,
+        "Age of the wrist force when the controller steps (s): the sensor's latency as the "
+        'controller sees it (the simulator with device timing: one state, 0.002 s). Used only '
+        'when arm.command_rate_hz is above 0.',
+        0.0, 1.0,
+    ),
 ]
 
 CONTROLLER_PARAMETER_SPECS: list[ParameterSpec] = [

@@ -30,6 +30,7 @@ from uvms_control.core.law.controller_result import ControllerResult, Phase
 from uvms_control.core.law.fuzzy_switch import FuzzySwitch
 from uvms_control.core.law.gain_ramp import GainRamp
 from uvms_control.core.law.gain_stability import check_gain_stability
+from uvms_control.core.law.held_command import HeldCommandForce
 from uvms_control.core.law.hybrid import HybridLaw
 from uvms_control.core.law.impedance import ImpedanceLaw
 from uvms_control.core.law.null_space import null_space_torque
@@ -76,6 +77,9 @@ class UnifiedForceController:
         model: the controller's own UVMS model (its estimate of the plant).
         control_period_s: the control period T (s): no step integrates the force integral or
             the derivative filter over more than T, and gains are checked for stability at T.
+        force_horizon_s: h (s) of ``held_command``: eq. 29 and 35 cancel the contact force
+            predicted h after its sample (the middle of an arm command slot held by the
+            device); 0, the default, cancels the measured F_e as the paper.
 
     Raises:
         ControlParameterError: gains that ``check_gains`` refuses.
@@ -89,8 +93,10 @@ class UnifiedForceController:
     """
 
     def __init__(self, params: ControllerParameters, model: UvmsModel,
-                 control_period_s: float = DEFAULT_CONTROL_PERIOD_S) -> None:
+                 control_period_s: float = DEFAULT_CONTROL_PERIOD_S,
+                 force_horizon_s: float = 0.0) -> None:
         self.params = params
+        self._held_force = HeldCommandForce(force_horizon_s) if force_horizon_s > 0.0 else None
         self.model = model
         self.control_period_s = control_period_s
         self._n_dof = model.n_dof
@@ -219,6 +225,8 @@ class UnifiedForceController:
         self._t_prev = 0.0
         self._q0 = np.zeros(self._n_dof)
         self._q0_dot: FloatArray | None = None  # the posture's rate, while a pilot moves it
+        if self._held_force is not None:
+            self._held_force.reset()
         self.hybrid.reset()
         self.task.hold()
 
@@ -358,7 +366,11 @@ class UnifiedForceController:
         V = self._law_map.dot([*reference, *F_e_list, *X, *X_dot, a_f]).reshape(3, 3)
         (mu0, p0, g0), (mu1, p1, g1), (mu2, p2, g2) = M_hat.dot(V).tolist()
         z0, z1, z2 = zeta_hat.tolist()
-        c0, c1, c2 = z0 + f0, z1 + f1, z2 + f2
+        if self._held_force is None:
+            c0, c1, c2 = z0 + f0, z1 + f1, z2 + f2
+        else:  # the force the wall will push with over the held command's slot
+            e0, e1, e2 = self._held_force.update(t, (f0, f1, f2))
+            c0, c1, c2 = z0 + e0, z1 + e1, z2 + e2
         # F_IP = M̂ U + ζ̂ + F_e (eq. 29); F_H = (I - S) F_p + S F_f + ζ̂ + F_e (eq. 35).
         (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = self._I_minus_S
         (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = self._S
