@@ -63,9 +63,8 @@ def _finite_vector(name: str, value: npt.ArrayLike, size: int) -> FloatArray:
     if array.shape != (size,) or (
         not math.isfinite(sum(array.tolist())) and not np.isfinite(array).all()
     ):
-        raise ControlInputError(
-            f'{name} must be {size} finite values, got {np.ravel(array).tolist()}'
-        )
+        raise ControlInputError(f'{name} must be {size} finite values, got '
+                                f'{np.ravel(array).tolist()}')
     return array
 
 
@@ -123,16 +122,9 @@ class UnifiedForceController:
         """Make n the force direction of the hybrid law (S = n nᵀ) and rebuild its maps."""
         p = self.params
         self.hybrid = HybridLaw(
-            np.asarray(normal, dtype=np.float64),
-            p.position_kp,
-            p.position_kd,
-            p.force_kp,
-            p.force_ki,
-            p.force_kd,
-            p.force_feedforward_compliance,
-            p.force_derivative_cutoff_hz,
-            p.force_integral_limit,
-        )
+            np.asarray(normal, dtype=np.float64), p.position_kp, p.position_kd, p.force_kp,
+            p.force_ki, p.force_kd, p.force_feedforward_compliance,
+            p.force_derivative_cutoff_hz, p.force_integral_limit)
         self.n = self.hybrid.n
         self._n_list: list[float] = self.n.tolist()
         self._law_map = self._build_law_map()
@@ -366,11 +358,9 @@ class UnifiedForceController:
         V = self._law_map.dot([*reference, *F_e_list, *X, *X_dot, a_f]).reshape(3, 3)
         (mu0, p0, g0), (mu1, p1, g1), (mu2, p2, g2) = M_hat.dot(V).tolist()
         z0, z1, z2 = zeta_hat.tolist()
-        if self._held_force is None:
-            c0, c1, c2 = z0 + f0, z1 + f1, z2 + f2
-        else:  # the force the wall will push with over the held command's slot
-            e0, e1, e2 = self._held_force.update(t, (f0, f1, f2))
-            c0, c1, c2 = z0 + e0, z1 + e1, z2 + e2
+        e0, e1, e2 = (f0, f1, f2) if self._held_force is None else self._held_force.update(
+            t, (f0, f1, f2))  # held_command: the wall's force over the held command's slot
+        c0, c1, c2 = z0 + e0, z1 + e1, z2 + e2
         # F_IP = M̂ U + ζ̂ + F_e (eq. 29); F_H = (I - S) F_p + S F_f + ζ̂ + F_e (eq. 35).
         (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = self._I_minus_S
         (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = self._S
