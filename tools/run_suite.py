@@ -64,8 +64,9 @@ IDLE_LANE = ('unit', 'scenarios')
 #: hangs; a test waiting for the CPU is not one.
 IDLE_LIMIT_FACTOR = 2.0
 #: ROS domains of each lane's test modules (test/conftest.py hands them out in turn): the two
-#: lanes' tests run at once and must not hear each other. The scenario runs have their own
-#: (test/scenarios/scenario_runs.py, from 150).
+#: lanes' tests run at once and must not hear each other. The scenario runs take the idle
+#: lane's (test/scenarios/scenario_runs.py; that lane runs one group at a time). All under
+#: 101: higher domains' ports are in Linux's ephemeral range (docs in scenario_runs.py).
 MAIN_DOMAINS = (1, 70)
 IDLE_DOMAINS = (71, 100)
 #: pyproject.toml's per-test limits (s), scaled for the idle lane.

@@ -37,8 +37,10 @@ ADDED_MASS_FACTOR = (1.4, 0.65, 1.3, 1.5, 0.7, 1.35)
 LINEAR_FACTOR = (1.3, 1.0, 0.65, 1.0, 1.4, 1.0)  # the shipped zeros stay zero
 QUADRATIC_FACTOR = (0.6, 1.4, 0.65, 1.3, 1.5, 0.7)
 BUOYANCY_CHANGE_N = 2.0
-#: The second concurrent run's ROS domain: the module's plus this (test modules use 1-100).
-SECOND_DOMAIN_OFFSET = 100
+#: The second concurrent run's ROS domain: the module's plus this, within the lane's range
+#: (UVMS_TEST_DOMAINS; never above 100: those domains' ports are in the ephemeral range, where
+#: a participant can take a UDP socket's datagrams from a test running beside).
+SECOND_DOMAIN_OFFSET = 35
 
 pytestmark = pytest.mark.slow
 
@@ -82,7 +84,9 @@ def test_the_plan_on_another_robot_recovers_its_hull(tmp_path: Path,
     # other's states): lockstep runs are deterministic whatever else the cores do, and the
     # experiments are independent (as a user may run them on two machines).
     domains: queue.Queue[int] = queue.Queue()
-    for domain in (module_ros_domain, module_ros_domain + SECOND_DOMAIN_OFFSET):
+    low, high = (int(x) for x in os.environ.get('UVMS_TEST_DOMAINS', '1-100').split('-'))
+    second = low + (module_ros_domain - low + SECOND_DOMAIN_OFFSET) % (high - low + 1)
+    for domain in (module_ros_domain, second):
         domains.put(domain)
 
     def run(scenario: Path, recording: Path) -> subprocess.CompletedProcess[str]:

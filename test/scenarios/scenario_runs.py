@@ -33,9 +33,14 @@ RUN_TIMEOUT_S = 600.0
 #: touch at 8.05 s, settled within 1 s, released at about 12.4 s. idle_wall holds for an hour.
 SHORTENED_S = {'hybrid_only': 5.0, 'case1_current': 14.0, 'bluerov2_alpha5_current': 14.0,
                'idle_wall': 5.0}
-#: First ROS_DOMAIN_ID of the scenario runs (each run gets the next one; the rest of the
-#: suite runs in the default domain 0 or its own random ones).
-SCENARIO_DOMAIN_BASE = 150
+#: ROS domains of the scenario runs (each run gets the next one): the range tools/run_suite.py
+#: gives the scenario group's lane (UVMS_TEST_DOMAINS, ``LOW-HIGH``; its idle lane runs the
+#: scenario runs and the unit tests one group after the other), else 71-100. Never above 100:
+#: a domain's ports are 7400 + 250 d + ..., and from d = 102 on they fall in Linux's
+#: ephemeral range, where a participant binding a port a UDP device twin or bridge of a test
+#: running beside holds (both with SO_REUSEADDR, as pymavlink's sockets are) takes its
+#: datagrams: a bridge test beside the scenario runs saw its vehicle fall silent.
+SCENARIO_DOMAINS = tuple(int(x) for x in os.environ.get('UVMS_TEST_DOMAINS', '71-100').split('-'))
 
 
 @dataclass(frozen=True)
@@ -126,7 +131,8 @@ class ScenarioRuns:
         # commands (same node names, same stamps from t = 0).
         self._domains += 1
         env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p),
-               'ROS_DOMAIN_ID': str(SCENARIO_DOMAIN_BASE + self._domains % 50)}
+               'ROS_DOMAIN_ID': str(SCENARIO_DOMAINS[0] + self._domains % (
+                   SCENARIO_DOMAINS[1] - SCENARIO_DOMAINS[0] + 1))}
         with self._path(name).with_suffix('.log').open('wb') as log:
             return subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
 
