@@ -78,10 +78,10 @@ sweeps: setup
 # tools/run_suite.py runs each integration module (the unit tests by sub-folder, two at a
 # time; the scenario tests together) in a pytest process of its own with a time limit: a test
 # hung inside C (a Fast DDS livelock) ends its module with its threads' stacks, and the rest
-# of the suite runs on. The unit and scenario tests run beside the others at SCHED_IDLE.
+# of the suite runs on. The unit tests run beside the others at SCHED_IDLE.
 # `make test` runs the suite on Python 3.11 and, in the same run, again on Python 3.12
-# (--also-python; the colcon workspace tests on 3.11 only): both interpreters' unit and
-# scenario tests fill the CPU the integration modules leave.
+# (--also-python; the colcon workspace tests on 3.11 only): both interpreters' unit tests
+# fill the CPU the integration modules leave.
 # The run is bounded as a whole too (SUITE_LIMIT_S, about 1.7x what both interpreters take on
 # the 2-core development machine): past it pytest gets SIGINT, prints where it was and its
 # summary, and the target fails, rather than a hang running into the CI job's own limit

@@ -8,8 +8,8 @@ the unit tests run one process per sub-folder, two at a time (pure CPU work: on 
 they take half the time), the scenario tests in one (their runs are shared across modules
 and happen in child processes, two at a time, with their own time limit).
 
-The unit and scenario tests keep no periods and wait on no clock: what they compute does not
-depend on when they get the CPU. They run in a lane of their own beside the rest, at
+The unit tests keep no periods and wait on no clock: what they compute does not depend on
+when they get the CPU. They run in a lane of their own beside the rest, at
 SCHED_IDLE (``chrt --idle``), so they take only the CPU time the integration tests leave
 (those wait on their nodes' real-time periods much of the time) and never delay one of them:
 a runnable SCHED_IDLE task yields to every other task at once. ``--one-lane`` runs the
@@ -56,17 +56,20 @@ WHOLE = ('scenarios', 'ros2_way')
 #: two of them share the two cores of CI without changing what they test.
 CONCURRENT = {'unit': 2}
 #: Top-level test folders whose groups run in the idle lane (SCHED_IDLE, beside the others):
-#: they keep no periods, so when they get the CPU changes nothing they check.
-IDLE_LANE = ('unit', 'scenarios')
+#: they keep no periods, so when they get the CPU changes nothing they check. Not the scenario
+#: tests: beside their runs (two lockstep graphs at a time, each writing its recording) the
+#: UDP device tests of the main lane failed in 3 runs of 4 (the ArduSub twin silent for
+#: 1.7-2.7 s at their first test, in both interpreters), never otherwise; cause not found.
+IDLE_LANE = ('unit',)
 #: How much longer than its limit an idle-lane group, and each of its tests (pyproject's
 #: pytest-timeout and faulthandler_timeout), may take: it gets the CPU only when the other
 #: lane leaves it (the integration tests want most of 2 cores at moments). These limits catch
 #: hangs; a test waiting for the CPU is not one.
 IDLE_LIMIT_FACTOR = 2.0
 #: ROS domains of each lane's test modules (test/conftest.py hands them out in turn): the two
-#: lanes' tests run at once and must not hear each other. The scenario runs take the idle
-#: lane's (test/scenarios/scenario_runs.py; that lane runs one group at a time). All under
-#: 101: higher domains' ports are in Linux's ephemeral range (docs in scenario_runs.py).
+#: lanes' tests run at once and must not hear each other. The scenario runs take their
+#: group's lane's (test/scenarios/scenario_runs.py; a lane runs one group at a time). All
+#: under 101: higher domains' ports are in Linux's ephemeral range.
 MAIN_DOMAINS = (1, 70)
 IDLE_DOMAINS = (71, 100)
 #: pyproject.toml's per-test limits (s), scaled for the idle lane.

@@ -34,12 +34,9 @@ RUN_TIMEOUT_S = 600.0
 SHORTENED_S = {'hybrid_only': 5.0, 'case1_current': 14.0, 'bluerov2_alpha5_current': 14.0,
                'idle_wall': 5.0}
 #: ROS domains of the scenario runs (each run gets the next one): the range tools/run_suite.py
-#: gives the scenario group's lane (UVMS_TEST_DOMAINS, ``LOW-HIGH``; its idle lane runs the
-#: scenario runs and the unit tests one group after the other), else 71-100. Never above 100:
-#: a domain's ports are 7400 + 250 d + ..., and from d = 102 on they fall in Linux's
-#: ephemeral range, where a participant binding a port a UDP device twin or bridge of a test
-#: running beside holds (both with SO_REUSEADDR, as pymavlink's sockets are) takes its
-#: datagrams: a bridge test beside the scenario runs saw its vehicle fall silent.
+#: gives the scenario group's lane (UVMS_TEST_DOMAINS, ``LOW-HIGH``; a lane runs one group at
+#: a time), else 71-100. Never above 100: a domain's ports are 7400 + 250 d + ..., and from
+#: d = 102 on they fall in Linux's ephemeral range, where the tests' UDP sockets live.
 SCENARIO_DOMAINS = tuple(int(x) for x in os.environ.get('UVMS_TEST_DOMAINS', '71-100').split('-'))
 
 

@@ -97,14 +97,14 @@ def test_hypothesis_plugin_is_loaded_only_where_a_module_uses_hypothesis() -> No
     assert run_suite.uses_hypothesis(unit) and not run_suite.uses_hypothesis(graph)
 
 
-def test_unit_and_scenario_groups_run_in_the_idle_lane_the_others_in_the_main_one() -> None:
-    """The groups that keep no periods are marked for the idle lane, with a longer limit."""
+def test_unit_groups_run_in_the_idle_lane_the_others_in_the_main_one() -> None:
+    """The unit groups are marked for the idle lane, with a longer limit; nothing else is."""
     groups = run_suite.groups_for([ROOT / 'test'], 900.0, 1500.0)
     idle = {g.name for g in groups if g.idle}
-    assert 'test/scenarios' in idle and 'test/unit/control' in idle
-    assert not any(name.startswith(('test/integration', 'test/ros2_way')) for name in idle)
-    scenarios = next(g for g in groups if g.name == 'test/scenarios')
-    assert scenarios.wall_limit_s == 1500.0 * run_suite.IDLE_LIMIT_FACTOR
+    assert 'test/unit/control' in idle
+    assert all(name.startswith('test/unit') for name in idle)
+    control = next(g for g in groups if g.name == 'test/unit/control')
+    assert control.wall_limit_s == 900.0 * run_suite.IDLE_LIMIT_FACTOR
 
 
 def test_an_idle_lane_group_runs_at_sched_idle_beside_the_main_lane(
