@@ -61,6 +61,10 @@ CONCURRENT = {'unit': 2}
 #: UDP device tests of the main lane failed in 3 runs of 4 (the ArduSub twin silent for
 #: 1.7-2.7 s at their first test, in both interpreters), never otherwise; cause not found.
 IDLE_LANE = ('unit',)
+#: Unit sub-folders that stay in the main lane: test/unit/hardware serves device twins on
+#: wall time (a 50 Hz RC loop, a 100 ms watchdog, 200 Hz streams) to the components and
+#: links it tests, which a starved SCHED_IDLE process misses.
+TIMED_UNIT_FOLDERS = ('hardware',)
 #: How much longer than its limit an idle-lane group, and each of its tests (pyproject's
 #: pytest-timeout and faulthandler_timeout), may take: it gets the CPU only when the other
 #: lane leaves it (the integration tests want most of 2 cores at moments). These limits catch
@@ -143,7 +147,11 @@ def groups_for(paths: list[Path], group_limit_s: float, scenario_limit_s: float)
         groups[group.name] = group
     for group in groups.values():
         group.paths.sort()
-        group.idle = group.paths[0].relative_to(TESTS).parts[0] in IDLE_LANE
+        parts = group.paths[0].relative_to(TESTS).parts
+        group.idle = parts[0] in IDLE_LANE and not (
+            len(parts) > 2 and parts[1] in TIMED_UNIT_FOLDERS)
+        if not group.idle and parts[0] in IDLE_LANE:
+            group.batch = ''  # alone in the main lane, not in the idle lane's pool
     return list(groups.values())
 
 

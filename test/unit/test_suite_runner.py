@@ -33,13 +33,14 @@ def test_scenario_modules_share_one_process_with_the_longer_limit() -> None:
 
 
 def test_unit_sub_folders_are_groups_of_one_pool() -> None:
-    """Every unit module runs exactly once, in the group of its sub-folder, all in one batch."""
+    """Every unit module runs once, in its sub-folder's group, pooled (timed ones alone)."""
     groups = run_suite.groups_for([ROOT / 'test' / 'unit'], 900.0, 1500.0)
     unit = ROOT / 'test' / 'unit'
     assert {g.name for g in groups} == {'test/unit', *(f'test/unit/{d.name}' for d in
                                                         unit.iterdir() if d.is_dir() and
                                                         any(d.rglob('test_*.py')))}
-    assert {g.batch for g in groups} == {'unit'}
+    assert {g.name for g in groups if g.batch != 'unit'} == {
+        f'test/unit/{d}' for d in run_suite.TIMED_UNIT_FOLDERS}
     dealt = [p for g in groups for p in g.paths]
     assert sorted(dealt) == sorted(unit.rglob('test_*.py'))
     assert run_suite.CONCURRENT['unit'] == 2
@@ -103,6 +104,7 @@ def test_unit_groups_run_in_the_idle_lane_the_others_in_the_main_one() -> None:
     idle = {g.name for g in groups if g.idle}
     assert 'test/unit/control' in idle
     assert all(name.startswith('test/unit') for name in idle)
+    assert 'test/unit/hardware' not in idle  # its twins serve on wall time
     control = next(g for g in groups if g.name == 'test/unit/control')
     assert control.wall_limit_s == 900.0 * run_suite.IDLE_LIMIT_FACTOR
 
