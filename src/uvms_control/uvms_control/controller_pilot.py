@@ -4,10 +4,12 @@ A mixin of ``ControllerNode`` (as ``controller_safety`` is). Subscribes ``pilot/
 and ``pilot/ee_twist`` (geometry_msgs/TwistStamped) and ``pilot/jaw`` (std_msgs/Float64);
 publishes ``controller/mode`` (std_msgs/String, latched: 'pilot', 'task' or 'hold') at every
 switch; serves ``controller/hold`` (std_srvs/Trigger). The jaw has one owner, the controller:
-at every control step it publishes ``command/jaw`` (std_msgs/Float64, m/s, + opens), the
-pilot's jaw speed in pilot mode (deadman-limited, within ``pilot.max_jaw_speed_m_s``) and zero
-in hold and task mode; the Alpha 5 bridge drives the jaws from it (its watchdog stops them
-when the steps stop, as it stops the joints when ``command/actuators`` stops). Messages are
+it publishes ``command/jaw`` (std_msgs/Float64, m/s, + opens) at every control step while
+the jaw speed is not zero, the pilot's in pilot mode (deadman-limited, within
+``pilot.max_jaw_speed_m_s``), then one zero when it stops (hold, task, deadman) and nothing
+while it stays zero, so that no message is built per step for a jaw at rest; the Alpha 5
+bridge drives the jaws from it (its watchdog stops them when the commands stop, as it stops
+the joints when ``command/actuators`` stops). Messages are
 checked and bounded by ``core.pilot.inputs`` against the robot's ``pilot.*`` limits, each kind
 of refusal named once per topic; the hand-over (``core.pilot.handover``) runs in the control
 step, before the task supervisor's. ``pilot.script`` (a scenario's ``pilot:``) plays timed
@@ -95,6 +97,7 @@ class ControllerPilot:
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self._mode_pub = node.create_publisher(String, MODE_TOPIC, latched)
         self._jaw_pub = node.create_publisher(Float64, JAW_COMMAND_TOPIC, qos)
+        self._jaw_sent = 0.0
         self._entities += [
             (node.destroy_publisher, self._mode_pub),
             (node.destroy_publisher, self._jaw_pub),
@@ -148,7 +151,10 @@ class ControllerPilot:
         if switches:
             self._publish_mode(pilot.mode.value)
             self._diagnostics.update()
-        self._jaw_pub.publish(Float64(data=pilot.jaw_command_m_s()))
+        jaw = pilot.jaw_command_m_s()
+        if jaw != 0.0 or self._jaw_sent != 0.0:  # a zero once, then quiet (no message a step)
+            self._jaw_pub.publish(Float64(data=jaw))
+            self._jaw_sent = jaw
 
     def _play(self, t: float, command: ScriptCommand) -> None:
         """One script command at t (s), through the checks a message takes."""
