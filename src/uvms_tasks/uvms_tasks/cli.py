@@ -10,6 +10,13 @@ goal (the controller ramps the force down and backs off) and exits 130.
 
 Exit status: 0 every task SUCCEEDED, 1 one did not (or no controller answered), 2 a bad file
 or bad usage, 130 interrupted.
+
+In a process that ends as soon as ``main`` returns (``python -m uvms_tasks.cli``, or a caller
+that said so with ``uvms_common.node_entry.mark_process_ends_after_main``), the node and the
+action client are not destroyed: once the results are printed the process's end frees them,
+so a teardown stuck in DDS (issue 48: a stack in rclpy's ``ActionClient.destroy``) cannot
+keep ``uvms task`` from exiting with its status. Called in a process that goes on (a test, a
+script), ``main`` tears down as any rclpy program does.
 """
 
 from __future__ import annotations
@@ -22,6 +29,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
+from uvms_common.node_entry import end_process, mark_process_ends_after_main
+from uvms_common.node_entry import process_ends_after_main as _process_ends_after_main
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent, active_stop_event
 
@@ -108,9 +117,11 @@ def _send_tasks(tasks: list[TaskSpec], namespace: str, timeout_s: float,
         _error(str(exc))
         return EXIT_FAILURE
     finally:
-        client.destroy()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        sys.stdout.flush()
+        if not _process_ends_after_main():
+            client.destroy()
+            node.destroy_node()
+            rclpy.try_shutdown()
 
 
 class _TaskRun:
@@ -258,5 +269,11 @@ class _ProgressLine:
             self._shown = False
 
 
+def console_main() -> None:
+    """``python -m uvms_tasks.cli``: run ``main``, then end the process without DDS teardown."""
+    mark_process_ends_after_main()
+    end_process(main())
+
+
 if __name__ == '__main__':
-    sys.exit(main())
+    console_main()

@@ -291,15 +291,20 @@ class ContactTaskClient:
         return TaskOutcome(name=name, status=status, result=result)
 
     def destroy(self) -> None:
-        """Destroy the action client and subscription (and the client's own executor)."""
-        self._action.destroy()
-        self.node.destroy_subscription(self._state_subscription)
-        if self._rosout is not None:
-            self.node.destroy_subscription(self._rosout)
+        """Destroy the action client and subscription (and the client's own executor).
+
+        The client's own executor lets go of the node first, as ``run_node`` does: an
+        entity destroyed while an EventsExecutor still holds its callbacks can be reached
+        by a DDS thread mid-destruction.
+        """
         if self._own_executor and self._executor is not None:
             self._executor.remove_node(self.node)
             self._executor.shutdown()
             self._executor = None
+        self._action.destroy()
+        self.node.destroy_subscription(self._state_subscription)
+        if self._rosout is not None:
+            self.node.destroy_subscription(self._rosout)
 
     def _blocking_executor(self) -> Executor:
         """The executor of the blocking methods, with the node on it."""

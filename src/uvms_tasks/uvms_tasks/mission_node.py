@@ -3,8 +3,12 @@
 It waits for the controller's action server and its first ``controller/state`` (whose
 ``desired_position``, the hold target X_d, is X0 of a half circle), sends the first goal,
 and sends each next one when the previous result arrives, from the X_d then current. Each
-result is logged in one line. ``finished``/``results`` let an in-process graph runner stop
-when the mission is done. Names are relative: run it in /uvms.
+result is logged in one line. The wait is bounded (parameter ``wait_timeout_s``, wall
+clock from the node's start): past it the mission gives up with one error line naming what
+it did not find (the action server by its full name, or a ``controller/state``) and ends
+(``gave_up``; exit 1 as its own process, as a node that could not start).
+``finished``/``results`` let an in-process graph runner stop when the mission is done.
+Names are relative: run it in /uvms.
 
 In process::
 
@@ -14,8 +18,9 @@ In process::
 
 As its own process: ``ros2 run uvms_tasks mission --ros-args -r __ns:=/uvms
 -p mission_file:=mission.yaml`` (exit 0 when every goal SUCCEEDED, 3 when one did not,
-``uvms_tasks.mission_outcome.EXIT_MISSION_FAILED``; 1 when the node could not start or
-crashed). With ``-p outcome_file:=F.json`` it writes how the mission ended there
+``uvms_tasks.mission_outcome.EXIT_MISSION_FAILED``; 1 when the node could not start, did
+not find the controller within ``wait_timeout_s``, or crashed). With
+``-p outcome_file:=F.json`` it writes how the mission ended there
 (``uvms_tasks.mission_outcome``): ``uvms launch`` reads it to say what failed.
 """
 
@@ -44,7 +49,7 @@ from uvms_common.raw_clock import take_clock_raw
 
 from uvms_msgs.action import ContactTask
 from uvms_msgs.msg import ControllerState
-from uvms_tasks.client import DISCOVERY_SETTLE_S, ContactTaskClient
+from uvms_tasks.client import DISCOVERY_SETTLE_S, STATE_TOPIC, ContactTaskClient
 from uvms_tasks.errors import TaskError, TaskFileError
 from uvms_tasks.goals import TaskOutcome, describe_task, goal_from_task
 from uvms_tasks.mission_outcome import (
@@ -54,6 +59,14 @@ from uvms_tasks.mission_outcome import (
     write_outcome,
 )
 from uvms_tasks.task_file import TaskSpec, load_task_file
+
+#: Period of the wall-clock check for the action server until the first goal is sent (s).
+DISCOVERY_POLL_S = 0.05
+#: Default of parameter ``wait_timeout_s``: wall time from the node's start to find the
+#: action server and the first controller/state (s). The controller's start-up (imports,
+#: model, kernels) took over 10 s on a machine at load 14; found within 3 s beside 2 busy
+#: loops (bench/bench_soak.py).
+WAIT_TIMEOUT_S = 30.0
 
 
 def mission_goal_uuid(index: int, name: str) -> UUID:
@@ -101,6 +114,13 @@ class MissionNode(Node):
                             'first goal (s); 0 when the server is in the same process',
                 read_only=True, floating_point_range=[
                     FloatingPointRange(from_value=0.0, to_value=10.0, step=0.0)])).value
+        self.wait_timeout_s: float = self.declare_parameter(
+            'wait_timeout_s', WAIT_TIMEOUT_S, ParameterDescriptor(
+                description="Wall time from the node's start to wait for the controller's "
+                            'action server and its first controller/state (s); past it the '
+                            'mission gives up naming what it did not find', read_only=True,
+                floating_point_range=[
+                    FloatingPointRange(from_value=0.1, to_value=3600.0, step=0.0)])).value
         self.outcome_file: str = self.declare_parameter(
             'outcome_file', '', ParameterDescriptor(
                 description='File to write the outcome of the mission to when it ends (JSON, '
@@ -120,6 +140,9 @@ class MissionNode(Node):
         self.sent_goals: list[ContactTask.Goal] = []
         self.last_feedback: ContactTask.Feedback | None = None
         self.finished = False
+        #: What the mission gave up waiting for (the action server, controller/state), or ''.
+        self.gave_up = ''
+        self._state_seen = False
         self._target: tuple[float, float, float] | None = None
         self._busy = False
         self._server_seen_s: float | None = None
@@ -141,7 +164,7 @@ class MissionNode(Node):
             depth=1, reliability=ReliabilityPolicy.RELIABLE,
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._discovery_timer = self.create_timer(
-            DISCOVERY_POLL_S, self._server_settled, clock=Clock(clock_type=ClockType.STEADY_TIME))
+            DISCOVERY_POLL_S, self._watch_start, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     @property
     def succeeded(self) -> bool:
@@ -162,6 +185,7 @@ class MissionNode(Node):
     def _on_state(self, data: bytes) -> None:
         if self._busy or self.finished or not self._server_settled():
             return
+        self._state_seen = True  # the start's wait is over (a goal may still be held)
         state = deserialize_message(data, ControllerState)
         send_at_s = self.tasks[len(self.results)].send_at_s
         stamp = state.header.stamp
@@ -171,6 +195,28 @@ class MissionNode(Node):
         self._target = (p.x, p.y, p.z)
         self._send_next()
 
+    def _watch_start(self) -> None:
+        """Look for the action server; give up past ``wait_timeout_s`` without it or a state.
+
+        On the steady clock: discovery runs on wall time, also before /clock ticks.
+        """
+        if self._state_seen or self.finished:
+            self.destroy_timer(self._discovery_timer)
+            return
+        self._server_settled()
+        if time.monotonic() - self._created_s < self.wait_timeout_s:
+            return
+        self.destroy_timer(self._discovery_timer)
+        self._stop_listening_to_state()
+        self.gave_up = (f'action server {self.client.action_name}'
+                        if self._server_seen_s is None else
+                        f'{self.resolve_topic_name(STATE_TOPIC)} message')
+        self.finished = True
+        self.get_logger().error(
+            f'mission not started: no {self.gave_up} within {self.wait_timeout_s:g} s of the '
+            "node's start (wall clock, parameter wait_timeout_s): is the controller running "
+            'in this namespace and ROS domain?')
+
     def _server_settled(self) -> bool:
         """The action server is discovered, and has had server_settle_s to discover us."""
         if not self.client.server_is_ready():
@@ -179,7 +225,6 @@ class MissionNode(Node):
         now = time.monotonic()
         if self._server_seen_s is None:
             self._server_seen_s = now
-            self.destroy_timer(self._discovery_timer)
             # One line that says when (bench/bench_soak.py reads the discovery time from it).
             self.get_logger().info(
                 f'found the action server {self.client.action_name} '
@@ -268,9 +313,6 @@ class MissionNode(Node):
         super().destroy_node()
 
 
-#: Period of the wall-clock check for the action server until it is found (s).
-DISCOVERY_POLL_S = 0.05
-
 
 def main(args: list[str] | None = None) -> None:
     """Run the mission node until its mission ends or SIGINT/SIGTERM."""
@@ -282,7 +324,9 @@ def main(args: list[str] | None = None) -> None:
 
     status = run_node(make_node, args, 'mission', (TaskError, ParameterException),
                       finished=lambda node: getattr(node, 'finished', False))
-    if status == 0 and nodes and nodes[0].finished and not nodes[0].succeeded:
+    if status == 0 and nodes and nodes[0].gave_up:
+        status = 1  # the mission never started: as a node that could not start
+    elif status == 0 and nodes and nodes[0].finished and not nodes[0].succeeded:
         status = EXIT_MISSION_FAILED
     sys.exit(status)
 
