@@ -40,11 +40,18 @@ if TYPE_CHECKING:
 #: named once, in ``launch_helpers.THRUSTER_ALLOCATOR``.
 COMPOSITIONS: dict[str, tuple[NodeSpec, ...]] = {
     'control': (ESTIMATOR, CONTROLLER, THRUSTER_ALLOCATOR),
-    # What runs on the robot's computer in the loop: the control nodes and the device bridges,
-    # so that a device's reading reaches the controller, and its command the device, without
-    # leaving the process (Fast DDS's intra-process delivery, no loopback UDP).
+    # What runs on the robot's computer: the control nodes and the device bridges in one
+    # real-time loop (uvms_hardware.robot_loop): a device's reading reaches the controller,
+    # and its command the device, by function calls in one period.
     'robot': (ESTIMATOR, CONTROLLER, THRUSTER_ALLOCATOR, *HARDWARE_BRIDGES.values()),
+    # The same nodes on their own timers, talking through DDS (intra-process): the layout
+    # before the robot loop, kept for comparison (bench/bench_robot_side.py).
+    'robot-topics': (ESTIMATOR, CONTROLLER, THRUSTER_ALLOCATOR, *HARDWARE_BRIDGES.values()),
 }
+#: Compositions run by the robot loop instead of each node's own timers.
+LOOPED = frozenset({'robot'})
+#: The first argument of a composed process run by the robot loop.
+LOOP_FLAG = '--loop'
 #: The composed process as the launcher names it (``control``: the process of the group).
 COMPOSED = NodeSpec('control', 'uvms_bringup', 'control_container', 'uvms_bringup.composed',
                     '', ())
@@ -87,10 +94,11 @@ def compose_plans(plans: Sequence[NodeProcessSpec], composition: str,
     grouped = [plan for plan in plans if plan.spec in members]
     if len(grouped) < 2:
         return list(plans)
-    command = list(command_prefix)
+    command = [*command_prefix, *([LOOP_FLAG] if composition in LOOPED else [])]
+    start = list(command)
     for plan in grouped:
         args = list(plan.command)
-        command += [*([SEPARATOR] if command != list(command_prefix) else []), plan.spec.name,
+        command += [*([SEPARATOR] if command != start else []), plan.spec.name,
                     *args[args.index('--ros-args'):]]
     out: list[NodeProcessSpec] = []
     for plan in plans:
@@ -116,7 +124,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     earlier = active_stop_event()
     stop = earlier if earlier is not None else StopEvent()
     try:
-        groups = node_groups(sys.argv[1:] if argv is None else argv)
+        args = list(sys.argv[1:] if argv is None else argv)
+        loop = bool(args) and args[0] == LOOP_FLAG
+        groups = node_groups(args[1:] if loop else args)
         by_name = {spec.name: spec for specs in COMPOSITIONS.values() for spec in specs}
         unknown = [name for name, _ in groups if name not in by_name]
         if not groups or unknown:
@@ -125,7 +135,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
         from uvms_bringup.composed_run import run_composed
 
-        return run_composed([(by_name[name], args) for name, args in groups], stop)
+        return run_composed([(by_name[name], args) for name, args in groups], stop, loop)
     finally:
         if stop is not earlier:
             stop.restore()

@@ -47,6 +47,7 @@ from uvms_common.raw_clock import take_clock_raw
 from uvms_common.realtime import MISS_WINDOW_S, EventLogger, MissCounter, StalenessMonitor
 from uvms_common.unconfigured import answer_while_unconfigured, controller_zero_answer
 
+from uvms_common import direct_topics
 from uvms_common import robot_parameters as robots
 from uvms_control import raw_conversions, task_conversions
 from uvms_control.controller_pilot import ControllerPilot
@@ -203,9 +204,9 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
         self._command_writer = raw_conversions.GeneralizedForceWriter(joint_names)
         self._state_writer = raw_conversions.ControllerStateWriter()
         for topic, (msg_type, read) in raw_conversions.controller_readers(joint_names).items():
-            self._entities.append((self.destroy_subscription, self.create_subscription(
-                msg_type, topic_for(topic, str(node['state_source'])),
-                lambda data, t=topic, r=read: self._on_input(t, r, data), inputs, raw=True)))
+            self._entities.append(direct_topics.subscribe(
+                self, msg_type, topic_for(topic, str(node['state_source'])),
+                lambda data, t=topic, r=read: self._on_input(t, r, data), inputs, raw=True))
         if node['trigger_mode'] == 'timer':
             # The period runs on the steady clock: a timer on /clock time fires once per
             # /clock message at most, so a burst of /clock drops control periods.

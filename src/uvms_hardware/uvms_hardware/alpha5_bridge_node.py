@@ -142,15 +142,13 @@ class Alpha5BridgeNode(BridgeNode):
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._joint_pub = self.own(self.destroy_publisher,
                                    self.create_publisher(JointState, 'joint_states', qos))
-        self.own(self.destroy_subscription, self.create_subscription(
-            ActuatorCommand, 'command/actuators', self._on_command, qos))
+        self.subscribe(ActuatorCommand, 'command/actuators', self._on_command, qos)
         self.own(self.destroy_service, self.create_service(Trigger, '~/reset_trip',
                                                            self._on_reset_trip))
         if core.arm.jaw is not None:
             self._jaw_pub = self.own(self.destroy_publisher,
                                      self.create_publisher(JointState, 'jaw_state', qos))
-            self.own(self.destroy_subscription, self.create_subscription(
-                Float64, 'command/jaw', self._on_jaw_command, qos))
+            self.subscribe(Float64, 'command/jaw', self._on_jaw_command, qos)
         self._timer = self.device_timer(self.component.poll_period_s(), self._on_tick)
         self._timer.cancel()  # polls from activate to the put-back only
         drives = core.arm.drives

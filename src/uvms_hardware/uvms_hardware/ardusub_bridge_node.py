@@ -45,6 +45,7 @@ from std_srvs.srv import Trigger
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.parameter_declaration import declare_specs
 
+from uvms_common import direct_topics
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
 from uvms_hardware.ardusub_component import SPECS, ArduSubComponent
@@ -148,7 +149,8 @@ class ArduSubBridgeNode(BridgeNode):
         self._battery = self.own(self.destroy_publisher,
                                  self.create_publisher(BatteryState, 'battery', qos))
         self.own(self.destroy_service, self.create_service(Trigger, '~/zero_depth', self._zero))
-        self.device_timer(1.0 / float(self.values['override_rate_hz']), self._period)
+        self.device_timer(1.0 / float(self.values['override_rate_hz']), self._period,
+                          then=self._write)
         c = self.component
         assert c.link is not None
         self.get_logger().info(f'ArduSub system {c.link.vehicle.system_id} at '
@@ -159,13 +161,14 @@ class ArduSubBridgeNode(BridgeNode):
         """Passthrough mode: journal and set RCIN; then arm and take commands."""
         self.component.activate()
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._command = self.create_subscription(ActuatorCommand, 'command/actuators',
-                                                 self._on_command, qos)
+        self._command = direct_topics.subscribe(self, ActuatorCommand, 'command/actuators',
+                                                self._on_command, qos)
 
     def put_device_back(self) -> list[str]:
         """Stop taking commands; neutral, disarm, release, functions back (bounded)."""
         if hasattr(self, '_command'):
-            self.destroy_subscription(self._command)
+            destroy, command = self._command
+            destroy(command)
             del self._command
         return self.component.put_back()
 
@@ -200,7 +203,10 @@ class ArduSubBridgeNode(BridgeNode):
                                                      current_a, remaining))
         if state.link_lost_changed:
             self.update_diagnostics()  # at once: the graph may end a running goal on it
-        component.write(self.now_s())
+
+    def _write(self) -> None:
+        """The period's RC overrides (in the robot loop: after the control step)."""
+        self.component.write(self.now_s())
 
     def _zero(self, request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         done = self.component.zero_depth()

@@ -47,6 +47,7 @@ from uvms_common.node_main import run_node
 from uvms_common.robot_parameters import declare_robot_name
 from uvms_common.stop_event import defer_stop_end
 
+from uvms_common import direct_topics
 from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import HardwareError
 
@@ -123,9 +124,21 @@ class BridgeNode(LifecycleNode):
         """The steady clock (s): the device's times (``uvms_hardware.device_clock``)."""
         return self._device_clock.now_s()
 
-    def device_timer(self, period_s: float, callback: Callable[[], None]) -> Any:
-        """A timer on the steady clock, destroyed with the configure's other entities."""
-        return self.own(self.destroy_timer, self._device_clock.timer(period_s, callback))
+    def device_timer(self, period_s: float, callback: Callable[[], None],
+                     then: Callable[[], None] | None = None) -> Any:
+        """A timer on the steady clock, destroyed with the configure's other entities.
+
+        ``then`` (a device's write) runs right after ``callback`` (its read); in the robot
+        process (``uvms_common.direct_topics``) the loop calls ``callback`` at ``period_s``
+        before its control step and ``then`` after it.
+        """
+        return self.own(*direct_topics.device_timer(self, period_s, callback,
+                                                     self._device_clock.timer, then))
+
+    def subscribe(self, msg_type: Any, topic: str, callback: Callable[[Any], None],
+                  qos: Any) -> Any:
+        """A subscription (direct in the robot process), destroyed with the entities."""
+        return self.own(*direct_topics.subscribe(self, msg_type, topic, callback, qos))
 
     def own(self, destroy: Callable[[Any], Any], entity: Any) -> Any:
         """Register an entity configure created; ``destroy(entity)`` runs at release."""

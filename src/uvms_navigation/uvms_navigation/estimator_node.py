@@ -35,6 +35,7 @@ from uvms_common.raw_clock import take_clock_raw
 from uvms_model.errors import ModelError
 from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
 
+from uvms_common import direct_topics
 from uvms_common import robot_parameters as robots
 from uvms_navigation import raw_conversions
 from uvms_navigation.eskf import ErrorStateEkf, EstimatorSettings
@@ -130,8 +131,9 @@ class EstimatorNode(LifecycleNode):
         qos = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
         self._odom_pub = self.create_publisher(Odometry, 'odometry/filtered', qos)
         self._entities = [(self.destroy_publisher, self._odom_pub)] + [
-            (self.destroy_subscription, self.create_subscription(
-                t, n, lambda data, n=n, cb=cb: self._on_payload(n, cb, data), qos, raw=True))
+            direct_topics.subscribe(
+                self, t, n, lambda data, n=n, cb=cb: self._on_payload(n, cb, data), qos,
+                raw=True)
             for t, n, cb in (
                 (Imu, 'imu', self._on_imu), (TwistWithCovarianceStamped, 'dvl', self._on_dvl),
                 (PoseWithCovarianceStamped, 'depth', self._on_depth),

@@ -54,6 +54,7 @@ from uvms_common.robot_parameters import (
 from uvms_common.unconfigured import allocator_zero_answer, answer_while_unconfigured
 from uvms_model.thrusters import ThrusterLayout
 
+from uvms_common import direct_topics
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsParameters, load_description
 from uvms_msgs.msg import ActuatorCommand, GeneralizedForce, ThrusterHealth, ThrusterState
 from uvms_thrusters import raw_conversions
@@ -246,9 +247,9 @@ class ThrusterAllocatorNode(LifecycleNode):
             (self.destroy_publisher, self._actuator_pub),
             (self.destroy_publisher, self._state_pub),
             (self.destroy_publisher, self._health_pub),
-            (self.destroy_subscription, self.create_subscription(
-                GeneralizedForce, 'command/generalized_force', self._on_command,
-                input_qos(self._lockstep), raw=True))]
+            direct_topics.subscribe(
+                self, GeneralizedForce, 'command/generalized_force', self._on_command,
+                input_qos(self._lockstep), raw=True)]
         if not self._lockstep:
             # On the steady clock, as the controller's: /clock bursts must not drop periods.
             self._entities.append((self.destroy_timer, self.create_timer(

@@ -1,0 +1,163 @@
+"""The robot loop: read the devices, estimate, control, allocate, write, in one period.
+
+As ros2_control's controller manager runs ``read()`` -> ``update()`` -> ``write()``, the robot
+process (``uvms launch --compose robot``) runs its bridges, estimator, controller and thruster
+allocator on one timer at the controller's ``control_rate_hz``. Each period:
+
+1. every device timer whose own period has come reads its device (never waits) and publishes
+   what it read: on DDS for the recorder and viewers, and by a function call to the
+   estimator and the controller (``uvms_common.direct_topics``);
+2. the period's time goes to the estimator (its ``/clock``), whose estimate goes to the
+   controller, whose generalized force goes to the allocator, whose command goes to the arm
+   (written at once) and the thrusters: function calls, no DDS;
+3. the device timers that read in step 1 write (the ArduSub's RC overrides).
+
+The nodes keep their lifecycle services, /diagnostics, parameters and the ContactTask action
+server; the devices keep their own watchdogs (a silent device publishes nothing, so nothing
+stale is delivered) and their restore on every way out (``composed_run``). A publisher
+created after the start (a node configured again) is tapped within a second.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.serialization import deserialize_message, serialize_message
+from rosgraph_msgs.msg import Clock as ClockMsg
+from uvms_common.direct_topics import Bus
+
+__all__ = ['RobotLoop']
+
+#: How often new publishers are looked for (s).
+REWIRE_PERIOD_S = 1.0
+#: Periods between two control steps while the node clock stands.
+HELD_PERIODS = 10
+#: Durations kept for the read-to-write figures (periods).
+KEPT_PERIODS = 4096
+
+
+class RobotLoop:
+    """The one timer of the robot process and the direct deliveries of its topics."""
+
+    def __init__(self, bus: Bus, nodes: Sequence[Node], rate_hz: float) -> None:
+        """Tap the nodes' publishers; the timer starts with `start`.
+
+        Args:
+            bus: The bus the nodes were built with (``direct_topics.install``).
+            nodes: The process's nodes.
+            rate_hz: The loop's rate (the controller's ``control_rate_hz``).
+        """
+        self.bus, self.nodes, self.rate_hz = bus, list(nodes), float(rate_hz)
+        self._tapped: set[int] = set()
+        self._steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._clock_node = nodes[0]
+        self._rewire_s = 0.0
+        self._durations_ns = np.zeros(KEPT_PERIODS, dtype=np.int64)
+        #: Periods run, periods that wrote a device, deliveries by (topic, node).
+        self.periods = 0
+        self.writes = 0
+        self.delivered: Counter[tuple[str, str]] = Counter()
+        self.timer: Any = None
+        #: Periods that ran the control chain (new time on the node clock).
+        self.steps = 0
+        self._period_ns = round(1e9 / self.rate_hz * 0.999)
+        self._stepped_ns, self._stepped_period = -self._period_ns, 0
+        self.wire()
+
+    def start(self, node: Node) -> None:
+        """The loop's timer, on ``node`` (the steady clock: /clock bursts drop no period)."""
+        self._clock_node = node
+        self.timer = node.create_timer(1.0 / self.rate_hz, self.tick, clock=self._steady)
+
+    def wire(self) -> None:
+        """Tap every publisher not yet tapped whose topic the bus serves."""
+        for node in self.nodes:
+            for publisher in list(node.publishers):
+                if id(publisher) not in self._tapped and publisher.topic_name in \
+                        self.bus.subscriptions:
+                    self._tap(publisher)
+
+    def _tap(self, publisher: Any) -> None:
+        self._tapped.add(id(publisher))
+        topic, send = publisher.topic_name, publisher.publish
+
+        def publish(msg: Any) -> None:
+            send(msg)
+            if getattr(publisher, '_enabled', True):  # an inactive lifecycle one sends nothing
+                self.deliver(topic, msg)
+
+        publisher.publish = publish
+
+    def deliver(self, topic: str, msg: Any) -> None:
+        """Call every direct subscription of ``topic`` with ``msg`` (message or CDR bytes)."""
+        data: bytes | None = None
+        for sub in self.bus.on(topic):
+            if sub.raw:
+                if isinstance(msg, (bytes, bytearray, memoryview)):
+                    value: Any = msg
+                else:
+                    data = data if data is not None else serialize_message(msg)
+                    value = data
+            elif isinstance(msg, (bytes, bytearray, memoryview)):
+                value = deserialize_message(bytes(msg), sub.msg_type)
+            else:
+                value = msg
+            sub.delivered += 1
+            self.delivered[topic, sub.node.get_name()] += 1
+            sub.callback(value)
+
+    def tick(self) -> None:
+        """One period: due reads, the clock down the control chain, the writes."""
+        start_ns = time.perf_counter_ns()
+        now_s = self._steady.now().nanoseconds * 1e-9
+        fired = [timer for timer in list(self.bus.timers) if timer.due(now_s)]
+        for timer in fired:
+            timer.read()
+        now = self._clock_node.get_clock().now()
+        # One control step per control period of the node clock: on a simulated clock slower
+        # than the wall (--real-time-factor) a period without new time computes nothing, but
+        # a clock that stands (a simulator holding its first state until the devices are
+        # driven) still gets the command every HELD_PERIODS, so the devices' watchdogs hold.
+        if self.bus.on('/clock') and (now.nanoseconds - self._stepped_ns >= self._period_ns
+                                      or self.periods - self._stepped_period >= HELD_PERIODS):
+            self._stepped_ns, self._stepped_period = now.nanoseconds, self.periods
+            self.steps += 1
+            msg = ClockMsg()
+            msg.clock = now.to_msg()
+            self.deliver('/clock', msg)
+        wrote = False
+        for timer in fired:
+            if timer.then is not None:
+                timer.then()
+                wrote = True
+        self._durations_ns[self.periods % KEPT_PERIODS] = time.perf_counter_ns() - start_ns
+        self.periods += 1
+        self.writes += wrote  # ArduSub overrides; the arm is written in the chain itself
+        if now_s - self._rewire_s > REWIRE_PERIOD_S:
+            self._rewire_s = now_s
+            self.wire()
+
+    def dds_inputs(self) -> list[str]:
+        """Subscriptions of the process's nodes on DDS for a topic the bus serves."""
+        served = set(self.bus.subscriptions) - {'/clock'}  # /clock: the nodes' time source
+        return [f'{node.get_name()}:{sub.topic_name}' for node in self.nodes
+                for sub in node.subscriptions if sub.topic_name in served]
+
+    def summary(self) -> str:
+        """One line: periods, the read-to-write time, the deliveries per edge."""
+        kept = self._durations_ns[:min(self.periods, KEPT_PERIODS)] * 1e-6
+        figures = (f'read->write p50 {np.percentile(kept, 50):.2f} ms, p99 '
+                   f'{np.percentile(kept, 99):.2f} ms, max {kept.max():.2f} ms'
+                   if kept.size else 'no period')
+        edges = ', '.join(f'{topic}->{node} {n}' for (topic, node), n in
+                          sorted(self.delivered.items()))
+        dds = self.dds_inputs()
+        return (f'robot loop: {self.periods} periods at {self.rate_hz:g} Hz, {self.steps} '
+                f'control steps, {self.writes} with a thruster write; {figures}; direct: '
+                f'{edges or "none"}; DDS inputs on direct topics: {", ".join(dds) or "none"}')
