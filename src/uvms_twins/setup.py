@@ -25,6 +25,7 @@ setup(
     entry_points={
         'console_scripts': [
             'hardware_twins = uvms_twins.entry_points:hardware_twins',
+            'simulator_with_twins = uvms_twins.entry_points:simulator_with_twins',
         ],
     },
 )

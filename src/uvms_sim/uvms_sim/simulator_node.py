@@ -5,12 +5,18 @@ stamped t_k, then integrate to the next publication; deterministic. Real time: a
 integrates one step per period on the latest command. The node is the clock source, so it
 keeps its own simulated time and never runs on ``use_sim_time``. ``/diagnostics`` reports the
 achieved step rate, the real-time factor (both against the wall clock) and lockstep timeouts.
+
+A `PlantSide` given to the node (``uvms_twins.simulator_with_twins``: the protocol twins)
+stands for the devices in this process: it is handed each published state and navigation
+reading by call instead of the device-side topics (joint_states, wrench, imu, dvl, depth,
+position_fix), and gives the actuator command instead of ``command/actuators``.
 """
 
 from __future__ import annotations
 
 import sys
-from typing import Any
+from collections.abc import Callable
+from typing import Any, Protocol
 
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
@@ -36,6 +42,7 @@ from uvms_common.robot_parameters import (
     with_robot_source,
 )
 from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
+from uvms_model.nav_sensors import Reading
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
@@ -50,7 +57,7 @@ from uvms_sim.parameters import (
     SimulatorSettings,
     default_joint_positions,
 )
-from uvms_sim.plant import Plant, initial_coordinates
+from uvms_sim.plant import Observation, Plant, initial_coordinates
 from uvms_sim.startup_watch import StartGates, StartupWatch, recorded_publishers
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
@@ -66,10 +73,42 @@ def _parameter_error(spec: Spec, exc: ParameterException) -> SimParameterError:
     return SimParameterError(f'invalid parameter {spec.name!r}: {exc}')
 
 
+class PlantSide(Protocol):
+    """The devices, served in the simulator's process: its measurements in, its command out."""
+
+    def observe(self, seen: Observation) -> None:
+        """Each published state, joint states and wrench as the devices deliver them."""
+
+    def reading(self, reading: Reading) -> None:
+        """Each navigation reading when it is due (after its latency), valid or not."""
+
+    def command(self, t_ns: int) -> tuple[Any, Any] | None:
+        """Thrusts (N) and joint torques (N m, the model's order) from ``t_ns`` on; None: none."""
+
+
+class _PlantSideNavigation(NavigationTopics):
+    """The navigation sensors' readings handed to a `PlantSide`, not published."""
+
+    def __init__(self, plant_side: PlantSide, *args: Any) -> None:
+        super().__init__(*args)
+        self._plant_side = plant_side
+
+    def _send(self, reading: Reading) -> None:
+        self._plant_side.reading(reading)
+
+
 class SimulatorNode(Node):
     """Simulated UVMS: actuator commands in, sensor topics, ``/clock`` and ``/tf`` out."""
 
-    def __init__(self, **kwargs: Any) -> None:
+    def __init__(self, plant_side: Callable[[SimulatorNode], PlantSide] | None = None,
+                 **kwargs: Any) -> None:
+        """Declare the parameters, build the plant and its topics.
+
+        Args:
+            plant_side: Builds the devices served in this process (given the node, once its
+                parameters are declared); None: the device-side topics, as always.
+            **kwargs: For rclpy's ``Node``.
+        """
         super().__init__('simulator', **kwargs)
         if self.get_parameter('use_sim_time').value:
             msg = ("parameter 'use_sim_time' = True: the simulator publishes /clock and keeps "
@@ -91,6 +130,9 @@ class SimulatorNode(Node):
             raise SimParameterError(
                 with_robot_source(f'invalid navigation parameter: {exc}', files)) from exc
         self._settings = cfg = SimulatorSettings.from_values(values)
+        if plant_side is not None and cfg.mode == 'lockstep':
+            raise SimParameterError("mode 'lockstep' with devices served in the simulator's "
+                                    "process: they run on wall time; valid: 'realtime'")
         # Seconds of silence otherwise (URDF, Pinocchio, the kernels from Numba's cache).
         self.get_logger().info('loading the model and compiled kernels')
         model = UvmsModel(params)
@@ -100,6 +142,7 @@ class SimulatorNode(Node):
                                  self.robot_name, robot_start_values(files))
         self._plant = Plant(params, q0, cfg.physics_dt_ns, cfg.wall_enabled,
                             cfg.wall_motion_start_force_n)
+        self._plant_side = None if plant_side is None else plant_side(self)
 
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._clock_pub = self.create_publisher(Clock, '/clock', reliable)
@@ -124,15 +167,17 @@ class SimulatorNode(Node):
             durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self._description_pub.publish(String(data=self._plant.model.description.urdf_text))
         # The hot topics go as raw CDR through fixed layouts (uvms_common.cdr_codecs).
-        self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command,
-                                 input_qos(cfg.mode == 'lockstep'), raw=True)
+        if self._plant_side is None:
+            self.create_subscription(ActuatorCommand, 'command/actuators', self._on_command,
+                                     input_qos(cfg.mode == 'lockstep'), raw=True)
         self._commands = raw_conversions.ActuatorCommandReader(self._plant.n_thrusters,
                                                                self._plant.joint_names)
         # imu, dvl, depth (position_fix) only when asked for: recordings stay as they were.
         devices = cfg.devices
-        self._navigation = (NavigationTopics(self, self._navigation_params, params.sensor.seed,
-                                             devices)
-                            if self._navigation_params.switch.enabled else None)
+        navigation_args = (self, self._navigation_params, params.sensor.seed, devices)
+        self._navigation = (None if not self._navigation_params.switch.enabled
+                            else NavigationTopics(*navigation_args) if self._plant_side is None
+                            else _PlantSideNavigation(self._plant_side, *navigation_args))
         # Device timing (uvms_sim.device_delivery): an ideal run takes exactly today's path.
         self._devices = DeviceDelivery(devices, params.sensor.seed)
         self._messages = raw_conversions.RawStateMessages(self._plant.joint_names)
@@ -176,6 +221,11 @@ class SimulatorNode(Node):
             + f', {devices.summary()}')
 
     @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The plant's joints, in the order of its coordinates and its torque inputs."""
+        return tuple(self._plant.joint_names)
+
+    @property
     def sim_time_ns(self) -> int:
         """Simulated time of the plant (ns)."""
         return self._plant.t_ns
@@ -198,9 +248,7 @@ class SimulatorNode(Node):
                                     throttle_duration_sec=1.0)
             return
         if self._settings.mode != 'lockstep':
-            self._command = command
-            if self._startup is not None:
-                self._startup.core.actuator_command()
+            self._take(command)
             return
         if self._awaiting_since is None or command[0] != self._plant.t_ns:
             # Not the answer the exchange waits for (an old or foreign stamp): kept out of
@@ -213,6 +261,12 @@ class SimulatorNode(Node):
         if self._startup is not None:
             self._startup.core.actuator_command()  # closed; dropped at the next timer turn
         self._answered()
+
+    def _take(self, command: tuple[int, Any, Any]) -> None:
+        """Real time: step on this command from now on (and the loop is closed, if held)."""
+        self._command = command
+        if self._startup is not None:
+            self._startup.core.actuator_command()
 
     def _on_kick(self) -> None:
         """Lockstep start: publish the initial state once the executor runs (and recorder)."""
@@ -417,15 +471,19 @@ class SimulatorNode(Node):
         ground_truth_due = self._published % self._settings.publishes_per_ground_truth == 0
         seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
-        out.update(self._devices.observation(seen, self._plant.n_joints),
-                   ground_truth=ground_truth_due)
+        delivered = self._devices.observation(seen, self._plant.n_joints)
+        out.update(delivered, ground_truth=ground_truth_due)
+        if self._plant_side is not None:
+            self._plant_side.observe(delivered)
         if self._navigation is not None:  # before /clock, on which the estimator publishes
             self._navigation.publish(seen.t_ns, seen.q, seen.w)
         self._clock_pub.publish(out.clock)
-        if self._published % self._settings.publishes_per_joint_state == 0:
+        devices_here = self._plant_side is None
+        if devices_here and self._published % self._settings.publishes_per_joint_state == 0:
             self._joint_pub.publish(out.joint_state)
         self._odom_pub.publish(out.odometry)
-        self._wrench_pub.publish(out.wrench)
+        if devices_here:
+            self._wrench_pub.publish(out.wrench)
         if ground_truth_due:
             self._ee_pub.publish(out.ee_pose)
             self._contact_pub.publish(out.contact)
@@ -433,6 +491,10 @@ class SimulatorNode(Node):
         if tf_due:
             self._tf_pub.publish(conversions.tf_message(seen.t_ns, seen.poses, self._parents))
         self._published += 1
+        if self._plant_side is not None:
+            command = self._plant_side.command(seen.t_ns)
+            if command is not None:
+                self._take((seen.t_ns, *command))
         if self._settings.mode == 'lockstep':
             self._awaiting_since = self.get_clock().now()
             self._wait.start(self._awaiting_since.nanoseconds)
