@@ -7,7 +7,11 @@ twins, the visualizer or the mission), and what the twin stand costs per process
 
 - ``separate``: one process per node (the launch without ``--compose``);
 - ``control``: ``--compose control`` (controller, allocator and estimator in one process);
-- ``robot``: ``--compose robot`` (those and the four bridges in one process).
+- ``robot``: ``--compose robot``, the robot loop (those and the four bridges in one process
+  on one timer: read, estimate, control, allocate, write in one period, no DDS between a
+  device and the controller; ``uvms_hardware.robot_loop``).
+
+``--layouts`` picks some of them (the first named is the baseline of the ratios).
 
 For each real-time factor (``--real-time-factors``, default 1.0 and 0.5) it runs the three
 layouts in turn, ``--pairs`` times, to the scenario's end, and reads the launch's own closing
@@ -19,9 +23,11 @@ footprint of each layout against the separate layout's of the same round (measur
 side), as ratios. The load average is printed before and after; only figures of an
 otherwise quiet machine mean something. It asserts nothing.
 
-Not measured here: the latency from a device's reply to the command it causes. The twins
-that could time it (the Alpha 5 twin's joint answer against the next CURRENT frame for that
-joint) run inside the launched ``hardware_twins`` process, which publishes no such times.
+For the robot loop it also reads the loop's own closing line: the time from the period's
+first device read to its last device write (p50 / p99 / max, ms). The latency from a device's
+reply to the command it causes is that, plus the wait for the device's read period (its own
+rate), plus the device's own reply time; the twins (inside ``hardware_twins``) publish no
+times of their own.
 
 Usage::
 
@@ -51,7 +57,9 @@ LAYOUTS: dict[str, tuple[str, ...]] = {
     'control': ('--compose', 'control'),
     'robot': ('--compose', 'robot'),
 }
-BASELINE = 'separate'
+#: The robot loop's closing line: its read-to-write time per period (ms).
+LOOP_LINE = re.compile(r'robot loop: .*read->write p50 ([\d.]+) ms, p99 ([\d.]+) ms, '
+                       r'max ([\d.]+) ms')
 #: Processes that would run on the robot's computer, by the launch's process names
 #: (``control``: the composed process of ``--compose control|robot``).
 ROBOT_SIDE = frozenset({
@@ -80,6 +88,7 @@ class Run:
     contacts: int | None
     cpu: dict[str, float]
     missed_pct: float | None
+    read_to_write_ms: tuple[float, float, float] | None = None
 
     @property
     def robot_side(self) -> float:
@@ -122,6 +131,8 @@ def launch(layout: str, factor: float, hardware: str, scenario: str, directory: 
         if failed:
             outcome = failed.group(1)
     cpu, missed = read_costs(lines)
+    loop = next((m for m in map(LOOP_LINE.search, lines) if m), None)
+    read_to_write = None if loop is None else tuple(float(v) for v in loop.groups())
     if not cpu:
         print(f'    {layout}: no cost table; the end of its output:\n'
               + '\n'.join(f'      {line}' for line in lines[-12:]))
@@ -135,7 +146,7 @@ def launch(layout: str, factor: float, hardware: str, scenario: str, directory: 
         except Exception as exc:  # a recording cut short by a failed node
             print(f'    {output.name}: no metrics ({type(exc).__name__}: {exc})')
         output.unlink()
-    return Run(outcome, contacts, cpu, missed)
+    return Run(outcome, contacts, cpu, missed, read_to_write)  # type: ignore[arg-type]
 
 
 def row(factor: float, layout: str, index: int, run: Run) -> str:
@@ -145,14 +156,17 @@ def row(factor: float, layout: str, index: int, run: Run) -> str:
     stand = ', '.join(f'{name} {run.cpu[name]:.0f}' for name in TWIN_STAND if name in run.cpu)
     missed = '-' if run.missed_pct is None else f'{run.missed_pct:.2f}'
     contacts = '-' if run.contacts is None else str(run.contacts)
+    loop = ('-' if run.read_to_write_ms is None
+            else ' / '.join(f'{v:.2f}' for v in run.read_to_write_ms))
     return (f'| {factor:g} | {layout} {index} | {run.outcome} | {contacts} | '
-            f'{run.robot_side:.0f} ({robot}) | {stand} | {missed} |')
+            f'{run.robot_side:.0f} ({robot}) | {stand} | {missed} | {loop} |')
 
 
 def summary(factor: float, runs: dict[str, list[Run]]) -> list[str]:
-    """Per layout: footprint range, and its ratios to the baseline of the same round."""
+    """Per layout: footprint range, and its ratios to the baseline (the first layout)."""
     lines = []
-    base = [r.robot_side for r in runs[BASELINE]]
+    baseline = next(iter(runs))
+    base = [r.robot_side for r in runs[baseline]]
     for layout, done in runs.items():
         sides = [r.robot_side for r in done]
         stand = {name: [r.cpu[name] for r in done if name in r.cpu] for name in TWIN_STAND}
@@ -160,9 +174,9 @@ def summary(factor: float, runs: dict[str, list[Run]]) -> list[str]:
                 f'of one core; twin stand '
                 + ', '.join(f'{name} {statistics.fmean(v):.0f} %' for name, v in stand.items()
                             if v))
-        if layout != BASELINE:
+        if layout != baseline:
             ratios = [s / b for s, b in zip(sides, base, strict=True) if b > 0]
-            text += ('; / separate, round by round: '
+            text += (f'; / {baseline}, round by round: '
                      + (', '.join(f'{r:.2f}' for r in ratios) or '-'))
         lines.append(text)
     return lines
@@ -176,19 +190,22 @@ def main() -> None:
                         metavar='F')
     parser.add_argument('--hardware', default='twin', help='twin or a hardware file')
     parser.add_argument('--scenario', default=SCENARIO)
+    parser.add_argument('--layouts', nargs='+', choices=list(LAYOUTS), default=list(LAYOUTS),
+                        help='the layouts to run; the first is the baseline of the ratios')
     args = parser.parse_args()
     sys.path[:0] = source_path().split(os.pathsep)
     print(f'load before: {" ".join(f"{v:.2f}" for v in os.getloadavg())} '
           f'({os.cpu_count()} CPUs); {args.scenario} --hardware {args.hardware}')
     print('| factor | layout | outcome | contacts | robot side, % of one core | '
-          'twin stand, % | missed % (worst loop process) |')
-    print('| --- | --- | --- | --- | --- | --- | --- |')
+          'twin stand, % | missed % (worst loop process) | loop read->write p50 / p99 / max, '
+          'ms |')
+    print('| --- | --- | --- | --- | --- | --- | --- | --- |')
     closing = []
     with tempfile.TemporaryDirectory(prefix='uvms_robot_side_') as directory:
         for factor in args.real_time_factors:
-            runs: dict[str, list[Run]] = {layout: [] for layout in LAYOUTS}
+            runs: dict[str, list[Run]] = {layout: [] for layout in args.layouts}
             for index in range(1, args.pairs + 1):
-                for layout in LAYOUTS:
+                for layout in args.layouts:
                     run = launch(layout, factor, args.hardware, args.scenario, Path(directory))
                     runs[layout].append(run)
                     print(row(factor, layout, index, run), flush=True)

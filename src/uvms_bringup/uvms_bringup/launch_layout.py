@@ -8,7 +8,7 @@ from dataclasses import replace
 
 from uvms_common.scheduling import Scheduling, fifo_refusal
 
-from uvms_bringup.launch_helpers import LOOP_NODES, SENSOR_BRIDGES, NodeSpec
+from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, LOOP_NODES, SENSOR_BRIDGES, NodeSpec
 from uvms_bringup.processes import NodeProcessSpec
 
 #: SCHED_FIFO priority steps between the control loop and the sensor bridges.
@@ -86,3 +86,13 @@ def composed_nodes(plan: NodeProcessSpec) -> str:
     command = list(plan.command)
     names = [arg.split(':=', 1)[1] for arg in command if arg.startswith('__node:=')]
     return '+'.join(names) if len(names) > 1 else ''
+
+
+def holds_bridge(plan: NodeProcessSpec) -> bool:
+    """Whether the process runs a hardware bridge (alone, or composed: the robot process).
+
+    Such a process stops before the others (``processes.Launcher.stop``): its devices, or
+    their twins, must still answer while it puts them back.
+    """
+    return plan.spec in HARDWARE_BRIDGES.values() or any(
+        name in HARDWARE_BRIDGES for name in composed_nodes(plan).split('+'))
