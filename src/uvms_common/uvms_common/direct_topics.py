@@ -80,13 +80,19 @@ class LoopTimer:
         """Whether the timer is cancelled."""
         return self.canceled
 
-    def due(self, now_s: float) -> bool:
-        """Whether its period has come (then the next is scheduled); never twice behind."""
+    def due(self, now_s: float, slack_s: float = 0.0) -> bool:
+        """Whether its period has come (then the next is scheduled); never twice behind.
+
+        Args:
+            now_s: The steady clock (s).
+            slack_s: How early a call still counts (half the loop's period: a loop tick a
+                little early must not make a 20 ms device period 22 ms).
+        """
         if self.canceled:
             return False
         if self.next_s is None or now_s - self.next_s > self.period_s:
             self.next_s = now_s
-        if now_s < self.next_s:
+        if now_s < self.next_s - slack_s:
             return False
         self.next_s += self.period_s
         return True

@@ -67,6 +67,7 @@ class RobotLoop:
         #: Periods that ran the control chain (new time on the node clock).
         self.steps = 0
         self._period_ns = round(1e9 / self.rate_hz * 0.999)
+        self._slack_s = 0.5 / self.rate_hz
         self._stepped_ns, self._stepped_period = -self._period_ns, 0
         self.wire()
 
@@ -116,7 +117,7 @@ class RobotLoop:
         """One period: due reads, the clock down the control chain, the writes."""
         start_ns = time.perf_counter_ns()
         now_s = self._steady.now().nanoseconds * 1e-9
-        fired = [timer for timer in list(self.bus.timers) if timer.due(now_s)]
+        fired = [timer for timer in list(self.bus.timers) if timer.due(now_s, self._slack_s)]
         for timer in fired:
             timer.read()
         now = self._clock_node.get_clock().now()
