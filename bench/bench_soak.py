@@ -291,6 +291,17 @@ def soak(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def suite_selection(test: str) -> list[str]:
+    """run_suite's arguments for a module or a node id (``path::name``).
+
+    run_suite selects groups by existing paths and hands every other argument to each
+    group's pytest: a node id alone would run the whole suite with it appended. The module's
+    path selects its group, ``-k`` the test.
+    """
+    path, _, name = test.partition('::')
+    return [path, '-k', name.split('[')[0]] if name else [path]
+
+
 def repeat_test(args: argparse.Namespace) -> int:
     """One test module or node id ``--runs`` times through the suite runner; 0 if all pass."""
     passes = 0
@@ -298,8 +309,8 @@ def repeat_test(args: argparse.Namespace) -> int:
     for run in range(args.runs):
         started = time.monotonic()
         result = subprocess.run([*netns, sys.executable, str(REPO / 'tools' / 'run_suite.py'),
-                                 args.test, '-q'], cwd=REPO, capture_output=True, text=True,
-                                check=False)
+                                 *suite_selection(args.test), '-q'], cwd=REPO,
+                                capture_output=True, text=True, check=False)
         passes += result.returncode == 0
         last = (result.stdout.strip().splitlines() or [''])[-1]
         print(f'{run + 1:4d} {"pass" if result.returncode == 0 else "FAIL"} '
