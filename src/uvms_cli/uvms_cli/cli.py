@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from uvms_common.node_entry import end_process
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent
+from uvms_sweep.ideal_devices import add_ideal_devices_argument, with_ideal_devices
 
 from uvms_cli.argument_types import port, positive_seconds, seconds_or_zero, seed
 
@@ -132,6 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="timed pilot commands played by the controller (YAML list; over the "
                           "scenario's pilot:, docs/piloting.md)")
     _add_params_file_argument(run)
+    add_ideal_devices_argument(run)
     _add_foxglove_arguments(run)
     launch = sub.add_parser(
         'launch', help="run the graph, one process per node, in real time for the scenario's "
@@ -164,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help=ROBOT_HELP)
     launch.add_argument('--quiet', '-q', action='store_true', help='only warnings and errors')
     _add_params_file_argument(launch)
+    add_ideal_devices_argument(launch)
     launch.add_argument(
         '--hardware', metavar='twin|FILE',
         help='drive the hardware bridges (ArduSub, DVL, Alpha 5, Net F/T) named by a hardware '
@@ -309,6 +312,8 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             from uvms_bringup.launch_helpers import config_dir
 
             hardware = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
+        if args.ideal_devices:
+            scenario = _with_ideal_devices(scenario)
         _check_robot(args.robot or (scenario.robot if scenario is not None else None))
         return launch_graph(scenario, args.mode, duration_s=duration,
                             output_path=args.output, quiet=args.quiet, stop=stop,
@@ -347,6 +352,8 @@ def _run_in_process(
             warning = short_duration_warning(scenario, scenario.duration_s)
         duration = args.duration if scenario is None else scenario.duration_s
         scenario = _with_params_files(scenario, args.params_file)
+        if args.ideal_devices:
+            scenario = _with_ideal_devices(scenario)
         _check_robot(args.robot or (scenario.robot if scenario is not None else None))
         if args.quiet:
             _quiet_logs()
@@ -376,6 +383,18 @@ def _with_params_files(scenario: Scenario | None, files: Sequence[str]) -> Scena
 
     specs = graph_nodes(record=False, estimator=uses_estimator(scenario))
     return apply_params_files(scenario, files, specs)
+
+
+def _with_ideal_devices(scenario: Scenario | None) -> Scenario:
+    """The scenario (a blank one if None) with ``--ideal-devices``' values over its own."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from uvms_scenarios.scenario import Scenario
+
+    base = scenario if scenario is not None else Scenario(
+        path=Path(), name='', description='', duration_s=0.0)
+    return replace(base, overrides=with_ideal_devices(base.overrides))
 
 
 def _run_graph_and_report(

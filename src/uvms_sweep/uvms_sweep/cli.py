@@ -10,10 +10,13 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from uvms_common.node_main import StopEvent
 from uvms_common.ros_environment import ros_environment_defaults
+
+from uvms_sweep.ideal_devices import add_ideal_devices_argument, with_ideal_devices
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -64,6 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--out', '-o', required=True, metavar='DIR',
                         help='output directory: points.csv, figures/, mcap/, logs/')
     add_ray_arguments(parser, 'points')
+    add_ideal_devices_argument(parser)
     return parser
 
 
@@ -105,6 +109,8 @@ def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     except GraphError as exc:
         _error(str(exc))
         return EXIT_FAILURE
+    if args.ideal_devices:  # every point's request carries the base scenario's overrides
+        scenario = replace(scenario, overrides=with_ideal_devices(scenario.overrides))
     if warning := duration_warning(sweep, scenario):
         print(f'uvms sweep: warning: {warning}', file=sys.stderr)
     if stop.is_set():

@@ -334,8 +334,12 @@ def _dispatch(
 def point_request(
     sweep: Sweep, scenario: Scenario, point: SweepPoint, duration_s: float
 ) -> dict[str, Any]:
-    """What the point process needs: base scenario, its parameters, seed and duration."""
-    overrides: dict[str, dict[str, Any]] = {}
+    """What the point process needs: base scenario, its parameters, seed and duration.
+
+    The overrides are the base scenario's as given (its file's, with what the command line
+    set over them: ``--ideal-devices``), then the point's axes.
+    """
+    overrides = {node: dict(values) for node, values in scenario.overrides.items()}
     for axis in sweep.axes:
         overrides.setdefault(axis.node, {})[axis.parameter] = point.values[axis.name]
     return {'point_id': point.point_id, 'scenario_path': str(scenario.path.resolve()),

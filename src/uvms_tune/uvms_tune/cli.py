@@ -10,13 +10,17 @@ from __future__ import annotations
 import argparse
 import shutil
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from uvms_common.node_main import StopEvent
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_sweep.cli import add_ray_arguments, positive_int
+from uvms_sweep.ideal_devices import add_ideal_devices_argument, with_ideal_devices
+
+if TYPE_CHECKING:
+    from uvms_tune.driver import Runner
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -41,6 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help='continue the tune in --out from its journal')
     parser.add_argument('--out', '-o', metavar='DIR',
                         help='output folder (default: out/tune/NAME)')
+    add_ideal_devices_argument(parser)
     parser.add_argument('--apply', action='store_true',
                         help='also write the gains as robots/NAME/controller_tuned.yaml, beside '
                              'the hand-tuned controller.yaml')
@@ -83,7 +88,8 @@ def _tune(args: argparse.Namespace, stop: StopEvent) -> int:
     try:
         with PointBatches(args.address, args.workers, stop) as batches:
             try:
-                tuner = Tuner(tune, out_dir, batches.run, resume=args.resume)
+                runner = _ideal_devices_runner(batches.run) if args.ideal_devices else batches.run
+                tuner = Tuner(tune, out_dir, runner, resume=args.resume)
             except TuneError as exc:
                 return _error(str(exc), EXIT_USAGE)
             if tune.path.resolve() != (out_dir / 'tune.yaml').resolve():
@@ -92,6 +98,14 @@ def _tune(args: argparse.Namespace, stop: StopEvent) -> int:
             return _finish(tuner, trials, apply=args.apply)
     except SweepEngineError as exc:
         return _error(str(exc), EXIT_FAILURE)
+
+
+def _ideal_devices_runner(run: Runner) -> Runner:
+    """``run`` with ``--ideal-devices``' values over every point request's overrides."""
+    def ideal(requests: Sequence[Mapping[str, Any]], timeout_s: float) -> list[dict[str, Any]]:
+        return run([{**request, 'overrides': with_ideal_devices(request['overrides'])}
+                    for request in requests], timeout_s)
+    return ideal
 
 
 def _run_trials(tuner: Any, trials: int, stop: StopEvent, *, quiet: bool) -> None:
