@@ -193,3 +193,37 @@ def test_uvms_task_exits_with_its_status_although_the_dds_teardown_would_hang(
     assert result.returncode == 0, result.stderr
     assert 'approach: SUCCEEDED' in result.stdout
     assert time.monotonic() - started < 30.0
+
+
+#: The mission as ``uvms launch`` starts it, with rclpy's ActionClient.destroy made to hang.
+_MISSION_WITH_A_HANGING_TEARDOWN = textwrap.dedent("""
+    import time
+    import rclpy.action.client
+    rclpy.action.client.ActionClient.destroy = lambda self: time.sleep(3600)
+    from uvms_common.node_entry import run_node_module
+    run_node_module('uvms_tasks.mission_node')
+""")
+
+
+def test_a_mission_whose_task_succeeded_exits_0_although_the_dds_teardown_would_hang(
+        tmp_path: Path) -> None:
+    """Issue 48: ``Timeout (0:00:02)!`` in ``ActionClient.destroy`` and exit 1 after SUCCEEDED.
+
+    The mission process leaves without the middleware's teardown: 0, at once, no stack.
+    """
+    mission_file = tmp_path / 'mission.yaml'
+    mission_file.write_text(yaml.safe_dump({'mission': [TASK]}))
+    graph = _Spun()
+    try:
+        graph.add(_server(graph.context, state=True))
+        started = time.monotonic()
+        result = subprocess.run(
+            [sys.executable, '-c', _MISSION_WITH_A_HANGING_TEARDOWN, '--ros-args', '-r',
+             '__ns:=/uvms', '-p', f'mission_file:={mission_file}'], env=_env(),
+            capture_output=True, text=True, timeout=60, check=False)
+    finally:
+        graph.close()
+    assert result.returncode == 0, result.stderr
+    assert 'mission done: 1 of 1 task(s) succeeded' in result.stderr
+    assert 'Timeout' not in result.stderr and 'Traceback' not in result.stderr, result.stderr
+    assert time.monotonic() - started < 30.0

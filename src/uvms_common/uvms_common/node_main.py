@@ -223,12 +223,15 @@ def middleware_teardown_skipped() -> Iterator[None]:
     For a process about to end: a node's ``destroy_node`` override then does its own work
     (cancel a goal, put a device back) and its ``super().destroy_node()`` returns at once.
     Bound methods taken before the block (``own(self.destroy_timer, ...)``) still destroy.
+    Only modules already imported are patched: a process without an action server has none
+    to skip, and importing ``rclpy.action`` at its stop cost it time on a loaded machine.
     """
-    import importlib
-
     saved: list[tuple[type, str, object]] = []
     for module_name, class_name, methods in _TEARDOWN_METHODS:
-        cls = getattr(importlib.import_module(module_name), class_name)
+        module = sys.modules.get(module_name)
+        if module is None:
+            continue
+        cls = getattr(module, class_name)
         for method in methods:
             saved.append((cls, method, cls.__dict__[method]))
             setattr(cls, method, lambda self, *args, **kwargs: True)

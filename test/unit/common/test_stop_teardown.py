@@ -81,3 +81,25 @@ def test_a_hanging_action_client_destroy_is_not_called_when_skipped(
         ActionClient.destroy(object())  # type: ignore[arg-type]
     assert time.monotonic() - started < 1.0
     assert ActionClient.destroy is hang
+
+
+_STOP_WITHOUT_ACTIONS = """
+import sys
+from rclpy.node import Node
+from uvms_common import node_entry
+from uvms_common.node_main import run_node
+
+node_entry.mark_process_ends_after_main()
+status = run_node(lambda: Node('no_actions'), [], 'no_actions', finished=lambda node: True)
+print(status, 'rclpy.action.server' in sys.modules, 'rclpy.action.client' in sys.modules)
+"""
+
+
+def test_a_node_process_without_actions_imports_none_at_its_stop() -> None:
+    """Skipping the teardown imports no rclpy.action (over 1 s at its stop under load)."""
+    import subprocess
+    import sys
+
+    result = subprocess.run([sys.executable, '-c', _STOP_WITHOUT_ACTIONS], capture_output=True,
+                            text=True, timeout=120, check=False)
+    assert result.stdout.split() == ['0', 'False', 'False'], result.stdout + result.stderr
