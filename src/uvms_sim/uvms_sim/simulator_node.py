@@ -106,7 +106,7 @@ class SimulatorNode(Node):
 
         Args:
             plant_side: Builds the devices served in this process (given the node, once its
-                parameters are declared); None: the device-side topics, as always.
+                parameters are declared and its plant built); None: the device-side topics.
             **kwargs: For rclpy's ``Node``.
         """
         super().__init__('simulator', **kwargs)
