@@ -57,7 +57,9 @@ def start_loop(nodes: Sequence[Node]) -> RobotLoop:
     robot_loop.start(controller)
     rclpy.logging.get_logger(LOGGER).info(
         f'robot loop at {rate_hz:g} Hz: {len(bus.timers)} device timers, direct topics '
-        + ', '.join(sorted(t for t, subs in bus.subscriptions.items() if subs)))
+        + ', '.join(sorted(t for t, subs in bus.subscriptions.items() if subs))
+        + (f'; on DDS (no publisher in the process): {", ".join(robot_loop.fallbacks)}'
+           if robot_loop.fallbacks else ''))
     return robot_loop
 
 

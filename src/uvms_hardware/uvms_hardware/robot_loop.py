@@ -64,12 +64,28 @@ class RobotLoop:
         self.writes = 0
         self.delivered: Counter[tuple[str, str]] = Counter()
         self.timer: Any = None
+        self.fallbacks = self._fall_back_to_dds()
         #: Periods that ran the control chain (new time on the node clock).
         self.steps = 0
         self._period_ns = round(1e9 / self.rate_hz * 0.999)
         self._slack_s = 0.5 / self.rate_hz
         self._stepped_ns, self._stepped_period = -self._period_ns, 0
         self.wire()
+
+    def _fall_back_to_dds(self) -> list[str]:
+        """A DDS subscription for each direct one that no node of the process publishes.
+
+        A topic the process does not make (a device another process bridges) still comes
+        in, through DDS; ``/clock`` is the loop's own.
+        """
+        published = {pub.topic_name for node in self.nodes for pub in node.publishers}
+        out = []
+        for sub in list(self.bus.all()):
+            if sub.topic != '/clock' and sub.topic not in published and sub.fallback is None:
+                sub.fallback = sub.node.create_subscription(sub.msg_type, sub.topic,
+                                                            sub.callback, sub.qos, raw=sub.raw)
+                out.append(f'{sub.node.get_name()}:{sub.topic}')
+        return out
 
     def start(self, node: Node) -> None:
         """The loop's timer, on ``node`` (the steady clock: /clock bursts drop no period)."""
@@ -147,8 +163,10 @@ class RobotLoop:
     def dds_inputs(self) -> list[str]:
         """Subscriptions of the process's nodes on DDS for a topic the bus serves."""
         served = set(self.bus.subscriptions) - {'/clock'}  # /clock: the nodes' time source
+        fallbacks = {id(sub.fallback) for sub in self.bus.all()}
         return [f'{node.get_name()}:{sub.topic_name}' for node in self.nodes
-                for sub in node.subscriptions if sub.topic_name in served]
+                for sub in node.subscriptions
+                if sub.topic_name in served and id(sub) not in fallbacks]
 
     def summary(self) -> str:
         """One line: periods, the read-to-write time, the deliveries per edge."""
@@ -161,4 +179,6 @@ class RobotLoop:
         dds = self.dds_inputs()
         return (f'robot loop: {self.periods} periods at {self.rate_hz:g} Hz, {self.steps} '
                 f'control steps, {self.writes} with a thruster write; {figures}; direct: '
-                f'{edges or "none"}; DDS inputs on direct topics: {", ".join(dds) or "none"}')
+                f'{edges or "none"}; DDS inputs on direct topics: {", ".join(dds) or "none"}'
+                + (f'; on DDS (no publisher in the process): {", ".join(self.fallbacks)}'
+                   if self.fallbacks else ''))
