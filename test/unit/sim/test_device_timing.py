@@ -83,7 +83,7 @@ def test_bluerov2_alpha5_declares_device_timing_and_the_paper_robot_none() -> No
     """The BlueROV2 + Alpha 5 folder declares its timing; the paper robot none."""
     bluerov = robot_parameters('bluerov2_alpha5', 'simulator')
     assert bluerov['devices.thrusts.rate_hz'].value == 50.0
-    assert bluerov['devices.ideal'].value is False  # its timing by default (issue 49)
+    assert bluerov['devices.ideal'].value is True  # until the controller holds at its rates
     assert bluerov['devices.joint_states.rate_hz'].value < 500.0
     assert bluerov['devices.thrusts.rate_hz'].source.name == 'device_timing.yaml'
     for name, item in bluerov.items():
