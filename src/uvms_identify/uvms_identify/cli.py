@@ -78,8 +78,10 @@ def _joint_count(robot: Any) -> int:
 
 
 def _fit(args: argparse.Namespace) -> int:
+    from uvms_identify.actuator_output import write_thrusters, write_urdf
     from uvms_identify.identify import identify
     from uvms_identify.output import (
+        provenance,
         write_figures,
         write_hydrodynamics,
         write_report,
@@ -92,10 +94,16 @@ def _fit(args: argparse.Namespace) -> int:
     figures = write_figures(result, args.out)
     hydrodynamics = write_hydrodynamics(result, args.out, figures)
     report = write_report(result, args.out, figures)
+    header = provenance(result, figures)
+    written = [hydrodynamics, write_thrusters(result, args.out, header)]
+    urdf = write_urdf(result, args.out, header)
+    if urdf is not None:
+        written.append(urdf)
     well = sum(result.fit.well_determined(j) for j in range(len(result.fit.theta)))
     fitted = sum(result.fit.identified(j) for j in range(len(result.fit.theta)))
     print(f'uvms identify: {fitted} of {len(result.fit.theta)} terms identified ({well} within '
-          f'10 %); wrote {hydrodynamics}, {report} and {len(figures)} figures')
+          f'10 %); wrote {", ".join(str(p) for p in written)}, {report} and {len(figures)} '
+          'figures')
     return EXIT_OK
 
 

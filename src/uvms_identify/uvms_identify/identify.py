@@ -9,6 +9,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from uvms_identify.actuators import (
+    Term,
+    ThrustPath,
+    checked_gain,
+    fit_joint_friction,
+    search_thrust_path,
+)
 from uvms_identify.errors import IdentifyError
 from uvms_identify.fit import HullFit, fit_hull
 from uvms_identify.known_terms import ZERO_HULL, known_forces, model_with_hull
@@ -25,6 +32,9 @@ HORIZONS_S = (1.0, 10.0)
 #: Delays searched between the recorded thrusts and the force they make (s): the thruster's
 #: lag and the command's transport, as one delay (the recorded thrust at t acts at t + d).
 DELAYS_S = tuple(round(float(d), 3) for d in np.arange(-0.04, 0.0801, 0.005))
+#: The rows of the thrust gain's check: the gain from them alone must agree with the gain
+#: from all rows (``uvms_identify.actuators.checked_gain``).
+TRANSLATION_AXES = (0, 1, 2)
 
 
 @dataclass
@@ -40,6 +50,10 @@ class Identification:
         errors: Per model ('identified', 'current') and horizon: RMS velocity error (6,).
         windows: Per horizon, the number of held-out windows.
         delay_s: The delay between the recorded thrusts and the force that fits best (s).
+        thrust: The thrusts' gain, lag and delay (``uvms_identify.actuators``).
+        joint_friction: Per arm joint, viscous and Coulomb friction (empty without joint
+            torques recorded).
+        joint_names: The arm's joints, in the model's order.
     """
 
     robot: RobotData
@@ -51,6 +65,9 @@ class Identification:
     errors: dict[tuple[str, float], FloatArray] = field(default_factory=dict)
     windows: dict[float, int] = field(default_factory=dict)
     delay_s: float = 0.0
+    thrust: ThrustPath | None = None
+    joint_friction: list[Term] = field(default_factory=list)
+    joint_names: list[str] = field(default_factory=list)
 
 
 def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
@@ -68,6 +85,7 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
     training: list[Series] = []
     held_out: list[Series] = []
     knowns: list[FloatArray] = []
+    arm_knowns: list[FloatArray] = []
     phis: list[FloatArray] = []
     for path in paths:
         series = read_series(path, robot, velocity=velocity)
@@ -85,32 +103,46 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
                 if len(piece.t_s) >= 3:
                     target.append(piece)
         for train in training[len(knowns):]:
-            knowns.append(known_forces(model, train.rpy, train.joints, train.nu,
-                                       train.joint_rates, train.nu_dot,
-                                       train.joint_accelerations))
+            everything = known_forces(model, train.rpy, train.joints, train.nu,
+                                      train.joint_rates, train.nu_dot,
+                                      train.joint_accelerations, slice(0, None))
+            knowns.append(everything[:, :6])
+            arm_knowns.append(everything[:, 6:])
             phis.append(hull_regressor(train.nu, train.nu_dot, train.gravity_body))
     if not knowns:
         raise IdentifyError('no stretch of the recordings has a measured velocity for '
                             f'{MIN_SEGMENT_S:g} s (the DVL never kept bottom lock)')
     phi = np.concatenate(phis)
-    best: tuple[float, float, HullFit] | None = None
-    for delay in DELAYS_S:
-        y = np.concatenate([delayed(train, delay).tau - known
-                            for train, known in zip(training, knowns, strict=True)])
-        candidate = fit_hull(y, phi, prior, fixed)
-        scale = np.sqrt(np.mean(y**2, axis=0))
-        scale[scale == 0.0] = 1.0
-        score = float(np.sum((candidate.residual_std / scale) ** 2))
-        if best is None or score < best[0]:
-            best = (score, delay, candidate)
-    assert best is not None
-    _, delay, fit = best
-    result = Identification(robot, list(paths), fit, prior, training, held_out, delay_s=delay)
+    known_all = np.concatenate(knowns)
+    # Rows weighted as the hull's fit weighs them (its residual per axis at the recorded
+    # thrusts), then the thrusts' gain, lag and delay that fit best, then the hull's terms.
+    first = fit_hull(np.concatenate([s.tau for s in training]) - known_all, phi, prior, fixed)
+    sigma = first.residual_std.copy()
+    sigma[sigma == 0.0] = 1.0
+    times, wrenches = [s.t_s for s in training], [s.tau for s in training]
+    thrust = search_thrust_path(times, wrenches, knowns, phi, 1.0 / sigma, DELAYS_S)
+    translation = np.where(np.isin(np.arange(6), TRANSLATION_AXES), 1.0 / sigma, 0.0)
+    thrust = checked_gain(thrust, search_thrust_path(
+        times, wrenches, knowns, phi, translation, (thrust.delay_s,),
+        (thrust.time_constant.value,)).gain)
+    y = np.concatenate([thrust.wrench(s.t_s, s.tau) for s in training]) - known_all
+    fit = fit_hull(y, phi, prior, fixed)
+    names = list(model.joint_names)
+    friction: list[Term] = []
+    if all(s.joint_torques.shape[1] == model.n_joints for s in training) and model.n_joints:
+        friction = fit_joint_friction(
+            np.concatenate([s.joint_rates for s in training]),
+            np.concatenate([s.joint_torques for s in training]) - np.concatenate(arm_knowns),
+            names)
+    result = Identification(robot, list(paths), fit, prior, training, held_out,
+                            delay_s=thrust.delay_s, thrust=thrust, joint_friction=friction,
+                            joint_names=names)
     if predict:
         excited = excited_axes(held_out)
         for horizon in HORIZONS_S:
-            for name, theta, d in (('identified', fit.theta, delay), ('current', prior, 0.0)):
-                inputs = [delayed(s, d) for s in held_out]
+            for name, theta, thrust_path in (('identified', fit.theta, thrust),
+                                      ('current', prior, None)):
+                inputs = [driven(s, thrust_path) for s in held_out]
                 errors = np.full(6, np.nan)
                 total = 0
                 for axis in range(6):
@@ -121,6 +153,15 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
                 result.errors[(name, horizon)] = errors
                 result.windows[horizon] = total
     return result
+
+
+def driven(series: Series, path: ThrustPath | None) -> Series:
+    """``series`` with the wrench its thrusts make through ``path`` (None: as recorded)."""
+    if path is None:
+        return series
+    shifted = copy.copy(series)
+    shifted.tau = path.wrench(series.t_s, series.tau)
+    return shifted
 
 
 def delayed(series: Series, delay_s: float) -> Series:

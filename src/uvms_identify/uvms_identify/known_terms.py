@@ -67,8 +67,8 @@ def total_weight_n(robot: RobotData) -> float:
 
 def known_forces(model: UvmsModel, attitude_rpy: FloatArray, joints: FloatArray,
                  nu: FloatArray, joint_rates: FloatArray, nu_dot: FloatArray,
-                 joint_accelerations: FloatArray) -> FloatArray:
-    """Vehicle rows (N, 6) of ``M_0 w_dot + bias_0(q, w)`` per sample.
+                 joint_accelerations: FloatArray, rows: slice = slice(0, 6)) -> FloatArray:
+    """Rows ``rows`` (vehicle: 0..5, arm: 6..) of ``M_0 w_dot + bias_0(q, w)`` per sample.
 
     Args:
         model: ``model_with_hull(robot, ZERO_HULL)``.
@@ -78,9 +78,11 @@ def known_forces(model: UvmsModel, attitude_rpy: FloatArray, joints: FloatArray,
         joint_rates: Arm joint rates (N, n) (rad/s).
         nu_dot: Body accelerations (N, 6).
         joint_accelerations: Arm joint accelerations (N, n) (rad/s^2).
+        rows: The generalized coordinates wanted: the vehicle's by default; ``slice(0,
+            None)`` for all (the arm rows hold no hull term: the hull acts on the base).
     """
     n = nu.shape[0]
-    out = np.empty((n, 6))
+    out = np.empty((n, len(range(model.n_dof)[rows])))
     q = np.zeros(model.n_dof)
     w = np.zeros(model.n_dof)
     w_dot = np.zeros(model.n_dof)
@@ -91,7 +93,7 @@ def known_forces(model: UvmsModel, attitude_rpy: FloatArray, joints: FloatArray,
         w[6:] = joint_rates[k]
         w_dot[:6] = nu_dot[k]
         w_dot[6:] = joint_accelerations[k]
-        out[k] = (model.mass_matrix_body(q)[:6] @ w_dot + model.bias_body(q, w)[:6])
+        out[k] = (model.mass_matrix_body(q)[rows] @ w_dot + model.bias_body(q, w)[rows])
     return out
 
 

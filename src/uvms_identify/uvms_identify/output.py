@@ -12,7 +12,8 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from uvms_identify.identify import HORIZONS_S, Identification, delayed
+from uvms_identify.actuator_output import report_lines
+from uvms_identify.identify import HORIZONS_S, Identification, driven
 from uvms_identify.known_terms import ZERO_HULL, model_with_hull, net_buoyancy_n
 from uvms_identify.predict import simulate
 from uvms_identify.regressor import (
@@ -67,6 +68,17 @@ def hull_entry(result: Identification) -> dict[str, object]:
             'center_of_buoyancy_m': [float(v) for v in center]}
 
 
+def provenance(result: Identification, figures: list[Path]) -> list[str]:
+    """Comment lines: when, from which commit, the recordings (sha256 prefix), the figures."""
+    return [
+        f'# Written {datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")} from '
+        f'commit {git_commit()}.',
+        '# Recordings (sha256 prefix):',
+        *(f'#   {path} ({_sha256(path)})' for path in result.recordings),
+        '# Fit figures: ' + ', '.join(p.name for p in figures) + ' (beside report.md).',
+    ]
+
+
 def write_hydrodynamics(result: Identification, out: Path, figures: list[Path]) -> Path:
     """DIR/hydrodynamics.yaml: the robot folder's file with the identified hull, provenance."""
     robot = result.robot
@@ -76,15 +88,12 @@ def write_hydrodynamics(result: Identification, out: Path, figures: list[Path]) 
     lines = [
         f'# Hydrodynamic parameters of robot {robot.name}: the hull ({ROOT_LINK}) identified by',
         '# `uvms identify fit` (docs/identification.md); the arm links as in the robot folder.',
-        f'# Written {datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")} from '
-        f'commit {git_commit()}.',
-        '# Recordings (sha256 prefix):',
-        *(f'#   {path} ({_sha256(path)})' for path in result.recordings),
-        '# Fit figures: ' + ', '.join(p.name for p in figures) + ' (beside report.md).',
+        *provenance(result, figures),
         '# Prior (terms the data could not identify keep it): '
         f'{robot.files.hydrodynamics}',
         f'# Thrust delay: {1000 * result.delay_s:+.0f} ms (the recorded thrust at t acts at '
-        't + delay; fitted with the terms, not a key of this file).',
+        "t + delay; fitted with the terms, not a key of this file); the thrusters' gain and "
+        'lag: thrusters.yaml and report.md.',
         '# Per term: fitted value +- 95 % CI, or why it kept the prior:',
     ]
     for j, name in enumerate(PARAMETER_NAMES):
@@ -125,7 +134,7 @@ def write_figures(result: Identification, out: Path) -> list[Path]:
         if len(series.t_s) < 3:
             continue
         steps = len(series.t_s) - 1
-        identified = simulate(model, result.fit.theta, delayed(series, result.delay_s), 0,
+        identified = simulate(model, result.fit.theta, driven(series, result.thrust), 0,
                               steps)
         current = simulate(model, result.prior, series, 0, steps)
         figure, axes = plt.subplots(3, 2, figsize=(11, 8), sharex=True)
@@ -162,8 +171,9 @@ def write_report(result: Identification, out: Path, figures: list[Path]) -> Path
              f'{robot.files.hydrodynamics}.', '',
              f'Thrust delay: {1000 * result.delay_s:+.0f} ms: the recorded thrusts fit best as '
              'acting this much later (negative: earlier) than stamped; searched over '
-             '-40..+80 ms with the terms; the held-out predictions of the identified model use '
-             'it, those of the robot folder do not.', '',
+             '-40..+80 ms with the thrusters\' gain and lag and the terms ("Actuators" below); '
+             'the held-out predictions of the identified model use them, those of the robot '
+             'folder do not.', '',
              '## Terms', '',
              '| term | identified | 95 % CI | robot folder | change | status |',
              '| --- | --- | --- | --- | --- | --- |']
@@ -203,9 +213,10 @@ def write_report(result: Identification, out: Path, figures: list[Path]) -> Path
                      + ' | '.join(cells) + ' |')
     windows = ', '.join(f'{count} windows of {h:g} s' for h, count in result.windows.items())
     lines += ['', f'Held-out errors: RMS of the velocity error at the horizon, predicted from '
-              f'the measured velocity with the recorded thrusts, attitude and arm ({windows}, '
+              f'the measured velocity and attitude with the recorded thrusts and arm ({windows}, '
               'the last 30 % of each recording; each axis over the recordings that excite it '
-              'most, all recordings for an axis none excites most).', '', '## Figures', '']
+              'most, all recordings for an axis none excites most).', '',
+              *report_lines(result), '## Figures', '']
     lines += [f'![{p.stem}]({p.name})' for p in figures]
     path = out / 'report.md'
     path.write_text('\n'.join(lines) + '\n', encoding='utf-8')

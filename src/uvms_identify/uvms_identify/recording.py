@@ -62,6 +62,8 @@ class Series:
         depth_m: Depth (N,) (m), NaN without a depth topic.
         valid: Where the velocity is measured (N,): False within the smoothing window of a
             gap of the velocity topic (a DVL without bottom lock).
+        joint_torques: The arm's torques commanded (``command/actuators``) (N, n) (N m),
+            smoothed as the rest; (N, 0) when the recording holds none.
     """
 
     source: Path
@@ -77,12 +79,13 @@ class Series:
     thrusts: FloatArray
     depth_m: FloatArray
     valid: NDArray[np.bool_]
+    joint_torques: FloatArray
 
     def window(self, mask: NDArray[np.bool_]) -> Series:
         """The samples where ``mask`` holds."""
         return Series(self.source, *(getattr(self, f)[mask] for f in (
             't_s', 'nu', 'nu_dot', 'rpy', 'gravity_body', 'joints', 'joint_rates',
-            'joint_accelerations', 'tau', 'thrusts', 'depth_m', 'valid')))
+            'joint_accelerations', 'tau', 'thrusts', 'depth_m', 'valid', 'joint_torques')))
 
 
 def _stamp(message: object) -> float:
@@ -131,6 +134,7 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     if depth_topic:
         topic_of[depth_topic] = '/depth'
     rows: dict[str, list[tuple[float, list[float]]]] = {s: [] for s in topic_of.values()}
+    torque_rows: list[tuple[float, list[float]]] = []
     typestore = uvms_typestore()
     try:
         for message in recording.messages(topic_of):
@@ -150,6 +154,7 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
                 rows[suffix].append((t, [*msg.position, *msg.velocity]))
             elif suffix == '/command/actuators':
                 rows[suffix].append((t, list(msg.thrust)))
+                torque_rows.append((t, list(msg.joint_torques)))
             else:
                 rows[suffix].append((t, [msg.pose.pose.position.z]))
     except RecordingError as exc:
@@ -202,6 +207,16 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     # The thrusts pass the same Savitzky-Golay smoothing as the velocities whose derivative
     # they balance: a force against a smoothed acceleration would read as extra mass.
     thrusts = smooth_and_differentiate(resample(thrust_t, thrust, grid), dt, window_s)[0]
+    torque_t = np.array([row[0] for row in torque_rows if len(row[1]) == n_joints])
+    if n_joints and torque_t.size > 3:
+        torque = np.array([row[1] for row in torque_rows if len(row[1]) == n_joints], float)
+        order = np.argsort(torque_t, kind='stable')
+        torque_t, torque = torque_t[order], torque[order]
+        keep_torque = np.r_[True, np.diff(torque_t) > 0.0]
+        joint_torques = smooth_and_differentiate(resample(
+            torque_t[keep_torque], torque[keep_torque], grid), dt, window_s)[0]
+    else:
+        joint_torques = np.zeros((grid.size, 0))
     depth = (resample(*series['/depth'], grid)[:, 0] if '/depth' in series
              else np.full(grid.size, np.nan))
     trim = round(window_s / dt)
@@ -214,7 +229,8 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     keep = slice(trim, grid.size - trim)
     result = Series(path, grid - grid[0], nu, nu_dot, euler_zyx(rotations),
                     rotations[:, 2, :], joints, joint_rates, joint_accelerations,
-                    thrusts @ robot.thrust_matrix.T, thrusts, depth, valid).window(
+                    thrusts @ robot.thrust_matrix.T, thrusts, depth, valid,
+                    joint_torques).window(
                         np.isin(np.arange(grid.size), np.arange(grid.size)[keep]))
     if float(np.abs(result.nu).max()) < MIN_SPEED:
         raise IdentifyError(f'{path}: no excitation: the vehicle never moved faster than '

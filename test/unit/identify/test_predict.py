@@ -53,7 +53,8 @@ def _run(robot: RobotData, duration_s: float, disturbance: np.ndarray) -> Series
     return Series(Path('synthetic'), t[grid], nu, np.gradient(nu, DT * EVERY, axis=0),
                   qs[grid, 3:6], rotations[:, 2, :], qs[grid, 6:], joint_rates,
                   np.gradient(joint_rates, DT * EVERY, axis=0), wrench[grid],
-                  np.zeros((nu.shape[0], n)), qs[grid, 2], np.ones(nu.shape[0], bool))
+                  np.zeros((nu.shape[0], n)), qs[grid, 2], np.ones(nu.shape[0], bool),
+                  np.zeros((nu.shape[0], n)))
 
 
 def test_rotation_step_is_the_exponential_of_the_body_rates() -> None:
