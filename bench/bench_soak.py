@@ -315,6 +315,9 @@ def repeat_test(args: argparse.Namespace) -> int:
         last = (result.stdout.strip().splitlines() or [''])[-1]
         print(f'{run + 1:4d} {"pass" if result.returncode == 0 else "FAIL"} '
               f'{time.monotonic() - started:6.1f} s  {last}', flush=True)
+        for line in result.stdout.splitlines():
+            if line.startswith(('FAILED ', 'ERROR ')):
+                print(f'       {line[:200]}', flush=True)  # which test, and why
     print(f'{passes} of {args.runs} runs passed: {args.test}')
     return 0 if passes == args.runs else 1
 
