@@ -110,11 +110,11 @@ def _wait(done: object, timeout_s: float) -> bool:
 def test_a_mission_without_a_controller_gives_up_naming_the_action_server(
         spun: _Spun) -> None:
     """Before, it waited for ever ('waiting for the action server and controller/state')."""
+    started = time.monotonic()  # the bound counts from the node's creation
     mission = _mission(spun.context, 0.5)
     spun.add(mission)
-    started = time.monotonic()
     assert _wait(lambda: mission.finished, 10.0), 'the mission still waits'
-    assert 0.4 < time.monotonic() - started < 5.0
+    assert 0.5 <= time.monotonic() - started < 5.0
     assert mission.gave_up == 'action server /uvms/controller/contact_task'
     assert not mission.succeeded and not mission.sent_goals
 
