@@ -131,7 +131,8 @@ def _project(q: FloatArray, x: FloatArray) -> FloatArray:
 def search_thrust_path(series_t: list[FloatArray], series_tau: list[FloatArray],
                        known: list[FloatArray], phi: FloatArray, weights: FloatArray,
                        delays_s: tuple[float, ...],
-                       time_constants_s: tuple[float, ...] = TIME_CONSTANTS_S) -> ThrustPath:
+                       time_constants_s: tuple[float, ...] = TIME_CONSTANTS_S,
+                       gain: Term | None = None) -> ThrustPath:
     """The gain, lag and delay of the thrusts that fit the hull's equation best.
 
     Args:
@@ -142,6 +143,7 @@ def search_thrust_path(series_t: list[FloatArray], series_tau: list[FloatArray],
         weights: Per axis, the rows' weight (6,): inverse residual standard deviation.
         delays_s: The delays searched (s).
         time_constants_s: The lags searched (s).
+        gain: A gain already decided (its value is used, not fitted), or None to fit it.
     """
     n = phi.shape[0]
     a = (phi * weights[None, :, None]).reshape(n * 6, phi.shape[2])
@@ -161,7 +163,10 @@ def search_thrust_path(series_t: list[FloatArray], series_tau: list[FloatArray],
             g_perp = _project(q, (drive * weights).reshape(rows))
             y_perp = g_perp - known_perp
             gg = float(g_perp @ g_perp)
-            c = float(g_perp @ y_perp) / gg if gg > 0.0 else 0.0
+            if gain is not None:
+                c = 1.0 - gain.value
+            else:
+                c = float(g_perp @ y_perp) / gg if gg > 0.0 else 0.0
             residual = y_perp - c * g_perp
             scores[(time_constant, delay)] = (float(residual @ residual), c, gg)
     (time_constant, delay), (best, c, gg) = min(scores.items(), key=lambda item: item[1][0])
@@ -201,8 +206,9 @@ def search_thrust_path(series_t: list[FloatArray], series_tau: list[FloatArray],
     gain_ci = 1.96 * math.sqrt(s2 / gg) if gg > 0.0 else math.inf
     gain_status = status_of(gain_value, gain_ci, 1.0) if gg > 0.0 else \
         'unidentifiable: not excited'
-    gain = Term('thrust_gain', gain_value if not gain_status.startswith('unidentifiable')
-                else 1.0, gain_ci, gain_status, '-')
+    if gain is None:
+        gain = Term('thrust_gain', gain_value if not gain_status.startswith('unidentifiable')
+                    else 1.0, gain_ci, gain_status, '-')
     return ThrustPath(gain, lag, delay, weights)
 
 
