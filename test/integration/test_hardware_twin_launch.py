@@ -17,6 +17,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import pytest
 from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_typestore
 
@@ -28,18 +29,37 @@ THROUGH_THE_GRAPH = ('/uvms/odometry/filtered', '/uvms/command/generalized_force
                      '/uvms/command/actuators')
 
 
-def test_the_graph_runs_on_the_bridges_against_the_twins(tmp_path: Path) -> None:
-    """Every input from a bridge, the estimate from them, the command out; exit 0."""
+#: The layouts: the default (the robot loop: bridges, estimator, controller and allocator in
+#: one process and one loop; the twins in the simulator's process), and one process per node
+#: with the twins in a process of their own.
+LAYOUTS = {'robot_loop': (), 'apart': ('--compose', 'none', '--twins-apart')}
+
+
+@pytest.mark.parametrize('layout', list(LAYOUTS))
+def test_the_graph_runs_on_the_bridges_against_the_twins(tmp_path: Path, layout: str) -> None:
+    """Every input from a bridge, the estimate from them, the command out; exit 0.
+
+    The run ends at its duration: the bridges put their devices back while the twins still
+    answer (with the twins in the simulator's process, the simulator serves them until the
+    launcher has stopped the robot process).
+    """
     output = tmp_path / 'twin.mcap'
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p),
                PYTHONUNBUFFERED='1')
     process = subprocess.run(
         [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'idle_wall', '--robot',
          'bluerov2_alpha5', '--hardware', 'twin', '--duration', '5', '--real-time-factor', '0.25',
-         '--output', str(output)],
+         '--output', str(output), *LAYOUTS[layout]],
         env=env, capture_output=True, text=True, timeout=240, stdin=subprocess.DEVNULL)
-    assert process.returncode == 0, process.stderr[-3000:]
-    assert 'hardware_twins' in process.stderr and 'alpha5_bridge' in process.stderr
+    log = process.stderr
+    assert process.returncode == 0, log[-3000:]
+    if layout == 'robot_loop':
+        assert 'hardware_twins' not in log, log[-3000:]
+        assert 'twins of bluerov2_alpha5 in this process' in log
+        assert '+netft_bridge+estimator+controller+thruster_allocator in one real-time loop' in log
+    else:
+        assert 'hardware_twins' in log and 'alpha5_bridge' in log
+    assert 'NOT confirmed' not in log, log[-3000:]  # every device put back, confirmed
     counts: Counter[str] = Counter()
     typestore = get_typestore(Stores.ROS2_JAZZY)
     first: dict[str, object] = {}
@@ -59,5 +79,5 @@ def test_the_graph_runs_on_the_bridges_against_the_twins(tmp_path: Path) -> None
     # at t = 0 and the arm never fell (limp before the arm bridge took it, its light links
     # trip the bridge's overspeed check within 0.1 s).
     assert truth.header.stamp.sec == 0 and truth.header.stamp.nanosec == 0
-    assert 'tripped' not in process.stderr, process.stderr[-3000:]
+    assert 'tripped' not in log, log[-3000:]
 

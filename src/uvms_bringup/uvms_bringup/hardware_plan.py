@@ -64,11 +64,15 @@ class HardwarePlan:
         path: The hardware file.
         twins: Whether the protocol twins (fed by the simulator) stand in for the devices.
         bridges: Bridge node name -> its parameters from the file, in start order.
+        twins_in_simulator: With twins: True serves them in the simulator's process
+            (``uvms_twins.simulator_with_twins``: no /plant topics, no process of their
+            own), False in the ``hardware_twins`` node beside it (``--twins-apart``).
     """
 
     path: Path
     twins: bool
     bridges: dict[str, dict[str, Any]] = field(default_factory=dict)
+    twins_in_simulator: bool = True
 
     def simulator_remaps(self) -> list[tuple[str, str]]:
         """``--ros-args -r`` rules moving the simulator's device-side topics under /plant."""
@@ -149,7 +153,8 @@ def hardware_scenario(scenario: Scenario, plan: HardwarePlan) -> Scenario:
     The controller runs on the estimate (a robot has no ground truth); the allocator sends
     desired thrusts (the propellers do the dynamics); with twins, the simulator measures
     with its navigation sensors, over a flat bottom ``TWIN_POOL_DEPTH_M`` down unless the
-    scenario sets one.
+    scenario sets one, and hands every sample on at once (ideal devices: the twins and
+    bridges keep the devices' own timing).
     """
     overrides = {node: dict(values) for node, values in scenario.overrides.items()}
     overrides.setdefault('controller', {})['state_source'] = 'estimate'
@@ -157,6 +162,9 @@ def hardware_scenario(scenario: Scenario, plan: HardwarePlan) -> Scenario:
     if plan.twins:
         simulator = overrides.setdefault('simulator', {})
         simulator['navigation.enabled'] = True
+        # The twins keep the devices' timing (their rates, the RC loop, the bus): a simulator
+        # that also held its samples to it would apply the delays twice.
+        simulator['devices.ideal'] = True
         if not simulator.get('world.seabed_depth_m'):
             simulator['world.seabed_depth_m'] = TWIN_POOL_DEPTH_M
     return replace(scenario, overrides=overrides)
@@ -165,13 +173,14 @@ def hardware_scenario(scenario: Scenario, plan: HardwarePlan) -> Scenario:
 def hardware_nodes(nodes: Sequence[NodeSpec], plan: HardwarePlan) -> list[NodeSpec]:
     """The launch's nodes on hardware: the bridges where the simulator stood.
 
-    With twins the simulator stays, followed by the twins and the bridges; without, the
-    bridges replace it (the robot is the plant).
+    With twins the simulator stays (holding the twins, or followed by their node), then the
+    bridges; without, the bridges replace it (the robot is the plant).
     """
     out: list[NodeSpec] = []
     for spec in nodes:
         if spec is SIMULATOR:
-            out += [SIMULATOR, HARDWARE_TWINS] if plan.twins else []
+            if plan.twins:
+                out += [SIMULATOR] if plan.twins_in_simulator else [SIMULATOR, HARDWARE_TWINS]
             out += [HARDWARE_BRIDGES[name] for name in plan.bridges]
         else:
             out.append(spec)
@@ -185,12 +194,18 @@ def hardware_parameters(nodes: Sequence[NodeSpec], plan: HardwarePlan
     Without twins there is no simulator and so no ``/clock``: every node runs on wall time.
     """
     values: dict[str, dict[str, Any]] = {name: dict(p) for name, p in plan.bridges.items()}
-    values[HARDWARE_TWINS.name] = plan.twin_parameters()
+    simulator: dict[str, Any] = {}
+    if plan.twins and plan.twins_in_simulator:
+        simulator.update({f'twins.{name}': value
+                          for name, value in plan.twin_parameters().items()})
+    elif plan.twins:
+        values[HARDWARE_TWINS.name] = plan.twin_parameters()
     # The simulator holds its first state until the loop is closed, and through the twins the
     # loop is closed only once every bridge drives its device: before, the arm twin makes no
     # torque (limp) and the estimator has no IMU, so physics started with the controller
     # alone would let the arm fall and the vehicle drift unseen.
-    values[SIMULATOR.name] = {'startup.nodes': [*SIMULATOR_STARTUP_NODES, *plan.bridges]}
+    simulator['startup.nodes'] = [*SIMULATOR_STARTUP_NODES, *plan.bridges]
+    values[SIMULATOR.name] = simulator
     for spec in nodes:
         if spec.uses_sim_time:
             values.setdefault(spec.name, {})['use_sim_time'] = plan.twins

@@ -105,6 +105,14 @@ HARDWARE_TWINS = NodeSpec(
     'hardware_twins', 'uvms_twins', 'hardware_twins', 'uvms_twins.twins_node',
     'TwinsNode', (), takes_robot=True,
 )
+#: The simulator with the protocol twins in its own process (``uvms launch --hardware twin``,
+#: the default; ``--twins-apart`` runs ``HARDWARE_TWINS`` instead). The launch keeps calling
+#: the node ``SIMULATOR`` (its remaps, start-up gates, scheduling and end are the simulator's);
+#: only its executable is this one (``launcher.node_command``).
+SIMULATOR_WITH_TWINS = NodeSpec(
+    'simulator', 'uvms_twins', 'simulator_with_twins', 'uvms_twins.simulator_with_twins',
+    'SimulatorWithTwins', ('robot.yaml',), uses_sim_time=False, takes_robot=True,
+)
 #: What the recorder records beside its defaults when the estimator runs.
 NAVIGATION_TOPICS = (
     'imu:sensor_msgs/msg/Imu',

@@ -26,6 +26,7 @@ from uvms_hardware.stop_report import read_stop_reports, stop_summary
 from uvms_scenarios.scenario import Scenario
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED, read_outcome
 
+from uvms_bringup.composed import LOOP_FLAG
 from uvms_bringup.executables import node_executable
 from uvms_bringup.hardware_plan import (
     HardwarePlan,
@@ -39,6 +40,7 @@ from uvms_bringup.launch_helpers import (
     MISSION,
     RECORDER,
     SIMULATOR,
+    SIMULATOR_WITH_TWINS,
     NodeSpec,
     config_dir,
     file_parameters,
@@ -188,7 +190,11 @@ def plan_launch(
         generated.write_text(parameters_file_text({f'{fq_prefix}/{spec.name}': overrides}),
                              encoding='utf-8')
         asks = node_scheduling(spec, scheduling, hardware is None or not hardware.twins)
-        command = [*node_executable(spec, bin_dir),
+        # With the twins in its process the simulator keeps its name, remaps, gates and
+        # scheduling; only its executable changes.
+        twins_inside = (spec is SIMULATOR and hardware is not None and hardware.twins
+                        and hardware.twins_in_simulator)
+        command = [*node_executable(SIMULATOR_WITH_TWINS if twins_inside else spec, bin_dir),
                    *ros_arguments(spec, namespace, [*files, generated], log_level,
                                   remaps if spec is SIMULATOR else (), asks)]
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
@@ -356,8 +362,10 @@ def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: flo
     launcher.start()
     if not quiet:
         started = ', '.join(f'{p.plan.label} (pid {p.popen.pid})' for p in launcher.processes)
-        composed = [composed_nodes(p.plan) for p in launcher.processes]
-        layout = '; '.join(f'{names} in one process' for names in composed if names)
+        composed = [(composed_nodes(p.plan), LOOP_FLAG in p.plan.command)
+                    for p in launcher.processes]
+        layout = '; '.join(f'{names} in one {"real-time loop" if looped else "process"}'
+                           for names, looped in composed if names)
         until = f'until {duration_s:g} s simulated or Ctrl-C' if duration_s else 'until Ctrl-C'
         launcher.report(f'uvms launch: {mode} graph, {layout or "one process per node"}: '
                         f'{started}{scheduling}; running {until}')
@@ -381,7 +389,9 @@ def run_launch(launcher: Launcher, stop: StopRequest, mode: str, duration_s: flo
         # Without a duration the simulator never finishes: its exit, even with 0 (a signal
         # sent to it alone), ends the launch as a failure naming it.
         outcome, process = launcher.wait_for_exit(
-            stop, SIMULATOR.name if duration_s else None, tell_failed_job, poll)
+            stop, SIMULATOR.name if duration_s else None, tell_failed_job, poll,
+            end_reached=lambda: process_stats.read(costs.directory,
+                                                   process_stats.END_REACHED) is not None)
     finally:
         costs.end([p.popen.pid for p in launcher.processes])
         launcher.stop()

@@ -32,7 +32,7 @@ from uvms_common.scheduling import STARTUP_RTTIME_S, limit_rt_time, rt_time_limi
 from uvms_common.stop_event import STOP_SIGNALS_BLOCKED
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED
 
-from uvms_bringup.launch_helpers import HARDWARE_BRIDGES, RECORDER, SIMULATOR, NodeSpec
+from uvms_bringup.launch_helpers import RECORDER, SIMULATOR, NodeSpec
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -317,6 +317,7 @@ class Launcher:
         self, stop: StopRequest, end_node: str | None = SIMULATOR.name,
         on_finished: Callable[[NodeProcess], None] | None = None,
         on_poll: Callable[[], None] | None = None,
+        end_reached: Callable[[], bool] | None = None,
     ) -> tuple[str, NodeProcess | None]:
         """Watch the children until a stop request or the first one that ends.
 
@@ -330,10 +331,14 @@ class Launcher:
             on_finished: Called once per finishing node that ended with 0 or
                 ``EXIT_MISSION_FAILED``.
             on_poll: Called every ``POLL_PERIOD_S`` while the children run.
+            end_reached: True once ``end_node`` reached the run's end while it keeps
+                running (the simulator serving the twins in its process: the bridges put
+                their devices back through them before it is stopped).
 
         Returns:
             ``('stopped', None)`` after a stop request, ``('finished', node)`` when
-            ``end_node`` exited 0, ``('failed', node)`` when another one ended.
+            ``end_node`` exited 0 or reached its end, ``('failed', node)`` when another one
+            ended.
         """
         seen: set[int] = set()
         while True:
@@ -351,6 +356,10 @@ class Launcher:
                 if process.name == end_node and status == 0:
                     return 'finished', process
                 return 'failed', process
+            if end_reached is not None and end_reached():
+                ends = [p for p in self.processes if p.name == end_node]
+                if ends:
+                    return 'finished', ends[0]
             if on_poll is not None:
                 on_poll()
             time.sleep(POLL_PERIOD_S)
@@ -368,11 +377,14 @@ class Launcher:
     def stop(self) -> None:
         """Stop every running node; escalate SIGINT, SIGTERM, SIGKILL.
 
-        The hardware bridges first, while their devices (or twins) still answer as they put
-        back what they changed; the recorder last, so that it records the others' last
-        messages and then closes its file.
+        The processes holding a hardware bridge first (a bridge alone, or the robot process
+        that composes them), while their devices (or twins) still answer as they put back
+        what they changed; the recorder last, so that it records the others' last messages
+        and then closes its file.
         """
-        bridges = [p for p in self.processes if p.plan.spec in HARDWARE_BRIDGES.values()]
+        from uvms_bringup.launch_layout import holds_bridge  # launch_layout imports this
+
+        bridges = [p for p in self.processes if holds_bridge(p.plan)]
         recorders = [p for p in self.processes if p.plan.spec is RECORDER]
         others = [p for p in self.processes if p not in bridges and p not in recorders]
         for group in (bridges, others, recorders):

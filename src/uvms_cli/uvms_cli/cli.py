@@ -10,9 +10,10 @@ import argparse
 import importlib
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from uvms_common.node_entry import end_process
+from uvms_common.node_entry import end_process, mark_process_ends_after_main
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.stop_event import StopEvent
 from uvms_sweep.ideal_devices import add_ideal_devices_argument, with_ideal_devices
@@ -205,10 +206,18 @@ def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
                         help='realtime: simulated seconds per wall second (default 1); below '
                              '1 runs a graph too heavy for this machine slower, every node '
                              'on /clock (docs/running.md)')
-    launch.add_argument('--compose', choices=('control', 'robot'),
+    launch.add_argument('--compose', choices=('control', 'robot', 'robot-topics', 'none'),
                         help='control: controller, thruster_allocator and estimator in one '
                              'process on one executor (same names, topics, parameters); '
-                             'robot: those and the hardware bridges (--hardware)')
+                             'robot (the default with --hardware): those and the hardware '
+                             'bridges in one real-time loop, no DDS between a device and the '
+                             'controller (docs/robot_process.md); robot-topics: the same '
+                             'process, each node on its own timer, talking through DDS; '
+                             'none: one process per node')
+    launch.add_argument('--twins-apart', action='store_true',
+                        help='--hardware twin: the protocol twins in a process of their own '
+                             '(hardware_twins, fed through /plant topics) instead of the '
+                             "simulator's")
 
 
 def _real_time_factor(text: str) -> float:
@@ -230,6 +239,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Installed first, so that a signal at any later point (building the graph, opening the
     # recording) ends the run cleanly with status 130.
     stop = StopEvent()
+    if argv is None:
+        # The console script ends with end_process after main: a delegated command (uvms
+        # task) then skips a DDS teardown that could hang (rclpy's ActionClient.destroy).
+        mark_process_ends_after_main()
     try:
         status = _main(args_list, stop)
     finally:
@@ -312,6 +325,9 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             from uvms_bringup.launch_helpers import config_dir
 
             hardware = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
+            if args.twins_apart:
+                hardware = replace(hardware, twins_in_simulator=False)
+        compose = args.compose or ('robot' if hardware is not None else None)
         if args.ideal_devices:
             scenario = _with_ideal_devices(scenario)
         _check_robot(args.robot or (scenario.robot if scenario is not None else None))
@@ -320,7 +336,8 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
                             foxglove=_foxglove_address(args), robot=args.robot,
                             hardware=hardware,
                             rt_priority=0 if args.no_rt else args.rt_priority, cpus=cpus,
-                            lock_memory=args.lock_memory, compose=args.compose,
+                            lock_memory=args.lock_memory,
+                            compose=None if compose == 'none' else compose,
                             real_time_factor=args.real_time_factor)
     except (ScenarioError, FileNotFoundError, ValueError) as exc:
         _error('launch', str(exc))

@@ -20,6 +20,9 @@ from typing import Any
 ENV = 'UVMS_STATS_DIR'
 #: File of the simulator's first physics step.
 FIRST_STEP = 'first_step'
+#: File of a run's end reached by a simulator that keeps serving until it is stopped (the
+#: protocol twins in its process: the bridges put their devices back through them first).
+END_REACHED = 'end_reached'
 
 
 def stats_dir() -> Path | None:
@@ -45,6 +48,14 @@ def write(name: str, values: dict[str, Any]) -> None:
 def mark_first_step() -> None:
     """The simulator's first physics step: now, on CLOCK_MONOTONIC (ns)."""
     write(FIRST_STEP, {'monotonic_ns': time.monotonic_ns(), 'pid': os.getpid()})
+
+
+def mark_end_reached() -> bool:
+    """The run's end reached (the launcher's cue to stop the graph); False without a launcher."""
+    if stats_dir() is None:
+        return False
+    write(END_REACHED, {'monotonic_ns': time.monotonic_ns(), 'pid': os.getpid()})
+    return True
 
 
 def read(directory: Path, name: str) -> dict[str, Any] | None:

@@ -374,7 +374,7 @@ class RecorderNode(Node):
 def main(args: Sequence[str] | None = None) -> None:
     """Run the recorder until SIGINT or SIGTERM, then close the MCAP file cleanly.
 
-    What had arrived before the stop is taken first (up to 2 s). The file is closed before
+    What had arrived before the stop is taken first (up to 1 s). The file is closed before
     the middleware teardown, whose hang then costs nothing: the process ends itself after a
     grace period (``uvms_common.node_main.run_node``).
     """

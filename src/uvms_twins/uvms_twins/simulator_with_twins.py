@@ -21,6 +21,7 @@ the bridges publish; it publishes none of them. Real time only (the twins run on
 from __future__ import annotations
 
 import sys
+import time
 from typing import Any
 
 from rclpy.exceptions import ParameterException
@@ -32,10 +33,14 @@ from uvms_sim.errors import SimParameterError
 from uvms_sim.plant import Observation
 from uvms_sim.simulator_node import SimulatorNode
 
+from uvms_common import process_stats
 from uvms_twins.twin_stand import STAND_PARAMETERS, TwinStand
 
 #: Prefix of the stand's parameters on the simulator node.
 PREFIX = 'twins.'
+#: How long the twins serve past the run's end while the launcher stops the bridges (s): a
+#: bridge's put-back takes at most a few seconds (its journal's confirmations).
+END_GRACE_S = 20.0
 #: The simulator's device-side topics (relative names): under /plant, as the launch has them.
 DEVICE_TOPICS = ('joint_states', 'wrench', 'imu', 'dvl', 'depth', 'position_fix',
                  'command/actuators')
@@ -123,6 +128,7 @@ class SimulatorWithTwins(SimulatorNode):
     def __init__(self, **kwargs: Any) -> None:
         cli_args = list(kwargs.pop('cli_args', None) or []) + device_topic_remaps()
         self.twins: InProcessTwins | None = None
+        self._end_marked_s: float | None = None
         super().__init__(plant_side=self._build_twins, cli_args=cli_args, **kwargs)
         assert self.twins is not None
         self._diagnostics.add('twins', self.twins.stand.report)
@@ -145,6 +151,26 @@ class SimulatorWithTwins(SimulatorNode):
                                f'{stand.summary()}')
         return twins
 
+    def end_served(self) -> bool:
+        """The process's end: its duration reached and, under a launcher, the devices put back.
+
+        At its duration the plain simulator exits at once. Here its exit would take the twins
+        with it while the bridges still put back what they changed on the devices (the
+        vehicle's disarm, the arm's settings: "NOT confirmed"). Under ``uvms launch`` the node
+        therefore marks the end reached (``process_stats.END_REACHED``: the launcher's cue to
+        stop the bridges first, then this process) and keeps its twins serving until it is
+        stopped, at most ``END_GRACE_S``; under ``ros2 run`` (no launcher) it ends at once.
+        """
+        if not self.finished:
+            return False
+        if self._end_marked_s is None:
+            if not process_stats.mark_end_reached():
+                return True
+            self._end_marked_s = time.monotonic()
+            self.get_logger().info('end reached: the twins serve until the bridges have put '
+                                   'the devices back')
+        return time.monotonic() - self._end_marked_s >= END_GRACE_S
+
     def destroy_node(self) -> None:
         """Stop the twins, then destroy the node."""
         if self.twins is not None:
@@ -157,7 +183,7 @@ def main(args: list[str] | None = None) -> None:
     sys.exit(run_node(SimulatorWithTwins, args, 'simulator',
                       (SimParameterError, ParameterException, HardwareError, ValueError,
                        OSError),
-                      finished=lambda node: node.finished))
+                      finished=lambda node: node.end_served()))
 
 
 if __name__ == '__main__':

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 import pytest
-from uvms_bringup.composed import COMPOSED, node_groups
+from uvms_bringup.composed import COMPOSED, LOOP_FLAG, node_groups
 from uvms_bringup.launch_costs import CostWatch, cpu_seconds
 from uvms_bringup.launch_helpers import resolve_scenario_path
 from uvms_bringup.launcher import plan_launch
@@ -68,7 +68,7 @@ def test_the_cost_table_reads_the_processes_stats_files(tmp_path: Path,
 
 
 def test_the_robot_composition_holds_the_control_nodes_and_every_bridge(tmp_path: Path) -> None:
-    """--compose robot with the twins: control and bridges in one process; twins apart."""
+    """--compose robot with the twins: control and bridges in one loop; twins in the simulator."""
     from uvms_bringup.hardware_plan import hardware_file_path, load_hardware_plan
 
     scenario = load_scenario(resolve_scenario_path('bluerov2_alpha5_contact'))
@@ -78,8 +78,10 @@ def test_the_robot_composition_holds_the_control_nodes_and_every_bridge(tmp_path
                            hardware=hardware, compose='robot')
     [process] = [plan for plan in composed if plan.spec is COMPOSED]
     command = list(process.command)
-    groups = dict(node_groups(command[command.index('uvms_bringup.composed') + 1:]))
+    args = command[command.index('uvms_bringup.composed') + 1:]
+    assert args[0] == LOOP_FLAG  # one real-time loop, not each node on its own timer
+    groups = dict(node_groups(args[1:]))
     assert set(groups) == {'controller', 'thruster_allocator', 'ardusub_bridge', 'dvl_bridge',
                            'alpha5_bridge', 'netft_bridge'}  # no estimator: state from truth
     assert {plan.spec.name for plan in composed} == {
-        'simulator', 'hardware_twins', 'control', 'visualizer', 'mission'}
+        'simulator', 'control', 'visualizer', 'mission'}  # the twins in the simulator

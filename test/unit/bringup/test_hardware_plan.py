@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -77,13 +78,28 @@ def test_with_twins_physics_waits_for_every_bridge_to_drive_its_device() -> None
 
 def test_with_twins_every_node_but_the_simulator_runs_on_its_clock() -> None:
     """The simulator is the clock: it alone keeps wall time; the bridges stamp with /clock."""
-    plan = load_hardware_plan(hardware_file_path('twin', CONFIG))
+    plan = replace(load_hardware_plan(hardware_file_path('twin', CONFIG)),
+                   twins_in_simulator=False)
     nodes = hardware_nodes(graph_nodes(record=True, mission=True, estimator=True), plan)
     values = hardware_parameters(nodes, plan)
     assert 'use_sim_time' not in values['simulator']
     assert all(values[name]['use_sim_time'] for name in (*BRIDGES, 'hardware_twins'))
     names = [spec.name for spec in nodes]
     assert names[:6] == ['simulator', 'hardware_twins', *BRIDGES]
+
+
+def test_by_default_the_twins_serve_in_the_simulators_process_where_the_bridges_connect(
+        ) -> None:
+    """--hardware twin: no twins process; the simulator gets each bridge's connection."""
+    plan = load_hardware_plan(hardware_file_path('twin', CONFIG))
+    assert plan.twins_in_simulator
+    nodes = hardware_nodes(graph_nodes(record=True, mission=True, estimator=True), plan)
+    assert [spec.name for spec in nodes][:5] == ['simulator', *BRIDGES]
+    values = hardware_parameters(nodes, plan)
+    assert 'hardware_twins' not in values
+    assert values['simulator']['twins.alpha5_bridge.connection'] == (
+        plan.bridges['alpha5_bridge']['connection'])
+    assert values['simulator']['startup.nodes'][-4:] == list(BRIDGES)
 
 
 def test_on_the_robot_the_bridges_replace_the_simulator_and_nothing_waits_for_clock(
@@ -107,4 +123,5 @@ def test_the_scenario_on_hardware_runs_the_controller_on_the_estimate() -> None:
     assert changed.overrides['thruster_allocator']['thruster_output'] == 'desired'
     assert changed.overrides['simulator']['navigation.enabled'] is True
     assert changed.overrides['simulator']['world.seabed_depth_m'] == 2.0
+    assert changed.overrides['simulator']['devices.ideal'] is True  # the twins keep the timing
     assert 'state_source' not in scenario.overrides.get('controller', {})

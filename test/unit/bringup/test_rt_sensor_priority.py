@@ -27,7 +27,8 @@ def twin_plans(tmp_path: Path, scheduling: Scheduling,
 
     The twin file's bridges; ``twins`` False as a robot's own hardware file (no twins beside).
     """
-    hardware = replace(load_hardware_plan(hardware_file_path('twin', CONFIG)), twins=twins)
+    hardware = replace(load_hardware_plan(hardware_file_path('twin', CONFIG)), twins=twins,
+                       twins_in_simulator=False)
     scenario = hardware_scenario(
         load_scenario(resolve_scenario_path('bluerov2_alpha5_contact')), hardware)
     plans = plan_launch(scenario, 'realtime', tmp_path, output_path=tmp_path / 'r.mcap',
