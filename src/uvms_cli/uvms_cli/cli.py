@@ -207,16 +207,12 @@ def _add_realtime_arguments(launch: argparse.ArgumentParser) -> None:
                              '1 runs a graph too heavy for this machine slower, every node '
                              'on /clock (docs/running.md)')
     launch.add_argument('--compose', choices=('control', 'robot', 'robot-topics', 'none'),
-                        help='control: controller, thruster_allocator and estimator in one '
-                             'process on one executor (same names, topics, parameters); '
-                             'robot (the default with --hardware): those and the hardware '
-                             'bridges in one real-time loop, no DDS between a device and the '
-                             'controller (docs/robot_process.md); robot-topics: the same '
-                             'process, each node on its own timer, talking through DDS; '
-                             'none: one process per node')
+                        help='control: controller, allocator and estimator in one process; '
+                             'robot (default with --hardware): those and the bridges in one '
+                             'real-time loop (docs/robot_process.md); robot-topics: that '
+                             'process on DDS; none: one process per node')
     launch.add_argument('--twins-apart', action='store_true',
-                        help='--hardware twin: the protocol twins in a process of their own '
-                             '(hardware_twins, fed through /plant topics) instead of the '
+                        help="--hardware twin: the twins in their own process, not the "
                              "simulator's")
 
 

@@ -5,34 +5,28 @@ stamped t_k, then integrate to the next publication; deterministic. Real time: a
 integrates one step per period on the latest command. The node is the clock source, so it
 keeps its own simulated time and never runs on ``use_sim_time``. ``/diagnostics`` reports the
 achieved step rate, the real-time factor (both against the wall clock) and lockstep timeouts.
-
-A `PlantSide` given to the node (``uvms_twins.simulator_with_twins``: the protocol twins)
-stands for the devices in this process: it is handed each published state and navigation
-reading by call instead of the device-side topics (joint_states, wrench, imu, dvl, depth,
-position_fix), and gives the actuator command instead of ``command/actuators``.
+A `uvms_sim.plant_side.PlantSide` given to the node stands for the devices in its process.
 """
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Any
 
 from geometry_msgs.msg import PoseStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.exceptions import ParameterException
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 from uvms_common.cdr_codecs import MalformedPayloadError
-from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report, robot_name
+from uvms_common.diagnostics import DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.exchange_qos import input_qos
 from uvms_common.node_main import run_node
 from uvms_common.parameter_declaration import Spec, declare_specs
-from uvms_common.process_stats import mark_first_step
 from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
 from uvms_common.robot_parameters import (
     check_all_declared,
@@ -42,13 +36,12 @@ from uvms_common.robot_parameters import (
     with_robot_source,
 )
 from uvms_model.nav_sensor_parameters import NAVIGATION_PARAMETER_SPECS, NavigationParameters
-from uvms_model.nav_sensors import Reading
 
 from uvms_model import PARAMETER_SPECS, ModelError, UvmsModel, UvmsParameters
 from uvms_msgs.msg import ActuatorCommand, ContactState
 from uvms_sim import conversions, raw_conversions
 from uvms_sim.device_delivery import DeviceDelivery
-from uvms_sim.errors import CommandError, SimParameterError, SimulationError, StartupError
+from uvms_sim.errors import CommandError, SimParameterError, SimulationError
 from uvms_sim.lockstep_wait import AttentiveWait
 from uvms_sim.navigation_topics import NavigationTopics, dvl_mount
 from uvms_sim.ocean_node import OceanCurrentInterface
@@ -57,47 +50,21 @@ from uvms_sim.parameters import (
     SimulatorSettings,
     default_joint_positions,
 )
-from uvms_sim.plant import Observation, Plant, initial_coordinates
+from uvms_sim.plant import Plant, initial_coordinates
+from uvms_sim.plant_side import PlantSide, PlantSideNavigation
+from uvms_sim.simulator_report import simulator_report
+from uvms_sim.startup_hold import StartupHold
 from uvms_sim.startup_watch import StartGates, StartupWatch, recorded_publishers
 
 #: Most plant steps one real-time tick takes to catch up with the wall clock.
 _MAX_CATCH_UP_STEPS = 10
-#: Share of its ``real_time_factor`` below which a real-time simulation reports that it falls
-#: behind.
-_BEHIND_REAL_TIME_FACTOR = 0.9
-#: Real time, start-up: wall time between re-publications of the held initial state (s).
-_HOLD_REPUBLISH_S = 0.1
 
 
 def _parameter_error(spec: Spec, exc: ParameterException) -> SimParameterError:
     return SimParameterError(f'invalid parameter {spec.name!r}: {exc}')
 
 
-class PlantSide(Protocol):
-    """The devices, served in the simulator's process: its measurements in, its command out."""
-
-    def observe(self, seen: Observation) -> None:
-        """Each published state, joint states and wrench as the devices deliver them."""
-
-    def reading(self, reading: Reading) -> None:
-        """Each navigation reading when it is due (after its latency), valid or not."""
-
-    def command(self, t_ns: int) -> tuple[Any, Any] | None:
-        """Thrusts (N) and joint torques (N m, the model's order) from ``t_ns`` on; None: none."""
-
-
-class _PlantSideNavigation(NavigationTopics):
-    """The navigation sensors' readings handed to a `PlantSide`, not published."""
-
-    def __init__(self, plant_side: PlantSide, *args: Any) -> None:
-        super().__init__(*args)
-        self._plant_side = plant_side
-
-    def _send(self, reading: Reading) -> None:
-        self._plant_side.reading(reading)
-
-
-class SimulatorNode(Node):
+class SimulatorNode(StartupHold):
     """Simulated UVMS: actuator commands in, sensor topics, ``/clock`` and ``/tf`` out."""
 
     def __init__(self, plant_side: Callable[[SimulatorNode], PlantSide] | None = None,
@@ -177,7 +144,7 @@ class SimulatorNode(Node):
         navigation_args = (self, self._navigation_params, params.sensor.seed, devices)
         self._navigation = (None if not self._navigation_params.switch.enabled
                             else NavigationTopics(*navigation_args) if self._plant_side is None
-                            else _PlantSideNavigation(self._plant_side, *navigation_args))
+                            else PlantSideNavigation(self._plant_side, *navigation_args))
         # Device timing (uvms_sim.device_delivery): an ideal run takes exactly today's path.
         self._devices = DeviceDelivery(devices, params.sensor.seed)
         self._messages = raw_conversions.RawStateMessages(self._plant.joint_names)
@@ -335,67 +302,6 @@ class SimulatorNode(Node):
                 f'the simulation runs {behind_s * 1e3:.1f} ms behind real time (start-up)',
                 once=True)
 
-    def _watch_startup(self) -> None:
-        """Start watching for the loop to close, with a log line (after the first state)."""
-        cfg = self._settings
-        realtime = cfg.mode != 'lockstep'
-        if realtime and not cfg.startup.hold:
-            return
-        now_ns = self.get_clock().now().nanoseconds
-        self._startup = StartupWatch(self, cfg.startup, realtime, now_ns)
-        self._startup.held_stamp_ns = self._plant.t_ns
-        timeout = cfg.startup.timeout_ns * 1e-9
-        self.get_logger().info(
-            f'holding the initial state at t = {self._plant.t_ns * 1e-9:.3f} s (time stands '
-            f'still) until the control loop is closed: waiting for '
-            f'{self._startup.core.waiting_for()} '
-            f'({f"startup.timeout_s {timeout:g} s" if timeout else "no start-up timeout"})')
-
-    def _check_startup_time(self) -> None:
-        """Stop with an error naming the node that did not answer, once the timeout passed."""
-        watch = self._startup
-        now_ns = self.get_clock().now().nanoseconds
-        if watch is not None and watch.core.expired(now_ns):
-            msg = watch.failure(now_ns)
-            self.get_logger().fatal(msg)
-            raise StartupError(msg)
-
-    def _startup_closed(self) -> None:
-        """The loop is closed: log it and drop the start-up subscription and clients."""
-        watch = self._startup
-        if watch is None or not watch.core.closed:
-            return
-        self._startup = None
-        watch.destroy()
-        waited = (self.get_clock().now().nanoseconds - watch.core.start_ns) * 1e-9
-        self.get_logger().info(f'control loop closed after {waited:.2f} s: physics runs')
-        mark_first_step()
-
-    def _loop_closed(self, now_ns: int) -> bool:
-        """Real time: hold (re-publish) the initial state until the loop is closed."""
-        if self._published == 0:
-            if not self._gates.first_state(now_ns):
-                return False
-            if not self._settings.startup.hold:
-                return True
-            self._publish_state()
-            self._held_published_ns = now_ns
-            self._watch_startup()
-        watch = self._startup
-        if watch is None:
-            return True
-        if watch.core.closed and self._gates.physics(now_ns):
-            self._startup_closed()
-            return True
-        self._check_startup_time()
-        if now_ns - self._held_published_ns >= _HOLD_REPUBLISH_S * 1e9:
-            if self._navigation is not None:  # before /clock, as _publish_state sends it
-                self._navigation.republish_held()
-            self._publish_state()
-            self._held_published_ns = now_ns
-        watch.poll(now_ns)
-        return False
-
     def _answered(self) -> None:
         """Lockstep: the published state is answered; integrate to the next one, or finish."""
         self._awaiting_since = None
@@ -444,25 +350,17 @@ class SimulatorNode(Node):
         step_hz = steps.rate_hz(t_ns // self._plant.dt_ns, now_ns)
         factor = seconds.rate_hz(t_ns * 1e-9, now_ns)
         new_timeouts = timeouts.rate_hz(self.timeouts, now_ns)
-        mode = self._settings.mode
-        values = {'mode': mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
+        values = {'mode': self._settings.mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
                   'real_time_factor': factor, 'lockstep_timeouts': self.timeouts,
                   'steps_behind_real_time': self._behind.missed,
                   'malformed_commands': self._commands.decoder.malformed,
                   'behind_real_time_share': self._behind.share}
-        if self._finished:
-            return Report(OK, f'finished at t = {t_ns * 1e-9:.3f} s', values)
-        if self._startup is not None:
-            return Report(WARN, 'holding the initial state: waiting for '
-                          f'{self._startup.core.waiting_for()}', values)
-        if mode == 'lockstep' and self._command is None:
-            return Report(WARN, 'waiting for the first actuator command', values)
-        if mode == 'lockstep' and new_timeouts:
-            return Report(WARN, 'lockstep timeouts: stepping on the last command', values)
-        slowest = _BEHIND_REAL_TIME_FACTOR * self._settings.real_time_factor
-        if mode != 'lockstep' and factor is not None and factor < slowest:
-            return Report(WARN, f'behind real time (factor {factor:.2f})', values)
-        return Report(OK, 'running', values)
+        return simulator_report(
+            values, finished=self._finished,
+            holding_for=(self._startup.core.waiting_for() if self._startup is not None
+                         else None),
+            first_command=self._command is not None, new_timeouts=new_timeouts,
+            asked_factor=self._settings.real_time_factor)
 
     def _publish_state(self) -> None:
         """Publish /clock, the sensor topics and, when due, ee_pose, contact and /tf (at t_k)."""
