@@ -38,9 +38,9 @@ for package in ('uvms_common', 'uvms_description', 'uvms_model', 'uvms_sim', 'uv
                 'uvms_bringup'):
     sys.path.insert(0, str(REPO / 'src' / package))
 
-from uvms_bringup.graph import Graph, build_graph, run_graph  # noqa: E402
 from uvms_bringup.launch_helpers import FOXGLOVE_SERVER, resolve_scenario_path  # noqa: E402
 from uvms_common.ros_environment import ros_environment_defaults  # noqa: E402
+from uvms_run.graph import Graph, build_graph, run_graph  # noqa: E402
 from uvms_scenarios.scenario import load_scenario  # noqa: E402
 
 #: The client process: connect, subscribe to every channel, say so, drain until killed.

@@ -2,7 +2,7 @@
 
 Runs scenarios (default: case1_ke1e4 on paper_uvms and bluerov2_alpha5_contact on
 bluerov2_alpha5, their 20 s; 1 kHz simulator, 500 Hz control), each through
-the in-process graph (``uvms_bringup.graph``, as ``uvms run`` does) in lockstep with the
+the in-process graph (``uvms_run.graph``, as ``uvms run`` does) in lockstep with the
 recorder on, on the EventsExecutor and/or the SingleThreadedExecutor in this one process,
 and prints for each the real-time factor (simulated s per wall s). Those headline runs are
 not instrumented.
@@ -72,7 +72,6 @@ for package in ('uvms_common', 'uvms_model', 'uvms_sim', 'uvms_control', 'uvms_t
 from bench_middleware_floor import run_floor  # noqa: E402
 from geometry_msgs.msg import PoseStamped  # noqa: E402
 from rclpy.serialization import deserialize_message  # noqa: E402
-from uvms_bringup.graph import Graph, RunResult, build_graph, run_graph  # noqa: E402
 from uvms_bringup.launch_helpers import (  # noqa: E402
     CONTROLLER,
     SIMULATOR,
@@ -92,6 +91,7 @@ from uvms_control.core.task.task_supervisor import TaskSupervisor  # noqa: E402
 from uvms_control.task_conversions import contact_task_goal  # noqa: E402
 from uvms_model.thrusters import ThrusterLayout  # noqa: E402
 from uvms_recording.mcap_reader import open_recording  # noqa: E402
+from uvms_run.graph import Graph, RunResult, build_graph, run_graph  # noqa: E402
 from uvms_scenarios.scenario import ParameterValue, Scenario, load_scenario  # noqa: E402
 from uvms_sim.parameters import (  # noqa: E402
     SIMULATOR_PARAMETERS,

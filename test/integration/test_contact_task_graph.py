@@ -24,8 +24,8 @@ from geometry_msgs.msg import Point, PointStamped, Vector3
 from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from uvms_bringup.graph import Graph, build_graph, run_graph
 from uvms_control.task_server import REJECTED_PREFIX
+from uvms_run.graph import Graph, build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 from uvms_tasks.client import ContactTaskClient
 

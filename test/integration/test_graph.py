@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
-from uvms_bringup.graph import GraphError, RunResult, build_graph, run_graph
+from uvms_run.graph import GraphError, RunResult, build_graph, run_graph
 from uvms_scenarios.scenario import Scenario, load_scenario
 
 from uvms_cli import cli

@@ -12,9 +12,9 @@ from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 from uvms_analysis.estimate_errors import estimate_errors
 from uvms_bringup.declared import check_scenario_overrides
-from uvms_bringup.graph import RunResult, build_graph, run_graph
 from uvms_bringup.launch_helpers import ESTIMATOR, graph_nodes, uses_estimator
 from uvms_control.core.parameters import topic_for
+from uvms_run.graph import RunResult, build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
 from uvms_analysis import report

@@ -8,7 +8,7 @@ import select
 import sys
 
 import pytest
-from uvms_bringup.bars import RunBar
+from uvms_run.bars import RunBar
 
 
 def eta_s(line: str) -> int:

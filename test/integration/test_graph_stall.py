@@ -3,10 +3,10 @@
 from pathlib import Path
 
 import pytest
-from uvms_bringup.graph import GraphError, build_graph, run_graph
+from uvms_run.graph import GraphError, build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
-from uvms_bringup import graph as graph_module
+from uvms_run import graph as graph_module
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 

@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from rosbags.highlevel import AnyReader
-from uvms_bringup.graph import Graph, build_graph, run_graph
+from uvms_run.graph import Graph, build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'

@@ -26,7 +26,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
-from uvms_bringup.graph import Graph, build_graph, run_graph
+from uvms_run.graph import Graph, build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 from uvms_tasks.client import ContactTaskClient
 

@@ -17,7 +17,7 @@ from rosbags.highlevel import AnyReader
 from uvms_analysis.pilot_plots import mode_changes
 from uvms_analysis.plots import plot_recording
 from uvms_analysis.series import load_run
-from uvms_bringup.graph import build_graph, run_graph
+from uvms_run.graph import build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
 SESSION = Path(__file__).resolve().parents[2] / 'config' / 'pilot' / 'press_100n_session.yaml'

@@ -22,11 +22,11 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
-from uvms_bringup.graph import build_graph, run_graph
 from uvms_recording.mcap_reader import open_recording
 from uvms_recording.mcap_writer import McapRecorder
 from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
 from uvms_recording.replay import ReplayNode, ReplayOptions
+from uvms_run.graph import build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
 from uvms_recording import replay, rerun

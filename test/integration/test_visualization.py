@@ -15,8 +15,8 @@ from typing import Any
 import pinocchio as pin
 import pytest
 from rosbags.highlevel import AnyReader
-from uvms_bringup.graph import build_graph, run_graph
 from uvms_recording.typestore import uvms_typestore
+from uvms_run.graph import build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 from uvms_viz.marker_geometry import WALL_THICKNESS_M
 

@@ -51,7 +51,7 @@ PACKAGES = ('uvms_analysis', 'uvms_bringup', 'uvms_cli', 'uvms_common', 'uvms_co
             'uvms_description', 'uvms_model', 'uvms_msgs', 'uvms_recording', 'uvms_sim',
             'uvms_navigation', 'uvms_sweep', 'uvms_tasks', 'uvms_thrusters', 'uvms_viz',
             'uvms_hardware', 'uvms_twins', 'uvms_tune', 'uvms_identify', 'uvms_scenarios',
-            'uvms_pilot')
+            'uvms_pilot', 'uvms_run')
 #: Longest time the build may take (s); the packages build in about 40 s on 2 cores.
 BUILD_TIMEOUT_S = 600.0
 #: colcon on this interpreter (as the venv's ``colcon`` script would): colcon runs setup.py

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
-from uvms_bringup.graph import build_graph, run_graph
+from uvms_run.graph import build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario
 
 SCENARIO = Path(__file__).resolve().parents[2] / 'config' / 'scenarios' / 'free_motion.yaml'

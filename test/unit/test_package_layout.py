@@ -17,11 +17,11 @@ PACKAGES = sorted(path.parent.name for path in SRC.glob('*/package.xml')
 
 #: Longest module (lines): past about 400 a module usually holds two jobs.
 MAX_MODULE_LINES = 450
-#: The bringup package holds only launching and running the graph. 2500 until 2026-12-04;
-#: since then it also plans the launch on hardware (bridges, twins: hardware_plan), composes
-#: the control process (composed) and reports scheduling and cost per process (launch_costs),
-#: each a part of launching the graph. A module that is not goes to a package of its own.
-MAX_BRINGUP_LINES = 3300
+#: The bringup package holds only launching the graph: its modules and launch file (2,650
+#: lines on 2026-12-06, modules alone 2,490; 3,118 before the in-process graph, its stall
+#: watch and the progress bars went to uvms_run and the twins and the scenario format to
+#: packages of their own). A module that is not about launching goes to a package of its own.
+MAX_BRINGUP_LINES = 2700
 
 
 def python_files(package: str) -> list[Path]:

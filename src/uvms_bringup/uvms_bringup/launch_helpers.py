@@ -1,7 +1,7 @@
 """What the graph is made of, shared by the in-process runner and the ROS 2 launch file.
 
 Pure Python (no rclpy, no launch): which nodes run, from which package and executable,
-with which parameter files and which per-mode parameters. ``uvms_bringup.graph`` builds
+with which parameter files and which per-mode parameters. ``uvms_run.graph`` builds
 the nodes in one process from it; ``launch/uvms.launch.py`` starts them as processes.
 """
 

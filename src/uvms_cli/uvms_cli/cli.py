@@ -21,7 +21,7 @@ from uvms_sweep.ideal_devices import add_ideal_devices_argument, with_ideal_devi
 from uvms_cli.argument_types import port, positive_seconds, seconds_or_zero, seed
 
 if TYPE_CHECKING:
-    from uvms_bringup.graph import Graph
+    from uvms_run.graph import Graph
     from uvms_scenarios.scenario import Scenario
 
 EXIT_OK = 0
@@ -347,8 +347,8 @@ def _run_in_process(
     args: argparse.Namespace, mode: str, stop: StopEvent, progress: bool
 ) -> int:
     """Build and run the graph in this process; report the outcome."""
-    from uvms_bringup.graph import GraphError, build_graph
     from uvms_bringup.launch_helpers import resolve_scenario_path
+    from uvms_run.graph import GraphError, build_graph
     from uvms_scenarios.scenario import ScenarioError, load_scenario, short_duration_warning
 
     command = args.command
@@ -414,8 +414,8 @@ def _run_graph_and_report(
     args: argparse.Namespace, graph: Graph, mode: str, stop: StopEvent, progress: bool
 ) -> int:
     """Spin a built graph to its end and print the outcome."""
-    from uvms_bringup.bars import RunBar
-    from uvms_bringup.graph import GraphError, run_graph
+    from uvms_run.bars import RunBar
+    from uvms_run.graph import GraphError, run_graph
 
     command = args.command
     bar = RunBar(graph.duration_s) if progress and graph.duration_s > 0.0 else None

@@ -39,7 +39,7 @@ on its own clock through the checks pilot messages take, so a pilot session is a
 
 Parameter values are booleans, integers, floats, strings or non-empty lists of one of
 them, as in a ROS 2 parameter file. Whether each overridden name is a parameter the node
-declares, with that type, is checked when the graph is built (``uvms_bringup.graph``).
+declares, with that type, is checked when the graph is built (``uvms_run.graph``).
 
 ``contact_estimate`` tells before a run when its mission's force is expected (first
 contact plus the force ramp), so that a duration too short for it is warned about.

@@ -91,7 +91,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     """Check the sweep, run it, and report."""
     import rclpy.logging
-    from uvms_bringup.graph import GraphError
+    from uvms_run.graph import GraphError
     from uvms_scenarios.scenario import ScenarioError
 
     from uvms_sweep.engine import SweepEngineError, run_sweep

@@ -40,9 +40,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from uvms_bringup.bars import PointBar
 from uvms_bringup.declared import CHECK_DOMAIN_ID
 from uvms_common.node_main import StopEvent
+from uvms_run.bars import PointBar
 from uvms_scenarios.scenario import Scenario
 
 from uvms_sweep.maps import draw_figures

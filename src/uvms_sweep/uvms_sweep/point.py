@@ -165,7 +165,7 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
     from uvms_analysis.metrics import compute_metrics
     from uvms_analysis.report import COLUMNS, LABEL_KEYS
     from uvms_analysis.series import load_run
-    from uvms_bringup.graph import build_graph, run_graph
+    from uvms_run.graph import build_graph, run_graph
     from uvms_scenarios.scenario import load_scenario
 
     scenario = load_scenario(request['scenario_path'])
@@ -191,7 +191,7 @@ def run_request(request: Mapping[str, Any]) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the point process: ``python -m uvms_sweep.point REQUEST.json``."""
     from uvms_analysis.series import AnalysisError
-    from uvms_bringup.graph import GraphError
+    from uvms_run.graph import GraphError
     from uvms_scenarios.scenario import ScenarioError
 
     _die_with_parent()

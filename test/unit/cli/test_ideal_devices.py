@@ -18,10 +18,11 @@ from uvms_sweep.engine import point_request
 from uvms_sweep.ideal_devices import IDEAL_DEVICES, with_ideal_devices
 from uvms_sweep.sweep_file import load_sweep
 
-from uvms_bringup import graph, launcher
+from uvms_bringup import launcher
 from uvms_cli import cli
 from uvms_description import robots_directory
 from uvms_description.robots import robot_parameters
+from uvms_run import graph
 from uvms_tune import cli as tune_cli
 
 CONTACT = 'bluerov2_alpha5_contact'

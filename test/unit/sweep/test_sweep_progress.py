@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 import re
 
-from uvms_bringup.bars import PointBar
+from uvms_run.bars import PointBar
 
 
 def eta_s(line: str) -> int:

@@ -23,11 +23,6 @@ from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
-from uvms_common.node_main import StopEvent, make_executor
-from uvms_scenarios.scenario import ParameterValue, Scenario
-from uvms_tasks.mission_node import MissionNode
-
-from uvms_bringup.bars import RunBar
 from uvms_bringup.declared import check_scenario_overrides
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
@@ -41,7 +36,12 @@ from uvms_bringup.launch_helpers import (
     uses_estimator,
 )
 from uvms_bringup.node_factory import GraphError, make_node
-from uvms_bringup.stall_watch import StallWatch, stall_limit_s
+from uvms_common.node_main import StopEvent, make_executor
+from uvms_scenarios.scenario import ParameterValue, Scenario
+from uvms_tasks.mission_node import MissionNode
+
+from uvms_run.bars import RunBar
+from uvms_run.stall_watch import StallWatch, stall_limit_s
 
 #: Longest wall-clock wait for any callback before the lockstep loop checks on the graph (s).
 _SPIN_TIMEOUT_S = 0.5

@@ -1,7 +1,7 @@
 """The graph's stall watch: simulated time that stands still too long is an error."""
 
 import pytest
-from uvms_bringup.stall_watch import MARGIN_S, StallWatch, stall_limit_s
+from uvms_run.stall_watch import MARGIN_S, StallWatch, stall_limit_s
 
 
 def test_moving_time_is_never_a_stall() -> None:
