@@ -103,6 +103,13 @@ def wait_for(done: object, timeout_s: float, what: str | Callable[[], str], log:
 # meanwhile; with the estimator's start fixed (docs/hardware.md, "What the twin test stand
 # shows") 3 runs of 3 quiet and 3 of 3 beside 2 busy loops held (2026-12-06), where at half
 # speed 6 of 11 had.
+#: One process per node with the twins apart: the test trips the arm with a second publisher
+#: on command/actuators and watches /plant/joint_states. The robot loop (the default) takes
+#: the arm's command from the allocator alone, by call, and the in-process twins publish no
+#: /plant topics, so neither way in exists there.
+LAYOUT = ('--compose', 'none', '--twins-apart')
+
+
 def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path) -> None:
     """Trip, then reset-trip: the hold goes on for 10 s without a new trip."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p),
@@ -112,7 +119,8 @@ def test_a_tripped_twin_arm_recovers_with_the_documented_commands(tmp_path: Path
         launch = subprocess.Popen(
             [sys.executable, '-m', 'uvms_cli.cli', 'launch', 'idle_wall', '--robot',
              'bluerov2_alpha5', '--hardware', 'twin', '--real-time-factor', '0.25', '--duration',
-             '0'], env=env, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+             '0', *LAYOUT], env=env, stdout=out, stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL)
     probe = Probe()
     try:
         wait_for(lambda: launch.poll() is not None

@@ -65,7 +65,8 @@ def test_ctrl_c_on_a_twin_launch_says_what_each_bridge_put_back(tmp_path: Path) 
     assert launch.returncode == 130, text[-3000:]
     lines = text.splitlines()
     for bridge, said in BRIDGE_LINES.items():
-        assert any(line.startswith(f'[{bridge}-') and said in line for line in lines), \
+        # Each bridge's own logger, in the robot process (the default) or a process of its own.
+        assert any(f'[uvms.{bridge}]: ' in line and said in line for line in lines), \
             (bridge, text[-4000:])
     last = lines[-1]
     assert last.startswith('uvms launch: interrupted; every node stopped; put back: '

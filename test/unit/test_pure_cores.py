@@ -25,7 +25,8 @@ PURE_MODULES = sorted(
             path
             for path in (SRC / 'uvms_sim' / 'uvms_sim').rglob('*.py')
             if not path.name.endswith('_node.py')
-            and path.name not in ('conversions.py', 'navigation_topics.py', 'startup_watch.py')
+            and path.name not in ('conversions.py', 'navigation_topics.py', 'startup_watch.py',
+                                  'startup_hold.py')
         ),
         *(SRC / 'uvms_analysis' / 'uvms_analysis').rglob('*.py'),
         *(
