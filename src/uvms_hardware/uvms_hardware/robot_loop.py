@@ -59,10 +59,9 @@ class RobotLoop:
         self._clock_node = nodes[0]
         self._rewire_s = 0.0
         self._durations_ns = np.zeros(KEPT_PERIODS, dtype=np.int64)
-        #: Periods run, periods that wrote a device, deliveries by (topic, node).
+        #: Periods run, periods that wrote a device.
         self.periods = 0
         self.writes = 0
-        self.delivered: Counter[tuple[str, str]] = Counter()
         self.timer: Any = None
         self.fallbacks = self._fall_back_to_dds()
         #: Periods that ran the control chain (new time on the node clock).
@@ -126,7 +125,6 @@ class RobotLoop:
             else:
                 value = msg
             sub.delivered += 1
-            self.delivered[topic, sub.node.get_name()] += 1
             sub.callback(value)
 
     def tick(self) -> None:
@@ -159,6 +157,14 @@ class RobotLoop:
         if now_s - self._rewire_s > REWIRE_PERIOD_S:
             self._rewire_s = now_s
             self.wire()
+
+    @property
+    def delivered(self) -> Counter[tuple[str, str]]:
+        """Messages delivered by call, by (topic, receiving node): the subscriptions' counts."""
+        out: Counter[tuple[str, str]] = Counter()
+        for sub in self.bus.all():
+            out[sub.topic, sub.node.get_name()] += sub.delivered
+        return +out  # the edges that delivered
 
     def dds_inputs(self) -> list[str]:
         """Subscriptions of the process's nodes on DDS for a topic the bus serves."""
