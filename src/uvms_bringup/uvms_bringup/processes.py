@@ -98,6 +98,9 @@ class NodeProcess:
         signals_sent: Signals the launcher sent it, in order.
         rt_time_limit_s: Its RLIMIT_RTTIME (soft, hard; s) when last seen running, for a
             real-time process; None where unlimited or not looked at.
+        rt_time_soft_min_s: The smallest soft RLIMIT_RTTIME seen while it ran (s): the limit
+            at which a SIGXCPU was sent, as the kernel raises the soft limit by 1 s as it sends
+            one and the launcher may read it between the signal and the process's end.
     """
 
     plan: NodeProcessSpec
@@ -105,6 +108,7 @@ class NodeProcess:
     status: int | None = None
     signals_sent: list[signal.Signals] = field(default_factory=list)
     rt_time_limit_s: tuple[float, float] | None = None
+    rt_time_soft_min_s: float | None = None
 
     @property
     def name(self) -> str:
@@ -120,6 +124,8 @@ class NodeProcess:
             self.status = self.popen.poll()
             if self.status is None and limit is not None:
                 self.rt_time_limit_s = limit
+                seen = self.rt_time_soft_min_s
+                self.rt_time_soft_min_s = limit[0] if seen is None else min(seen, limit[0])
         return self.status
 
 
@@ -147,7 +153,8 @@ def end_line(process: NodeProcess) -> str:
     status = process.status or 0
     limit = process.rt_time_limit_s
     if process.plan.rt_priority and status == -signal.SIGXCPU:
-        ran = f'{limit[0]:g} s ' if limit else ''
+        soft = process.rt_time_soft_min_s
+        ran = f'{soft:g} s ' if soft is not None else ''
         return f'stopped: real-time loop ran {ran}without blocking (RLIMIT_RTTIME)'
     if (process.plan.rt_priority and status == -signal.SIGKILL and limit is not None
             and limit[0] >= limit[1] and signal.SIGKILL not in process.signals_sent):
