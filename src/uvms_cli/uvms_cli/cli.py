@@ -321,8 +321,9 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
             from uvms_bringup.launch_helpers import config_dir
 
             hardware = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
-            if args.twins_apart:
-                hardware = replace(hardware, twins_in_simulator=False)
+            hardware = replace(hardware, twins_in_simulator=not args.twins_apart)
+        if args.twins_apart and not (hardware is not None and hardware.twins):
+            raise ValueError('--twins-apart needs --hardware twin: no twins to run apart')
         compose = args.compose or ('robot' if hardware is not None else None)
         if args.ideal_devices:
             scenario = _with_ideal_devices(scenario)

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from uvms_bringup.launch_helpers import config_dir
 
 from uvms_bringup import launcher
 from uvms_cli import cli
@@ -123,3 +124,29 @@ def test_real_time_factor_reaches_the_launch_and_zero_is_refused(
     assert not launched
     err = capsys.readouterr().err
     assert '--real-time-factor' in err and '0.01 to 10' in err
+
+
+@pytest.mark.parametrize('with_file', [False, True], ids=['no-hardware', 'no-twins'])
+def test_twins_apart_without_twins_is_refused_naming_the_flag(
+    launched: dict[str, Any], capsys: pytest.CaptureFixture[str], tmp_path: Path,
+    with_file: bool
+) -> None:
+    """--twins-apart with no twins to run apart: exit 2 naming it, nothing launched."""
+    hardware: list[str] = []
+    if with_file:  # the shipped real-robot file, its one placeholder filled in
+        pool = config_dir() / 'hardware' / 'bluerov2_pool.yaml'
+        real = tmp_path / 'pool.yaml'
+        real.write_text(pool.read_text().replace('SET-ME', '192.168.2.10'))
+        hardware = ['--hardware', str(real)]
+    assert cli.main(['launch', 'bluerov2_alpha5_contact', '--twins-apart', *hardware]) == 2
+    assert not launched
+    assert '--twins-apart needs --hardware twin' in capsys.readouterr().err
+
+
+def test_twins_apart_with_the_twin_stand_runs_them_in_their_own_process(
+    launched: dict[str, Any]
+) -> None:
+    """--hardware twin --twins-apart: the hardware plan says the twins are not in the simulator."""
+    assert cli.main(['launch', 'bluerov2_alpha5_contact', '--hardware', 'twin',
+                     '--twins-apart']) == 0
+    assert launched['hardware'].twins and not launched['hardware'].twins_in_simulator
