@@ -201,23 +201,28 @@ def run_cycle(cycle: Cycle, directory: Path, stop_limit_s: float,
     """Launch, stop at the cycle's moment, judge."""
     output = directory / f'{cycle.scenario}-{random.randrange(1 << 30)}.mcap'
     launch = Launch(cycle.scenario, cycle.twin, output)
-    sent: float | None = None
-    if cycle.moment == 'startup':
-        # Counted from the launcher's first line (its node processes started): before it,
-        # the stop would land in the launcher's own interpreter start-up (the ROS wheels'
-        # .pth re-executes it), where no code of ours runs yet and Python itself prints
-        # `Fatal Python error: init_import_site` for any console script.
-        if launch.wait_for(LAUNCHER_UP, 60.0) is not None:
-            time.sleep(random.uniform(0.2, 2.0))
-            sent = launch.interrupt()
-    elif cycle.moment == 'before_step':
-        if launch.wait_for('holding the initial state', 60.0) is not None:
-            sent = launch.interrupt()
-    elif cycle.moment == 'mid_task':
-        if launch.wait_for('sending mission', 90.0) is not None:
-            time.sleep(random.uniform(0.5, 5.0))
-            sent = launch.interrupt()
-    cycle.status = launch.finish(600.0 if sent is None else 30.0)
+    try:
+        sent: float | None = None
+        if cycle.moment == 'startup':
+            # Counted from the launcher's first line (its node processes started): before it,
+            # the stop would land in the launcher's own interpreter start-up (the ROS wheels'
+            # .pth re-executes it), where no code of ours runs yet and Python itself prints
+            # `Fatal Python error: init_import_site` for any console script.
+            if launch.wait_for(LAUNCHER_UP, 60.0) is not None:
+                time.sleep(random.uniform(0.2, 2.0))
+                sent = launch.interrupt()
+        elif cycle.moment == 'before_step':
+            if launch.wait_for('holding the initial state', 60.0) is not None:
+                sent = launch.interrupt()
+        elif cycle.moment == 'mid_task':
+            if launch.wait_for('sending mission', 90.0) is not None:
+                time.sleep(random.uniform(0.5, 5.0))
+                sent = launch.interrupt()
+        cycle.status = launch.finish(600.0 if sent is None else 30.0)
+    except BaseException:  # the soak itself stopped (Ctrl-C, SIGTERM): so is the launch
+        launch.interrupt()
+        launch.finish(10.0)
+        raise
     lines = launch.lines
     cycle.lines = lines
     if sent is not None and cycle.status is not None:
@@ -343,6 +348,8 @@ def main() -> int:
                         help='run the repeated test inside tools/loopback-netns')
     args = parser.parse_args()
     random.seed(args.seed)
+    # A SIGTERM ends the soak through the ``finally`` below, so the busy loops end with it.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     print(f'load average before: {os.getloadavg()[0]:.2f}; {args.loads} busy loop(s)')
     loads = busy_loops(args.loads)
     try:
