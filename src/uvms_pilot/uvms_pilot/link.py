@@ -93,6 +93,8 @@ class PilotLink:
         self._tasks = ContactTaskClient(node)
         self._queue: list[Any] = []
         self._goal: Any = None
+        #: A cancel asked while the goal's acceptance was still on its way: sent on acceptance.
+        self._cancel_on_accept = False
         self._task_name = ''  # the running task's, on its feedback lines
 
     def _update(self, **changes: Any) -> None:
@@ -189,11 +191,15 @@ class PilotLink:
 
         handle = future.result()
         if not handle.accepted:
-            self._goal, self._queue = None, []
+            self._goal, self._queue, self._cancel_on_accept = None, [], False
             self._update(task=TaskOutcome(task.name, int(handle.status), rejected=True).describe())
             return
         self._goal = handle
         self._tasks.result_async(handle).add_done_callback(lambda f: self._on_result(task, f))
+        if self._cancel_on_accept:
+            self._cancel_on_accept = False
+            self._tasks.cancel_async(handle)
+            self.note('cancel: asked')
 
     def _on_result(self, task: Any, future: Any) -> None:
         from uvms_tasks.goals import TaskOutcome
@@ -210,9 +216,12 @@ class PilotLink:
     def cancel_task(self) -> None:
         """Cancel the running task (the controller backs the arm off as on any cancel)."""
         self._queue = []
-        if self._goal is None or not hasattr(self._goal, 'cancel_goal_async'):
-            self.note('no task to cancel' if self._goal is None else 'cancel: goal not yet '
-                      'accepted; press c again')
+        if self._goal is None:
+            self.note('no task to cancel')
+            return
+        if not hasattr(self._goal, 'cancel_goal_async'):  # sent, its acceptance not yet here
+            self._cancel_on_accept = True
+            self.note('cancel: asked, sent once the goal is accepted')
             return
         self._tasks.cancel_async(self._goal)
         self.note('cancel: asked')
