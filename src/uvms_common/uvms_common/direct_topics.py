@@ -46,6 +46,8 @@ class DirectSubscription:
     delivered: int = 0
     #: The DDS subscription that replaced it (no publisher of the process on the topic).
     fallback: Any = None
+    #: What the loop charges its callback's CPU to (``uvms_hardware.loop_ledger``).
+    phase: str = ''
 
     def destroy(self) -> None:
         """Stop the deliveries (and the fallback DDS subscription, if any)."""
@@ -163,7 +165,7 @@ def subscribe(node: Any, msg_type: Any, topic: str, callback: Callable[[Any], No
         return node.destroy_subscription, node.create_subscription(msg_type, topic, callback,
                                                                    qos, raw=raw)
     sub = DirectSubscription(node, msg_type, node.resolve_topic_name(topic), callback, qos,
-                             raw, bus)
+                             raw, bus, phase=f'{node.get_name()} <- {topic}')
     bus.add(sub)
     return DirectSubscription.destroy, sub
 

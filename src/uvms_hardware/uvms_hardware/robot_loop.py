@@ -20,17 +20,21 @@ created after the start (a node configured again) is tapped within a second.
 
 from __future__ import annotations
 
+import os
 import time
 from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from rclpy.clock import Clock, ClockType
+from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock as ClockMsg
 from uvms_common.direct_topics import Bus
+from uvms_common.raw_clock import take_clock_raw
+
+from uvms_hardware.loop_ledger import LoopLedger, make_ledger
 
 __all__ = ['RobotLoop']
 
@@ -40,6 +44,32 @@ REWIRE_PERIOD_S = 1.0
 HELD_PERIODS = 10
 #: Durations kept for the read-to-write figures (periods).
 KEPT_PERIODS = 4096
+
+
+def share_clock(main: Node, nodes: Sequence[Node]) -> int:
+    """One ``/clock`` subscription for the process: every node's clock set by ``main``'s.
+
+    Under ``use_sim_time`` each node's time source subscribes ``/clock`` on its own: in one
+    process the same message was taken and decoded once per node (seven times at the
+    simulator's rate; measured, most of the loop thread's CPU outside its periods). Here
+    ``main``'s source (taken raw, ``uvms_common.raw_clock``) sets every node's clock and the
+    others subscribe nothing (``feed_from_node``). Their clocks read the same time as before,
+    as each node of the process would have set it from the same message.
+
+    Returns:
+        The number of nodes whose clock now follows ``main``'s.
+    """
+    source = take_clock_raw(main)
+    shared = 0
+    for node in nodes:
+        if node is main:
+            continue
+        take_clock_raw(node).feed_from_node()
+        clock = node.get_clock()
+        if isinstance(clock, ROSClock):
+            source.attach_clock(clock)
+            shared += 1
+    return shared
 
 
 class RobotLoop:
@@ -63,12 +93,19 @@ class RobotLoop:
         self.periods = 0
         self.writes = 0
         self.timer: Any = None
+        #: Nodes whose clock follows the loop's clock node (`share_clock`).
+        self.shared_clocks = 0
         self.fallbacks = self._fall_back_to_dds()
         #: Periods that ran the control chain (new time on the node clock).
         self.steps = 0
         self._period_ns = round(1e9 / self.rate_hz * 0.999)
         self._slack_s = 0.5 / self.rate_hz
         self._stepped_ns, self._stepped_period = -self._period_ns, 0
+        #: The thread's CPU per phase and per published topic (``loop_ledger``; counted
+        #: only with ``UVMS_LOOP_CPU=1``).
+        self.ledger: LoopLedger = make_ledger(os.environ)
+        self._labels: dict[int, str] = {}
+        self._first_ns = self._last_ns = 0
         self.wire()
 
     def _fall_back_to_dds(self) -> list[str]:
@@ -87,28 +124,41 @@ class RobotLoop:
         return out
 
     def start(self, node: Node) -> None:
-        """The loop's timer, on ``node`` (the steady clock: /clock bursts drop no period)."""
+        """The loop's timer, on ``node`` (the steady clock: /clock bursts drop no period).
+
+        ``node``'s time source is also the only ``/clock`` subscription of the process: the
+        other nodes' clocks follow it (`share_clock`).
+        """
         self._clock_node = node
+        self.shared_clocks = share_clock(node, self.nodes)
         self.timer = node.create_timer(1.0 / self.rate_hz, self.tick, clock=self._steady)
 
     def wire(self) -> None:
-        """Tap every publisher not yet tapped whose topic the bus serves."""
+        """Tap every publisher not yet tapped: its CPU counted, its direct deliveries made."""
         for node in self.nodes:
             for publisher in list(node.publishers):
-                if id(publisher) not in self._tapped and publisher.topic_name in \
-                        self.bus.subscriptions:
+                if id(publisher) not in self._tapped:
                     self._tap(publisher)
 
     def _tap(self, publisher: Any) -> None:
         self._tapped.add(id(publisher))
-        topic, send = publisher.topic_name, publisher.publish
+        topic, send, ledger = publisher.topic_name, publisher.publish, self.ledger
+        direct = topic in self.bus.subscriptions
+        if not direct and not ledger.enabled:
+            return
 
         def publish(msg: Any) -> None:
-            send(msg)
-            if getattr(publisher, '_enabled', True):  # an inactive lifecycle one sends nothing
-                self.deliver(topic, msg)
+            ledger.publish(topic, send, msg)
+            if direct and getattr(publisher, '_enabled', True):  # an inactive lifecycle one
+                self.deliver(topic, msg)                           # sends nothing
 
         publisher.publish = publish
+
+    def _label(self, timer: Any, what: str) -> str:
+        label = self._labels.get(id(timer))
+        if label is None:
+            label = self._labels[id(timer)] = timer.node.get_name().removesuffix('_bridge')
+        return f'{what} {label}'
 
     def deliver(self, topic: str, msg: Any) -> None:
         """Call every direct subscription of ``topic`` with ``msg`` (message or CDR bytes)."""
@@ -125,15 +175,27 @@ class RobotLoop:
             else:
                 value = msg
             sub.delivered += 1
-            sub.callback(value)
+            self.ledger.enter(sub.phase)
+            try:
+                sub.callback(value)
+            finally:
+                self.ledger.leave()
 
     def tick(self) -> None:
         """One period: due reads, the clock down the control chain, the writes."""
         start_ns = time.perf_counter_ns()
+        ledger = self.ledger
+        if self.periods:
+            ledger.leave()  # 'outside': the executor since the last period
+        else:
+            self._first_ns = start_ns
+        ledger.enter('loop')
         now_s = self._steady.now().nanoseconds * 1e-9
         fired = [timer for timer in list(self.bus.timers) if timer.due(now_s, self._slack_s)]
         for timer in fired:
+            ledger.enter(self._label(timer, 'read'))
             timer.read()
+            ledger.leave()
         now = self._clock_node.get_clock().now()
         # One control step per control period of the node clock: on a simulated clock slower
         # than the wall (--real-time-factor) a period without new time computes nothing, but
@@ -149,14 +211,18 @@ class RobotLoop:
         wrote = False
         for timer in fired:
             if timer.then is not None:
+                ledger.enter(self._label(timer, 'write'))
                 timer.then()
+                ledger.leave()
                 wrote = True
-        self._durations_ns[self.periods % KEPT_PERIODS] = time.perf_counter_ns() - start_ns
+        self._last_ns = time.perf_counter_ns()
+        self._durations_ns[self.periods % KEPT_PERIODS] = self._last_ns - start_ns
         self.periods += 1
         self.writes += wrote  # ArduSub overrides; the arm is written in the chain itself
         if now_s - self._rewire_s > REWIRE_PERIOD_S:
             self._rewire_s = now_s
             self.wire()
+        ledger.switch('outside')
 
     @property
     def delivered(self) -> Counter[tuple[str, str]]:
@@ -183,8 +249,12 @@ class RobotLoop:
         edges = ', '.join(f'{topic}->{node} {n}' for (topic, node), n in
                           sorted(self.delivered.items()))
         dds = self.dds_inputs()
+        wall_s = (self._last_ns - self._first_ns) * 1e-9
+        cpu = '; '.join(self.ledger.lines(self.periods, wall_s))
         return (f'robot loop: {self.periods} periods at {self.rate_hz:g} Hz, {self.steps} '
                 f'control steps, {self.writes} with a thruster write; {figures}; direct: '
                 f'{edges or "none"}; DDS inputs on direct topics: {", ".join(dds) or "none"}'
                 + (f'; on DDS (no publisher in the process): {", ".join(self.fallbacks)}'
-                   if self.fallbacks else ''))
+                   if self.fallbacks else '')
+                + f'; /clock: one subscription, {self.shared_clocks} other nodes follow it'
+                + (f'; {cpu}' if cpu else ''))
