@@ -32,7 +32,9 @@ from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
+from uvms_common.cdr_codecs import MessageCodec, PayloadWriter
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
+from uvms_common.direct_topics import active_bus
 
 from uvms_hardware.bridge_messages import stamp
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
@@ -81,6 +83,8 @@ class NetFtBridgeNode(BridgeNode):
             local_clock=lambda: self.get_clock().now().nanoseconds * 1e-9,
             log=logger_log(self.get_logger()),
             stop_requested=stop_requested)
+        #: The wrench's CDR writer in the robot loop (configure), None in a node process.
+        self._payload: PayloadWriter | None = None
         self.start()
 
     @property
@@ -104,6 +108,8 @@ class NetFtBridgeNode(BridgeNode):
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         self._wrench_pub = self.own(self.destroy_publisher,
                                     self.create_publisher(WrenchStamped, 'wrench', qos))
+        self._payload = (PayloadWriter(MessageCodec(WrenchStamped, {
+            'header.frame_id': FT_SENSOR_LINK}), ['wrench']) if active_bus() else None)
         self.own(self.destroy_service, self.create_service(Trigger, '~/bias', self._on_bias))
         # One poll timer for the configured link; the component reads only while active.
         self.device_timer(1.0 / float(self.values['poll_rate_hz']), self._on_tick)
@@ -127,7 +133,16 @@ class NetFtBridgeNode(BridgeNode):
 
     def _on_tick(self) -> None:
         self.component.read(self.now_s())
-        for stamp_s, wrench in self.component.state().records:
+        records = self.component.state().records
+        if self._payload is not None:
+            # In the robot loop: the CDR bytes written by struct, published raw and handed
+            # to the controller's raw input as they are (no message object built, converted
+            # and serialized again for each of the box's 500 records a second).
+            for stamp_s, (force, torque) in records:
+                self._wrench_pub.publish(self._payload.fill(round(stamp_s * 1e9), (*force,
+                                                                                  *torque)))
+            return
+        for stamp_s, wrench in records:
             msg = WrenchStamped()
             msg.header.stamp = stamp(round(stamp_s * 1e9))
             msg.header.frame_id = FT_SENSOR_LINK

@@ -286,13 +286,14 @@ class FrameSplitter:
     def feed(self, chunk: bytes) -> list[Packet]:
         """The packets that ``chunk`` completes, in order (bad frames dropped and counted)."""
         packets = []
-        for byte in chunk:
-            if byte != 0:
-                if len(self._buffer) < self.MAX_ENCODED_BYTES:
-                    self._buffer.append(byte)
-                else:
-                    self._overflow = True
-                continue
+        data = bytes(chunk)
+        start = 0
+        while True:  # by terminator (bytes.find), not byte by byte: 500 reads a second
+            end = data.find(0, start)
+            self._keep(data[start:] if end < 0 else data[start:end])
+            if end < 0:
+                return packets
+            start = end + 1
             frame, overflow = bytes(self._buffer), self._overflow
             self._buffer.clear()
             self._overflow = False
@@ -302,7 +303,15 @@ class FrameSplitter:
                 packet = self._decode(frame)
                 if packet is not None:
                     packets.append(packet)
-        return packets
+
+    def _keep(self, part: bytes) -> None:
+        """Add ``part`` (no terminator in it) to the frame; what does not fit is dropped."""
+        room = self.MAX_ENCODED_BYTES - len(self._buffer)
+        if len(part) > room:
+            self._buffer += part[:room]
+            self._overflow = True
+        else:
+            self._buffer += part
 
     def _decode(self, frame: bytes) -> Packet | None:
         try:
