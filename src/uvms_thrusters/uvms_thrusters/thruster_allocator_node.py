@@ -369,7 +369,10 @@ class ThrusterAllocatorNode(LifecycleNode):
                 'only from the ESC feedback')
         self._published += 1
         self._saturated += output.allocation.saturation_scale < 1.0
-        thrust = output.allocation.thrust if self._desired_output else output.thrust
+        # 'desired' (hardware): the real thrusters follow what is sent, so an injected fault
+        # acts by sending its demand (a stuck thruster's thrust; none: the allocation's).
+        thrust = (self.core.injector.motor_demand(output.allocation.thrust, t_ns * 1e-9)
+                  if self._desired_output else output.thrust)
         self._actuator_pub.publish(
             self._actuator_writer.payload(t_ns, thrust, output.joint_torques))
         if self._state_gate.due(t_ns):
