@@ -12,13 +12,15 @@ twins, the visualizer or the mission), and what the twin stand costs per process
   device and the controller; ``uvms_hardware.robot_loop``).
 
 ``--layouts`` picks some of them (the first named is the baseline of the ratios).
+``--revision REV`` runs the robot loop of git revision REV (extracted beside the tree) and of
+this tree in turn instead: the before/after of a change to the robot process, side by side.
 
 For each real-time factor (``--real-time-factors``, default 1.0 and 0.5) it runs the three
 layouts in turn, ``--pairs`` times, to the scenario's end, and reads the launch's own closing
 cost table (``uvms_bringup.launch_costs``: CPU in % of one core per process from the first
 simulated step, missed periods of the loop processes) instead of measuring anew. It prints
 one row per run (outcome, contacts from the recording, robot-side CPU, the twin stand's CPU
-per process, the worst missed share of a loop process) and per factor the robot-side
+per process, the missed share of each loop process) and per factor the robot-side
 footprint of each layout against the separate layout's of the same round (measured side by
 side), as ratios. The load average is printed before and after; only figures of an
 otherwise quiet machine mean something. It asserts nothing.
@@ -49,6 +51,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bench_realtime_load import MISSION_FAILED, source_path
+from other_revision import extract_revision, python_path
 
 SCENARIO = 'bluerov2_alpha5_contact'
 #: Layout name -> the ``uvms launch`` arguments that make it; the first is the baseline.
@@ -81,13 +84,13 @@ class Run:
         outcome: SUCCEEDED, the mission's failure, NODE FAILED or the exit status.
         contacts: Separate contact intervals of the recording (None without a recording).
         cpu: CPU per process (% of one core) from the cost table.
-        missed_pct: Worst missed share of a loop process (%), None without periods.
+        missed_pct: Missed share per loop process (%).
     """
 
     outcome: str
     contacts: int | None
     cpu: dict[str, float]
-    missed_pct: float | None
+    missed_pct: dict[str, float]
     read_to_write_ms: tuple[float, float, float] | None = None
 
     @property
@@ -96,10 +99,10 @@ class Run:
         return sum(v for name, v in self.cpu.items() if name in ROBOT_SIDE)
 
 
-def read_costs(lines: list[str]) -> tuple[dict[str, float], float | None]:
-    """CPU per process and the worst missed share from the launch's closing cost table."""
+def read_costs(lines: list[str]) -> tuple[dict[str, float], dict[str, float]]:
+    """CPU per process and the missed shares of the loop processes from the cost table."""
     cpu: dict[str, float] = {}
-    shares = []
+    shares: dict[str, float] = {}
     inside = False
     for line in lines:
         if line.startswith(COST_HEADER):
@@ -110,19 +113,24 @@ def read_costs(lines: list[str]) -> tuple[dict[str, float], float | None]:
             continue
         cpu[match.group(1)] = float(match.group(2))
         if match.group(4) and int(match.group(4)):
-            shares.append(100.0 * int(match.group(3)) / int(match.group(4)))
-    return cpu, max(shares) if shares else None
+            shares[match.group(1)] = 100.0 * int(match.group(3)) / int(match.group(4))
+    return cpu, shares
 
 
-def launch(layout: str, factor: float, hardware: str, scenario: str, directory: Path) -> Run:
-    """One ``uvms launch`` to the scenario's end in a layout, read from its output."""
+def launch(layout: str, factor: float, hardware: str, scenario: str, directory: Path,
+           root: Path | None = None) -> Run:
+    """One ``uvms launch`` to the scenario's end in a layout, read from its output.
+
+    ``root``: another revision's tree to run (``--revision``), this tree's when None.
+    """
     output = directory / f'{layout}-{random.randrange(1 << 30)}.mcap'
-    env = dict(os.environ, PYTHONPATH=source_path(), ROS_DOMAIN_ID=str(random.randint(1, 100)))
+    env = dict(os.environ, PYTHONPATH=source_path() if root is None else python_path(root),
+               ROS_DOMAIN_ID=str(random.randint(1, 100)))
     command = [str(Path(sys.executable).parent / 'uvms'), 'launch', scenario, '--hardware',
                hardware, '--real-time-factor', str(factor), '--output', str(output),
-               *LAYOUTS[layout]]
+               *LAYOUTS[layout.split('@')[0]]]
     result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=1200,
-                            check=False, stdin=subprocess.DEVNULL)
+                            check=False, stdin=subprocess.DEVNULL, cwd=root)
     lines = result.stderr.splitlines()
     outcome = {0: 'SUCCEEDED', 1: 'NODE FAILED', 130: 'INTERRUPTED'}.get(result.returncode,
                                                                        str(result.returncode))
@@ -154,7 +162,8 @@ def row(factor: float, layout: str, index: int, run: Run) -> str:
     robot = ', '.join(f'{name} {value:.0f}' for name, value in sorted(run.cpu.items())
                       if name in ROBOT_SIDE)
     stand = ', '.join(f'{name} {run.cpu[name]:.0f}' for name in TWIN_STAND if name in run.cpu)
-    missed = '-' if run.missed_pct is None else f'{run.missed_pct:.2f}'
+    missed = ', '.join(f'{name} {share:.2f}' for name, share in sorted(run.missed_pct.items())
+                       if share > 0.0) or '0'
     contacts = '-' if run.contacts is None else str(run.contacts)
     loop = ('-' if run.read_to_write_ms is None
             else ' / '.join(f'{v:.2f}' for v in run.read_to_write_ms))
@@ -192,21 +201,27 @@ def main() -> None:
     parser.add_argument('--scenario', default=SCENARIO)
     parser.add_argument('--layouts', nargs='+', choices=list(LAYOUTS), default=list(LAYOUTS),
                         help='the layouts to run; the first is the baseline of the ratios')
+    parser.add_argument('--revision', metavar='REV',
+                        help="the robot loop of git revision REV, then this tree's, in turn")
     args = parser.parse_args()
     sys.path[:0] = source_path().split(os.pathsep)
+    layouts = [f'robot@{args.revision}', 'robot'] if args.revision else args.layouts
     print(f'load before: {" ".join(f"{v:.2f}" for v in os.getloadavg())} '
           f'({os.cpu_count()} CPUs); {args.scenario} --hardware {args.hardware}')
     print('| factor | layout | outcome | contacts | robot side, % of one core | '
-          'twin stand, % | missed % (worst loop process) | loop read->write p50 / p99 / max, '
+          'twin stand, % | missed %, per loop process | loop read->write p50 / p99 / max, '
           'ms |')
     print('| --- | --- | --- | --- | --- | --- | --- | --- |')
     closing = []
     with tempfile.TemporaryDirectory(prefix='uvms_robot_side_') as directory:
+        other = (extract_revision(args.revision, Path(directory) / 'other')
+                 if args.revision else None)
         for factor in args.real_time_factors:
-            runs: dict[str, list[Run]] = {layout: [] for layout in args.layouts}
+            runs: dict[str, list[Run]] = {layout: [] for layout in layouts}
             for index in range(1, args.pairs + 1):
-                for layout in args.layouts:
-                    run = launch(layout, factor, args.hardware, args.scenario, Path(directory))
+                for layout in layouts:
+                    run = launch(layout, factor, args.hardware, args.scenario, Path(directory),
+                                 other if '@' in layout else None)
                     runs[layout].append(run)
                     print(row(factor, layout, index, run), flush=True)
             closing += summary(factor, runs)

@@ -29,6 +29,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from uvms_hardware import latency_probe
 from uvms_hardware.alpha5_checks import (
     CONFIRM_TRIES,
     DEFAULT_CONFIRM_TIMEOUT_S,
@@ -329,6 +330,8 @@ class Alpha5Component(HardwareComponent):
         if not frames and self._refused(now_s):
             self.log('error', f'command refused: {core.last_rejection}')
         link.send(frames)
+        if frames:
+            latency_probe.note('current')
 
     def write_jaw(self, now_s: float, speed_m_s: float) -> None:
         """The jaws' opening speed (m/s, + opens) to VELOCITY; refused while tripped."""

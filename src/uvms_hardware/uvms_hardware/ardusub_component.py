@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from uvms_hardware import bridge_messages as bm
+from uvms_hardware import latency_probe
 from uvms_hardware.ardusub_core import ArduSubCore, choose_mode, put_back_summary
 from uvms_hardware.ardusub_link import PASSTHROUGH, SCRIPT, ArduSubLink, LinkSettings
 from uvms_hardware.ardusub_restore import find_leftovers, leftovers_refusal
@@ -300,6 +301,7 @@ class ArduSubComponent(HardwareComponent):
             link.neutral()
         else:
             link.send_override(link.pwm_for(thrusts_n))
+            latency_probe.note('rc')
 
     def state(self) -> ArduSubState:
         """The telemetry of the last read; ``fresh`` False while the vehicle is silent."""

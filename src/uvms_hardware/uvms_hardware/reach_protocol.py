@@ -285,7 +285,7 @@ class FrameSplitter:
 
     def feed(self, chunk: bytes) -> list[Packet]:
         """The packets that ``chunk`` completes, in order (bad frames dropped and counted)."""
-        packets = []
+        packets: list[Packet] = []
         data = bytes(chunk)
         start = 0
         while True:  # by terminator (bytes.find), not byte by byte: 500 reads a second

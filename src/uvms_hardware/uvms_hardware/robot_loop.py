@@ -34,6 +34,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from uvms_common.direct_topics import Bus
 from uvms_common.raw_clock import take_clock_raw
 
+from uvms_hardware import latency_probe
 from uvms_hardware.loop_ledger import LoopLedger, make_ledger
 
 __all__ = ['RobotLoop']
@@ -242,6 +243,7 @@ class RobotLoop:
 
     def summary(self) -> str:
         """One line: periods, the read-to-write time, the deliveries per edge."""
+        latency_probe.flush()  # the process may end without its atexit hooks
         kept = self._durations_ns[:min(self.periods, KEPT_PERIODS)] * 1e-6
         figures = (f'read->write p50 {np.percentile(kept, 50):.2f} ms, p99 '
                    f'{np.percentile(kept, 99):.2f} ms, max {kept.max():.2f} ms'

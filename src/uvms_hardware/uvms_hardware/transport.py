@@ -14,6 +14,7 @@ import time
 from collections.abc import Callable, Collection
 from typing import NamedTuple, Protocol
 
+from uvms_hardware import latency_probe
 from uvms_hardware.address import LOOPBACK, parse_host_port
 from uvms_hardware.errors import AddressError, HardwareError
 
@@ -96,6 +97,8 @@ class UdpLink:
                 continue
             if sender[1] == self._peer[1]:
                 datagrams.append(data)
+        if datagrams:
+            latency_probe.note('rx', self._peer[1], len(datagrams))
         return datagrams
 
     def wait(self, timeout_s: float) -> bool:

@@ -56,6 +56,7 @@ from uvms_hardware.address import LOOPBACK
 from uvms_hardware.hardware_config import Alpha5Hardware, Drive
 from uvms_hardware.reach_protocol import Mode, PacketId
 
+from uvms_hardware import latency_probe
 from uvms_hardware import reach_protocol as rp
 
 #: UDP port of Reach's examples.
@@ -306,6 +307,7 @@ class Alpha5Twin:
         sock = self._socket
         assert sock is not None
         next_status_s = time.monotonic() + STATUS_PERIOD_S
+        port = sock.getsockname()[1]
         while self._running.is_set():
             readable, _, _ = select.select([sock], [], [], 0.05)
             now_s = time.monotonic()
@@ -320,11 +322,13 @@ class Alpha5Twin:
                 reply = b''.join(self.handle(p, now_s) for p in self.splitter.feed(datagram))
                 if reply:
                     sock.sendto(reply, sender)
+                    latency_probe.note('reply', port)
             if now_s >= next_status_s:
                 next_status_s = now_s + STATUS_PERIOD_S
                 status = self.status_frames()
                 if status and self._host is not None:
                     sock.sendto(status, self._host)
+                    latency_probe.note('reply', port)
 
     def __enter__(self) -> Alpha5Twin:
         self.start()

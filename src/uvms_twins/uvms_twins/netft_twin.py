@@ -41,6 +41,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from uvms_hardware.address import LOOPBACK
 from uvms_hardware.errors import ProtocolError
 
+from uvms_hardware import latency_probe
 from uvms_hardware import rdt_protocol as rdt
 
 #: Largest record rate the twin streams at (Hz).
@@ -211,6 +212,7 @@ class NetFtTwin:
     def _serve(self) -> None:
         sock = self._socket
         assert sock is not None
+        port = sock.getsockname()[1]
         while self._running.is_set():
             with self._lock:
                 client = self._client
@@ -218,6 +220,7 @@ class NetFtTwin:
             for record in records:
                 if client is not None:
                     sock.sendto(record, client)
+                    latency_probe.note('reply', port)
             readable, _, _ = select.select([sock], [], [], min(wait_s, 0.05))
             if readable:
                 datagram, sender = sock.recvfrom(64)
