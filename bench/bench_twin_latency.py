@@ -7,11 +7,14 @@ datagram leaves them, the bridges when they read datagrams and when a command le
 (the arm's CURRENT frames, the vehicle's RC overrides), all on CLOCK_MONOTONIC.
 
 Reply i of a device is the i-th datagram its bridge read (loopback UDP neither loses nor
-reorders; the bridge reads only its twin's port); the command it causes is the first one of
+reorders; the bridge reads only its twin's port; the Net F/T's records by their RDT
+sequence); the command it causes is the first one of
 its kind that leaves the bridge after that read. The latency is the command's time minus the
 reply's: the wait for the bridge's next read (the loop's period), the read, the estimator,
-the controller, the allocator and the write. Printed per path: p50 / p99 / max (ms) and the
-number of replies, with the part from the read to the command on its own:
+the controller, the allocator and the write. Replies count from 1 s after the first command
+to the last command (before, the bridges read what queued while they were activated).
+Printed per path: p50 / p99 / max (ms) and the number of replies, with the part from the
+read to the command on its own:
 
 - ``alpha5 reply -> CURRENT``: a joint's answer (POSITION + VELOCITY) to the next CURRENT
   frames. A joint's answer enters the controller with its round (``joint_states`` is
@@ -44,6 +47,10 @@ from bench_realtime_load import MISSION_FAILED, source_path
 SCENARIO = 'bluerov2_alpha5_contact'
 #: Joints the Alpha 5 bridge polls in one round (one answer datagram each).
 ROUND = 4
+#: The Net F/T twin's port (``rdt_protocol.RDT_PORT``); the other twin is the Alpha 5.
+RDT_PORT = 49152
+#: Replies counted from this long after the first command (ns).
+SETTLE_NS = 1_000_000_000
 
 
 def read_notes(directory: Path) -> dict[str, list[tuple[int, int, int]]]:
@@ -60,7 +67,24 @@ def read_notes(directory: Path) -> dict[str, list[tuple[int, int, int]]]:
 
 def replies_read(notes: dict[str, list[tuple[int, int, int]]], port: int
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """(sent ns, read ns) of each reply from the twin at ``port`` that its bridge read."""
+    """(sent ns, read ns) of each reply from the twin at ``port`` that its bridge read.
+
+    The Net F/T's records by their RDT sequence (the latest sending of it before the read:
+    a new stream starts its sequence again); the Alpha 5's answers in order.
+    """
+    if port == RDT_PORT:
+        sends: dict[int, list[int]] = defaultdict(list)
+        for t, p, sequence in notes['reply']:
+            if p == port:
+                sends[sequence].append(t)
+        pairs = []
+        for r, _, sequence in notes['ftrx']:
+            times = sends.get(sequence, [])
+            k = bisect.bisect_right(times, r)
+            if k:
+                pairs.append((times[k - 1], r))
+        both = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+        return both[:, 0], both[:, 1]
     sent = np.array([t for t, p, _ in notes['reply'] if p == port], dtype=np.int64)
     read = np.array([t for t, p, n in notes['rx'] if p == port for _ in range(n)],
                     dtype=np.int64)
@@ -123,16 +147,23 @@ def main() -> None:
     ports = sorted({p for _, p, _ in notes['reply']})
     currents = [t for t, _, _ in notes['current']]
     overrides = [t for t, _, _ in notes['rc']]
+    if not currents:
+        print('no CURRENT frame left the bridge: nothing to measure')
+        return
+    # The running loop only: from 1 s after the first command to the last one (before, the
+    # bridges read what queued while they were configured and activated).
+    start_ns, end_ns = currents[0] + SETTLE_NS, currents[-1]
+    print(f'window: {(end_ns - start_ns) * 1e-9:.1f} s of commands')
     for port in ports:
         sent, read = replies_read(notes, port)
+        inside = (sent >= start_ns) & (sent < end_ns)
+        sent, read = sent[inside], read[inside]
         replies = sum(1 for _, p, _ in notes['reply'] if p == port)
-        # The twin whose replies come at the Net F/T's rate streams records; the other
-        # answers the Alpha 5 bridge's requests.
         span_s = (sent[-1] - sent[0]) * 1e-9 if sent.size > 1 else 0.0
         rate_hz = sent.size / span_s if span_s else 0.0
-        device = 'netft record' if rate_hz > 300.0 else 'alpha5 reply'
-        print(f'{device} (port {port}): {replies} sent, {read.size} read by the bridge, '
-              f'{rate_hz:.0f}/s')
+        device = 'netft record' if port == RDT_PORT else 'alpha5 reply'
+        print(f'{device} (port {port}): {replies} sent, {read.size} of them in the window and '
+              f'read by the bridge, {rate_hz:.0f}/s')
         total, after = latencies(sent, read, currents)
         print('  ' + figure(f'{device} -> CURRENT', total, after))
         if device == 'alpha5 reply':

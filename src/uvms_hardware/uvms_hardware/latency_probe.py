@@ -8,9 +8,12 @@ leaves them and the bridges when they read datagrams and when a command leaves t
 reply i of a device is the i-th datagram its bridge read (loopback UDP neither loses nor
 reorders), and the command it causes is the first one that leaves after that read.
 
-Kinds: ``reply <port>`` (a twin sent a datagram from ``port``), ``rx <port> <n>`` (a bridge
-read ``n`` datagrams from ``port``), ``current`` (the Alpha 5's CURRENT frames left the
-bridge), ``rc`` (the ArduSub's RC overrides left the bridge).
+Kinds: ``reply <port> [<sequence>]`` (a twin sent a datagram from ``port``; a Net F/T
+record's RDT sequence), ``rx <port> <n>`` (a bridge read ``n`` datagrams from ``port``),
+``ftrx 0 <sequence>`` (the Net F/T bridge read that record), ``current`` (the Alpha 5's
+CURRENT frames left the bridge), ``rc`` (the ArduSub's RC overrides left the bridge). The
+Net F/T's records are paired by their sequence: its bridge drops records read before it is
+active, so counting would not pair them.
 """
 
 from __future__ import annotations

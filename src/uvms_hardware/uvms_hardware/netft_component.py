@@ -30,6 +30,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from uvms_hardware import latency_probe
 from uvms_hardware import rdt_protocol as rdt
 from uvms_hardware.address import parse_host_port
 from uvms_hardware.component import (
@@ -248,6 +249,9 @@ class NetFtComponent(HardwareComponent):
         if core is None or link is None or not self.active:
             return
         datagrams = link.read_datagrams()
+        if latency_probe.enabled():  # each record's RDT sequence, for bench_twin_latency
+            for datagram in datagrams:
+                latency_probe.note('ftrx', 0, int.from_bytes(datagram[:4], 'big'))
         # Read after the socket: every record had arrived by then (a delay never negative).
         local_s = self.local_clock()
         bad = core.bad_datagrams

@@ -220,7 +220,7 @@ class NetFtTwin:
             for record in records:
                 if client is not None:
                     sock.sendto(record, client)
-                    latency_probe.note('reply', port)
+                    latency_probe.note('reply', port, int.from_bytes(record[:4], 'big'))
             readable, _, _ = select.select([sock], [], [], min(wait_s, 0.05))
             if readable:
                 datagram, sender = sock.recvfrom(64)
