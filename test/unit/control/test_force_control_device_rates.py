@@ -7,11 +7,15 @@ slots from t = 0 and held (the bus, ``devices.arm_commands.rate_hz``) and the wr
 reaches the controller one 2 ms state late (``devices.wrench``), as the simulator with
 ``devices.ideal: false`` does. Today's controller (arm.command_rate_hz 0) loses its force
 there; cancelling the force predicted for the held slot's middle (``held_command``) holds it.
+With the wrist sensor's 0.1 % noise (sensor.yaml: 0.58 N axial, 0.29 N across, 1 sd) a
+quadratic through the last three samples amplifies the noise about 33 times and the arm
+diverges; the prediction weighed by the samples' own noise holds there too.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 import pytest
@@ -41,6 +45,11 @@ F_D = 20.0
 Q0 = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0])
 #: The middle of the contact (s): after the force ramp, before the path ends.
 MID_CONTACT_S = (2.5, 4.5)
+#: The wrist sensor's noise, 1 sd per sensor axis (N): 0.1 % of the Mini45's ranges
+#: (sensor.yaml noise_fraction 0.001, force_range_n [580, 290, 290]).
+NOISE_SD_N = np.array([0.58, 0.29, 0.29])
+#: An arm joint faster than this (rad/s) has run away: the loop stops there.
+RUNAWAY_RAD_S = 50.0
 
 
 def flat(tree: dict[str, object], prefix: str = '') -> dict[str, object]:
@@ -69,12 +78,16 @@ def model() -> UvmsModel:
 
 
 @functools.cache
-def press(command_rate_hz: float, force_latency_s: float,
-          devices: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Times (s), wall force and F_d (N) of the press; ``devices``: 77 Hz slots, 2 ms late force.
+def press(command_rate_hz: float, force_latency_s: float, devices: bool,
+          noise_seed: int | None = None,
+          with_wall: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Times (s), wall force, F_d (N) and position error (m) of the press.
 
-    The controller is told the devices' timing through ``held_slot_horizon_s`` (the node's
-    arm.command_rate_hz and arm.force_latency_s).
+    ``devices``: 77 Hz slots, 2 ms late force. ``noise_seed``: the wrist sensor's 0.1 % noise
+    (``NOISE_SD_N``) drawn with this seed; None noise-free. ``with_wall`` False: the same path
+    in free water (``with_wall`` False). The controller is told the devices' timing through
+    ``held_slot_horizon_s`` (the node's arm.command_rate_hz and arm.force_latency_s). A run
+    away arm ends the series there.
     """
     plant = model()
     controller = UnifiedForceController(robot_gains(), model(), DT,
@@ -82,21 +95,24 @@ def press(command_rate_hz: float, force_latency_s: float,
     supervisor = TaskSupervisor(controller, SafetyLimits(
         max_contact_force_n=60.0, sensor_range_n=290.0, max_path_distance_m=0.5))
     x_a = plant.ee_position(Q0)
-    wall_x = float(x_a[0]) + 0.003
+    wall_x = float(x_a[0]) + (0.003 if with_wall else 1.0)
+    rng = None if noise_seed is None else np.random.default_rng(noise_seed)
     goal = ContactTaskGoal(
         path=x_a + np.array([[0.0, 0.0, 0.0], [0.0115, 0.0, 0.0], [0.0115, 0.0, 0.02]]),
         times=np.array([0.0, 1.5, 4.5]), velocities=None, accelerations=None,
         normal=np.array([1.0, 0.0, 0.0]), force_n=F_D, force_ramp_s=1.0,
-        require_contact=True, start_time_s=0.5)
+        require_contact=with_wall, start_time_s=0.5)
     q, w = Q0.copy(), np.zeros(10)
     late_sensor = np.zeros(3)
     held = np.zeros(4)
     next_slot_ns = 0
-    times, force, f_d = [], [], []
+    times, force, f_d, x_error = [], [], [], []
     for k in range(round(5.0 / DT)):
         t, t_ns = k * DT, k * round(DT * 1e9)
         wall = np.array([K_E * max(float(plant.ee_position(q)[0]) - wall_x, 0.0), 0.0, 0.0])
         sensor = plant.ee_rotation(q).T @ wall
+        if rng is not None:
+            sensor = sensor + NOISE_SD_N * rng.standard_normal(3)
         if k == 1:
             supervisor.submit('press', goal, t)
         result, _ = supervisor.step(t, q, w, late_sensor if devices else sensor)
@@ -111,12 +127,18 @@ def press(command_rate_hz: float, force_latency_s: float,
         times.append(t)
         force.append(wall[0])
         f_d.append(result.F_d[0])
-    return np.array(times), np.array(force), np.array(f_d)
+        x_error.append(float(np.linalg.norm(result.X - result.X_d)))
+        if not np.isfinite(w).all() or float(np.abs(w[6:]).max()) > RUNAWAY_RAD_S:
+            break
+    return np.array(times), np.array(force), np.array(f_d), np.array(x_error)
 
 
-def mid_contact_rms(command_rate_hz: float, force_latency_s: float, devices: bool) -> float:
-    """RMS of F - F_d (N) over the middle of the contact."""
-    t, force, f_d = press(command_rate_hz, force_latency_s, devices)
+def mid_contact_rms(command_rate_hz: float, force_latency_s: float, devices: bool,
+                    noise_seed: int | None = None) -> float:
+    """RMS of F - F_d (N) over the middle of the contact; inf when the run ended before it."""
+    t, force, f_d, _ = press(command_rate_hz, force_latency_s, devices, noise_seed)
+    if t[-1] < MID_CONTACT_S[1]:
+        return math.inf
     middle = (t > MID_CONTACT_S[0]) & (t < MID_CONTACT_S[1])
     return float(np.sqrt(np.mean((force[middle] - f_d[middle]) ** 2)))
 
@@ -173,3 +195,41 @@ def test_zero_horizon_is_the_measured_force() -> None:
     force = HeldCommandForce(0.0)
     assert force.update(0.0, (1.0, 2.0, 3.0)) == (1.0, 2.0, 3.0)
     assert force.update(DT, (5.0, 2.0, 3.0)) == (5.0, 2.0, 3.0)
+
+
+#: Seeds of the noisy presses: one draw of the noise can favour either loop (measured mid-contact
+#: RMS 1.45 / 1.87 / 1.84 N at the devices' rates against 1.59 / 1.26 / 1.68 N ideal).
+NOISE_SEEDS = (1, 2, 3)
+
+
+def test_controller_holds_its_force_with_the_wrist_sensors_noise() -> None:
+    """0.1 % wrist noise at the device rates: the press holds, 1.3x the ideal loop, peak 15 %.
+
+    Over three noise draws the mean mid-contact RMS is at most 1.3x the ideal loop's with the
+    same draws (measured 1.72 N against 1.51 N) and every peak within 15 % of its ideal run's
+    (at most +10 %). The quadratic alone through the last three samples (held_command before
+    the noise weighting) amplifies the noise about 33 times: every draw ran away within 1.3 s.
+    """
+    held, ideal = [], []
+    for seed in NOISE_SEEDS:
+        held.append(mid_contact_rms(77.0, 0.002, True, seed))
+        ideal.append(mid_contact_rms(0.0, 0.0, False, seed))
+        peak_ideal = press(0.0, 0.0, False, seed)[1].max()
+        peak = press(77.0, 0.002, True, seed)[1].max()
+        assert abs(peak - peak_ideal) <= 0.15 * peak_ideal, f'seed {seed}: peak {peak:.1f} N'
+    assert all(math.isfinite(rms) for rms in held), f'ran away: {held}'
+    assert np.mean(held) <= 1.3 * np.mean(ideal), f'{held} against {ideal}'
+
+
+def test_free_motion_with_the_wrist_sensors_noise_keeps_its_path() -> None:
+    """The same path in free water with the 0.1 % noise: the prediction adds no error.
+
+    The arm keeps within 1.2x the position error of the device-timed loop without prediction
+    (measured 6.3 mm against 6.0 mm; ideal devices 3.5 mm: the noise cancelled by eq. 29 and
+    held over a slot costs the rest) and within 10 mm. The quadratic alone ran away (0.2 m).
+    """
+    t, _, _, x_error = press(77.0, 0.002, True, NOISE_SEEDS[0], False)
+    t_plain, _, _, x_error_plain = press(0.0, 0.0, True, NOISE_SEEDS[0], False)
+    assert t[-1] == t_plain[-1] > MID_CONTACT_S[1]
+    assert x_error.max() <= 1.2 * x_error_plain.max()
+    assert x_error.max() < 0.01

@@ -16,17 +16,40 @@ difference). The force loop itself (eq. 39), the fuzzy switch and the task super
 the measured F_e. A command rate of 0 is the ideal device: h = 0 and the measured F_e, exactly
 as eq. 29.
 
+The quadratic weighs three 2 ms samples 11.1, -26.5 and 16.4 at h = 8.5 ms: a noisy sensor's
+noise would enter eq. 29/35 about 33 times larger (the Alpha 5's 0.1 % wrist noise, 0.58 N,
+as 19 N: the arm runs away). So the predicted increment p - F_e is weighed by how noisy the
+samples are (``prediction_weight``): g = 1 / (1 + (G sigma / e)^2), G the quadratic's noise
+gain, e a tolerance (N) and sigma the noise per axis, estimated from the samples' third
+differences (0 on any quadratic, 20 sigma^2 for white noise) by their median absolute value
+over the last ``NOISE_WINDOW`` samples (a kink of the real force, the contact's onset or a held
+command's step, is an outlier there, not noise). A clean sensor gets the whole prediction
+(g = 1 on a quadratic: the exact cancellation); a noisy one the measured force, as eq. 29 (at
+the devices' rates with the robot's 0.1 % noise that holds: docs/hardware.md). Whatever the
+noise, the noise the increment adds has a standard deviation of at most e / 2 (g G sigma peaks
+at G sigma = e).
+
 Pure Python, plain floats: it runs in the control step.
 """
 
 from __future__ import annotations
 
 import math
+import statistics
+from collections import deque
 
 from uvms_control.core.errors import ControlParameterError
 
 #: A gap between samples longer than this many of the first one restarts the prediction.
 RESTART_RATIO = 5.0
+#: Default tolerance e (N): the prediction's noise, G sigma, at which half the increment is used.
+NOISE_TOLERANCE_N = 0.5
+#: Default number of third differences whose median absolute value estimates the noise.
+NOISE_WINDOW = 32
+#: sigma of white noise per median absolute third difference f3 - 3 f2 + 3 f1 - f0: the third
+#: difference of unit white noise is normal with variance 20, and a normal's median absolute
+#: value is 0.6745 sigma.
+MEDIAN_TO_SD = 1.0 / (0.6744897501960817 * math.sqrt(20.0))
 
 Vector3 = tuple[float, float, float]
 
@@ -91,32 +114,104 @@ def quadratic_extrapolation(samples: list[tuple[float, Vector3]], horizon_s: flo
             f2[2] + horizon_s * d1[2] + w * (d1[2] - d0[2]))
 
 
+def quadratic_increment_noise_gain(times_s: tuple[float, float, float], horizon_s: float) -> float:
+    """Noise gain G of the increment ``quadratic_extrapolation`` adds to the newest sample.
+
+    The increment p - f2 is a weighted sum of the three samples; G is the root of the sum of
+    the squared weights: the standard deviation of the increment per unit of white noise.
+
+    Args:
+        times_s: The three sample times t0 < t1 < t2 (s).
+        horizon_s: How far past t2 (s).
+
+    >>> round(quadratic_increment_noise_gain((0.0, 0.002, 0.004), 0.0085), 1)
+    32.7
+    >>> quadratic_increment_noise_gain((0.0, 0.002, 0.004), 0.0)
+    0.0
+    """
+    t0, t1, t2 = times_s
+    step1, step0 = t2 - t1, t1 - t0
+    w = horizon_s * (t2 + horizon_s - t1) / (t2 - t0)
+    a2 = (horizon_s + w) / step1
+    a0 = w / step0
+    return math.sqrt(a2 * a2 + (a2 + a0) ** 2 + a0 * a0)
+
+
+def prediction_weight(noise_sd: float, noise_gain: float, tolerance_n: float) -> float:
+    """Weight g of the predicted increment: 1 / (1 + (G sigma / e)^2).
+
+    Args:
+        noise_sd: Estimated noise standard deviation of the samples, sigma (N).
+        noise_gain: Noise gain G of the increment (``quadratic_increment_noise_gain``).
+        tolerance_n: e (N): the increment's noise G sigma at which half of it is used; the
+            weighted increment's noise g G sigma is at most e / 2 whatever sigma.
+
+    >>> prediction_weight(0.0, 32.8, 0.5)
+    1.0
+    >>> prediction_weight(0.5 / 32.8, 32.8, 0.5)
+    0.5
+    >>> prediction_weight(0.58, 32.8, 0.5) < 1e-3
+    True
+    """
+    ratio = noise_gain * noise_sd / tolerance_n
+    return 1.0 / (1.0 + ratio * ratio)
+
+
 class HeldCommandForce:
     """The contact force eq. 29 and 35 cancel, predicted for the held command's slot.
 
+    The measured F_e plus the quadratic's increment to h after it, per axis weighed by
+    ``prediction_weight`` with the noise estimated from the samples' third differences (their
+    median absolute value over the last ``noise_window`` of them). Until four samples have come
+    (no noise estimate yet) the measured force, as eq. 29.
+
     Args:
         horizon_s: h of ``held_slot_horizon_s``; 0 returns each sample unchanged.
+        noise_tolerance_n: e of ``prediction_weight`` (N).
+        noise_window: How many third differences the noise estimate takes.
 
     >>> force = HeldCommandForce(0.01)
-    >>> [force.update(0.002 * k, (2.0 * k, 0.0, 0.0))[0] for k in range(3)]
-    [0.0, 12.0, 14.0]
+    >>> [force.update(0.002 * k, (2.0 * k * k, 0.0, 0.0))[0] for k in range(5)]
+    [0.0, 2.0, 8.0, 128.0, 162.0]
     """
 
-    def __init__(self, horizon_s: float) -> None:
+    def __init__(self, horizon_s: float, noise_tolerance_n: float = NOISE_TOLERANCE_N,
+                 noise_window: int = NOISE_WINDOW) -> None:
         if not (math.isfinite(horizon_s) and horizon_s >= 0.0):
             raise ControlParameterError('prediction horizon', horizon_s, '[0, inf) s')
+        if not (math.isfinite(noise_tolerance_n) and noise_tolerance_n > 0.0):
+            raise ControlParameterError('prediction noise tolerance', noise_tolerance_n,
+                                        '(0, inf) N')
+        if noise_window < 1:
+            raise ControlParameterError('prediction noise window', noise_window, '[1, inf)')
         self.horizon_s = horizon_s
+        self.noise_tolerance_n = noise_tolerance_n
         self._samples: list[tuple[float, Vector3]] = []
+        self._third: tuple[deque[float], deque[float], deque[float]] = (
+            deque(maxlen=noise_window), deque(maxlen=noise_window), deque(maxlen=noise_window))
+        self._last: Vector3 = (0.0, 0.0, 0.0)
+
+    @property
+    def noise_sd(self) -> Vector3:
+        """The estimated noise standard deviation per axis (N); 0 before any estimate."""
+        a, b, c = self._third
+        if not a:
+            return (0.0, 0.0, 0.0)
+        return (MEDIAN_TO_SD * statistics.median(a), MEDIAN_TO_SD * statistics.median(b),
+                MEDIAN_TO_SD * statistics.median(c))
 
     def reset(self) -> None:
-        """Forget the samples: the next one restarts the prediction."""
+        """Forget the samples and the noise estimate: the next sample restarts both."""
         self._samples = []
+        for third in self._third:
+            third.clear()
 
     def update(self, t: float, f_e: Vector3) -> Vector3:
         """Take the sample F_e (N) at t (s); return the force predicted h after it.
 
         A sample at or before the newest one (a re-published state) is not taken again; a gap
-        of more than ``RESTART_RATIO`` sample periods restarts from the new sample.
+        of more than ``RESTART_RATIO`` sample periods restarts the prediction from the new
+        sample (the noise estimate is kept: the sensor's noise has not changed).
         """
         if self.horizon_s == 0.0:
             return f_e
@@ -124,10 +219,23 @@ class HeldCommandForce:
         if samples:
             gap = t - samples[-1][0]
             if gap <= 0.0:
-                return quadratic_extrapolation(samples, self.horizon_s)
+                return self._last
             if len(samples) >= 2 and gap > RESTART_RATIO * (samples[-1][0] - samples[-2][0]):
                 samples.clear()
         samples.append((t, f_e))
-        if len(samples) > 3:
+        if len(samples) > 4:
             del samples[0]
-        return quadratic_extrapolation(samples, self.horizon_s)
+        if len(samples) < 4:
+            self._last = f_e
+            return f_e
+        (_, fa), (t0, fb), (t1, fc), (t2, fd) = samples
+        for i, third in enumerate(self._third):
+            third.append(abs(fd[i] - 3.0 * fc[i] + 3.0 * fb[i] - fa[i]))
+        gain = quadratic_increment_noise_gain((t0, t1, t2), self.horizon_s)
+        p = quadratic_extrapolation(samples[1:], self.horizon_s)
+        e = self.noise_tolerance_n
+        s0, s1, s2 = self.noise_sd
+        self._last = (fd[0] + prediction_weight(s0, gain, e) * (p[0] - fd[0]),
+                      fd[1] + prediction_weight(s1, gain, e) * (p[1] - fd[1]),
+                      fd[2] + prediction_weight(s2, gain, e) * (p[2] - fd[2]))
+        return self._last
