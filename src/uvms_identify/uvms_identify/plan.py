@@ -52,7 +52,10 @@ MAX_SPEED = (math.inf, math.inf, math.inf, math.inf, math.inf, 1.0)
 START_DEPTH_M = 2.5
 SEABED_DEPTH_M = 4.5
 #: What the recorder records: the robot's own sensors and commands; the ground truth
-#: odometry only for the acceptance check (the fit never reads it).
+#: odometry only for the acceptance check (the fit never reads it). ``wrench``, ``ee_pose``
+#: and ``contact`` too: `uvms launch` starts the simulator only once its recorder subscribes
+#: to every state topic it publishes (``startup.recorder``); without them a plan's scenario
+#: held the twin stand at t = 0 until the ArduSub bridge gave up (no HEARTBEAT in 30 s).
 RECORDED_TOPICS = [
     '/clock:rosgraph_msgs/msg/Clock',
     'joint_states:sensor_msgs/msg/JointState',
@@ -62,6 +65,9 @@ RECORDED_TOPICS = [
     'command/actuators:uvms_msgs/msg/ActuatorCommand',
     'thrusters/state:uvms_msgs/msg/ThrusterState',
     'odometry:nav_msgs/msg/Odometry',
+    'wrench:geometry_msgs/msg/WrenchStamped',
+    'ee_pose:geometry_msgs/msg/PoseStamped',
+    'contact:uvms_msgs/msg/ContactState',
 ]
 
 
