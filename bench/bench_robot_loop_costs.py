@@ -8,6 +8,10 @@ holds on a loaded machine, unlike the microseconds themselves):
 - ``alpha5 feed``: the Alpha 5's answers split into frames byte by byte in Python (before)
   vs. by ``bytes.find`` of the terminator (``reach_protocol.FrameSplitter.feed``): one read's
   datagram, a joint's POSITION and VELOCITY answers;
+- ``alpha5 request``: a joint's feedback REQUEST encoded (COBS, CRC) each poll (before) vs.
+  encoded once per device (``alpha5_core``);
+- ``loop /clock``: the period's time to the estimator's raw input as a ``Clock`` message
+  built and serialized (before) vs. its 12 CDR bytes packed by ``struct`` (``robot_loop``);
 - ``netft wrench``: one record as a ``WrenchStamped`` built field by field and serialized for
   the controller's raw input (before) vs. its CDR bytes written by ``struct`` into a
   preallocated payload (``cdr_codecs.PayloadWriter``), as the robot loop's Net F/T bridge
@@ -101,9 +105,29 @@ def main() -> None:
     # Equal as messages (rclpy leaves its alignment padding unwritten; ours is zeros).
     assert (deserialize_message(typed(), WrenchStamped)
             == deserialize_message(raw(), WrenchStamped)), 'the two wrench payloads differ'
+    from rosgraph_msgs.msg import Clock
+    from uvms_hardware.alpha5_core import FEEDBACK_REQUEST
+    from uvms_hardware.reach_protocol import encode_request
+    from uvms_hardware.robot_loop import _CLOCK_CDR, CDR_LE_HEADER
+
+    requests = {0x02: encode_request(0x02, FEEDBACK_REQUEST)}
+
+    def clock_typed() -> bytes:
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = divmod(1_700_000_000_123_456_789, 1_000_000_000)
+        return serialize_message(msg)
+
+    def clock_raw() -> bytes:
+        return _CLOCK_CDR.pack(CDR_LE_HEADER, *divmod(1_700_000_000_123_456_789,
+                                                      1_000_000_000))
+
+    assert clock_typed() == clock_raw()
     pairs = {'alpha5 feed': (lambda: old_feed(old_splitter, answer),
                              lambda: new_splitter.feed(answer)),
-             'netft wrench': (typed, raw)}
+             'netft wrench': (typed, raw),
+             'alpha5 request': (lambda: encode_request(0x02, FEEDBACK_REQUEST),
+                                lambda: requests[0x02]),
+             'loop /clock': (clock_typed, clock_raw)}
     print(f'load: {" ".join(f"{v:.2f}" for v in os.getloadavg())}; {args.rounds} rounds of '
           f'{CALLS} calls, interleaved')
     for name, (before, after) in pairs.items():

@@ -143,6 +143,9 @@ class Alpha5Core:
         self._drive_of = {d.device_id: d for d in self.drives}
         self._slots = list(arm.joints) * (JAW_POLL_ROUNDS if arm.jaw else 1) + (
             [arm.jaw] if arm.jaw else [])
+        #: Each device's feedback REQUEST frame, encoded once (it never changes).
+        self._requests = {d.device_id: rp.encode_request(d.device_id, FEEDBACK_REQUEST)
+                          for d in self._slots}
         self._next = 0
         self._holding = False
         self._driving = False
@@ -323,7 +326,7 @@ class Alpha5Core:
         drive = self._slots[self._next]
         round_done = self._next % len(self.arm.joints) == 0 and drive is not self.jaw
         self._next = (self._next + 1) % len(self._slots)
-        return frames + rp.encode_request(drive.device_id, FEEDBACK_REQUEST), round_done
+        return frames + self._requests[drive.device_id], round_done
 
     def poll_period_s(self, rate_hz: float) -> float:
         """The period of `tick` (s) that asks every joint ``rate_hz`` times a second."""

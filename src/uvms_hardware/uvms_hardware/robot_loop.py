@@ -21,6 +21,7 @@ created after the start (a node configured again) is tapped within a second.
 from __future__ import annotations
 
 import os
+import struct
 import time
 from collections import Counter
 from collections.abc import Sequence
@@ -30,7 +31,6 @@ import numpy as np
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message, serialize_message
-from rosgraph_msgs.msg import Clock as ClockMsg
 from uvms_common.direct_topics import Bus
 from uvms_common.raw_clock import take_clock_raw
 
@@ -43,6 +43,9 @@ __all__ = ['RobotLoop']
 REWIRE_PERIOD_S = 1.0
 #: Periods between two control steps while the node clock stands.
 HELD_PERIODS = 10
+#: A rosgraph_msgs/Clock in CDR: encapsulation (CDR, little endian), int32 sec, uint32 nanosec.
+_CLOCK_CDR = struct.Struct('<4siI')
+CDR_LE_HEADER = b'\x00\x01\x00\x00'
 #: Durations kept for the read-to-write figures (periods).
 KEPT_PERIODS = 4096
 
@@ -191,7 +194,7 @@ class RobotLoop:
         else:
             self._first_ns = start_ns
         ledger.enter('loop')
-        now_s = self._steady.now().nanoseconds * 1e-9
+        now_s = time.monotonic()
         fired = [timer for timer in list(self.bus.timers) if timer.due(now_s, self._slack_s)]
         for timer in fired:
             ledger.enter(self._label(timer, 'read'))
@@ -206,9 +209,10 @@ class RobotLoop:
                                       or self.periods - self._stepped_period >= HELD_PERIODS):
             self._stepped_ns, self._stepped_period = now.nanoseconds, self.periods
             self.steps += 1
-            msg = ClockMsg()
-            msg.clock = now.to_msg()
-            self.deliver('/clock', msg)
+            # Its CDR bytes by struct: the estimator takes /clock raw (no message built and
+            # serialized again each period); a typed input gets it deserialized.
+            self.deliver('/clock', _CLOCK_CDR.pack(CDR_LE_HEADER,
+                                                   *divmod(now.nanoseconds, 1_000_000_000)))
         wrote = False
         for timer in fired:
             if timer.then is not None:
