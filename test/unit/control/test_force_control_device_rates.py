@@ -198,7 +198,7 @@ def test_zero_horizon_is_the_measured_force() -> None:
 
 
 #: Seeds of the noisy presses: one draw of the noise can favour either loop (measured mid-contact
-#: RMS 1.45 / 1.87 / 1.84 N at the devices' rates against 1.59 / 1.26 / 1.68 N ideal).
+#: RMS 1.83 / 1.60 / 1.73 N at the devices' rates against 1.59 / 1.26 / 1.68 N ideal).
 NOISE_SEEDS = (1, 2, 3)
 
 
@@ -207,7 +207,7 @@ def test_controller_holds_its_force_with_the_wrist_sensors_noise() -> None:
 
     Over three noise draws the mean mid-contact RMS is at most 1.3x the ideal loop's with the
     same draws (measured 1.72 N against 1.51 N) and every peak within 15 % of its ideal run's
-    (at most +10 %). The quadratic alone through the last three samples (held_command before
+    (+6 to +10 %). The quadratic alone through the last three samples (held_command before
     the noise weighting) amplifies the noise about 33 times: every draw ran away within 1.3 s.
     """
     held, ideal = [], []
@@ -221,15 +221,14 @@ def test_controller_holds_its_force_with_the_wrist_sensors_noise() -> None:
     assert np.mean(held) <= 1.3 * np.mean(ideal), f'{held} against {ideal}'
 
 
-def test_free_motion_with_the_wrist_sensors_noise_keeps_its_path() -> None:
-    """The same path in free water with the 0.1 % noise: the prediction adds no error.
+def test_free_motion_with_the_wrist_sensors_noise_keeps_its_path_as_at_ideal_devices() -> None:
+    """The same path in free water with the 0.1 % noise: within 1.3x the ideal loop's error.
 
-    The arm keeps within 1.2x the position error of the device-timed loop without prediction
-    (measured 6.3 mm against 6.0 mm; ideal devices 3.5 mm: the noise cancelled by eq. 29 and
-    held over a slot costs the rest) and within 10 mm. The quadratic alone ran away (0.2 m).
+    Measured 3.1 mm against 3.5 mm at ideal devices. Cancelling each noisy sample as eq. 29
+    does, held over a 77 Hz slot, costs 6.0 mm (the controller told nothing of the devices);
+    the quadratic alone ran away (0.2 m).
     """
     t, _, _, x_error = press(77.0, 0.002, True, NOISE_SEEDS[0], False)
-    t_plain, _, _, x_error_plain = press(0.0, 0.0, True, NOISE_SEEDS[0], False)
-    assert t[-1] == t_plain[-1] > MID_CONTACT_S[1]
-    assert x_error.max() <= 1.2 * x_error_plain.max()
-    assert x_error.max() < 0.01
+    t_ideal, _, _, x_error_ideal = press(0.0, 0.0, False, NOISE_SEEDS[0], False)
+    assert t[-1] == t_ideal[-1] > MID_CONTACT_S[1]
+    assert x_error.max() <= 1.3 * x_error_ideal.max()

@@ -29,6 +29,14 @@ the devices' rates with the robot's 0.1 % noise that holds: docs/hardware.md). W
 noise, the noise the increment adds has a standard deviation of at most e / 2 (g G sigma peaks
 at G sigma = e).
 
+Out of contact a noisy sensor reads only its noise, and eq. 29 cancels it: held over a slot it
+moves the arm (bluerov2_alpha5_free_motion: 6.7 mm off its path at the devices' rates against
+2.8 mm at ideal devices). So where the measured force's magnitude is within a few sigma of 0
+(``free_water_weight``: below 3 sigma, above 6 sigma the force as above, a smooth step between)
+the mean of the samples over the last 2 h is cancelled instead (its noise 1 / sqrt(n) of one
+sample's). In contact the force as above: any smoothing there lags the stiff wall's force
+and the contact bounces (measured, docs/hardware.md). A clean sensor (sigma 0) never averages.
+
 Pure Python, plain floats: it runs in the control step.
 """
 
@@ -50,6 +58,10 @@ NOISE_WINDOW = 32
 #: difference of unit white noise is normal with variance 20, and a normal's median absolute
 #: value is 0.6745 sigma.
 MEDIAN_TO_SD = 1.0 / (0.6744897501960817 * math.sqrt(20.0))
+#: Below this many noise sigmas of force magnitude the sensor reads free water (its noise).
+FREE_WATER_SIGMAS = 3.0
+#: Above this many the force is a contact's, cancelled as measured (and predicted).
+CONTACT_SIGMAS = 6.0
 
 Vector3 = tuple[float, float, float]
 
@@ -157,18 +169,45 @@ def prediction_weight(noise_sd: float, noise_gain: float, tolerance_n: float) ->
     return 1.0 / (1.0 + ratio * ratio)
 
 
+def free_water_weight(force_n: float, noise_sd_n: float) -> float:
+    """Weight of the measured (and predicted) force against the free-water mean: 0 to 1.
+
+    A smooth step (3 u^2 - 2 u^3) of the force's magnitude from ``FREE_WATER_SIGMAS`` to
+    ``CONTACT_SIGMAS`` noise sigmas; 1 for a clean sensor (sigma 0).
+
+    Args:
+        force_n: Magnitude of the measured force (N).
+        noise_sd_n: Magnitude of the estimated noise sigma over the three axes (N).
+
+    >>> free_water_weight(0.5, 0.7), free_water_weight(5.0, 0.7), free_water_weight(0.5, 0.0)
+    (0.0, 1.0, 1.0)
+    >>> round(free_water_weight(3.15, 0.7), 6)
+    0.5
+    """
+    if noise_sd_n == 0.0:
+        return 1.0
+    u = (force_n - FREE_WATER_SIGMAS * noise_sd_n) / (
+        (CONTACT_SIGMAS - FREE_WATER_SIGMAS) * noise_sd_n)
+    u = min(max(u, 0.0), 1.0)
+    return u * u * (3.0 - 2.0 * u)
+
+
 class HeldCommandForce:
     """The contact force eq. 29 and 35 cancel, predicted for the held command's slot.
 
     The measured F_e plus the quadratic's increment to h after it, per axis weighed by
     ``prediction_weight`` with the noise estimated from the samples' third differences (their
-    median absolute value over the last ``noise_window`` of them). Until four samples have come
-    (no noise estimate yet) the measured force, as eq. 29.
+    median absolute value over the last ``noise_window`` of them); out of contact
+    (``free_water_weight``) the mean of the samples of the last ``free_water_window_s``
+    instead. Until four samples have come (no noise estimate yet) the measured force, as
+    eq. 29.
 
     Args:
         horizon_s: h of ``held_slot_horizon_s``; 0 returns each sample unchanged.
         noise_tolerance_n: e of ``prediction_weight`` (N).
         noise_window: How many third differences the noise estimate takes.
+        free_water_window_s: Span of the free-water mean (s); None: 2 h (at least the held
+            slot, h being the latency and half the slot).
 
     >>> force = HeldCommandForce(0.01)
     >>> [force.update(0.002 * k, (2.0 * k * k, 0.0, 0.0))[0] for k in range(5)]
@@ -176,7 +215,8 @@ class HeldCommandForce:
     """
 
     def __init__(self, horizon_s: float, noise_tolerance_n: float = NOISE_TOLERANCE_N,
-                 noise_window: int = NOISE_WINDOW) -> None:
+                 noise_window: int = NOISE_WINDOW,
+                 free_water_window_s: float | None = None) -> None:
         if not (math.isfinite(horizon_s) and horizon_s >= 0.0):
             raise ControlParameterError('prediction horizon', horizon_s, '[0, inf) s')
         if not (math.isfinite(noise_tolerance_n) and noise_tolerance_n > 0.0):
@@ -186,6 +226,9 @@ class HeldCommandForce:
             raise ControlParameterError('prediction noise window', noise_window, '[1, inf)')
         self.horizon_s = horizon_s
         self.noise_tolerance_n = noise_tolerance_n
+        self.free_water_window_s = (2.0 * horizon_s if free_water_window_s is None
+                                    else free_water_window_s)
+        self._recent: deque[tuple[float, Vector3]] = deque()
         self._samples: list[tuple[float, Vector3]] = []
         self._third: tuple[deque[float], deque[float], deque[float]] = (
             deque(maxlen=noise_window), deque(maxlen=noise_window), deque(maxlen=noise_window))
@@ -203,6 +246,7 @@ class HeldCommandForce:
     def reset(self) -> None:
         """Forget the samples and the noise estimate: the next sample restarts both."""
         self._samples = []
+        self._recent.clear()
         for third in self._third:
             third.clear()
 
@@ -223,6 +267,10 @@ class HeldCommandForce:
             if len(samples) >= 2 and gap > RESTART_RATIO * (samples[-1][0] - samples[-2][0]):
                 samples.clear()
         samples.append((t, f_e))
+        recent = self._recent
+        recent.append((t, f_e))
+        while recent[0][0] < t - self.free_water_window_s:
+            recent.popleft()
         if len(samples) > 4:
             del samples[0]
         if len(samples) < 4:
@@ -235,7 +283,16 @@ class HeldCommandForce:
         p = quadratic_extrapolation(samples[1:], self.horizon_s)
         e = self.noise_tolerance_n
         s0, s1, s2 = self.noise_sd
-        self._last = (fd[0] + prediction_weight(s0, gain, e) * (p[0] - fd[0]),
-                      fd[1] + prediction_weight(s1, gain, e) * (p[1] - fd[1]),
-                      fd[2] + prediction_weight(s2, gain, e) * (p[2] - fd[2]))
+        c0 = fd[0] + prediction_weight(s0, gain, e) * (p[0] - fd[0])
+        c1 = fd[1] + prediction_weight(s1, gain, e) * (p[1] - fd[1])
+        c2 = fd[2] + prediction_weight(s2, gain, e) * (p[2] - fd[2])
+        w = free_water_weight(math.sqrt(fd[0] * fd[0] + fd[1] * fd[1] + fd[2] * fd[2]),
+                              math.sqrt(s0 * s0 + s1 * s1 + s2 * s2))
+        if w < 1.0:
+            n = len(recent)
+            m0 = sum(f[0] for _, f in recent) / n
+            m1 = sum(f[1] for _, f in recent) / n
+            m2 = sum(f[2] for _, f in recent) / n
+            c0, c1, c2 = m0 + w * (c0 - m0), m1 + w * (c1 - m1), m2 + w * (c2 - m2)
+        self._last = (c0, c1, c2)
         return self._last
