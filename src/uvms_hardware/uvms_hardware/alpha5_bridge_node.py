@@ -54,7 +54,8 @@ arm joints the controller takes whole. activate, the put-back (their mode from b
 trip treat them as every device.
 
 The device is `uvms_hardware.alpha5_component.Alpha5Component` (no ROS); this node only turns
-its lifecycle hooks into the component's, its poll timer into ``read``, the command topics
+its lifecycle hooks into the component's, its poll timer into ``read`` and then ``ask`` (in the
+robot loop: ``read`` before the control step, ``ask`` after the write), the command topics
 into ``write`` and ``write_jaw``, and its state and report into messages.
 """
 
@@ -149,7 +150,8 @@ class Alpha5BridgeNode(BridgeNode):
             self._jaw_pub = self.own(self.destroy_publisher,
                                      self.create_publisher(JointState, 'jaw_state', qos))
             self.subscribe(Float64, 'command/jaw', self._on_jaw_command, qos)
-        self._timer = self.device_timer(self.component.poll_period_s(), self._on_tick)
+        self._timer = self.device_timer(self.component.poll_period_s(), self._on_tick,
+                                        then=self._ask)
         self._timer.cancel()  # polls from activate to the put-back only
         drives = core.arm.drives
         self.get_logger().info(
@@ -206,6 +208,10 @@ class Alpha5BridgeNode(BridgeNode):
             self._joint_pub.publish(self._joint_state(state.joints, t_s))
         if state.jaw is not None:
             self._jaw_pub.publish(self._joint_state(state.jaw, t_s))
+
+    def _ask(self) -> None:
+        """The next requests, after the period's commands (in the robot loop: its write)."""
+        self.component.ask(self.now_s())
 
     def _joint_state(self, sample: JointSample, t_s: float) -> JointState:
         """The message of a sample, stamped with its oldest answer's arrival (node clock)."""

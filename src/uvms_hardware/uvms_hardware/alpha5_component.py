@@ -10,12 +10,16 @@ What the ``alpha5_bridge`` node did with its device, behind `HardwareComponent`'
   (position, speed) or hardware.yaml's (current), or a device stays silent.
 - activate sends MODE Standby to every device, each read back; refused, naming the device,
   where one does not confirm, or where a joint already moves over the trip speed.
-- `read` drains the link (answers, HARDWARE_STATUS), trips on an overspeed, makes the round's
-  joint state (and the jaws') once every driven joint answered again, and sends what this
-  period asks of the wire: the next device's POSITION and VELOCITY request and, after
-  ``watchdog_timeout_s`` without a command, VELOCITY 0 to every joint (``Alpha5Core.tick``).
+- `read` drains the link (answers, HARDWARE_STATUS), trips on an overspeed and makes the
+  round's joint state (and the jaws') once every driven joint answered again.
 - `write` turns joint torques into CURRENT mA per joint (or the velocity fallback);
   `write_jaw` the jaws' speed into VELOCITY (mm/s on the wire).
+- `ask`, after the period's write, sends what the period asks of the wire: the next device's
+  POSITION and VELOCITY request and, after ``watchdog_timeout_s`` without a command, VELOCITY
+  0 to every joint (``Alpha5Core.tick``). Asked after the commands, the answer comes back in
+  the rest of the period and the next period's read takes it: asked in the read, it came just
+  after that read and waited a whole period more (through the twins, answer to CURRENT
+  frame p50 2.7-2.8 ms at a 2 ms period; docs/robot_process.md).
 - put_back: VELOCITY 0 to every device at once, then device by device, each read back,
   VELOCITY 0 and the mode from before activate; what is not confirmed is a problem line.
 
@@ -297,7 +301,7 @@ class Alpha5Component(HardwareComponent):
         return self.core.poll_period_s(self.feedback_rate_hz)
 
     def read(self, now_s: float) -> None:
-        """Answers taken, a trip found, the round's state made; this period's requests sent.
+        """Answers taken, a trip found, the round's state made.
 
         Never waits. Only while active (nothing is asked of an arm not driven).
         """
@@ -314,6 +318,15 @@ class Alpha5Component(HardwareComponent):
                      'after a trip")')
         self._state = Alpha5State(core.next_joint_state(now_s), core.next_jaw_state(now_s),
                                   newly)
+
+    def ask(self, now_s: float) -> None:
+        """This period's requests (and the watchdog's VELOCITY 0) sent; after the write.
+
+        Never waits. Only while active.
+        """
+        core, link = self.core, self.link
+        if core is None or link is None or not self.active:
+            return
         frames, _ = core.tick(now_s)
         link.send(frames)
 

@@ -31,13 +31,14 @@ def settings(port: int, **changes: object) -> dict[str, object]:
 
 def read_until(arm: Alpha5Component, done: Callable[[Alpha5State], bool],
                timeout_s: float = 3.0) -> Alpha5State:
-    """Call read() at the poll period until done(state) (the state that made it true)."""
+    """Call read() then ask() at the poll period until done(state) (the state that did it)."""
     end = time.monotonic() + timeout_s
     while True:
         arm.read(time.monotonic())
         state = arm.state()
         if done(state):
             return state
+        arm.ask(time.monotonic())
         assert time.monotonic() < end, 'timed out reading'
         time.sleep(arm.poll_period_s())
 
@@ -98,6 +99,7 @@ def test_read_never_waits_on_a_silent_arm_and_reports_it(
     while time.monotonic() < end:
         start = time.monotonic()
         arm.read(start)
+        arm.ask(start)
         slowest_s = max(slowest_s, time.monotonic() - start)
         assert arm.state().joints is None
         time.sleep(0.004)
