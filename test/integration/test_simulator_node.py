@@ -504,6 +504,31 @@ def test_first_state_waits_for_the_recorder_to_subscribe(harness: Harness, mode:
         assert stamp_ns(received[topic][0]) == 0, topic
 
 
+def test_a_recorder_of_fewer_topics_is_waited_for_on_those_only(harness: Harness) -> None:
+    """startup.recorder_topics: a recorder of /clock and joint_states alone starts the run.
+
+    A scenario that gives the recorder fewer topics (``uvms identify plan``'s) held the
+    simulator at t = 0 until ``startup.timeout_s``: it waited on every state topic.
+    """
+    sim = harness.start(mode='lockstep', startup__recorder='recorder', duration_s=0.02,
+                        startup__recorder_topics=['/clock', 'joint_states'])
+    harness.spin_for(0.5)
+    assert sim.sim_time_ns == 0
+    recorder = rclpy.create_node('recorder', namespace='uvms', context=harness.context)
+    received: dict[str, list[Any]] = {'/clock': [], 'joint_states': []}
+    recorder.create_subscription(Clock, '/clock', received['/clock'].append, 100)
+    recorder.create_subscription(JointState, 'joint_states', received['joint_states'].append,
+                                 100)
+    harness.executor.add_node(recorder)
+    try:
+        harness.spin_until(lambda: sim.finished)
+    finally:
+        harness.executor.remove_node(recorder)
+        recorder.destroy_node()
+    assert received['/clock'][0].clock.sec == received['/clock'][0].clock.nanosec == 0
+    assert stamp_ns(received['joint_states'][0]) == 0
+
+
 def mission_says_ready(harness: Harness) -> Node:
     """A node named mission publishing True on mission/ready, latched as the mission does."""
     mission = rclpy.create_node('mission', namespace='uvms', context=harness.context)

@@ -75,7 +75,7 @@ def _launch_nodes(context: LaunchContext) -> list[Node]:
                             estimator=uses_estimator(scenario)):
         overrides = node_parameters(spec, scenario, mode, duration_s, output_path or None,
                                     foxglove_address, robot)
-        overrides.update(recorder_wait(spec, bool(output_path)))
+        overrides.update(recorder_wait(spec, bool(output_path), scenario))
         overrides.update(mission_wait(spec, mission))
         if spec is MISSION:
             assert scenario is not None

@@ -158,15 +158,24 @@ def uses_estimator(scenario: Scenario | None) -> bool:
     return 'estimator' in scenario.overrides or controller.get('state_source') == 'estimate'
 
 
-def recorder_wait(spec: NodeSpec, record: bool) -> dict[str, ParameterValue]:
+def recorder_wait(spec: NodeSpec, record: bool,
+                  scenario: Scenario | None = None) -> dict[str, ParameterValue]:
     """The simulator's ``startup.recorder`` when a recorder runs in a process of its own.
 
     The simulator then publishes its first state only once the recorder's subscriptions to
     the state topics are matched, so the recording starts at t = 0 however long the
     recorder's process takes to start (``uvms launch``, ``uvms.launch.py``; in one process
-    the graph runner builds the recorder before the first state goes out).
+    the graph runner builds the recorder before the first state goes out). A scenario that
+    gives the recorder its own ``topics`` gives the simulator them too
+    (``startup.recorder_topics``): it waits only for the state topics among them.
     """
-    return {'startup.recorder': RECORDER.name} if spec is SIMULATOR and record else {}
+    if spec is not SIMULATOR or not record:
+        return {}
+    values: dict[str, ParameterValue] = {'startup.recorder': RECORDER.name}
+    topics = scenario.node_overrides(RECORDER.name).get('topics') if scenario else None
+    if isinstance(topics, list) and topics:
+        values['startup.recorder_topics'] = [str(entry).rsplit(':', 1)[0] for entry in topics]
+    return values
 
 
 def mission_wait(spec: NodeSpec, mission: bool) -> dict[str, ParameterValue]:

@@ -169,7 +169,7 @@ def plan_launch(
             continue
         overrides: dict[str, Any] = {
             **node_parameters(spec, scenario, mode, duration_s, output, foxglove),
-            **recorder_wait(spec, output is not None),
+            **recorder_wait(spec, output is not None, scenario),
             **mission_wait(spec, mission),
             **(extra_overrides or {}).get(spec.name, {}),
         }

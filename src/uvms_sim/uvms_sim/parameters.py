@@ -138,6 +138,14 @@ SIMULATOR_PARAMETERS: tuple[ParameterSpec, ...] = (
         '(both modes; uvms launch sets it when it records); empty: publish at once.',
     ),
     ParameterSpec(
+        'startup.recorder_topics', ['*'],
+        'With startup.recorder: the topics it records (names as the recorder resolves them, '
+        'relative to the namespace or absolute); only the state topics among them are waited '
+        "for. ['*'] (the default): every state topic. uvms launch sets it from a scenario's "
+        '`recorder: {topics: [...]}`, so that a recorder told to record fewer topics does not '
+        'hold the first state until startup.timeout_s.',
+    ),
+    ParameterSpec(
         'startup.mission', '',
         "A mission's latched readiness topic (relative to the namespace, e.g. mission/ready) "
         'on which True must arrive before physics starts (lockstep: before the first state; '
@@ -341,9 +349,21 @@ class SimulatorSettings:
                                     round(float(checked['startup.timeout_s']) * 1e9),
                                     tuple(checked['startup.nodes']),
                                     str(checked['startup.recorder']),
-                                    str(checked['startup.mission'])),
+                                    str(checked['startup.mission']),
+                                    recorder_topics(checked['startup.recorder_topics'])),
             devices=DeviceTiming.from_values(checked),
         )
+
+
+def recorder_topics(names: Sequence[str]) -> tuple[str, ...]:
+    """``startup.recorder_topics`` as `StartupSettings` takes it: () for every state topic.
+
+    >>> recorder_topics(['*'])
+    ()
+    >>> recorder_topics(['imu', '/clock'])
+    ('imu', '/clock')
+    """
+    return () if '*' in names else tuple(names)
 
 
 def validate_value(spec: ParameterSpec, value: Any) -> Value:

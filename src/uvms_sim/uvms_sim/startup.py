@@ -54,6 +54,8 @@ class StartupSettings:
             the first state is published (``subscriber_matched``); '' none.
         mission: A mission's latched readiness topic (``mission/ready``) on which True
             must arrive before the first state is published; '' none.
+        recorder_topics: The topics the recorder records (relative or absolute names); only
+            the state topics among them are waited for; () every state topic.
     """
 
     hold: bool
@@ -61,6 +63,7 @@ class StartupSettings:
     nodes: tuple[str, ...]
     recorder: str = ''
     mission: str = ''
+    recorder_topics: tuple[str, ...] = ()
 
 
 class LoopStartup:

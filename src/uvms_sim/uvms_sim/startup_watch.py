@@ -140,6 +140,9 @@ class SubscriberWait:
         self._node = node
         self.subscriber = subscriber = settings.recorder
         self._publishers = list(publishers)
+        if settings.recorder_topics:
+            recorded = {node.resolve_topic_name(topic) for topic in settings.recorder_topics}
+            self._publishers = [p for p in self._publishers if p.topic_name in recorded]
         self.start_ns = node.get_clock().now().nanoseconds
         self._timeout_ns = settings.timeout_ns
         self._asked_ns: int | None = None
