@@ -6,11 +6,12 @@ without a wall (``bluerov2_alpha5_free_motion``). Metrics are those of ``uvms re
 force is the simulator's ground truth. The bounds are the issue's acceptance figures.
 
 The claims are made at ideal devices, the simulator's default for now (the robot's
-device_timing.yaml holds ``devices.ideal: true``: the controller's held-slot prediction does not
-hold with the wrist sensor's noise yet, docs/hardware.md "Device timing"). With the robot's
-device timing and the controller's device-timing file (noise-free wrist sensor, as the contact
-scenario's) issue 49's acceptance is checked: one contact, mid-contact RMS force error at most
-1.3x the ideal run's, the peak within 15 %.
+device_timing.yaml holds ``devices.ideal: true``: with the controller's held-slot keys the twin
+stand's default launch aborts, docs/hardware.md "Making it the default"). With the robot's
+device timing and the controller's device-timing file issue 49's acceptance is checked: on the
+contact (noise-free wrist sensor, as the scenario's) one contact, mid-contact RMS force error
+at most 1.3x the ideal run's, the peak within 15 %; the free motion with the wrist sensor's
+0.1 % noise within the same 5 mm as at ideal devices.
 """
 
 from __future__ import annotations
@@ -96,25 +97,54 @@ def test_free_motion_tracks_the_half_circle_within_5_mm(
     assert metrics.tracking_error < ALONG_WALL_BOUND_M, f'{metrics.tracking_error * 1e3:.2f} mm'
 
 
-@pytest.fixture(scope='module')
-def contact_device_timed(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ScenarioResult]:
-    """bluerov2_alpha5_contact with the robot's device timing and the controller's file."""
-    directory: Path = tmp_path_factory.mktemp('bluerov2_device_timing')
+def run_device_timed(name: str, directory: Path) -> ScenarioResult:
+    """Scenario ``name`` with the robot's device timing and the controller's file."""
     params = directory / 'device_timing.yaml'
     params.write_text(DEVICE_TIMING, encoding='utf-8')
-    path = directory / 'contact.mcap'
+    path = directory / f'{name}.mcap'
     env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p),
            'ROS_DOMAIN_ID': str(DOMAIN)}
     result = subprocess.run(
         [sys.executable, '-m', 'uvms_cli.cli', 'run',
-         str(SCENARIO_DIR / 'bluerov2_alpha5_contact.yaml'), '--output', str(path), '--quiet',
+         str(SCENARIO_DIR / f'{name}.yaml'), '--output', str(path), '--quiet',
          '--params-file', str(params), '--params-file', str(CONTROLLER_TIMING)],
         capture_output=True, text=True, env=env, timeout=RUN_TIMEOUT_S, check=False)
     if result.returncode != 0:
-        pytest.fail(f'uvms run (device timing) exited {result.returncode}:\n'
+        pytest.fail(f'uvms run {name} (device timing) exited {result.returncode}:\n'
                     f'{(result.stdout + result.stderr)[-2000:]}')
     run = load_run(path)
-    yield ScenarioResult('bluerov2_alpha5_contact', path, run, compute_metrics(run))
+    return ScenarioResult(name, path, run, compute_metrics(run))
+
+
+@pytest.fixture(scope='module')
+def contact_device_timed(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ScenarioResult]:
+    """bluerov2_alpha5_contact with the robot's device timing and the controller's file."""
+    yield run_device_timed('bluerov2_alpha5_contact',
+                           tmp_path_factory.mktemp('bluerov2_device_timing'))
+
+
+@pytest.fixture(scope='module')
+def free_motion_device_timed(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[ScenarioResult]:
+    """bluerov2_alpha5_free_motion (0.1 % wrist noise) with the robot's device timing."""
+    yield run_device_timed('bluerov2_alpha5_free_motion',
+                           tmp_path_factory.mktemp('bluerov2_device_timing_free'))
+
+
+def test_with_device_timing_and_the_wrist_noise_free_motion_tracks_within_5_mm(
+    free_motion_device_timed: ScenarioResult,
+) -> None:
+    """The held-slot prediction with the wrist sensor's 0.1 % noise: the path within 5 mm.
+
+    Measured 3.38 mm (ideal devices 2.80 mm). The quadratic alone through the last three force
+    samples (held_command before its noise weighting) amplified the noise 33 times: the arm
+    diverged at 3.8 s; cancelling each noisy sample held over a slot: 7.09 mm.
+    """
+    metrics = free_motion_device_timed.metrics
+    assert metrics.contact_count == 0
+    assert metrics.tracking_error is not None
+    assert metrics.tracking_error < ALONG_WALL_BOUND_M, f'{metrics.tracking_error * 1e3:.2f} mm'
 
 
 def mid_contact_rms_error(run: Run) -> float:
@@ -136,8 +166,8 @@ def test_with_device_timing_one_contact_rms_within_1_3x_and_peak_within_15_perce
 ) -> None:
     """Issue 49's acceptance: the device-timed run against the ideal devices' run.
 
-    One touch, mid-contact RMS force error at most 1.3x the ideal run's (measured 0.0121 N
-    against 0.0113 N), the peak within 15 % (20.07 N against 20.10 N).
+    One touch, mid-contact RMS force error at most 1.3x the ideal run's (measured 0.0123 N
+    against 0.0113 N), the peak within 15 % (20.08 N against 20.10 N).
     """
     timed, ideal = contact_device_timed.metrics, bluerov2_alpha5_contact.metrics
     assert timed.contact_count == 1
