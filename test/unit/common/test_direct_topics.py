@@ -12,10 +12,14 @@ from uvms_common import direct_topics
 
 
 class FakeNode:
-    """The parts of a node the module uses: subscriptions, timers, name resolution."""
+    """The parts of a node the module uses: subscriptions, timers, names."""
 
     def __init__(self) -> None:
         self.created: list[tuple[str, str]] = []
+
+    def get_name(self) -> str:
+        """As ``rclpy.node.Node.get_name`` (the loop's CPU ledger names each delivery by it)."""
+        return 'fake'
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Any, qos: Any,
                             raw: bool = False) -> str:
