@@ -67,16 +67,21 @@ def altered_robot(directory: Path) -> Path:
     return folder
 
 
+def write_plan(out: Path) -> Path:
+    """``uvms identify plan --robot ROBOT --out OUT`` through the CLI's own parser; ``out``."""
+    parser = argparse.ArgumentParser()
+    identify_cli.add_parser(parser.add_subparsers(dest='command'))
+    assert identify_cli.run(parser.parse_args(
+        ['identify', 'plan', '--robot', ROBOT, '--out', str(out)])) == 0
+    return out
+
+
 @pytest.mark.timeout(1800)  # six runs and the fit: about 10 min on 2 loaded cores
 def test_the_plan_on_another_robot_recovers_its_hull(tmp_path: Path,
                                                      module_ros_domain: int) -> None:
     """Well-determined terms within 10 %, the 10 s prediction error halved or better."""
     folder = altered_robot(tmp_path)
-    parser = argparse.ArgumentParser()
-    identify_cli.add_parser(parser.add_subparsers(dest='command'))
-    plan = tmp_path / 'plan'
-    assert identify_cli.run(parser.parse_args(
-        ['identify', 'plan', '--robot', ROBOT, '--out', str(plan)])) == 0
+    plan = write_plan(tmp_path / 'plan')
     scenarios = sorted(plan.glob('identify_*.yaml'))
     recordings = [tmp_path / f'{scenario.stem}.mcap' for scenario in scenarios]
 

@@ -16,18 +16,15 @@ prediction, which the test leaves out): marked slow.
 
 from __future__ import annotations
 
-import argparse
 import subprocess
 from pathlib import Path
 
 import pytest
-from test_identify_acceptance import ROBOT, UVMS, altered_robot
+from test_identify_acceptance import ROBOT, UVMS, altered_robot, write_plan
 from uvms_identify.identify import identify
 from uvms_identify.regressor import PARAMETER_NAMES
 from uvms_identify.robot_data import load_robot
 from uvms_recording.mcap_reader import open_recording
-
-from uvms_identify import cli as identify_cli
 
 AXES = ('roll', 'yaw')
 #: The terms these two experiments excite well through the twin stand (docs/identification.md,
@@ -54,11 +51,7 @@ def test_the_twin_stand_recordings_recover_the_hull(tmp_path: Path,
                                                     module_ros_domain: int) -> None:
     """Roll and yaw through the twins: the terms they excite well within 20 % of the truth."""
     folder = altered_robot(tmp_path)
-    parser = argparse.ArgumentParser()
-    identify_cli.add_parser(parser.add_subparsers(dest='command'))
-    plan = tmp_path / 'plan'
-    assert identify_cli.run(parser.parse_args(
-        ['identify', 'plan', '--robot', ROBOT, '--out', str(plan)])) == 0
+    plan = write_plan(tmp_path / 'plan')
     recordings = []
     for axis in AXES:
         recording = tmp_path / f'{axis}.mcap'
