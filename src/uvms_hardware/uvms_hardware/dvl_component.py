@@ -8,10 +8,12 @@ velocity in ``dvl_link`` (the DVL's frame, ``mounting_rpy_rad``, turned into dvl
 its covariance (the report's, else fom^2), stamped with the report's own
 ``time_of_validity`` (µs on the DVL's clock) mapped into the local clock through the offset
 `uvms_hardware.device_time` estimates from each report's ``time_of_transmission`` against its
-arrival; a report without a time of validity, or while the clocks visibly run at different
-rates, is stamped at its arrival and counted. Each report is given once, when it arrives: a
-silent DVL gives nothing and is not fresh after ``timeout_s``. A sensor: nothing on the DVL
-is changed, so `put_back` only says so::
+arrival (read on the local clock through the steady one, `uvms_hardware.arrival_clock`: a
+``/clock`` that stood while the process was starved would map later reports early); a report
+without a time of validity, or while the clocks visibly run at different rates, is stamped
+at its arrival and counted. Each report is given once, when it arrives: a silent DVL gives
+nothing and is not fresh after ``timeout_s``. A sensor: nothing on the DVL is changed, so
+`put_back` only says so::
 
     dvl = DvlComponent(values, rot_link_from_dvl(mounting, link_rpy))
     dvl.configure(); dvl.activate()
@@ -30,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from uvms_hardware.address import LOOPBACK, HostPort, parse_host_port
+from uvms_hardware.arrival_clock import ArrivalClock
 from uvms_hardware.component import (
     ERROR,
     OK,
@@ -123,6 +126,12 @@ class DvlComponent(HardwareComponent):
         self.default_port = default_port
         self.name = name
         self.clock, self.local_clock = clock, local_clock or clock
+        #: Arrivals on the local clock read through the steady one: a local clock that is a
+        #: ``/clock`` stands while its process is starved, and an arrival read on it would
+        #: map every later report too early (`uvms_hardware.arrival_clock`).
+        self.arrival_clock: ArrivalClock | None = (
+            None if local_clock is None or local_clock is clock
+            else ArrivalClock(local_clock, clock))
         self.log = log
         self.link: DvlLink | None = None
         self.estimator: DeviceClockEstimator | None = None
@@ -148,8 +157,9 @@ class DvlComponent(HardwareComponent):
         self.estimator = DeviceClockEstimator(window_s, window_s / 30.0,
                                               float(v['clock_reset_s']))
         self.configured = True
+        arrival = self.local_clock if self.arrival_clock is None else self.arrival_clock.now
         self.link = link = DvlLink(address, float(v['reconnect_period_s']), clock=self.clock,
-                                   arrival_clock=self.local_clock).start()
+                                   arrival_clock=arrival).start()
         if not link.wait_connected(float(v['connect_timeout_s'])):
             raise DvlBridgeError(f'no DVL at {address.host}:{address.port} ({link.last_error})')
 
@@ -192,6 +202,8 @@ class DvlComponent(HardwareComponent):
         """
         link = self.link
         measurements = []
+        if self.arrival_clock is not None:
+            self.arrival_clock.sample()
         if link is not None:
             for arrival_s, report in link.take():
                 stamp_s = self.stamp_s(report, arrival_s)
