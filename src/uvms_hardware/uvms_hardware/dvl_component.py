@@ -192,7 +192,8 @@ class DvlComponent(HardwareComponent):
         if not clock.rates_agree:
             self.stamped_at_arrival += 1
             return arrival_s
-        return clock.to_local(report.time_of_validity_us * _US) or arrival_s
+        stamp_s = clock.to_local(report.time_of_validity_us * _US)
+        return arrival_s if stamp_s is None else stamp_s  # 0.0 is a time (a plant's first)
 
     def read(self, now_s: float) -> None:
         """The reports queued since the last read (never waits); each one times the clock.
