@@ -17,11 +17,12 @@ PACKAGES = sorted(path.parent.name for path in SRC.glob('*/package.xml')
 
 #: Longest module (lines): past about 400 a module usually holds two jobs.
 MAX_MODULE_LINES = 450
-#: The bringup package holds only launching the graph: its modules and launch file (2,650
-#: lines on 2026-12-06, modules alone 2,490; 3,118 before the in-process graph, its stall
-#: watch and the progress bars went to uvms_run and the twins and the scenario format to
-#: packages of their own). A module that is not about launching goes to a package of its own.
-MAX_BRINGUP_LINES = 2700
+#: The bringup package holds only launching the graph: its modules and launch file, under the
+#: 2,500 lines issue 47 asks (2,490 on 2026-12-07, modules alone 2,330; 3,118 before the
+#: in-process graph, its stall watch and the progress bars went to uvms_run, the twins and
+#: the scenario format to packages of their own, and ``--params-file`` to uvms_cli). A module
+#: that is not about launching goes to a package of its own.
+MAX_BRINGUP_LINES = 2500
 
 
 def python_files(package: str) -> list[Path]:

@@ -25,10 +25,9 @@ from typing import Any
 
 import yaml
 from rclpy.parameter import Parameter
-from uvms_scenarios.scenario import ParameterValue, Scenario, ScenarioError
-
 from uvms_bringup.declared import TYPE_NAMES, as_declared_type, declared_parameters
 from uvms_bringup.launch_helpers import DEFAULT_NAMESPACE, RECORDER, NodeSpec
+from uvms_scenarios.scenario import ParameterValue, Scenario, ScenarioError
 
 #: The simulator's parameter that the scenario's ``seed`` sets (``Scenario.node_overrides``).
 SEED_PARAMETER = 'sensor.seed'
