@@ -21,7 +21,8 @@ settled: the discovery time). One row per cycle, then the counts; exit status 1 
 failed, so the bench can stand in a loop.
 
 ``--test NODEID --runs N`` instead runs one test N times under the same load, each in its own
-``tools/run_suite.py`` process (the suite's own limits), and counts the passes.
+``tools/run_suite.py`` process (the suite's own limits), and counts the passes (``--logs DIR``
+keeps each failed run's output).
 
 Usage::
 
@@ -323,6 +324,9 @@ def repeat_test(args: argparse.Namespace) -> int:
         for line in result.stdout.splitlines():
             if line.startswith(('FAILED ', 'ERROR ')):
                 print(f'       {line[:200]}', flush=True)  # which test, and why
+        if args.logs is not None and result.returncode != 0:
+            args.logs.mkdir(parents=True, exist_ok=True)
+            (args.logs / f'run{run + 1}.log').write_text(result.stdout + result.stderr)
     print(f'{passes} of {args.runs} runs passed: {args.test}')
     return 0 if passes == args.runs else 1
 
@@ -341,7 +345,8 @@ def main() -> int:
     parser.add_argument('--moments', nargs='+', choices=MOMENTS, default=list(MOMENTS),
                         help='the stop moments to draw from (default: all four)')
     parser.add_argument('--logs', type=Path, default=None, metavar='DIR',
-                        help="write each failed cycle's console lines to DIR/cycleN.log")
+                        help="each failed cycle's console lines to DIR/cycleN.log (with --test: "
+                             "each failed run's output to DIR/runN.log)")
     parser.add_argument('--test', help='a test (path or node id) to repeat instead')
     parser.add_argument('--runs', type=int, default=30)
     parser.add_argument('--netns', action='store_true',
