@@ -36,6 +36,15 @@ in Position mode toward it at the speed limit, stopped at the position limits; s
 other modes (Current makes no known speed: no Kt for the jaws), on ``clock`` (default: the
 steady clock; a stand would give the plant's). `jaw_state` and `jaw_command` read them.
 
+The bus (``bus``, default on): the arm's RS-485 line at ``arm.serial_baud`` 8N1, half duplex
+(``uvms_twins.rs485_bus``): every frame the twin receives and every answer it sends occupies
+the line for its bytes (10 bits each: a 10-byte packet takes 0.87 ms at 115200); a frame is
+applied when it has fully arrived, an answer is sent when it has fully gone, after whatever
+held the line; a frame the host's adapter cannot hold (``buffer_bytes``) is lost, and one
+written while an answer is on the line is counted in ``line.collisions``. So the answer rate
+per joint and the rate at which commands take effect are the bus's, not the host's.
+``bus=False`` answers and applies each frame as it arrives (the protocol alone).
+
 Faults a test can set: `set_silent` (a device answers and takes nothing: a broken cable, an
 unpowered joint; the others go on), and ``drop_first_datagrams`` / `drop_datagrams` (the
 next datagrams the server receives are lost before any device sees them, as on a lossy link).
@@ -46,6 +55,7 @@ from __future__ import annotations
 import math
 import select
 import socket
+import struct
 import threading
 import time
 from collections import deque
@@ -58,6 +68,7 @@ from uvms_hardware.reach_protocol import Mode, PacketId
 
 from uvms_hardware import latency_probe
 from uvms_hardware import reach_protocol as rp
+from uvms_twins.rs485_bus import DEFAULT_BUFFER_BYTES, HalfDuplexLine
 
 #: UDP port of Reach's examples.
 DEFAULT_PORT = 6789
@@ -81,6 +92,7 @@ class TwinDevice:
     velocity_limit: float = 0.0
     current_limit_ma: float = 0.0
     received: deque[tuple[float, rp.Packet]] = field(default_factory=lambda: deque(maxlen=4096))
+    sent: deque[tuple[float, rp.Packet]] = field(default_factory=lambda: deque(maxlen=4096))
 
 
 def current_to_torque_n_m(drive: Drive, current_ma: float) -> float:
@@ -93,7 +105,8 @@ class Alpha5Twin:
 
     def __init__(self, arm: Alpha5Hardware, host: str = LOOPBACK, port: int = DEFAULT_PORT,
                  model_data: bytes = b'alpha5', drop_first_datagrams: int = 0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, bus: bool = True,
+                 buffer_bytes: int = DEFAULT_BUFFER_BYTES) -> None:
         drives = list(arm.drives)
         jaw = arm.jaw_device
         if jaw is not None and all(d.device_id != jaw.device_id for d in drives):
@@ -118,6 +131,9 @@ class Alpha5Twin:
         #: Datagrams lost on purpose so far.
         self.dropped = 0
         self.port = port
+        #: The arm's line (None: ``bus=False``, every frame at once).
+        self.line = HalfDuplexLine(arm.serial_baud, buffer_bytes) if bus else None
+        self._sent_splitter = rp.FrameSplitter()
 
     # -- plant side ---------------------------------------------------------------------------
     def set_joint_state(self, positions: Sequence[float], velocities: Sequence[float]) -> None:
@@ -308,27 +324,76 @@ class Alpha5Twin:
         assert sock is not None
         next_status_s = time.monotonic() + STATUS_PERIOD_S
         port = sock.getsockname()[1]
+        stamped = _stamp_arrivals(sock)
         while self._running.is_set():
-            readable, _, _ = select.select([sock], [], [], 0.05)
+            wait_s = 0.05
+            if self.line is not None:
+                wait_s = min(wait_s, max(0.0, self.line.next_due_s() - time.monotonic()))
+            readable, _, _ = select.select([sock], [], [], wait_s)
             now_s = time.monotonic()
-            if readable:
-                datagram, sender = sock.recvfrom(4096)
+            while readable:  # every datagram waiting, before the line runs on
+                datagram, sender, arrived_s = _receive(sock, stamped, now_s)
                 with self._lock:
                     lost, self._to_drop = self._to_drop > 0, max(0, self._to_drop - 1)
                     self.dropped += lost
-                if lost:
-                    continue
-                self._host = sender
-                reply = b''.join(self.handle(p, now_s) for p in self.splitter.feed(datagram))
-                if reply:
-                    sock.sendto(reply, sender)
-                    latency_probe.note('reply', port)
+                if not lost:
+                    self._host = sender
+                    self._take(sock, datagram, sender, arrived_s, port)
+                readable, _, _ = select.select([sock], [], [], 0.0)
+            self._run_line(sock, time.monotonic(), port)
             if now_s >= next_status_s:
                 next_status_s = now_s + STATUS_PERIOD_S
                 status = self.status_frames()
                 if status and self._host is not None:
-                    sock.sendto(status, self._host)
-                    latency_probe.note('reply', port)
+                    if self.line is None:
+                        sock.sendto(status, self._host)
+                        latency_probe.note('reply', port)
+                    else:
+                        self.line.answer(now_s, status, self._host)
+
+    def _take(self, sock: socket.socket, datagram: bytes, sender: tuple[str, int],
+              arrived_s: float, port: int) -> None:
+        """A datagram from the host: at once without a bus, else frame by frame on the line."""
+        if self.line is None:
+            reply = b''.join(self.handle(p, arrived_s) for p in self.splitter.feed(datagram))
+            if reply:
+                sock.sendto(reply, sender)
+                latency_probe.note('reply', port)
+            return
+        # The line up to the write first: the adapter holds only what still waits then, however
+        # late this thread woke.
+        self._run_line(sock, arrived_s, port)
+        for frame in _frames(datagram):
+            self.line.write(arrived_s, frame, sender)
+
+    def _run_line(self, sock: socket.socket, now_s: float, port: int) -> None:
+        """The line carried up to ``now_s``: frames applied, answers that have gone sent."""
+        if self.line is None:
+            return
+        for gone_s, reply, peer in self.line.run(now_s, self._apply_frame):
+            sock.sendto(reply, peer)
+            latency_probe.note('reply', port)
+            self._note_sent(gone_s, reply)
+
+    def _note_sent(self, gone_s: float, reply: bytes) -> None:
+        """Keep (time the answer had gone, packet) per device: `sent`."""
+        with self._lock:
+            for packet in self._sent_splitter.feed(reply):
+                device = self.devices.get(packet.device_id)
+                if device is not None:
+                    device.sent.append((gone_s, packet))
+
+    def sent(self, device_id: int) -> list[tuple[float, rp.Packet]]:
+        """(monotonic time s, packet) of every answer the device sent on the bus, oldest first.
+
+        The time is when the answer had fully gone on the line (empty without a bus).
+        """
+        with self._lock:
+            return list(self.devices[device_id].sent)
+
+    def _apply_frame(self, frame: bytes, arrived_s: float) -> bytes:
+        """A host frame that has fully arrived on the line: applied; the answer (b'': none)."""
+        return b''.join(self.handle(p, arrived_s) for p in self.splitter.feed(frame))
 
     def __enter__(self) -> Alpha5Twin:
         self.start()
@@ -336,3 +401,59 @@ class Alpha5Twin:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+
+#: The kernel's arrival stamp of a datagram (Linux; None elsewhere: the thread's clock).
+_SO_TIMESTAMPNS: int | None = getattr(socket, 'SO_TIMESTAMPNS', None)
+
+
+def _stamp_arrivals(sock: socket.socket) -> bool:
+    """Ask the kernel to stamp each datagram's arrival (SO_TIMESTAMPNS); False: not here."""
+    option = _SO_TIMESTAMPNS
+    if option is None:
+        return False
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, option, 1)
+    except OSError:
+        return False
+    return True
+
+
+def _wall_minus_steady_s() -> float:
+    """time.time() - time.monotonic() (s), from the tightest of a few bracketed readings.
+
+    A thread preempted between its two clock reads would shift every stamp by the pause.
+    """
+    best = (math.inf, 0.0)
+    for _ in range(3):
+        before_s = time.monotonic()
+        wall_s = time.time()
+        after_s = time.monotonic()
+        best = min(best, (after_s - before_s, wall_s - (before_s + after_s) / 2.0))
+    return best[1]
+
+
+def _receive(sock: socket.socket, stamped: bool,
+             now_s: float) -> tuple[bytes, tuple[str, int], float]:
+    """(datagram, sender, arrival s on time.monotonic): the kernel's stamp when it gives one.
+
+    The kernel's stamp is when the host wrote (loopback), however late this thread wakes: the
+    line then starts the frame when the host's adapter would have.
+    """
+    if not stamped:
+        datagram, sender = sock.recvfrom(4096)
+        return datagram, sender, now_s
+    datagram, ancillary, _, sender = sock.recvmsg(4096, 64)
+    for level, kind, data in ancillary:
+        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
+            seconds, nanoseconds = struct.unpack('qq', data[:16])
+            wall_s = seconds + nanoseconds * 1e-9
+            return datagram, sender, min(now_s, wall_s - _wall_minus_steady_s())
+    return datagram, sender, now_s
+
+
+def _frames(datagram: bytes) -> list[bytes]:
+    """The datagram's frames, each with its 0x00 terminator (a tail without one as it is)."""
+    parts = datagram.split(b'\x00')
+    frames = [part + b'\x00' for part in parts[:-1]]
+    return frames + ([parts[-1]] if parts[-1] else [])
