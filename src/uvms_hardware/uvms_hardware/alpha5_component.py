@@ -12,14 +12,17 @@ What the ``alpha5_bridge`` node did with its device, behind `HardwareComponent`'
   where one does not confirm, or where a joint already moves over the trip speed.
 - `read` drains the link (answers, HARDWARE_STATUS), trips on an overspeed and makes the
   round's joint state (and the jaws') once every driven joint answered again.
-- `write` turns joint torques into CURRENT mA per joint (or the velocity fallback);
-  `write_jaw` the jaws' speed into VELOCITY (mm/s on the wire).
-- `ask`, after the period's write, sends what the period asks of the wire: the next device's
-  POSITION and VELOCITY request and, after ``watchdog_timeout_s`` without a command, VELOCITY
-  0 to every joint (``Alpha5Core.tick``). Asked after the commands, the answer comes back in
-  the rest of the period and the next period's read takes it: asked in the read, it came just
-  after that read and waited a whole period more (through the twins, answer to CURRENT
-  frame p50 2.7-2.8 ms at a 2 ms period; docs/robot_process.md).
+- `write` turns joint torques into CURRENT mA per joint (or the velocity fallback) and holds
+  them for the bus's next command slot; `write_jaw` the jaws' speed into VELOCITY (mm/s on the
+  wire), sent at the bus's next free turn.
+- `ask`, after the period's write, takes the period's turn on the half-duplex bus
+  (``uvms_hardware.alpha5_bus``, at hardware.yaml's ``alpha5.bus.command_rate_hz``): while no
+  answer is expected, the watchdog's VELOCITY 0 (after ``watchdog_timeout_s`` without a
+  command) and the jaws' frames, every joint's held CURRENT once per command slot, then the
+  next device's POSITION and VELOCITY request if its answer ends before the next slot. Asked
+  after the commands, the answer comes back in the rest of the period and the next period's
+  read takes it (through the twins without a bus, answer to CURRENT frame p50 2.7-2.8 ms at a
+  2 ms period; docs/robot_process.md).
 - put_back: VELOCITY 0 to every device at once, then device by device, each read back,
   VELOCITY 0 and the mode from before activate; what is not confirmed is a problem line.
 
@@ -28,12 +31,14 @@ What the ``alpha5_bridge`` node did with its device, behind `HardwareComponent`'
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from uvms_hardware import latency_probe
+from uvms_hardware.alpha5_bus import BusSchedule, byte_time_s, cycle_budget
 from uvms_hardware.alpha5_checks import (
     CONFIRM_TRIES,
     DEFAULT_CONFIRM_TIMEOUT_S,
@@ -60,7 +65,7 @@ from uvms_hardware.component import (
     python_log,
 )
 from uvms_hardware.errors import HardwareError
-from uvms_hardware.hardware_config import Drive, load_alpha5
+from uvms_hardware.hardware_config import Alpha5Hardware, Drive, hardware_section, load_alpha5
 from uvms_hardware.reach_protocol import Mode, encode_request
 from uvms_hardware.stop_report import write_stop_report
 from uvms_hardware.transport import Link, open_link, parse_connection
@@ -75,8 +80,9 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
      'udp:HOST:PORT, or serial:DEVICE[:BAUD] (8N1, 115200 unless given)'),
     ('watchdog_timeout_s', 0.1, 'No command for this long: VELOCITY 0 to every joint (s)'),
     ('feedback_rate_hz', 125.0,
-     'Each device is asked this often, joint_states published once per round (Hz); above '
-     '100 so that a late timer on a busy host still gives >= 100 Hz per joint'),
+     'Turns on the bus: the poll timer runs at this rate x devices (Hz); each device is asked '
+     'at most this often, and less where the bus is full (hardware.yaml alpha5.bus: about '
+     '50 Hz per joint at 77 Hz of commands on 115200 baud); joint_states once per round'),
     ('command_mode', 'current',
      'current: torque as CURRENT mA (Kt, gear, efficiency); velocity: a fallback, '
      'VELOCITY = velocity_gain_rad_s_per_n_m * torque'),
@@ -99,6 +105,27 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
      f'{CONFIRM_TRIES} tries per change, and the whole put-back with every device silent '
      f'must fit {PUT_BACK_BUDGET_S:g} s'),
 )
+
+
+def bus_command_rate_hz(robot_name: str, arm: Alpha5Hardware) -> float:
+    """The command slots' rate (Hz): hardware.yaml's ``alpha5.bus.command_rate_hz``.
+
+    Without it, the budget of one CURRENT and one answered REQUEST per joint per cycle.
+
+    Raises:
+        Alpha5BridgeError: A rate whose commands and one request per slot do not fit the line.
+    """
+    _, section = hardware_section(robot_name, 'alpha5')
+    bus = section.get('bus') or {}
+    joints = len(arm.joints)
+    rate_hz = float(bus.get('command_rate_hz', cycle_budget(arm.serial_baud, joints)))
+    slot_bytes = joints * 10 + 8 + 20  # every joint's CURRENT and one answered REQUEST
+    if not (rate_hz > 0.0 and rate_hz * slot_bytes * byte_time_s(arm.serial_baud) <= 1.0):
+        raise Alpha5BridgeError(
+            f'alpha5.bus.command_rate_hz = {rate_hz:g}: {joints} CURRENT frames and one '
+            f'answered request ({slot_bytes} bytes) per slot do not fit {arm.serial_baud} baud '
+            f'(at most {1.0 / (slot_bytes * byte_time_s(arm.serial_baud)):.0f} Hz)')
+    return rate_hz
 
 
 def jaw_default(robot_name: str) -> str:
@@ -150,6 +177,10 @@ class Alpha5Component(HardwareComponent):
         #: Every reason the last configure was refused, one per device problem.
         self.configure_errors: list[str] = []
         self.feedback_rate_hz = 0.0
+        self.command_rate_hz = 0.0
+        self.bus: BusSchedule | None = None
+        self._urgent = b''
+        self._asked_s = -math.inf
         self._state = Alpha5State()
         self._refused = Throttle(1.0)
         self._jaw_refused = Throttle(1.0)
@@ -203,6 +234,7 @@ class Alpha5Component(HardwareComponent):
             raise Alpha5BridgeError('; '.join(errors))
         self.core = core
         self.feedback_rate_hz = rate_hz
+        self.command_rate_hz = bus_command_rate_hz(self.robot_name, arm)
 
     def _check(self, link: Link, core: Alpha5Core, drive: Drive) -> list[str]:
         timeout_s = float(self.values['answer_timeout_s'])
@@ -219,6 +251,8 @@ class Alpha5Component(HardwareComponent):
                 trip speed (named); the runner then puts back every device.
         """
         assert self.core is not None and self.link is not None
+        self.bus = BusSchedule(self.core.arm.serial_baud, self.command_rate_hz)
+        self._urgent = b''
         self.link.read()  # answers still in flight from configure
         problems = self._confirm(self.core.standby_settings())
         if problems:
@@ -258,6 +292,9 @@ class Alpha5Component(HardwareComponent):
         self.active = False
         core, link = self.core, self.link
         problems: list[str] = []
+        if self.bus is not None:
+            self.bus.hold(b'')
+        self._urgent = b''
         if core is not None and link is not None:
             link.send(core.neutral_frames())  # every joint stops first, whatever follows
             settings = core.restore_settings(self.modes_before)
@@ -311,6 +348,9 @@ class Alpha5Component(HardwareComponent):
             return
         tripped = core.overspeed
         core.receive(link.read(), now_s)
+        if self.bus is not None and core.asked is not None and core.answered(
+                core.asked, self._asked_s):
+            self.bus.answered()  # the line is free: the next turn may write
         newly = core.overspeed if core.overspeed and not tripped else ''
         if newly:
             self.log('error', f'tripped: {newly}: VELOCITY 0 to every joint; commands refused '
@@ -320,41 +360,59 @@ class Alpha5Component(HardwareComponent):
                                   newly)
 
     def ask(self, now_s: float) -> None:
-        """This period's requests (and the watchdog's VELOCITY 0) sent; after the write.
+        """This period's turn on the bus (``alpha5_bus``); after the write.
 
-        Never waits. Only while active.
+        While no answer is expected: the watchdog's VELOCITY 0 and the jaws' frames, every
+        joint's held CURRENT once per command slot, then the next device's request (if its
+        answer ends before the next slot). A command is held only while the core drives (a
+        watchdog hold or a trip drops it). Never waits. Only while active.
         """
-        core, link = self.core, self.link
-        if core is None or link is None or not self.active:
+        core, link, bus = self.core, self.link, self.bus
+        if core is None or link is None or bus is None or not self.active:
             return
-        frames, _ = core.tick(now_s)
+        self._urgent += core.hold_frames(now_s)
+        if not core.driving and bus.held:
+            bus.hold(b'')
+        sent_s = max(now_s, self.clock())  # the answers are reckoned from the write itself
+        if not bus.line_free(sent_s):
+            return
+        slots, asked = bus.slots, bus.bytes_expected
+        frames = bus.turn(sent_s, self._urgent, core.next_request)
+        if bus.bytes_expected != asked:
+            self._asked_s = now_s  # an answer read after this is the request's
+        self._urgent = b''
         link.send(frames)
+        if bus.slots != slots:
+            latency_probe.note('current')
 
     def write(self, now_s: float, commands: Any = None) -> None:
-        """Joint torques (N m) as ``(joint names, torques)`` to CURRENT (or VELOCITY) frames.
+        """Joint torques (N m) as ``(names, torques)`` to CURRENT (or VELOCITY) frames, held.
 
-        Refused (one error line a second, nothing sent) while tripped or for a bad command.
+        `ask` sends them at the bus's next command slot. Refused (one error line a second,
+        nothing held) while tripped or for a bad command.
         """
-        core, link = self.core, self.link
-        if commands is None or core is None or link is None or not self.active:
+        core, bus = self.core, self.bus
+        if commands is None or core is None or bus is None or not self.active:
             return
         names, torques = commands
         frames = core.command(now_s, list(names), list(torques))
         if not frames and self._refused(now_s):
             self.log('error', f'command refused: {core.last_rejection}')
-        link.send(frames)
         if frames:
-            latency_probe.note('current')
+            bus.hold(frames)
 
     def write_jaw(self, now_s: float, speed_m_s: float) -> None:
-        """The jaws' opening speed (m/s, + opens) to VELOCITY; refused while tripped."""
-        core, link = self.core, self.link
-        if core is None or link is None or not self.active:
+        """The jaws' opening speed (m/s, + opens) to VELOCITY; refused while tripped.
+
+        Sent at the bus's next free turn (`ask`).
+        """
+        core = self.core
+        if core is None or self.link is None or not self.active:
             return
         frames, refused = core.jaw_command(now_s, float(speed_m_s))
         if refused and self._jaw_refused(now_s):
             self.log('error', f'jaw command refused: {refused}')
-        link.send(frames)
+        self._urgent += frames
 
     def reset_trip(self) -> tuple[bool, str]:
         """Take commands again once no joint moves over the trip speed: (done, what was said)."""

@@ -4,9 +4,9 @@ The component (``alpha5_component``) owns the link and the clock and calls, per 
 (configure's checks of each device are ``alpha5_checks``)::
 
     core = Alpha5Core(load_alpha5('bluerov2_alpha5'), watchdog_timeout_s=0.1)
-    link.send(core.command(t_s, names, torques))    # on each ActuatorCommand
+    bus.hold(core.command(t_s, names, torques))     # on each ActuatorCommand (alpha5_bus)
     core.receive(link.read(), t_s)                  # every period
-    frames, round_done = core.tick(t_s)             # next feedback REQUEST, watchdog neutral
+    link.send(bus.turn(t_s, core.hold_frames(t_s), core.next_request))  # the bus's turn
     sample = core.next_joint_state(t_s)             # every joint answered again, or None
     link.send(core.jaw_command(t_s, 0.002)[0])      # the jaws at 2 mm/s (when driven)
     jaw = core.next_jaw_state(t_s)                  # the jaws answered again, or None
@@ -147,6 +147,8 @@ class Alpha5Core:
         self._requests = {d.device_id: rp.encode_request(d.device_id, FEEDBACK_REQUEST)
                           for d in self._slots}
         self._next = 0
+        #: The device of the last feedback request (None before one).
+        self.asked: int | None = None
         self._holding = False
         self._driving = False
         self._last_hold_s = -math.inf
@@ -308,7 +310,19 @@ class Alpha5Core:
 
         The frames: VELOCITY 0 to every joint when the watchdog trips and while it holds
         (the jaws too, on their own watchdog), then one feedback REQUEST to the next device
-        in turn (the jaws once every ``JAW_POLL_ROUNDS`` rounds).
+        in turn (the jaws once every ``JAW_POLL_ROUNDS`` rounds). The component sends the two
+        apart (`hold_frames`, `next_request`) on its bus schedule (``alpha5_bus``).
+        """
+        frames = self.hold_frames(t_s)
+        round_done = self._next % len(self.arm.joints) == 0 and (
+            self._slots[self._next] is not self.jaw)
+        return frames + self.next_request(), round_done
+
+    def hold_frames(self, t_s: float) -> bytes:
+        """The watchdog's frames at ``t_s`` (b'' while it does not hold).
+
+        VELOCITY 0 to every joint when the watchdog trips and every ``HOLD_RESEND_S`` while
+        it holds (the jaws too, on their own watchdog).
         """
         frames = b''
         if self._driving and self.watchdog.expired(t_s):
@@ -323,10 +337,27 @@ class Alpha5Core:
             if self._jaw_holding and t_s - self._jaw_hold_s >= HOLD_RESEND_S:
                 frames += rp.encode_velocity(self.jaw.device_id, 0.0)
                 self._jaw_hold_s = t_s
+        return frames
+
+    def next_request(self) -> bytes:
+        """The feedback REQUEST of the next device in turn.
+
+        The jaws are asked once every ``JAW_POLL_ROUNDS`` rounds of the joints.
+        """
         drive = self._slots[self._next]
-        round_done = self._next % len(self.arm.joints) == 0 and drive is not self.jaw
         self._next = (self._next + 1) % len(self._slots)
-        return frames + self._requests[drive.device_id], round_done
+        self.asked = drive.device_id
+        return self._requests[drive.device_id]
+
+    def answered(self, device_id: int, since_s: float) -> bool:
+        """Whether the device's POSITION and VELOCITY have both arrived after ``since_s``."""
+        feedback = self.feedback.get(device_id)
+        return feedback is not None and feedback.oldest_s > since_s
+
+    @property
+    def driving(self) -> bool:
+        """True while the joints take commands: a command came, no watchdog hold, no trip."""
+        return self._driving
 
     def poll_period_s(self, rate_hz: float) -> float:
         """The period of `tick` (s) that asks every joint ``rate_hz`` times a second."""

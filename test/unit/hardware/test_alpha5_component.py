@@ -78,8 +78,9 @@ def test_a_round_of_joint_states_comes_once_every_joint_answered(
 
 def test_torques_become_current_on_the_twin_and_the_watchdog_stops_them(
         twin: Alpha5Twin, arm: Alpha5Component) -> None:
-    """write() drives Current mode; no command for watchdog_timeout_s: VELOCITY 0 to all."""
+    """write() then ask() drives Current mode; no command for watchdog_timeout_s: VELOCITY 0."""
     arm.write(time.monotonic(), (JOINTS, [0.0, 0.2, -0.1, 0.0]))
+    arm.ask(time.monotonic())  # the held command goes at the bus's turn (alpha5_bus)
     deadline = time.monotonic() + 2.0
     while twin.joint_commands()['joint_2'][0] != Mode.CURRENT:
         assert time.monotonic() < deadline, twin.joint_commands()
