@@ -15,9 +15,20 @@ holds on a loaded machine, unlike the microseconds themselves):
 - ``netft wrench``: one record as a ``WrenchStamped`` built field by field and serialized for
   the controller's raw input (before) vs. its CDR bytes written by ``struct`` into a
   preallocated payload (``cdr_codecs.PayloadWriter``), as the robot loop's Net F/T bridge
-  publishes it now.
+  publishes it now;
+- ``device clock``: a bridge's steady time as ``Clock.now()`` of a steady rclpy clock (before)
+  vs. ``time.monotonic_ns()`` (``device_clock.DeviceClock.now_s``, the same CLOCK_MONOTONIC);
+- ``node clock``: a node's clock as ``get_clock().now().nanoseconds`` (before) vs.
+  ``clock_read.now_ns`` (the same read, no ``Time`` built);
+- ``odometry covariances``: the estimator's pose and twist covariances computed at each
+  published estimate (before) vs. once per filter change (``eskf``), one change in 10
+  periods as at the twin stand (IMU 50 Hz, control 500 Hz);
+- ``actuators to 2 bridges``: the allocator's CDR command deserialized for each typed
+  subscriber (before) vs. once (``robot_loop.deliver``);
+- ``t200 pwm x8``: a period's 8 thrusts to PWM with each branch of the curve found by
+  ``np.flatnonzero`` per call (before) vs. found once per curve (``t200_curve``).
 
-It asserts nothing. Usage::
+The pairs are checked to give the same values first. It asserts nothing else. Usage::
 
     .venv/bin/python bench/bench_robot_loop_costs.py [--rounds N]
 """
@@ -29,6 +40,7 @@ import os
 import statistics
 import time
 from collections.abc import Callable
+from typing import Any
 
 from bench_realtime_load import source_path
 
@@ -65,6 +77,81 @@ def per_call_us(job: Callable[[], object]) -> float:
     for _ in range(CALLS):
         job()
     return (time.thread_time_ns() - start) / CALLS / 1e3
+
+
+def old_pwm_from_thrust(curve: Any, thrust_n: float, voltage_v: float | None) -> float:
+    """``T200Curve.pwm_from_thrust`` as it was: both branches found at each call."""
+    import math
+
+    import numpy as np
+    if not math.isfinite(thrust_n) or thrust_n == 0.0:
+        return float(curve.neutral_pwm_us)
+    grid, thrust = curve._grid
+    target = thrust_n / curve.voltage_scale(voltage_v)
+    if target > 0.0:
+        start = int(np.flatnonzero(thrust <= 0.0)[-1])
+        g, f = grid[start:], thrust[start:]
+    else:
+        stop = int(np.flatnonzero(thrust >= 0.0)[0])
+        g, f = grid[:stop + 1], thrust[:stop + 1]
+    return float(np.interp(target, f, g))
+
+
+def period_pairs() -> dict[str, tuple[Callable[[], object], Callable[[], object]]]:
+    """The pairs of the per-period cuts (clock reads, covariances, deserialization, PWM)."""
+    import numpy as np
+    from rclpy.clock import Clock, ClockType, ROSClock
+    from rclpy.serialization import deserialize_message, serialize_message
+    from uvms_common.clock_read import now_ns
+    from uvms_hardware.device_clock import DeviceClock
+    from uvms_hardware.hardware_config import hardware_section
+    from uvms_hardware.t200_curve import T200Curve
+    from uvms_model.nav_sensor_parameters import NavigationParameters
+    from uvms_navigation.eskf import ErrorStateEkf, EstimatorSettings
+
+    from uvms_msgs.msg import ActuatorCommand
+
+    steady = Clock(clock_type=ClockType.STEADY_TIME)
+    device = DeviceClock.__new__(DeviceClock)  # no node: now_s reads no node
+    device.clock = steady
+    ros = ROSClock()
+    ekf = ErrorStateEkf(EstimatorSettings(NavigationParameters()))
+    ekf.reset_from_ahrs(0, [0.0, 0.0, 2.0], [0.1, -0.05, 0.7])
+    ekf.predict(20_000_000, [0.01, 0.02, -0.01], [0.1, 0.0, -9.8])
+    assert np.array_equal(ekf.pose_covariance(), ekf._pose_covariance())
+    periods = [0, 0]
+
+    def covariances_before() -> object:
+        return ekf._pose_covariance(), ekf._twist_covariance()
+
+    def covariances_after() -> object:
+        periods[0] += 1
+        if periods[0] % 10 == 0:
+            ekf.cov = ekf.cov.copy()  # a filter change: a new covariance array
+        return ekf.pose_covariance(), ekf.twist_covariance()
+
+    command = ActuatorCommand(thrust=[1.5, -2.0, 0.3, 0.0, 4.0, -6.0, 2.5, -0.7],
+                              joint_names=['a', 'b', 'c', 'd', 'e'],
+                              joint_torques=[0.1, 0.2, 0.3, 0.4, 0.5])
+    data = serialize_message(command)
+
+    def deserialize_each() -> object:
+        return [deserialize_message(data, ActuatorCommand) for _ in range(2)]
+
+    def deserialize_once() -> object:
+        msg = deserialize_message(data, ActuatorCommand)
+        return [msg, msg]
+
+    curve = T200Curve.from_section(hardware_section('bluerov2_alpha5', 'ardusub')[1]['t200'])
+    thrusts = command.thrust.tolist()
+    assert [old_pwm_from_thrust(curve, t, 15.8) for t in thrusts] == [
+        curve.pwm_from_thrust(t, 15.8) for t in thrusts]
+    return {'device clock': (lambda: steady.now().nanoseconds * 1e-9, device.now_s),
+            'node clock': (lambda: ros.now().nanoseconds, lambda: now_ns(ros)),
+            'odometry covariances': (covariances_before, covariances_after),
+            'actuators to 2 bridges': (deserialize_each, deserialize_once),
+            't200 pwm x8': (lambda: [old_pwm_from_thrust(curve, t, 15.8) for t in thrusts],
+                            lambda: [curve.pwm_from_thrust(t, 15.8) for t in thrusts])}
 
 
 def main() -> None:
@@ -128,6 +215,7 @@ def main() -> None:
              'alpha5 request': (lambda: encode_request(0x02, FEEDBACK_REQUEST),
                                 lambda: requests[0x02]),
              'loop /clock': (clock_typed, clock_raw)}
+    pairs.update(period_pairs())
     print(f'load: {" ".join(f"{v:.2f}" for v in os.getloadavg())}; {args.rounds} rounds of '
           f'{CALLS} calls, interleaved')
     for name, (before, after) in pairs.items():

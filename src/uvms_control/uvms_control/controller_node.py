@@ -38,6 +38,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.cdr_codecs import MalformedPayloadError
+from uvms_common.clock_read import now_ns, steady_ns
 from uvms_common.diagnostics import DiagnosticsPublisher, RateMeter
 from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
@@ -293,7 +294,7 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
             value = None
         if not self._lockstep:
             if value is not None:  # timer and odometry modes compute on the last valid input
-                now = self.get_clock().now().nanoseconds
+                now = now_ns(self.get_clock())
                 self._inputs[topic] = Input(stamp, now, value)
                 if self._on_odometry and topic == 'odometry':
                     self._step_on_latest(stamp, now)
@@ -408,7 +409,7 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
         self._last_tau_b = result.tau_b
         self._last_stamp_ns = t_ns
         self._publish_command(t_ns, result.tau_b)
-        self.tasks.count_step(t_ns, self._steady.now().nanoseconds, self._period_ns)
+        self.tasks.count_step(t_ns, steady_ns(), self._period_ns)
         if self._state_gate.due(t_ns):
             self._state_pub.publish(self._state_writer.payload(t_ns, result))
         self.tasks.finish(events)

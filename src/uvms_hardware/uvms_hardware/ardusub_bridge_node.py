@@ -42,6 +42,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, Imu
 from std_srvs.srv import Trigger
+from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.parameter_declaration import declare_specs
 
@@ -133,7 +134,7 @@ class ArduSubBridgeNode(BridgeNode):
 
     def _local_s(self) -> float:
         """The node clock (s): what stamps are in (``/clock`` beside the simulator)."""
-        return self.get_clock().now().nanoseconds * 1e-9
+        return now_ns(self.get_clock()) * 1e-9
 
     # -- the device hooks --------------------------------------------------------------
     def configure_device(self) -> None:

@@ -28,6 +28,7 @@ from typing import Any
 
 from geometry_msgs.msg import TwistWithCovarianceStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.parameter_declaration import declare_specs
 
@@ -78,7 +79,7 @@ class DvlBridgeNode(BridgeNode):
                 f'navigation.dvl.position_m {link_position_m}, the lever arm the estimator uses')
         self.component = DvlComponent(
             values, rot, int(section.get('port', DEFAULT_PORT)), self.get_name(),
-            clock=self.now_s, local_clock=lambda: self.get_clock().now().nanoseconds * 1e-9,
+            clock=self.now_s, local_clock=lambda: now_ns(self.get_clock()) * 1e-9,
             log=logger_log(self.get_logger()))
         self.start()
 

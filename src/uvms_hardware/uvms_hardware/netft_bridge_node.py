@@ -33,6 +33,7 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
 from uvms_common.cdr_codecs import MessageCodec, PayloadWriter
+from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.direct_topics import active_bus
 
@@ -80,7 +81,7 @@ class NetFtBridgeNode(BridgeNode):
             for name, default, text in PARAMETERS}
         self.component = NetFtComponent(
             values, hardware, problem, self.get_name(), clock=self.now_s,
-            local_clock=lambda: self.get_clock().now().nanoseconds * 1e-9,
+            local_clock=lambda: now_ns(self.get_clock()) * 1e-9,
             log=logger_log(self.get_logger()),
             stop_requested=stop_requested)
         #: The wrench's CDR writer in the robot loop (configure), None in a node process.

@@ -31,6 +31,7 @@ import numpy as np
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message, serialize_message
+from uvms_common.clock_read import now_ns
 from uvms_common.direct_topics import Bus
 from uvms_common.raw_clock import take_clock_raw
 
@@ -159,14 +160,22 @@ class RobotLoop:
         publisher.publish = publish
 
     def _label(self, timer: Any, what: str) -> str:
+        if not self.ledger.enabled:
+            return what  # no ledger: no phase name built twice a period per device
         label = self._labels.get(id(timer))
         if label is None:
             label = self._labels[id(timer)] = timer.node.get_name().removesuffix('_bridge')
         return f'{what} {label}'
 
     def deliver(self, topic: str, msg: Any) -> None:
-        """Call every direct subscription of ``topic`` with ``msg`` (message or CDR bytes)."""
+        """Call every direct subscription of ``topic`` with ``msg`` (message or CDR bytes).
+
+        A message is serialized at most once, CDR bytes deserialized at most once per message
+        type, whatever the number of subscriptions (``command/actuators``: the arm's and the
+        vehicle's bridges take the same message, as an intra-process delivery shares it).
+        """
         data: bytes | None = None
+        typed: dict[Any, Any] = {}
         for sub in self.bus.on(topic):
             if sub.raw:
                 if isinstance(msg, (bytes, bytearray, memoryview)):
@@ -175,7 +184,9 @@ class RobotLoop:
                     data = data if data is not None else serialize_message(msg)
                     value = data
             elif isinstance(msg, (bytes, bytearray, memoryview)):
-                value = deserialize_message(bytes(msg), sub.msg_type)
+                value = typed.get(sub.msg_type)
+                if value is None:
+                    value = typed[sub.msg_type] = deserialize_message(bytes(msg), sub.msg_type)
             else:
                 value = msg
             sub.delivered += 1
@@ -200,19 +211,19 @@ class RobotLoop:
             ledger.enter(self._label(timer, 'read'))
             timer.read()
             ledger.leave()
-        now = self._clock_node.get_clock().now()
+        clock_ns = now_ns(self._clock_node.get_clock())
         # One control step per control period of the node clock: on a simulated clock slower
         # than the wall (--real-time-factor) a period without new time computes nothing, but
         # a clock that stands (a simulator holding its first state until the devices are
         # driven) still gets the command every HELD_PERIODS, so the devices' watchdogs hold.
-        if self.bus.on('/clock') and (now.nanoseconds - self._stepped_ns >= self._period_ns
+        if self.bus.on('/clock') and (clock_ns - self._stepped_ns >= self._period_ns
                                       or self.periods - self._stepped_period >= HELD_PERIODS):
-            self._stepped_ns, self._stepped_period = now.nanoseconds, self.periods
+            self._stepped_ns, self._stepped_period = clock_ns, self.periods
             self.steps += 1
             # Its CDR bytes by struct: the estimator takes /clock raw (no message built and
             # serialized again each period); a typed input gets it deserialized.
             self.deliver('/clock', _CLOCK_CDR.pack(CDR_LE_HEADER,
-                                                   *divmod(now.nanoseconds, 1_000_000_000)))
+                                                   *divmod(clock_ns, 1_000_000_000)))
         wrote = False
         for timer in fired:
             if timer.then is not None:

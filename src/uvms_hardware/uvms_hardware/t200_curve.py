@@ -88,6 +88,18 @@ class T200Curve:
         grid = np.arange(self.pwm_us[0], self.pwm_us[-1] + GRID_STEP_US / 2, GRID_STEP_US)
         return grid, np.asarray(self._interpolant(grid), float)
 
+    @functools.cached_property
+    def _branches(self) -> tuple[tuple[FloatArray, FloatArray], tuple[FloatArray, FloatArray]]:
+        """(thrust, pwm) of the forward and the reverse branch of `_grid`, found once.
+
+        Each runs from the dead band's edge outwards, where the curve is strictly increasing
+        (PCHIP of increasing points), so ``np.interp`` inverts it and clamps at its ends.
+        """
+        grid, thrust = self._grid
+        start = int(np.flatnonzero(thrust <= 0.0)[-1])
+        stop = int(np.flatnonzero(thrust >= 0.0)[0])
+        return (thrust[start:], grid[start:]), (thrust[:stop + 1], grid[:stop + 1])
+
     @property
     def min_pwm_us(self) -> float:
         """Shortest pulse (µs): full reverse."""
@@ -122,16 +134,9 @@ class T200Curve:
         """
         if not math.isfinite(thrust_n) or thrust_n == 0.0:
             return self.neutral_pwm_us
-        grid, thrust = self._grid
         target = thrust_n / self.voltage_scale(voltage_v)
-        # Each branch runs from the dead band's edge outwards, where the curve is strictly
-        # increasing (PCHIP of increasing points), so np.interp inverts it and clamps at ends.
-        if target > 0.0:
-            start = int(np.flatnonzero(thrust <= 0.0)[-1])
-            g, f = grid[start:], thrust[start:]
-        else:
-            stop = int(np.flatnonzero(thrust >= 0.0)[0])
-            g, f = grid[:stop + 1], thrust[:stop + 1]
+        forward, reverse = self._branches  # the branch slices depend on the table alone
+        f, g = forward if target > 0.0 else reverse
         return float(np.interp(target, f, g))
 
 

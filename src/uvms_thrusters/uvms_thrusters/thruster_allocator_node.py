@@ -30,6 +30,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.cdr_codecs import MalformedPayloadError
+from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import (
     ERROR,
     OK,
@@ -312,14 +313,15 @@ class ThrusterAllocatorNode(LifecycleNode):
                 throttle_duration_sec=1.0,
             )
             tau_b = None
+        now = now_ns(self.get_clock())  # one read for the arrival and the lockstep check
         if tau_b is not None:
             self._safe_tau_b = tau_b
-            self._arrival_ns = self.get_clock().now().nanoseconds
+            self._arrival_ns = now
         if not self._lockstep:
             return
         if self._last_stamp_ns is not None and stamp < self._last_stamp_ns:
             return  # an old command: the thrusters are already past it
-        ahead_ns = stamp - self.get_clock().now().nanoseconds
+        ahead_ns = stamp - now
         if ahead_ns > self._max_step_ns:
             # Stamped beyond simulated time: no state asked for it (another publisher). It
             # must not move the thruster time ahead, or the real commands would look old.

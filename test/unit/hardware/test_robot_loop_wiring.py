@@ -83,6 +83,36 @@ def test_a_reading_reaches_its_consumer_by_a_call_and_is_still_published(bus: Bu
     assert controller.subscriptions == [] and loop.dds_inputs() == []
 
 
+def test_cdr_bytes_for_two_typed_inputs_are_deserialized_once(
+        bus: Bus, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The allocator's raw command to the arm's and the vehicle's bridges: one message for both.
+
+    Each typed subscriber got its own deserialization of the same bytes (14 us each, every
+    control period); the message is now made once and handed to both, as an intra-process
+    delivery shares it.
+    """
+    from uvms_hardware import robot_loop
+
+    calls: list[Any] = []
+
+    def counted(data: bytes, msg_type: Any) -> Any:
+        calls.append(msg_type)
+        return deserialize_message(data, msg_type)
+
+    monkeypatch.setattr(robot_loop, 'deserialize_message', counted)
+    allocator = FakeNode('thruster_allocator', '/uvms/joint_states')
+    arm, vehicle = FakeNode('alpha5_bridge'), FakeNode('ardusub_bridge')
+    got: list[JointState] = []
+    for node in (arm, vehicle):
+        direct_topics.subscribe(node, JointState, 'joint_states', got.append, 10)
+    RobotLoop(bus, [allocator, arm, vehicle], 500.0)
+    from rclpy.serialization import serialize_message
+    allocator.publishers[0].publish(serialize_message(JointState(name=['joint_1'],
+                                                                 position=[0.5])))
+    assert len(got) == 2 and list(got[0].position) == [0.5] and got[1] is got[0]
+    assert calls == [JointState]
+
+
 def test_an_input_no_node_of_the_process_publishes_comes_through_dds(bus: Bus) -> None:
     """No DVL bridge in the process: the estimator's dvl input falls back to DDS."""
     estimator = FakeNode('estimator')
