@@ -63,13 +63,30 @@ has none, but an exact sum theta + e makes H P H^T singular and the update lose 
 theta-e correlation to rounding (yaw variance collapsed 50-fold over 5 s with tau 1e5 s)."""
 
 
+_I3 = np.eye(3)
+_I19 = np.eye(N_ERROR)
+_I3.flags.writeable = _I19.flags.writeable = False
+"""Identities made once (read-only): ``np.eye`` was called 8 times per IMU sample."""
+
+
+def cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``np.cross`` of two 3-vectors, bit for bit, without its general axis handling.
+
+    Each component is one product minus another, each rounded, as ``np.cross`` computes it
+    (``multiply`` then ``-=``): the same doubles at a tenth of the cost.
+    """
+    a1, a2, a3 = a.tolist()
+    b1, b2, b3 = b.tolist()
+    return np.array((a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1))
+
+
 def exp_so3(phi: FloatArray) -> FloatArray:
     """Rotation matrix Exp(phi) of a rotation vector (Rodrigues; Solà eq. 77)."""
     angle = math.sqrt(float(phi @ phi))
     k = skew(phi)
     if angle < 1e-8:
-        return np.eye(3) + k + 0.5 * k @ k
-    return (np.eye(3) + math.sin(angle) / angle * k
+        return _I3 + k + 0.5 * k @ k
+    return (_I3 + math.sin(angle) / angle * k
             + (1.0 - math.cos(angle)) / angle ** 2 * k @ k)
 
 
@@ -143,6 +160,7 @@ class ErrorStateEkf:
         self.cov = np.diag(variances)
         self.last_dvl_ns: int | None = None
         self.dvl_rejected = 0
+        self._covariances: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
 
     def reset_from_ahrs(self, t_ns: int, p_ned: ArrayLike, rpy_m: ArrayLike,
                         v_ned: ArrayLike = (0.0, 0.0, 0.0)) -> None:
@@ -159,6 +177,7 @@ class ErrorStateEkf:
         self.cov[TH, TH] = j_inv @ s_e @ j_inv.T
         self.cov[TH, AE] = -j_inv @ s_e
         self.cov[AE, TH] = self.cov[TH, AE].T
+        self._covariances = None  # the covariance changed in place
 
     @property
     def accel_bias(self) -> FloatArray:
@@ -198,22 +217,22 @@ class ErrorStateEkf:
         g_body = self.rot.T @ GRAVITY_NED
         step = exp_so3(w * dt)
         decay = np.exp(-dt / self._tau)
-        fx = np.eye(N_ERROR)
+        fx = _I19.copy()
         fx[P, V] = self.rot * dt
         fx[P, TH] = -self.rot @ skew(v) * dt
-        fx[V, V] = np.eye(3) - skew(w) * dt
+        fx[V, V] = _I3 - skew(w) * dt
         fx[V, TH] = skew(g_body) * dt
-        fx[V, BA] = -np.eye(3) * dt
+        fx[V, BA] = -_I3 * dt
         fx[V, BG] = -skew(v) * dt
         fx[TH, TH] = step.T
-        fx[TH, BG] = -np.eye(3) * dt
+        fx[TH, BG] = -_I3 * dt
         fx[9:, 9:] = np.diag(decay)
         q = np.zeros(N_ERROR)
         q[V] = imu.accel_noise_density ** 2 * dt
         q[TH] = imu.gyro_noise_density ** 2 * dt
         q[9:] = self._stationary_var * (1.0 - decay ** 2)
         self.p_ned = self.p_ned + self.rot @ v * dt
-        self.v_body = v + (f + g_body - np.cross(w, v)) * dt
+        self.v_body = v + (f + g_body - cross3(w, v)) * dt
         self.rot = self.rot @ step
         self.x_gm = self.x_gm * decay
         self.cov = fx @ self.cov @ fx.T + np.diag(q)
@@ -224,14 +243,14 @@ class ErrorStateEkf:
         h = np.zeros((3, N_ERROR))
         rpy = self.rpy
         h[:, TH] = euler_rate_matrix(rpy[0], rpy[1])
-        h[:, AE] = np.eye(3)
+        h[:, AE] = _I3
         y = wrap(np.asarray(rpy_m, dtype=float) - rpy - self.x_gm[7:10])
         return self._update(y, h, np.full(3, _AHRS_REGULARISATION_RAD ** 2))
 
     def update_dvl(self, v_dvl: ArrayLike) -> float | None:
         """Fuse a valid DVL velocity (m/s, DVL frame); None if the gate rejected it."""
         c_t = self._rot_body_from_dvl.T
-        predicted = c_t @ (self.v_body + np.cross(self.w_body, self._r_dvl))
+        predicted = c_t @ (self.v_body + cross3(self.w_body, self._r_dvl))
         dvl = self.settings.sensors.dvl
         sigma = dvl.sigma_base_m_s + dvl.sigma_per_speed * float(np.linalg.norm(predicted))
         h = np.zeros((3, N_ERROR))
@@ -262,7 +281,7 @@ class ErrorStateEkf:
         sigma = (np.array([fix.sigma_horizontal_m] * 2 + [fix.sigma_vertical_m])
                  if sigma_m is None else np.asarray(sigma_m, dtype=float))
         h = np.zeros((3, N_ERROR))
-        h[:, P] = np.eye(3)
+        h[:, P] = _I3
         y = np.asarray(p_ned_m, dtype=float) - self.p_ned
         return self._update(y, h, np.maximum(sigma, 1e-6) ** 2)
 
@@ -271,7 +290,7 @@ class ErrorStateEkf:
         s = h @ self.cov @ h.T + np.diag(noise)
         gain = np.linalg.solve(s, h @ self.cov).T
         dx = gain @ y
-        i_kh = np.eye(N_ERROR) - gain @ h
+        i_kh = _I19 - gain @ h
         self.cov = i_kh @ self.cov @ i_kh.T + gain @ np.diag(noise) @ gain.T
         self.cov = 0.5 * (self.cov + self.cov.T)
         self.p_ned = self.p_ned + dx[P]
@@ -292,18 +311,44 @@ class ErrorStateEkf:
                 self.v_body.copy())
 
     def pose_covariance(self) -> FloatArray:
-        """6x6 covariance of (x, y, z in map_ned; roll, pitch, yaw) (m^2, rad^2)."""
+        """6x6 covariance of (x, y, z in map_ned; roll, pitch, yaw) (m^2, rad^2); read-only.
+
+        Computed once per filter state (`_covariance_pair`): the estimator publishes at each
+        control period, the filter changes only with an IMU, DVL, depth or fix reading.
+        """
+        return self._covariance_pair()[0]
+
+    def twist_covariance(self) -> FloatArray:
+        """6x6 covariance of (linear velocity, angular velocity) in base_link_frd; read-only."""
+        return self._covariance_pair()[1]
+
+    def _covariance_pair(self) -> tuple[FloatArray, FloatArray]:
+        """The pose and twist covariances of the present ``cov`` and ``rot``, cached.
+
+        ``predict``, ``_update`` and ``reset`` assign new ``cov`` and ``rot`` arrays, so the
+        cache holds while both are the very arrays it was computed from (kept referenced, so
+        an identity is never reused); ``reset_from_ahrs``, which writes ``cov`` in place,
+        drops it. The values are those computed afresh: nothing in the arithmetic changes.
+        """
+        cached = self._covariances
+        if cached is not None and cached[0] is self.cov and cached[1] is self.rot:
+            return cached[2], cached[3]
+        pose, twist = self._pose_covariance(), self._twist_covariance()
+        pose.flags.writeable = twist.flags.writeable = False
+        self._covariances = (self.cov, self.rot, pose, twist)
+        return pose, twist
+
+    def _pose_covariance(self) -> FloatArray:
         j = np.eye(6)
         rpy = self.rpy
         j[3:, 3:] = euler_rate_matrix(rpy[0], rpy[1])
         block = self.cov[0:9, 0:9][np.ix_([0, 1, 2, 6, 7, 8], [0, 1, 2, 6, 7, 8])]
         return j @ block @ j.T
 
-    def twist_covariance(self) -> FloatArray:
-        """6x6 covariance of (linear velocity, angular velocity) in base_link_frd."""
+    def _twist_covariance(self) -> FloatArray:
         out = np.zeros((6, 6))
         out[:3, :3] = self.cov[V, V]
         imu = self.settings.sensors.imu
         gyro = imu.gyro_noise_density ** 2 * imu.rate_hz
-        out[3:, 3:] = self.cov[BG, BG] + np.eye(3) * gyro
+        out[3:, 3:] = self.cov[BG, BG] + _I3 * gyro
         return out

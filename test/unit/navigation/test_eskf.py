@@ -202,3 +202,47 @@ def test_health_reports_dvl_lost_and_growing_covariance_then_recovers() -> None:
     assert level >= WARN and 'DVL lost' in message and 'covariance growing' in message
     assert values['dvl_lost'] and values['covariance_growing']
     assert reports[38][0] == OK
+
+
+def test_published_covariances_are_those_of_the_filter_at_every_change() -> None:
+    """The pose and twist covariances, cached per filter state, equal a fresh computation.
+
+    The estimator publishes them each control period while the filter changes only with a
+    reading: after a start from the AHRS (the covariance written in place), a prediction,
+    each kind of update and a reset they must be recomputed, and not be writable (a caller
+    changing them would change the next period's message).
+    """
+    ekf = ErrorStateEkf(EstimatorSettings(NavigationParameters()))
+
+    def fresh() -> tuple[np.ndarray, np.ndarray]:
+        return ekf._pose_covariance(), ekf._twist_covariance()
+
+    steps = [lambda: ekf.reset(0, [0.0, 0.0, 2.0], [0.1, 0.2, 0.3]),
+             lambda: ekf.reset_from_ahrs(0, [0.0, 0.0, 2.0], [0.2, -0.1, 1.0]),
+             lambda: ekf.predict(5_000_000, [0.01, 0.02, 0.03], [0.1, 0.0, -9.8]),
+             lambda: ekf.update_attitude([0.21, -0.11, 1.01]),
+             lambda: ekf.update_depth(2.05),
+             lambda: ekf.update_dvl([0.01, 0.0, 0.0]),
+             lambda: ekf.update_position([0.1, 0.0, 2.0], [0.5, 0.5, 0.5]),
+             lambda: ekf.predict(10_000_000, [0.0, 0.02, 0.0], [0.0, 0.1, -9.8])]
+    for step in steps:
+        first_pose, first_twist = ekf.pose_covariance(), ekf.twist_covariance()  # cached
+        step()
+        pose, twist = ekf.pose_covariance(), ekf.twist_covariance()
+        want_pose, want_twist = fresh()
+        assert np.array_equal(pose, want_pose) and np.array_equal(twist, want_twist)
+        assert not np.array_equal(pose, first_pose) or not np.array_equal(twist, first_twist)
+        assert ekf.pose_covariance() is pose  # the same period's second read: no work
+        with pytest.raises(ValueError):
+            pose[0, 0] = 1.0
+
+
+def test_cross3_is_numpys_cross_bit_for_bit() -> None:
+    """The filter's cross product gives the very doubles of ``np.cross`` (nothing reordered)."""
+    from uvms_navigation.eskf import cross3
+
+    rng = np.random.default_rng(7)
+    for _ in range(20000):
+        a = rng.normal(size=3) * 10.0 ** rng.uniform(-9, 4)
+        b = rng.normal(size=3) * 10.0 ** rng.uniform(-9, 4)
+        assert cross3(a, b).tobytes() == np.cross(a, b).tobytes()
