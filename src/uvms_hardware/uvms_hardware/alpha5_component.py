@@ -82,7 +82,7 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
     ('feedback_rate_hz', 125.0,
      'Turns on the bus: the poll timer runs at this rate x devices (Hz); each device is asked '
      'at most this often, and less where the bus is full (hardware.yaml alpha5.bus: about '
-     '50 Hz per joint at 77 Hz of commands on 115200 baud); joint_states once per round'),
+     '44 Hz per joint at 77 Hz of commands on 115200 baud); joint_states once per round'),
     ('command_mode', 'current',
      'current: torque as CURRENT mA (Kt, gear, efficiency); velocity: a fallback, '
      'VELOCITY = velocity_gain_rad_s_per_n_m * torque'),
