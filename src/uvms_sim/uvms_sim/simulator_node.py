@@ -343,7 +343,12 @@ class SimulatorNode(StartupHold):
             raise
 
     def _report(self) -> Report:
-        """/diagnostics: step rate and real-time factor on the wall clock, lockstep timeouts."""
+        """/diagnostics: step rate and real-time factor on the wall clock, lockstep timeouts.
+
+        ``steps`` and ``states_published`` are exact counts (simulated time in steps, the
+        states published so far): a reader gets the share of simulated-time slots the
+        simulator filled without counting messages, which DDS may drop on the way.
+        """
         now_ns = self.get_clock().now().nanoseconds  # the system clock: no use_sim_time here
         t_ns = self._plant.t_ns
         steps, seconds, timeouts = self._meters
@@ -352,6 +357,7 @@ class SimulatorNode(StartupHold):
         new_timeouts = timeouts.rate_hz(self.timeouts, now_ns)
         values = {'mode': self._settings.mode, 'sim_time_s': t_ns * 1e-9, 'step_rate_hz': step_hz,
                   'real_time_factor': factor, 'lockstep_timeouts': self.timeouts,
+                  'steps': t_ns // self._plant.dt_ns, 'states_published': self._published,
                   'steps_behind_real_time': self._behind.missed,
                   'malformed_commands': self._commands.decoder.malformed,
                   'behind_real_time_share': self._behind.share}
