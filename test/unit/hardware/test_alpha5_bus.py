@@ -13,7 +13,6 @@ import time
 from collections import defaultdict
 from collections.abc import Iterator
 
-import numpy as np
 import pytest
 from uvms_hardware.alpha5_bus import BusSchedule, byte_time_s, cycle_budget
 from uvms_hardware.alpha5_component import PARAMETERS, Alpha5Component
@@ -87,9 +86,9 @@ def test_the_twin_answers_and_applies_at_the_bus_rate(twin: Alpha5Twin) -> None:
         assert _rate_hz(sent) == pytest.approx(expected_hz, rel=0.01), device_id
         assert _rate_hz(sent) == pytest.approx(SOURCE_BUDGET_HZ, rel=0.02), device_id
         assert _rate_hz(applied) == pytest.approx(expected_hz, rel=0.01), device_id
-        # On the host: the same rate, seen through a busy host's thread wake-ups.
-        host_s = float(np.median(np.diff(answers[device_id])))
-        assert 1.0 / host_s == pytest.approx(expected_hz, rel=0.05), device_id
+        # On the host, through a busy host's thread wake-ups (bursts after a late one): never
+        # faster than the line over the whole run (the old twin answered all 60 at once).
+        assert _rate_hz(answers[device_id]) < 1.05 * expected_hz, device_id
     assert twin.line is not None and twin.line.lost_frames == 0
 
 
