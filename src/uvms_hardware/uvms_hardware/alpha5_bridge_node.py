@@ -7,11 +7,13 @@ the URDF's (position, speed) or hardware.yaml's (current), or that stays silent.
 sends MODE Standby to every device and reads each MODE back (``uvms_hardware.alpha5_probe``:
 resent until confirmed, ``CONFIRM_TRIES`` tries of ``confirm_timeout_s``); a device that does
 not confirm refuses the activation, naming it. Running, each ``ActuatorCommand`` becomes
-CURRENT mA per joint (``uvms_hardware.alpha5_core``), held; a timer at ``feedback_rate_hz`` x
-devices takes the turns on the half-duplex bus (``uvms_hardware.alpha5_bus``): every joint's
-latest CURRENT once per command slot (hardware.yaml ``alpha5.bus.command_rate_hz``), and one
-device asked for POSITION and VELOCITY per turn while no answer is on the line; the watchdog
-sends VELOCITY 0 to every joint after ``watchdog_timeout_s`` without a command and holds.
+CURRENT mA per joint (``uvms_hardware.alpha5_core``); a timer at ``feedback_rate_hz`` x
+devices asks one device per tick for POSITION and VELOCITY; the watchdog sends VELOCITY 0 to
+every joint after ``watchdog_timeout_s`` without a command and holds. With ``bus_schedule``
+(off by default) the commands are held and the timer takes the turns on the half-duplex bus
+(``uvms_hardware.alpha5_bus``): every joint's latest CURRENT once per command slot
+(hardware.yaml ``alpha5.bus.command_rate_hz``), one device asked per turn while no answer is
+on the line.
 
 ``joint_states`` carries fresh answers only: one message as soon as every driven joint has
 answered position and velocity again (once per round), each answer younger than

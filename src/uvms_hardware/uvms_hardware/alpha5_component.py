@@ -12,14 +12,17 @@ What the ``alpha5_bridge`` node did with its device, behind `HardwareComponent`'
   where one does not confirm, or where a joint already moves over the trip speed.
 - `read` drains the link (answers, HARDWARE_STATUS), trips on an overspeed and makes the
   round's joint state (and the jaws') once every driven joint answered again.
-- `write` turns joint torques into CURRENT mA per joint (or the velocity fallback) and holds
-  them for the bus's next command slot; `write_jaw` the jaws' speed into VELOCITY (mm/s on the
-  wire), sent at the bus's next free turn.
-- `ask`, after the period's write, takes the period's turn on the half-duplex bus
-  (``uvms_hardware.alpha5_bus``, at hardware.yaml's ``alpha5.bus.command_rate_hz``): while no
-  answer is expected, the watchdog's VELOCITY 0 (after ``watchdog_timeout_s`` without a
-  command) and the jaws' frames, every joint's held CURRENT once per command slot, then the
-  next device's POSITION and VELOCITY request if its answer ends before the next slot. Asked
+- `write` turns joint torques into CURRENT mA per joint (or the velocity fallback);
+  `write_jaw` the jaws' speed into VELOCITY (mm/s on the wire). Both are written at once,
+  or, with ``bus_schedule`` (off by default: the twin stand does not hold with it yet,
+  docs/hardware.md "The Alpha 5 bus"), held for the bus's next command slot or free turn.
+- `ask`, after the period's write, sends what the period asks of the wire: the next device's
+  POSITION and VELOCITY request and, after ``watchdog_timeout_s`` without a command, VELOCITY
+  0 to every joint (``Alpha5Core.tick``). With ``bus_schedule`` it takes the period's turn on
+  the half-duplex bus (``uvms_hardware.alpha5_bus``, at hardware.yaml's
+  ``alpha5.bus.command_rate_hz``): while no answer is expected, the watchdog's VELOCITY 0 and
+  the jaws' frames, every joint's held CURRENT once per command slot, then the next device's
+  request if its answer ends before the next slot. Asked
   after the commands, the answer comes back in the rest of the period and the next period's
   read takes it (through the twins without a bus, answer to CURRENT frame p50 2.7-2.8 ms at a
   2 ms period; docs/robot_process.md).
@@ -100,6 +103,11 @@ PARAMETERS: tuple[tuple[str, Any, str], ...] = (
      'A joint reported faster than this many times its URDF speed limit trips the bridge: '
      'VELOCITY 0 to every joint, commands refused until ~/reset_trip or deactivate and '
      'activate (>= 1)'),
+    ('bus_schedule', False,
+     "Schedule the half-duplex bus (uvms_hardware.alpha5_bus): each joint's latest CURRENT "
+     'once per slot at hardware.yaml alpha5.bus.command_rate_hz, requests only while no '
+     'answer is on the line. Off: every command written at once, one request per poll '
+     '(the twin stand does not hold with it yet: docs/hardware.md "The Alpha 5 bus")'),
     ('confirm_timeout_s', DEFAULT_CONFIRM_TIMEOUT_S,
      f'Wait for a MODE read-back when activate or the put-back confirms a change (s); '
      f'{CONFIRM_TRIES} tries per change, and the whole put-back with every device silent '
@@ -251,7 +259,8 @@ class Alpha5Component(HardwareComponent):
                 trip speed (named); the runner then puts back every device.
         """
         assert self.core is not None and self.link is not None
-        self.bus = BusSchedule(self.core.arm.serial_baud, self.command_rate_hz)
+        self.bus = (BusSchedule(self.core.arm.serial_baud, self.command_rate_hz)
+                    if bool(self.values['bus_schedule']) else None)
         self._urgent = b''
         self.link.read()  # answers still in flight from configure
         problems = self._confirm(self.core.standby_settings())
@@ -360,15 +369,19 @@ class Alpha5Component(HardwareComponent):
                                   newly)
 
     def ask(self, now_s: float) -> None:
-        """This period's turn on the bus (``alpha5_bus``); after the write.
+        """This period's requests (and the watchdog's VELOCITY 0) sent; after the write.
 
-        While no answer is expected: the watchdog's VELOCITY 0 and the jaws' frames, every
+        With ``bus_schedule``, the period's turn on the bus (``alpha5_bus``): while no answer
+        is expected, the watchdog's VELOCITY 0 and the jaws' frames, every
         joint's held CURRENT once per command slot, then the next device's request (if its
         answer ends before the next slot). A command is held only while the core drives (a
         watchdog hold or a trip drops it). Never waits. Only while active.
         """
         core, link, bus = self.core, self.link, self.bus
-        if core is None or link is None or bus is None or not self.active:
+        if core is None or link is None or not self.active:
+            return
+        if bus is None:  # unscheduled: the next request (and the watchdog's VELOCITY 0)
+            link.send(core.tick(now_s)[0])
             return
         self._urgent += core.hold_frames(now_s)
         if not core.driving and bus.held:
@@ -388,23 +401,28 @@ class Alpha5Component(HardwareComponent):
     def write(self, now_s: float, commands: Any = None) -> None:
         """Joint torques (N m) as ``(names, torques)`` to CURRENT (or VELOCITY) frames, held.
 
-        `ask` sends them at the bus's next command slot. Refused (one error line a second,
+        With ``bus_schedule``, `ask` sends them at the bus's next command slot; without, they
+        are written at once. Refused (one error line a second,
         nothing held) while tripped or for a bad command.
         """
-        core, bus = self.core, self.bus
-        if commands is None or core is None or bus is None or not self.active:
+        core, link, bus = self.core, self.link, self.bus
+        if commands is None or core is None or link is None or not self.active:
             return
         names, torques = commands
         frames = core.command(now_s, list(names), list(torques))
         if not frames and self._refused(now_s):
             self.log('error', f'command refused: {core.last_rejection}')
-        if frames:
+        if bus is None:  # unscheduled: written at once
+            link.send(frames)
+            if frames:
+                latency_probe.note('current')
+        elif frames:
             bus.hold(frames)
 
     def write_jaw(self, now_s: float, speed_m_s: float) -> None:
         """The jaws' opening speed (m/s, + opens) to VELOCITY; refused while tripped.
 
-        Sent at the bus's next free turn (`ask`).
+        Sent at the bus's next free turn (`ask`) with ``bus_schedule``, else at once.
         """
         core = self.core
         if core is None or self.link is None or not self.active:
@@ -412,7 +430,10 @@ class Alpha5Component(HardwareComponent):
         frames, refused = core.jaw_command(now_s, float(speed_m_s))
         if refused and self._jaw_refused(now_s):
             self.log('error', f'jaw command refused: {refused}')
-        self._urgent += frames
+        if self.bus is None:
+            self.link.send(frames)
+        else:
+            self._urgent += frames
 
     def reset_trip(self) -> tuple[bool, str]:
         """Take commands again once no joint moves over the trip speed: (done, what was said)."""

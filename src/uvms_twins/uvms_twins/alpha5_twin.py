@@ -36,14 +36,15 @@ in Position mode toward it at the speed limit, stopped at the position limits; s
 other modes (Current makes no known speed: no Kt for the jaws), on ``clock`` (default: the
 steady clock; a stand would give the plant's). `jaw_state` and `jaw_command` read them.
 
-The bus (``bus``, default on): the arm's RS-485 line at ``arm.serial_baud`` 8N1, half duplex
+The bus (``bus=True``; off by default: with it the twin stand does not hold yet,
+docs/hardware.md "The Alpha 5 bus"): the arm's RS-485 line at ``arm.serial_baud`` 8N1, half duplex
 (``uvms_twins.rs485_bus``): every frame the twin receives and every answer it sends occupies
 the line for its bytes (10 bits each: a 10-byte packet takes 0.87 ms at 115200); a frame is
 applied when it has fully arrived, an answer is sent when it has fully gone, after whatever
 held the line; a frame the host's adapter cannot hold (``buffer_bytes``) is lost, and one
 written while an answer is on the line is counted in ``line.collisions``. So the answer rate
 per joint and the rate at which commands take effect are the bus's, not the host's.
-``bus=False`` answers and applies each frame as it arrives (the protocol alone).
+Without it the twin answers and applies each frame as it arrives (the protocol alone).
 
 Faults a test can set: `set_silent` (a device answers and takes nothing: a broken cable, an
 unpowered joint; the others go on), and ``drop_first_datagrams`` / `drop_datagrams` (the
@@ -105,7 +106,7 @@ class Alpha5Twin:
 
     def __init__(self, arm: Alpha5Hardware, host: str = LOOPBACK, port: int = DEFAULT_PORT,
                  model_data: bytes = b'alpha5', drop_first_datagrams: int = 0,
-                 clock: Callable[[], float] = time.monotonic, bus: bool = True,
+                 clock: Callable[[], float] = time.monotonic, bus: bool = False,
                  buffer_bytes: int = DEFAULT_BUFFER_BYTES) -> None:
         drives = list(arm.drives)
         jaw = arm.jaw_device
@@ -371,9 +372,9 @@ class Alpha5Twin:
         if self.line is None:
             return
         for gone_s, reply, peer in self.line.run(now_s, self._apply_frame):
+            self._note_sent(gone_s, reply)  # before the host can have it
             sock.sendto(reply, peer)
             latency_probe.note('reply', port)
-            self._note_sent(gone_s, reply)
 
     def _note_sent(self, gone_s: float, reply: bytes) -> None:
         """Keep (time the answer had gone, packet) per device: `sent`."""

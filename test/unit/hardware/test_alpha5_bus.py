@@ -43,7 +43,7 @@ def test_the_budget_arithmetic_is_the_sources() -> None:
 @pytest.fixture
 def twin() -> Iterator[Alpha5Twin]:
     """The bluerov2_alpha5 arm's twin with its bus; a large adapter buffer (nothing lost)."""
-    with Alpha5Twin(load_alpha5(ROBOT), port=0, buffer_bytes=100_000) as running:
+    with Alpha5Twin(load_alpha5(ROBOT), port=0, bus=True, buffer_bytes=100_000) as running:
         yield running
 
 
@@ -97,7 +97,7 @@ def test_commands_at_the_control_rate_overflow_the_bus(twin: Alpha5Twin) -> None
 
     Frames are lost once the adapter's 256 bytes are full (its buffer assumed).
     """
-    small = Alpha5Twin(load_alpha5(ROBOT), port=0)
+    small = Alpha5Twin(load_alpha5(ROBOT), port=0, bus=True)
     with small, socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
         start_s = time.monotonic()
         sent = 0
@@ -183,19 +183,21 @@ def test_the_component_writes_at_the_slots_through_the_twin() -> None:
 
     The old bridge wrote at 500 Hz. Every slot sent arrives, no frame crosses an answer. A
     late loop (a busy host) can miss a slot, never send two: so at most 77 Hz, and at least
-    half of it.
+    half of what its turns allow.
     """
-    with Alpha5Twin(load_alpha5(ROBOT), port=0) as twin:
+    with Alpha5Twin(load_alpha5(ROBOT), port=0, bus=True) as twin:
         values = {name: default for name, default, _ in PARAMETERS}
         values.update(connection=f'udp:127.0.0.1:{twin.port}', startup_wait_s=0.0,
-                      jaw_joint='jaw', watchdog_timeout_s=1.0)
+                      jaw_joint='jaw', watchdog_timeout_s=1.0, bus_schedule=True)
         arm = Alpha5Component(values, ROBOT, log=lambda level, text: None)
         arm.configure()
         arm.activate()
         assert twin.line is not None
         collisions = twin.line.collisions  # configure's and activate's own exchanges
         start_s = time.monotonic()
+        turns = 0
         while time.monotonic() - start_s < 1.5:
+            turns += 1
             now_s = time.monotonic()
             arm.read(now_s)
             arm.write(now_s, (JOINTS, [0.0, 0.2, -0.1, 0.0]))
@@ -217,6 +219,9 @@ def test_the_component_writes_at_the_slots_through_the_twin() -> None:
         arm.release()
         for device_id in JOINT_IDS:
             assert len(times[device_id]) == slots, (device_id, twin.line, twin.dropped)
-            assert 0.5 * 77.0 < _rate_hz(times[device_id]) < 1.02 * 77.0, device_id
+            assert _rate_hz(times[device_id]) < 1.02 * 77.0, device_id
+        # A slot at every turn 13 ms after the last: most of 77 Hz unless the loop itself
+        # was starved (then most of its turns).
+        assert slots >= 0.5 * min(turns, 1.5 * 77.0), (slots, turns)
         assert crossed == 0
         assert twin.line.lost_frames == 0
