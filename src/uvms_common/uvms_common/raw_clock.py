@@ -18,6 +18,7 @@ which the project pins. ``test_raw_clock.py`` runs a node on a typed ``/clock`` 
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from rclpy.clock import ClockType, ROSClock
@@ -48,6 +49,9 @@ class RawClockTimeSource(TimeSource):
         self.malformed = 0
         self.last_ns = 0
         self._fed = False
+        #: Called with each stamp from /clock after the clocks are set (the robot loop's
+        #: period on simulated time); None: nothing called.
+        self.on_clock: Callable[[int], None] | None = None
         super().__init__(node=node)
 
     @property
@@ -89,6 +93,8 @@ class RawClockTimeSource(TimeSource):
             return
         sec, nanosec = (_BIG if data[1] == 0 else _LITTLE).unpack_from(data, 4)
         self._set(sec * 1_000_000_000 + nanosec)
+        if self.on_clock is not None:
+            self.on_clock(self.last_ns)
 
     def _set(self, stamp_ns: int) -> None:
         self.last_ns = stamp_ns

@@ -104,6 +104,9 @@ class RobotLoop:
         #: Periods that ran the control chain (new time on the node clock).
         self.steps = 0
         self._period_ns = round(1e9 / self.rate_hz * 0.999)
+        #: Whether /clock runs the periods (simulated time; `start`).
+        self.clock_driven = False
+        self._fallback_ns = round(1.5e9 / self.rate_hz)
         self._slack_s = 0.5 / self.rate_hz
         self._stepped_ns, self._stepped_period = -self._period_ns, 0
         #: The thread's CPU per phase and per published topic (``loop_ledger``; counted
@@ -129,14 +132,38 @@ class RobotLoop:
         return out
 
     def start(self, node: Node) -> None:
-        """The loop's timer, on ``node`` (the steady clock: /clock bursts drop no period).
+        """The loop's timer, on ``node``; on simulated time, each new period of /clock too.
 
         ``node``'s time source is also the only ``/clock`` subscription of the process: the
-        other nodes' clocks follow it (`share_clock`).
+        other nodes' clocks follow it (`share_clock`). On the wall clock (the robot) the
+        steady timer is the period. On simulated time (the twin stand) a period runs as each
+        /clock message brings a new control period, as gz_ros2_control runs the controller
+        manager from the simulator's step: on its own timer the loop beat against the
+        simulator's /clock (both 500 Hz, free running), and one period in five found no new
+        time and the next two periods' worth, a state left unanswered (measured 4-30 % at
+        factor 1). The steady timer then runs a period only when /clock has not for
+        1.5 periods (a simulator holding its first state, a stall), so the devices are still
+        read and, while the clock stands, commanded (`HELD_PERIODS`).
         """
         self._clock_node = node
         self.shared_clocks = share_clock(node, self.nodes)
-        self.timer = node.create_timer(1.0 / self.rate_hz, self.tick, clock=self._steady)
+        source = take_clock_raw(node)
+        if source.ros_time_is_active:
+            source.on_clock = self._on_clock
+            self.clock_driven = True
+        self.timer = node.create_timer(1.0 / self.rate_hz, self._on_timer, clock=self._steady)
+
+    def _on_clock(self, stamp_ns: int) -> None:
+        """/clock arrived (simulated time): a period when it brings a new control period."""
+        if stamp_ns - self._stepped_ns >= self._period_ns:
+            self.tick()
+
+    def _on_timer(self) -> None:
+        """The steady timer: the period, or on simulated time the fallback of a still clock."""
+        if (self.clock_driven and self.periods
+                and time.perf_counter_ns() - self._last_ns < self._fallback_ns):
+            return
+        self.tick()
 
     def wire(self) -> None:
         """Tap every publisher not yet tapped: its CPU counted, its direct deliveries made."""
@@ -268,7 +295,8 @@ class RobotLoop:
         dds = self.dds_inputs()
         wall_s = (self._last_ns - self._first_ns) * 1e-9
         cpu = '; '.join(self.ledger.lines(self.periods, wall_s))
-        return (f'robot loop: {self.periods} periods at {self.rate_hz:g} Hz, {self.steps} '
+        return (f'robot loop: {self.periods} periods at {self.rate_hz:g} Hz'
+                f'{" (on /clock)" if self.clock_driven else ""}, {self.steps} '
                 f'control steps, {self.writes} with a thruster write; {figures}; direct: '
                 f'{edges or "none"}; DDS inputs on direct topics: {", ".join(dds) or "none"}'
                 + (f'; on DDS (no publisher in the process): {", ".join(self.fallbacks)}'
