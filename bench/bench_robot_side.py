@@ -5,7 +5,8 @@ hardware bridges, the control nodes, the estimator and the recorder: not the sim
 twins, the visualizer or the mission), and what the twin stand costs per process, for
 ``uvms launch bluerov2_alpha5_contact --hardware twin`` in three layouts:
 
-- ``separate``: one process per node (the launch without ``--compose``);
+- ``separate``: one process per node (``--compose none``; without ``--compose`` a launch with
+  ``--hardware`` runs the robot process);
 - ``control``: ``--compose control`` (controller, allocator and estimator in one process);
 - ``robot``: ``--compose robot``, the robot loop (those and the four bridges in one process
   on one timer: read, estimate, control, allocate, write in one period, no DDS between a
@@ -56,7 +57,7 @@ from other_revision import extract_revision, python_path
 SCENARIO = 'bluerov2_alpha5_contact'
 #: Layout name -> the ``uvms launch`` arguments that make it; the first is the baseline.
 LAYOUTS: dict[str, tuple[str, ...]] = {
-    'separate': (),
+    'separate': ('--compose', 'none'),
     'control': ('--compose', 'control'),
     'robot': ('--compose', 'robot'),
 }
