@@ -82,7 +82,8 @@ from uvms_hardware.alpha5_component import (
     Alpha5Component,
     jaw_default,
 )
-from uvms_hardware.alpha5_core import Alpha5Core, JointSample
+from uvms_hardware.alpha5_core import Alpha5Core
+from uvms_hardware.alpha5_feedback import JointSample
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
 from uvms_hardware.component import logger_log
 from uvms_hardware.device_clock import stop_requested

@@ -43,10 +43,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 from uvms_hardware import reach_protocol as rp
 from uvms_hardware.alpha5_checks import Setting, describe, unit_of
+from uvms_hardware.alpha5_feedback import DeviceFeedback, JointSample
 from uvms_hardware.hardware_config import Alpha5Hardware, Drive
 from uvms_hardware.reach_protocol import Mode, PacketId
 from uvms_hardware.watchdog import CommandWatchdog
@@ -72,46 +72,6 @@ IGNORING_MODES = frozenset({Mode.DISABLE, Mode.PASSIVE})
 #: The jaws are asked their state once every this many rounds of the joints (25 Hz at the
 #: default 125 Hz): a pilot watches them open, no control loop closes on them.
 JAW_POLL_ROUNDS = 5
-
-
-@dataclass
-class DeviceFeedback:
-    """What a device last reported (SI) and when it arrived (s of the bridge's clock)."""
-
-    position: float = math.nan
-    velocity: float = math.nan
-    position_s: float = -math.inf
-    velocity_s: float = -math.inf
-    status: bytes = b''
-    status_s: float = -math.inf
-
-    @property
-    def answer_s(self) -> float:
-        """Arrival of the device's last feedback answer (-inf before the first)."""
-        return max(self.position_s, self.velocity_s)
-
-    @property
-    def oldest_s(self) -> float:
-        """Arrival of the older of its last position and velocity (-inf before both)."""
-        return min(self.position_s, self.velocity_s)
-
-
-@dataclass(frozen=True)
-class JointSample:
-    """One joint state of fresh answers only, in drive order.
-
-    Attributes:
-        names: Joint names.
-        positions: rad (jaw m).
-        velocities: rad/s (jaw m/s).
-        oldest_answer_s: Arrival of the oldest answer it holds (s of the bridge's clock): the
-            stamp it deserves, as the protocol has no device clock.
-    """
-
-    names: list[str]
-    positions: list[float]
-    velocities: list[float]
-    oldest_answer_s: float
 
 
 class Alpha5Core:

@@ -56,7 +56,6 @@ from __future__ import annotations
 import math
 import select
 import socket
-import struct
 import threading
 import time
 from collections import deque
@@ -69,6 +68,7 @@ from uvms_hardware.reach_protocol import Mode, PacketId
 
 from uvms_hardware import latency_probe
 from uvms_hardware import reach_protocol as rp
+from uvms_twins.datagram_stamps import receive_stamped, stamp_arrivals
 from uvms_twins.rs485_bus import DEFAULT_BUFFER_BYTES, HalfDuplexLine
 
 #: UDP port of Reach's examples.
@@ -325,7 +325,7 @@ class Alpha5Twin:
         assert sock is not None
         next_status_s = time.monotonic() + STATUS_PERIOD_S
         port = sock.getsockname()[1]
-        stamped = _stamp_arrivals(sock)
+        stamped = stamp_arrivals(sock)
         while self._running.is_set():
             wait_s = 0.05
             if self.line is not None:
@@ -333,7 +333,7 @@ class Alpha5Twin:
             readable, _, _ = select.select([sock], [], [], wait_s)
             now_s = time.monotonic()
             while readable:  # every datagram waiting, before the line runs on
-                datagram, sender, arrived_s = _receive(sock, stamped, now_s)
+                datagram, sender, arrived_s = receive_stamped(sock, stamped, now_s)
                 with self._lock:
                     lost, self._to_drop = self._to_drop > 0, max(0, self._to_drop - 1)
                     self.dropped += lost
@@ -402,55 +402,6 @@ class Alpha5Twin:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
-
-
-#: The kernel's arrival stamp of a datagram (Linux; None elsewhere: the thread's clock).
-_SO_TIMESTAMPNS: int | None = getattr(socket, 'SO_TIMESTAMPNS', None)
-
-
-def _stamp_arrivals(sock: socket.socket) -> bool:
-    """Ask the kernel to stamp each datagram's arrival (SO_TIMESTAMPNS); False: not here."""
-    option = _SO_TIMESTAMPNS
-    if option is None:
-        return False
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, option, 1)
-    except OSError:
-        return False
-    return True
-
-
-def _wall_minus_steady_s() -> float:
-    """time.time() - time.monotonic() (s), from the tightest of a few bracketed readings.
-
-    A thread preempted between its two clock reads would shift every stamp by the pause.
-    """
-    best = (math.inf, 0.0)
-    for _ in range(3):
-        before_s = time.monotonic()
-        wall_s = time.time()
-        after_s = time.monotonic()
-        best = min(best, (after_s - before_s, wall_s - (before_s + after_s) / 2.0))
-    return best[1]
-
-
-def _receive(sock: socket.socket, stamped: bool,
-             now_s: float) -> tuple[bytes, tuple[str, int], float]:
-    """(datagram, sender, arrival s on time.monotonic): the kernel's stamp when it gives one.
-
-    The kernel's stamp is when the host wrote (loopback), however late this thread wakes: the
-    line then starts the frame when the host's adapter would have.
-    """
-    if not stamped:
-        datagram, sender = sock.recvfrom(4096)
-        return datagram, sender, now_s
-    datagram, ancillary, _, sender = sock.recvmsg(4096, 64)
-    for level, kind, data in ancillary:
-        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
-            seconds, nanoseconds = struct.unpack('qq', data[:16])
-            wall_s = seconds + nanoseconds * 1e-9
-            return datagram, sender, min(now_s, wall_s - _wall_minus_steady_s())
-    return datagram, sender, now_s
 
 
 def _frames(datagram: bytes) -> list[bytes]:
