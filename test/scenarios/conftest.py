@@ -114,22 +114,9 @@ def bluerov2_alpha5_current(scenario_runs: ScenarioRuns) -> ScenarioResult:
     return scenario_runs.get('bluerov2_alpha5_current')
 
 
-@pytest.fixture(scope='session')
-def bluerov2_alpha5_contact_device_timed(scenario_runs: ScenarioRuns) -> ScenarioResult:
-    """bluerov2_alpha5_contact with the robot's device timing and the controller's file."""
-    return scenario_runs.get('bluerov2_alpha5_contact_device_timed')
-
-
-@pytest.fixture(scope='session')
-def bluerov2_alpha5_free_motion_device_timed(scenario_runs: ScenarioRuns) -> ScenarioResult:
-    """bluerov2_alpha5_free_motion (0.1 % wrist noise) with the robot's device timing."""
-    return scenario_runs.get('bluerov2_alpha5_free_motion_device_timed')
-
-
 SCENARIO_FIXTURES = frozenset({
     'free_motion', 'case1_ke1e4', 'case1_ke1e5', 'case2_noise', 'case3_moving_wall',
     'case4_model_error', 'impedance_only', 'hybrid_only', 'bluerov2_alpha5_contact',
     'bluerov2_alpha5_free_motion', 'case1_current', 'bluerov2_alpha5_current',
     'bluerov2_alpha5_thruster_fault', 'case1_thruster_fault', 'idle_wall',
-    'bluerov2_alpha5_contact_device_timed', 'bluerov2_alpha5_free_motion_device_timed',
 })

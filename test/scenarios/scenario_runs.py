@@ -5,10 +5,7 @@ recorded to MCAP in a session temporary directory and read back with
 ``uvms_analysis.series``. The runs are CPU-bound Python, so they go to separate processes:
 when the first scenario fixture is requested, every scenario that the selected tests need is
 started, at most ``WORKERS`` at a time in the order the tests use them, and each fixture
-then waits only for its own run. A thread of the session starts the next run as soon as one
-ends, also while the tests' own work holds the main thread (a graph run in this process,
-reading a recording): before, a slot freed then stayed empty until the next fixture asked.
-Runs of a scenario with other parameter files (``VARIANTS``) go through the same pool.
+then waits only for its own run.
 """
 
 from __future__ import annotations
@@ -16,7 +13,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,8 +20,6 @@ from pathlib import Path
 import numpy as np
 from uvms_analysis.metrics import RunMetrics, compute_metrics
 from uvms_analysis.series import Run, load_run
-
-from uvms_description import robots_directory
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / 'config' / 'scenarios'
 #: Concurrent scenario processes: the CI machine has two cores.
@@ -44,20 +38,6 @@ SHORTENED_S = {'hybrid_only': 5.0, 'case1_current': 14.0, 'bluerov2_alpha5_curre
 #: a time), else 71-100. Never above 100: a domain's ports are 7400 + 250 d + ..., and from
 #: d = 102 on they fall in Linux's ephemeral range, where the tests' UDP sockets live.
 SCENARIO_DOMAINS = tuple(int(x) for x in os.environ.get('UVMS_TEST_DOMAINS', '71-100').split('-'))
-#: The robot's device timing applied: a ROS 2 parameter file for every simulator.
-DEVICE_TIMING = '/**/simulator:\n  ros__parameters:\n    devices:\n      ideal: false\n'
-#: The controller at the devices' rates (arm.command_rate_hz, arm.force_latency_s).
-CONTROLLER_TIMING = robots_directory() / 'bluerov2_alpha5' / 'controller_device_timing.yaml'
-#: Runs of a scenario with parameter files: run name -> (scenario, the files, in order). A
-#: ``str`` is the text of a file written into the session's directory, a ``Path`` a file.
-VARIANTS: dict[str, tuple[str, tuple[str | Path, ...]]] = {
-    'bluerov2_alpha5_contact_device_timed': (
-        'bluerov2_alpha5_contact', (DEVICE_TIMING, CONTROLLER_TIMING)),
-    'bluerov2_alpha5_free_motion_device_timed': (
-        'bluerov2_alpha5_free_motion', (DEVICE_TIMING, CONTROLLER_TIMING)),
-}
-#: Seconds between two looks of the session's thread at the running scenario processes.
-REAP_PERIOD_S = 0.1
 
 
 @dataclass(frozen=True)
@@ -87,34 +67,23 @@ class ScenarioRuns:
         self._exit_status: dict[str, int] = {}
         self._done: dict[str, ScenarioResult] = {}
         self._domains = 0
-        #: Held while the pool's bookkeeping changes (this thread and the reaper's).
-        self._lock = threading.Lock()
-        self._closed = threading.Event()
-        with self._lock:
-            self._start_more()
-        self._reaper = threading.Thread(target=self._reap_until_closed, name='scenario-runs',
-                                        daemon=True)
-        self._reaper.start()
+        self._start_more()
 
     def get(self, name: str) -> ScenarioResult:
         """The run of a scenario; started now if no selected test announced it."""
         if name in self._done:
             return self._done[name]
-        with self._lock:
-            if name not in self._running and name not in self._exit_status:
-                if name in self._pending:
-                    self._pending.remove(name)
-                self._running[name] = self._start(name)
+        if name not in self._running and name not in self._exit_status:
+            if name in self._pending:
+                self._pending.remove(name)
+            self._running[name] = self._start(name)
         deadline = time.monotonic() + RUN_TIMEOUT_S
-        while True:
-            with self._lock:
-                self._reap()
-                if name in self._exit_status:
-                    break
+        while name not in self._exit_status:
             if time.monotonic() > deadline:
                 msg = f'uvms run {name} took longer than {RUN_TIMEOUT_S} s'
                 raise TimeoutError(msg)
-            time.sleep(REAP_PERIOD_S)
+            time.sleep(0.1)
+            self._reap()
         if self._exit_status[name] != 0:
             log = self._path(name).with_suffix('.log').read_text(errors='replace')[-2000:]
             msg = f'uvms run {name} failed with exit status {self._exit_status[name]}:\n{log}'
@@ -125,22 +94,14 @@ class ScenarioRuns:
 
     def close(self) -> None:
         """Stop runs that no test asked for (a session ended early)."""
-        self._closed.set()
-        self._reaper.join()
         for process in self._running.values():
             process.kill()
             process.wait()
         self._running.clear()
         self._pending.clear()
 
-    def _reap_until_closed(self) -> None:
-        """Keep the pool full until the session closes it (the session's thread)."""
-        while not self._closed.wait(REAP_PERIOD_S):
-            with self._lock:
-                self._reap()
-
     def _reap(self) -> None:
-        """Collect finished runs and start pending ones in the freed slots (lock held)."""
+        """Collect finished runs and start pending ones in the freed slots."""
         for name, process in list(self._running.items()):
             status = process.poll()
             if status is not None:
@@ -157,18 +118,11 @@ class ScenarioRuns:
             self._running[name] = self._start(name)
 
     def _start(self, name: str) -> subprocess.Popen[bytes]:
-        scenario, files = VARIANTS.get(name, (name, ()))
         command = [sys.executable, '-m', 'uvms_cli.cli', 'run',
-                   str(SCENARIO_DIR / f'{scenario}.yaml'), '--output', str(self._path(name)),
+                   str(SCENARIO_DIR / f'{name}.yaml'), '--output', str(self._path(name)),
                    '--quiet']
         if name in SHORTENED_S:
             command += ['--duration', str(SHORTENED_S[name])]
-        for k, file in enumerate(files):
-            if isinstance(file, str):
-                written = self.directory / f'{name}.{k}.yaml'
-                written.write_text(file, encoding='utf-8')
-                file = written
-            command += ['--params-file', str(file)]
         # The child finds the sources as this process does (pytest's pythonpath setting).
         # A DDS domain of its own: two lockstep graphs in one domain would hear each other's
         # commands (same node names, same stamps from t = 0).

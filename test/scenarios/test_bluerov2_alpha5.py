@@ -16,10 +16,19 @@ at most 1.3x the ideal run's, the peak within 15 %; the free motion with the wri
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
 import numpy as np
-from scenario_runs import ScenarioResult
-from uvms_analysis.metrics import contact_intervals, hold
-from uvms_analysis.series import Run
+import pytest
+from scenario_runs import SCENARIO_DIR, SCENARIO_DOMAINS, ScenarioResult
+from uvms_analysis.metrics import compute_metrics, contact_intervals, hold
+from uvms_analysis.series import Run, load_run
+
+from uvms_description import robots_directory
 
 F_D_N = 20.0
 #: Issue 21: the force settles within 5 % of F_d in under 2 s of the first contact.
@@ -32,8 +41,14 @@ ALONG_WALL_BOUND_M = 5e-3
 PEAK_BOUND = 0.15
 #: Issue 49: with device timing the mid-contact RMS force error at most 1.3x the ideal run's.
 RMS_RATIO_BOUND = 1.3
-#: The device-timed runs (the robot's device timing, the controller's device-timing file) are
-#: scenario_runs.VARIANTS, run in the scenario runs' pool beside the others.
+#: The robot's device timing applied: a ROS 2 parameter file for every simulator.
+DEVICE_TIMING = '/**/simulator:\n  ros__parameters:\n    devices:\n      ideal: false\n'
+#: The controller at the devices' rates (arm.command_rate_hz, arm.force_latency_s).
+CONTROLLER_TIMING = robots_directory() / 'bluerov2_alpha5' / 'controller_device_timing.yaml'
+#: ROS domain of the device-timed run: the last of the lane's (scenario_runs counts up from the
+#: first; domains above 100 have their ports in Linux's ephemeral range).
+DOMAIN = SCENARIO_DOMAINS[1]
+RUN_TIMEOUT_S = 600.0
 
 
 def test_one_contact_at_the_set_point(bluerov2_alpha5_contact: ScenarioResult) -> None:
@@ -82,8 +97,43 @@ def test_free_motion_tracks_the_half_circle_within_5_mm(
     assert metrics.tracking_error < ALONG_WALL_BOUND_M, f'{metrics.tracking_error * 1e3:.2f} mm'
 
 
+def run_device_timed(name: str, directory: Path) -> ScenarioResult:
+    """Scenario ``name`` with the robot's device timing and the controller's file."""
+    params = directory / 'device_timing.yaml'
+    params.write_text(DEVICE_TIMING, encoding='utf-8')
+    path = directory / f'{name}.mcap'
+    env = {**os.environ, 'PYTHONPATH': os.pathsep.join(p for p in sys.path if p),
+           'ROS_DOMAIN_ID': str(DOMAIN)}
+    result = subprocess.run(
+        [sys.executable, '-m', 'uvms_cli.cli', 'run',
+         str(SCENARIO_DIR / f'{name}.yaml'), '--output', str(path), '--quiet',
+         '--params-file', str(params), '--params-file', str(CONTROLLER_TIMING)],
+        capture_output=True, text=True, env=env, timeout=RUN_TIMEOUT_S, check=False)
+    if result.returncode != 0:
+        pytest.fail(f'uvms run {name} (device timing) exited {result.returncode}:\n'
+                    f'{(result.stdout + result.stderr)[-2000:]}')
+    run = load_run(path)
+    return ScenarioResult(name, path, run, compute_metrics(run))
+
+
+@pytest.fixture(scope='module')
+def contact_device_timed(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ScenarioResult]:
+    """bluerov2_alpha5_contact with the robot's device timing and the controller's file."""
+    yield run_device_timed('bluerov2_alpha5_contact',
+                           tmp_path_factory.mktemp('bluerov2_device_timing'))
+
+
+@pytest.fixture(scope='module')
+def free_motion_device_timed(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[ScenarioResult]:
+    """bluerov2_alpha5_free_motion (0.1 % wrist noise) with the robot's device timing."""
+    yield run_device_timed('bluerov2_alpha5_free_motion',
+                           tmp_path_factory.mktemp('bluerov2_device_timing_free'))
+
+
 def test_with_device_timing_and_the_wrist_noise_free_motion_tracks_within_5_mm(
-    bluerov2_alpha5_free_motion_device_timed: ScenarioResult,
+    free_motion_device_timed: ScenarioResult,
 ) -> None:
     """The held-slot prediction with the wrist sensor's 0.1 % noise: the path within 5 mm.
 
@@ -91,7 +141,7 @@ def test_with_device_timing_and_the_wrist_noise_free_motion_tracks_within_5_mm(
     samples (held_command before its noise weighting) amplified the noise 33 times: the arm
     diverged at 3.8 s; cancelling each noisy sample held over a slot: 7.09 mm.
     """
-    metrics = bluerov2_alpha5_free_motion_device_timed.metrics
+    metrics = free_motion_device_timed.metrics
     assert metrics.contact_count == 0
     assert metrics.tracking_error is not None
     assert metrics.tracking_error < ALONG_WALL_BOUND_M, f'{metrics.tracking_error * 1e3:.2f} mm'
@@ -112,21 +162,19 @@ def mid_contact_rms_error(run: Run) -> float:
 
 
 def test_with_device_timing_one_contact_rms_within_1_3x_and_peak_within_15_percent(
-    bluerov2_alpha5_contact_device_timed: ScenarioResult,
-    bluerov2_alpha5_contact: ScenarioResult,
+    contact_device_timed: ScenarioResult, bluerov2_alpha5_contact: ScenarioResult,
 ) -> None:
     """Issue 49's acceptance: the device-timed run against the ideal devices' run.
 
     One touch, mid-contact RMS force error at most 1.3x the ideal run's (measured 0.0123 N
     against 0.0113 N), the peak within 15 % (20.08 N against 20.10 N).
     """
-    timed_run = bluerov2_alpha5_contact_device_timed
-    timed, ideal = timed_run.metrics, bluerov2_alpha5_contact.metrics
+    timed, ideal = contact_device_timed.metrics, bluerov2_alpha5_contact.metrics
     assert timed.contact_count == 1
     assert timed.peak_force is not None and ideal.peak_force is not None
     assert abs(timed.peak_force - ideal.peak_force) <= PEAK_BOUND * ideal.peak_force, (
         f'peak {timed.peak_force:.2f} N against {ideal.peak_force:.2f} N')
-    rms_timed = mid_contact_rms_error(timed_run.run)
+    rms_timed = mid_contact_rms_error(contact_device_timed.run)
     rms_ideal = mid_contact_rms_error(bluerov2_alpha5_contact.run)
     assert rms_timed <= RMS_RATIO_BOUND * rms_ideal, (
         f'mid-contact RMS {rms_timed:.4f} N against {rms_ideal:.4f} N')
