@@ -43,15 +43,6 @@ def node(request: pytest.FixtureRequest) -> Iterator[Node]:
     rclpy.try_shutdown(context=context)
 
 
-@pytest.fixture
-def bus() -> Iterator[Bus]:
-    """An installed bus, uninstalled after the test."""
-    installed = Bus()
-    direct_topics.install(installed)
-    yield installed
-    direct_topics.uninstall()
-
-
 @pytest.mark.parametrize('node', [True], indirect=True)
 def test_each_new_period_of_clock_runs_one_period_at_once(node: Node, bus: Bus) -> None:
     """A /clock a period on: one control step in its callback; within the period: none."""

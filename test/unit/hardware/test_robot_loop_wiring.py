@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -57,15 +56,6 @@ class FakeNode:
     def destroy_timer(self, timer: Any) -> bool:
         """As ``rclpy.node.Node.destroy_timer``."""
         return True
-
-
-@pytest.fixture
-def bus() -> Iterator[Bus]:
-    """An installed bus, uninstalled after the test."""
-    installed = Bus()
-    direct_topics.install(installed)
-    yield installed
-    direct_topics.uninstall()
 
 
 def test_a_reading_reaches_its_consumer_by_a_call_and_is_still_published(bus: Bus) -> None:
