@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import math
 import time
 from collections.abc import Callable, Iterator
@@ -416,6 +417,30 @@ def test_invalid_gain_stops_the_controller_naming_the_parameter(
     """A non-positive-definite P, B_d, K or a negative gain raises from the constructor."""
     with pytest.raises(ControlParameterError, match=name.replace('.', r'\.')):
         harness.add(ControllerNode, **{name: value})
+
+
+def test_a_refused_controller_leaves_no_node_in_the_graph(harness: Harness) -> None:
+    """Its entities go with the raise, not at some later garbage collection.
+
+    Collected later, in the collector's order, a refused node hung a test process in C
+    (CI of 2026-12-06); the collector is held off here so that only the constructor's own
+    clean-up can take the node out of the graph. A namespace of its own: the earlier tests'
+    controllers may still be in the domain's graph.
+    """
+    gc.disable()
+    try:
+        with pytest.raises(ControlParameterError, match=r'model\.mass_scale'):
+            ControllerNode(namespace='refused', context=harness.context, cli_args=PARAMS,
+                           parameter_overrides=[Parameter('model.mass_scale', value=0.0)])
+        probe = harness.probe.node
+
+        def refused() -> list[str]:
+            return [name for name, namespace in probe.get_node_names_and_namespaces()
+                    if namespace == '/refused']
+
+        assert harness.spin_until(lambda: not refused(), timeout_s=2.0), refused()
+    finally:
+        gc.enable()
 
 
 def test_unknown_trigger_mode_stops_the_controller(harness: Harness) -> None:

@@ -42,6 +42,7 @@ from uvms_common.clock_read import now_ns, steady_ns
 from uvms_common.diagnostics import DiagnosticsPublisher, RateMeter
 from uvms_common.exchange_qos import input_qos
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.rate_gate import RateGate
 from uvms_common.raw_clock import take_clock_raw
@@ -82,6 +83,7 @@ FAILURE = TransitionCallbackReturn.FAILURE
 class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, LifecycleNode):
     """Unified force controller: sensor topics and tasks in, generalized force and state out."""
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         """Declare the parameters and, under ``autostart``, configure and activate.
 

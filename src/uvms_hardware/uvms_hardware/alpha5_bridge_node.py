@@ -75,6 +75,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from std_srvs.srv import Trigger
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
+from uvms_common.node_construction import destroyed_if_construction_fails
 
 from uvms_hardware.alpha5_component import (
     PARAMETERS,
@@ -102,6 +103,7 @@ class Alpha5BridgeNode(BridgeNode):
     error_type = Alpha5BridgeError
     diagnostics_task = 'alpha5'
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('alpha5_bridge', **kwargs)
         values = {name: self.declare_parameter(

@@ -44,6 +44,7 @@ from sensor_msgs.msg import BatteryState, Imu
 from std_srvs.srv import Trigger
 from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.parameter_declaration import declare_specs
 
 from uvms_common import direct_topics
@@ -77,6 +78,7 @@ class ArduSubBridgeNode(BridgeNode):
     error_type = ArduSubBridgeError
     diagnostics_task = 'vehicle'
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('ardusub_bridge', **kwargs)
         try:

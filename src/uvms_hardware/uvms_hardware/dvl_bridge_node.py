@@ -30,6 +30,7 @@ from geometry_msgs.msg import TwistWithCovarianceStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.parameter_declaration import declare_specs
 
 from uvms_description.robots import RobotParameter, robot_parameters
@@ -55,6 +56,7 @@ class DvlBridgeNode(BridgeNode):
     error_type = DvlBridgeError
     diagnostics_task = 'dvl'
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('dvl_bridge', **kwargs)
         try:

@@ -36,6 +36,7 @@ from uvms_common.cdr_codecs import MessageCodec, PayloadWriter
 from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.direct_topics import active_bus
+from uvms_common.node_construction import destroyed_if_construction_fails
 
 from uvms_hardware.bridge_messages import stamp
 from uvms_hardware.bridge_node import BridgeNode, run_bridge
@@ -66,6 +67,7 @@ class NetFtBridgeNode(BridgeNode):
     error_type = NetFtBridgeError
     diagnostics_task = 'netft'
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('netft_bridge', **kwargs)
         try:

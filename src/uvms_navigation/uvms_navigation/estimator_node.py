@@ -30,6 +30,7 @@ from sensor_msgs.msg import Imu
 from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import ERROR, OK, WARN, DiagnosticsPublisher, Report
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 from uvms_model.errors import ModelError
@@ -64,6 +65,7 @@ class EstimatorError(ValueError):
 class EstimatorNode(LifecycleNode):
     """Navigation filter: sensor topics in, odometry/filtered and its health out."""
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('estimator', **kwargs)
         self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time

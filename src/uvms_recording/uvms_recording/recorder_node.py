@@ -21,6 +21,7 @@ from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 from uvms_common.stop_event import defer_stop_end
@@ -142,6 +143,7 @@ class RecorderNode(Node):
     file's summary; until then the file is readable up to its last complete chunk.
     """
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         """Declare parameters, open the MCAP file and subscribe.
 

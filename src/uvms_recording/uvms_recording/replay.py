@@ -27,6 +27,7 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from uvms_common.node_construction import destroyed_if_construction_fails
 
 from uvms_recording.errors import RecordingError, ReplayError
 from uvms_recording.mcap_reader import McapRecording, RecordedMessage, open_recording
@@ -143,6 +144,7 @@ def _qos_profile(offered: QosDescription) -> QoSProfile:
 class ReplayNode(Node):
     """Publishes a recording's messages, raw, on their recorded topics with recorded QoS."""
 
+    @destroyed_if_construction_fails
     def __init__(self, recording: McapRecording, topics: Iterable[str], **kwargs: Any) -> None:
         """Create one publisher per topic, typed and with the QoS the recording offers.
 

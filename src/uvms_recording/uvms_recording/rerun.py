@@ -24,6 +24,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from uvms_common.node_construction import destroyed_if_construction_fails
 
 from uvms_recording.errors import ReplayError
 from uvms_recording.mcap_reader import McapRecording
@@ -160,6 +161,7 @@ def controller_namespace(recording: McapRecording) -> str:
 class _RerunFeeder(Node):
     """Publishes recorded controller inputs raw and collects the controller's outputs raw."""
 
+    @destroyed_if_construction_fails
     def __init__(self, recording: McapRecording, inputs: Sequence[str],
                  outputs: Sequence[str], **kwargs: Any) -> None:
         super().__init__('replay_rerun_feeder', **kwargs)

@@ -25,6 +25,7 @@ from tf2_msgs.msg import TFMessage
 from uvms_common.cdr_codecs import MalformedPayloadError
 from uvms_common.diagnostics import DiagnosticsPublisher, RateMeter, Report, robot_name
 from uvms_common.exchange_qos import input_qos
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.parameter_declaration import Spec, declare_specs
 from uvms_common.realtime import MISS_WINDOW_S, STARTUP_GRACE_S, MissCounter
@@ -67,6 +68,7 @@ def _parameter_error(spec: Spec, exc: ParameterException) -> SimParameterError:
 class SimulatorNode(StartupHold):
     """Simulated UVMS: actuator commands in, sensor topics, ``/clock`` and ``/tf`` out."""
 
+    @destroyed_if_construction_fails
     def __init__(self, plant_side: Callable[[SimulatorNode], PlantSide] | None = None,
                  **kwargs: Any) -> None:
         """Declare the parameters, build the plant and its topics.

@@ -44,6 +44,7 @@ from rclpy.subscription import Subscription
 from rclpy.task import Future
 from std_msgs.msg import Bool
 from unique_identifier_msgs.msg import UUID
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 
@@ -96,6 +97,7 @@ class MissionNode(Node):
         TaskFileError: No tasks given, or the mission file is unreadable or invalid.
     """
 
+    @destroyed_if_construction_fails
     def __init__(self, tasks: Sequence[TaskSpec] | None = None,
                  server_settle_s: float = 0.0, **kwargs: Any) -> None:
         super().__init__('mission', **kwargs)

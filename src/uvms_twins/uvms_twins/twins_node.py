@@ -33,6 +33,7 @@ from sensor_msgs.msg import Imu, JointState
 from uvms_common.cdr_codecs import Decoded, MalformedPayloadError, RawDecoder
 from uvms_common.diagnostics import DiagnosticsPublisher
 from uvms_common.hot_messages import joint_state_codec, wrench_codec
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.robot_parameters import declare_robot_name
 from uvms_hardware.device_clock import DeviceClock
@@ -60,6 +61,7 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
 class TwinsNode(Node):
     """Serves the four twins and moves the plant's measurements and commands over /plant."""
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('hardware_twins', **kwargs)
         robot = declare_robot_name(self)

@@ -27,6 +27,7 @@ from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 from uvms_recording.errors import RecordingError
@@ -121,6 +122,7 @@ class _Listener:
 class FoxgloveServerNode(Node):
     """Forwards the graph's topics, raw CDR, to Foxglove clients on ws://host:port."""
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('foxglove_server', **kwargs)
         self._clock_source = take_clock_raw(self)  # /clock raw under use_sim_time

@@ -23,6 +23,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 from visualization_msgs.msg import MarkerArray
@@ -41,6 +42,7 @@ from uvms_viz.marker_geometry import (
 class VisualizerNode(Node):
     """Markers for RViz and Foxglove, decimated to ``marker_rate_hz`` of simulated time."""
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         super().__init__('visualizer', **kwargs)
         # Under use_sim_time the node clock follows the controller states' stamps (it only

@@ -1,0 +1,66 @@
+"""A node whose constructor fails leaves nothing behind: its ROS entities are destroyed at once.
+
+A node constructor that refuses its parameters (``ControlParameterError`` and the like) raises
+after rclpy's ``Node.__init__`` has created the node's publishers, services and timers. The
+half-built node then lives on in a reference cycle until Python's garbage collector finds it,
+at whatever moment and in whatever order it frees the entities (measured on Jazzy: a failed
+``ControllerNode`` is still alive after the ``raise`` and goes at the next ``gc.collect()``).
+rclpy's own ``destroy_node`` destroys the dependent entities first "to work around a possible
+hang" (ros2/build_cop#248); the collector does not. In the CI of 2026-12-06 a test process
+that had built several refused controllers hung for good with its main thread at 100 % CPU in
+C code under an unrelated line: the collector's teardown of one of them, by every sign (no
+Python frame moved; pytest-timeout's signal never ran).
+
+:func:`destroyed_if_construction_fails` wraps a node class's ``__init__``: when it raises, the
+node's entities are destroyed in rclpy's order, then the exception goes on. Only rclpy's base
+``Node.destroy_node`` runs, not the class's own override (which may expect a device or a file
+that the failed constructor never got). In a node process (``uvms_common.node_entry``) nothing
+is destroyed: that process ends at once after a failed build, without the middleware's
+teardown (``uvms_common.node_main``), so no collector ever gets to the node.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any
+
+from rclpy.node import Node
+
+from uvms_common.node_entry import process_ends_after_main
+
+
+def destroyed_if_construction_fails(
+        init: Callable[..., None]) -> Callable[..., None]:
+    """``init`` (a node class's ``__init__``), destroying the node's entities when it raises."""
+
+    @functools.wraps(init)
+    def construct(self: Node, *args: Any, **kwargs: Any) -> None:
+        try:
+            init(self, *args, **kwargs)
+        except BaseException:
+            destroy_half_built(self)
+            raise
+
+    return construct
+
+
+def destroy_half_built(node: Node) -> None:
+    """Destroy what rclpy's ``Node.__init__`` created, if it got that far; never raises.
+
+    Not in a node process, which ends without the middleware's teardown.
+
+    ``Node.__init__`` creates its type description service last: without it the base
+    constructor itself failed and rclpy has nothing of ours to free.
+    """
+    if process_ends_after_main() or not hasattr(node, '_type_description_service'):
+        return
+    try:
+        Node.destroy_node(node)
+        # A lifecycle node's state machine holds the node's handle (and its transition
+        # publisher); rclpy's LifecycleNode leaves it to the collector, so it goes here too.
+        state_machine = getattr(node, '_state_machine', None)
+        if state_machine is not None:
+            state_machine.destroy_when_not_in_use()
+    except Exception:  # an entity already gone: the exception that matters is the caller's
+        pass
