@@ -28,6 +28,13 @@ COMPOSED_NODES = {'case1_ke1e4': {'controller', 'thruster_allocator'},
 #: Nodes whose names the graph must show (discovery of the others' names can lag the run on
 #: a loaded machine; their command lines name them).
 SEEN_IN_GRAPH = {'simulator', 'controller', 'thruster_allocator'}
+#: Half of real time. The layout is under test here, not the machine's speed: at 1.0 the
+#: separate graph of case1_estimated takes 186-193 % of one core of this 2-core machine (its
+#: cost table, quiet machine), so on a slower one it cannot keep its periods at all. In the
+#: landing CI of 2026-12-07 its SCHED_FIFO processes got 125 % of a core, missed 11-16 % of
+#: their periods (worst 104-112 ms late) and the stale commands tripped the controller's
+#: position limit: 3 of the 4 runs failed. The claims at 1.0 are the benches' (bench/).
+REAL_TIME_FACTOR = 0.5
 
 
 def child_env() -> dict[str, str]:
@@ -83,7 +90,8 @@ def test_the_graph_runs_with_the_same_node_names_composed_or_not(compose: str | 
                                                                   scenario: str) -> None:
     """A short run ends with status 0; the node names do not depend on the layout."""
     nodes = NODES | COMPOSED_NODES[scenario]
-    command = [str(BIN / 'uvms'), 'launch', scenario, '--duration', '6']
+    command = [str(BIN / 'uvms'), 'launch', scenario, '--duration', '6',
+               '--real-time-factor', str(REAL_TIME_FACTOR)]
     if compose is not None:
         command += ['--compose', compose]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
