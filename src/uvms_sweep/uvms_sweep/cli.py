@@ -66,6 +66,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('sweep', metavar='SWEEP.yaml', help='sweep file (docs/sweeps.md)')
     parser.add_argument('--out', '-o', required=True, metavar='DIR',
                         help='output directory: points.csv, figures/, mcap/, logs/')
+    parser.add_argument(
+        '--params-file', action='append', default=[], metavar='FILE',
+        help='a ROS 2 parameter file (node_name: ros__parameters: ..., /** and /**/node '
+             "wildcards) applied to every point over the scenario and the sweep file's "
+             'params_files, under the axes; repeatable, later files win; every name is '
+             'checked against what the nodes declare before any point runs (as uvms run '
+             '--params-file; docs/sweeps.md)')
     add_ray_arguments(parser, 'points')
     add_ideal_devices_argument(parser)
     return parser
@@ -102,7 +109,7 @@ def _sweep(args: argparse.Namespace, stop: StopEvent) -> int:
     # The nodes built to check the axes would log their start-up lines: only warnings.
     rclpy.logging.set_logger_level('uvms', rclpy.logging.LoggingSeverity.WARN)
     try:
-        sweep, scenario = check_sweep(load_sweep(args.sweep))
+        sweep, scenario = check_sweep(load_sweep(args.sweep), args.params_file)
     except (SweepError, ScenarioError) as exc:
         _error(str(exc))
         return EXIT_USAGE

@@ -11,11 +11,17 @@ the axes to vary, each a node parameter by its dotted scenario name::
     seeds: [1, 2]                          # list of int >= 0, optional: [the scenario's seed]
     timeout_s: 600.0                       # number > 0, optional (600): wall time per point
     record: false                          # bool, optional: keep each point's MCAP
+    params_files: [timed.yaml]             # list of str, optional: ROS 2 parameter files
+                                           #   over the scenario, before the axes (below)
     axes:                                  # mapping, required: 1 or more axes
       simulator.contact.stiffness_n_m: {logspace: [1.0e+3, 1.0e+6, 7]}
       controller.model.mass_scale: {linspace: [0.5, 1.5, 5]}
       controller.mode: [fuzzy, hybrid]     # or a list of values
     metrics: [force_rms_error_N, overshoot_percent]   # required: `uvms report` CSV columns
+
+A ``params_files`` entry is a path relative to the sweep file, absolute, or
+``robots/ROBOT/FILE`` (a file of a robot folder, wherever uvms_description is installed); each
+is applied to every point as ``uvms run --params-file`` applies it (``validate.check_sweep``).
 
 This module is pure (no rclpy): it reads, validates and expands the grid. Whether each axis
 names a parameter its node declares, with that type, is checked by ``sweep_validate``.
@@ -55,7 +61,7 @@ DEFAULT_TIMEOUT_S = 600.0
 MAX_POINTS = 100_000
 
 _REQUIRED = ('name', 'scenario', 'axes', 'metrics')
-_OPTIONAL = ('description', 'duration_s', 'seeds', 'timeout_s', 'record')
+_OPTIONAL = ('description', 'duration_s', 'seeds', 'timeout_s', 'record', 'params_files')
 _KNOWN_KEYS = (*_REQUIRED, *_OPTIONAL)
 _SPACINGS = ('linspace', 'logspace')
 _MAX_SEED = 2**31 - 1
@@ -122,6 +128,7 @@ class Sweep:
         record: Keep each point's recording (DIR/mcap/POINT.mcap).
         axes: The axes, in file order (the first is the figures' x axis).
         metrics: ``uvms report`` CSV column names to map.
+        params_files: ROS 2 parameter files applied to every point, in order, before the axes.
     """
 
     path: Path
@@ -134,6 +141,7 @@ class Sweep:
     record: bool
     axes: tuple[Axis, ...]
     metrics: tuple[str, ...]
+    params_files: tuple[Path, ...] = ()
 
     def points(self, scenario_name: str, duration_s: float, default_seed: int) -> list[SweepPoint]:
         """Every point of the grid, seeds innermost, in axis order (first axis slowest).
@@ -218,6 +226,7 @@ def parse_sweep(data: Any, path: Path) -> Sweep:
         record=record,
         axes=axes,
         metrics=metrics,
+        params_files=_params_files(data.get('params_files'), path),
     )
 
 
@@ -337,6 +346,30 @@ def _seeds(data: Any, path: Path) -> tuple[int, ...]:
         if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= _MAX_SEED:
             raise SweepError(_type_error(path, f'seeds[{i}]', f'an int in [0, {_MAX_SEED}]', seed))
     return tuple(dict.fromkeys(data))
+
+
+def _params_files(data: Any, path: Path) -> tuple[Path, ...]:
+    """The ``params_files`` list: each an existing file (empty when absent)."""
+    if data is None:
+        return ()
+    if not isinstance(data, list) or not data:
+        raise SweepError(_type_error(path, 'params_files', 'a non-empty list of file paths', data))
+    files = []
+    for i, entry in enumerate(data):
+        key = f'params_files[{i}]'
+        if not isinstance(entry, str) or not entry:
+            raise SweepError(_type_error(path, key, 'a file path', entry))
+        candidates = [path.parent / entry]
+        if Path(entry).parts[0] == 'robots' and not Path(entry).is_absolute():
+            from uvms_description import robots_directory
+
+            candidates.append(robots_directory().joinpath(*Path(entry).parts[1:]))
+        found = next((file for file in candidates if file.is_file()), None)
+        if found is None:
+            tried = ', '.join(str(file) for file in candidates)
+            raise SweepError(f'{path}: key {key!r}: no file {entry!r} (looked for {tried})')
+        files.append(found)
+    return tuple(files)
 
 
 def _scenario_path(scenario: str, path: Path) -> Path:

@@ -1,5 +1,9 @@
 """Check a sweep against the graph before it runs: base scenario, axis names and value types.
 
+The sweep file's ``params_files`` and then ``uvms sweep --params-file``'s files apply over the
+base scenario as ``uvms run --params-file`` applies them (``params_files``: every name checked
+against what the nodes declare, the file and section named when wrong); the axes come over them.
+
 Each axis must name a parameter its node declares (after robot.yaml and controller.yaml) and
 give values of the declared type; integers on a float parameter are taken as floats. Ranges
 are not checked here: a value outside a parameter's declared range fails its point at
@@ -12,10 +16,13 @@ base scenario's force is reached, estimated before the run (``scenario.contact_e
 from __future__ import annotations
 
 import difflib
+from collections.abc import Sequence
 from dataclasses import replace
+from pathlib import Path
 
 from rclpy.parameter import Parameter
 from uvms_bringup.declared import as_declared_type, declared_parameters
+from uvms_bringup.launch_helpers import graph_nodes, uses_estimator
 from uvms_scenarios.scenario import (
     ParameterValue,
     Scenario,
@@ -23,6 +30,7 @@ from uvms_scenarios.scenario import (
     short_duration_warning,
 )
 
+from uvms_sweep.params_files import apply_params_files
 from uvms_sweep.sweep_file import Axis, Sweep, SweepError
 
 _TYPE_NAMES = {
@@ -37,11 +45,24 @@ _TYPE_NAMES = {
 }
 
 
-def check_sweep(sweep: Sweep) -> tuple[Sweep, Scenario]:
+def check_sweep(
+    sweep: Sweep, params_files: Sequence[str | Path] = ()
+) -> tuple[Sweep, Scenario]:
     """The sweep with its axis values in the declared types, and its base scenario.
 
+    Args:
+        sweep: The sweep as read.
+        params_files: ``uvms sweep --params-file``'s files, applied after the sweep file's.
+
+    Returns:
+        The sweep, and the base scenario with the parameter files' values over its own (every
+        point's request starts from these overrides, ``engine.point_request``).
+
     Raises:
-        ScenarioError: The base scenario file is invalid (the message names its key).
+        ScenarioError: The base scenario file is invalid (the message names its key), or a
+            parameter file is: unreadable, a section matching no node, a name no node
+            declares, a value of another type (the message names the file or the sweep
+            file's key ``params_files[i]``, and the section).
         SweepError: An axis names no parameter of its node, or a value has another type;
             the message names the sweep file and the key ``axes.NODE.PARAMETER``.
         GraphError: A node cannot be built from its parameter files.
@@ -53,6 +74,13 @@ def check_sweep(sweep: Sweep) -> tuple[Sweep, Scenario]:
             if node in declared:
                 where = f'{scenario.path}: key {f"{node}.{name}"!r}'
                 _coerce(declared[node], node, name, value, where)
+    files = [*sweep.params_files, *params_files]
+    labels = [*(f"{sweep.path}: key 'params_files[{i}]' ({file})"
+                for i, file in enumerate(sweep.params_files)),
+              *(f'--params-file {file}' for file in params_files)]
+    specs = graph_nodes(record=False, estimator=uses_estimator(scenario))
+    scenario = apply_params_files(scenario, files, specs, declared=declared,
+                                  labels=labels) or scenario
     axes = tuple(_checked_axis(sweep, axis, declared) for axis in sweep.axes)
     return replace(sweep, axes=axes), scenario
 
