@@ -26,7 +26,10 @@ holds on a loaded machine, unlike the microseconds themselves):
 - ``actuators to 2 bridges``: the allocator's CDR command deserialized for each typed
   subscriber (before) vs. once (``robot_loop.deliver``);
 - ``t200 pwm x8``: a period's 8 thrusts to PWM with each branch of the curve found by
-  ``np.flatnonzero`` per call (before) vs. found once per curve (``t200_curve``).
+  ``np.flatnonzero`` per call (before) vs. found once per curve (``t200_curve``);
+- ``device clock estimate``: one arrival of a 500 Hz stream taken and ``rates_agree`` asked
+  (as the Net F/T bridge does each record) with the rate history's convex hull built at each
+  ask (before) vs. once per finished block (``device_time``).
 
 The pairs are checked to give the same values first. It asserts nothing else. Usage::
 
@@ -36,6 +39,7 @@ The pairs are checked to give the same values first. It asserts nothing else. Us
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import time
@@ -104,6 +108,7 @@ def period_pairs() -> dict[str, tuple[Callable[[], object], Callable[[], object]
     from rclpy.serialization import deserialize_message, serialize_message
     from uvms_common.clock_read import now_ns
     from uvms_hardware.device_clock import DeviceClock
+    from uvms_hardware.device_time import DeviceClockEstimator, lower_envelope
     from uvms_hardware.hardware_config import hardware_section
     from uvms_hardware.t200_curve import T200Curve
     from uvms_model.nav_sensor_parameters import NavigationParameters
@@ -146,12 +151,29 @@ def period_pairs() -> dict[str, tuple[Callable[[], object], Callable[[], object]
     thrusts = command.thrust.tolist()
     assert [old_pwm_from_thrust(curve, t, 15.8) for t in thrusts] == [
         curve.pwm_from_thrust(t, 15.8) for t in thrusts]
+    estimates = [DeviceClockEstimator(), DeviceClockEstimator()]
+    arrivals = [0, 0]
+
+    def arrival(which: int) -> DeviceClockEstimator:
+        estimate = estimates[which]
+        arrivals[which] += 1
+        device_s = arrivals[which] / 500.0
+        estimate.add(device_s, device_s + 3.0 + 0.0005 * (arrivals[which] * 7919 % 13))
+        return estimate
+
+    def rates_agree_before() -> object:
+        finished = [point for _, point in arrival(0)._history][:-1]
+        return len(finished) < 4 or abs(lower_envelope(finished, math.inf)[2]) < 0.01
+
+    for _ in range(5000):
+        assert rates_agree_before() == arrival(1).rates_agree
     return {'device clock': (lambda: steady.now().nanoseconds * 1e-9, device.now_s),
             'node clock': (lambda: ros.now().nanoseconds, lambda: now_ns(ros)),
             'odometry covariances': (covariances_before, covariances_after),
             'actuators to 2 bridges': (deserialize_each, deserialize_once),
             't200 pwm x8': (lambda: [old_pwm_from_thrust(curve, t, 15.8) for t in thrusts],
-                            lambda: [curve.pwm_from_thrust(t, 15.8) for t in thrusts])}
+                            lambda: [curve.pwm_from_thrust(t, 15.8) for t in thrusts]),
+            'device clock estimate': (rates_agree_before, lambda: arrival(1).rates_agree)}
 
 
 def main() -> None:

@@ -125,6 +125,9 @@ class DeviceClockEstimator:
         self._history: deque[tuple[int, Point]] = deque(
             maxlen=BLOCKS_PER_WINDOW * HISTORY_WINDOWS + 1)
         self._dirty = False
+        #: ``rates_agree`` of the finished blocks, None once they changed (a block appended
+        #: or the history cleared); asked for every sample, it changes once a block.
+        self._rates_agree: bool | None = None
 
     def add(self, device_s: float, arrival_s: float) -> None:
         """One arrival: the device's time of it and ours (s); non-finite pairs are ignored."""
@@ -178,10 +181,11 @@ class DeviceClockEstimator:
     @property
     def rates_agree(self) -> bool:
         """False when the history shows the clocks running more than ``max_skew`` apart."""
-        finished = [p for _, p in self._history][:-1]
-        if len(finished) < MIN_RATE_BLOCKS:
-            return True
-        return abs(lower_envelope(finished, math.inf)[2]) < self.max_skew
+        if self._rates_agree is None:
+            finished = [p for _, p in self._history][:-1]
+            self._rates_agree = (len(finished) < MIN_RATE_BLOCKS
+                                 or abs(lower_envelope(finished, math.inf)[2]) < self.max_skew)
+        return self._rates_agree
 
     @property
     def span_s(self) -> float:
@@ -238,11 +242,13 @@ class DeviceClockEstimator:
         index = math.floor(point.x / self._block_s)
         if self._history and index < self._history[-1][0]:
             self._history.clear()  # device time ran back: a history across it means nothing
+            self._rates_agree = None
         if self._history and self._history[-1][0] == index:
             if point.y < self._history[-1][1].y:
-                self._history[-1] = (index, point)
+                self._history[-1] = (index, point)  # the newest block: not in rates_agree
         else:
             self._history.append((index, point))
+            self._rates_agree = None
 
     def _close_bucket(self) -> None:
         """`LATE_BUCKETS` finished buckets in a row wholly above the envelope: set back."""
@@ -268,6 +274,7 @@ class DeviceClockEstimator:
         self._late_buckets = 0
         if not jumped:
             self._history.clear()
+            self._rates_agree = None
         self._buckets.clear()
         self._excess.clear()
         if keep is not None:

@@ -164,3 +164,27 @@ def test_clocks_at_one_rate_agree() -> None:
     clock = DeviceClockEstimator(window_s=5.0, bucket_s=0.25)
     feed(clock, random.Random(8), 0.0, 6.0, 50.0, skew=0.005)
     assert clock.rates_agree
+
+
+def test_rates_agree_asked_at_every_sample_answers_as_asked_once() -> None:
+    """Read at every arrival (as the bridges do) it says what a fresh look at the history says.
+
+    Two estimators take the same pairs, across a rate change and a forward jump; one is asked
+    at every pair, the other only now and then: their answers match each time.
+    """
+    every = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, reset_s=0.1)
+    seldom = DeviceClockEstimator(window_s=5.0, bucket_s=0.25, reset_s=0.1)
+    rng = random.Random(11)
+    answers = []
+    pairs = ([(i / 50.0, OFFSET_S + i / 50.0) for i in range(300)]  # one rate
+             + [(6.0 + i / 50.0, OFFSET_S + 6.0 + 0.5 * i / 50.0) for i in range(400)]  # half
+             + [(15.0 + i / 50.0, OFFSET_S + 3.0 + i / 50.0) for i in range(700)])  # jumped
+    for k, (device_s, local_s) in enumerate(pairs):
+        arrival_s = local_s + MIN_DELAY_S + rng.expovariate(1.0 / 0.002)
+        every.add(device_s, arrival_s)
+        seldom.add(device_s, arrival_s)
+        asked = every.rates_agree
+        if k % 37 == 0:
+            answers.append((asked, seldom.rates_agree))
+    assert all(a == b for a, b in answers)
+    assert {a for a, _ in answers} == {True, False}  # both answers were given
