@@ -86,7 +86,7 @@ def test_every_point_gets_the_files_values_under_its_axes(tmp_path: Path) -> Non
 
 
 def test_params_file_option_applies_after_the_sweep_files(tmp_path: Path) -> None:
-    """uvms sweep --params-file: later than params_files, so its values win."""
+    """`uvms sweep --params-file`: later than params_files, so its values win."""
     write(tmp_path, TIMED, 'timed.yaml')
     again = write(tmp_path, TIMED.replace('false', 'true'), 'ideal.yaml')
     _, scenario = check_sweep(load_sweep(write(tmp_path, SWEEP, 'sweep.yaml')), [again])
@@ -94,8 +94,10 @@ def test_params_file_option_applies_after_the_sweep_files(tmp_path: Path) -> Non
 
 
 def test_shipped_device_rates_sweep_runs_with_device_timing() -> None:
-    """config/sweeps/device_rates.yaml: every point with devices.ideal false and the
-    controller's device-timing keys (they changed nothing while device timing was off)."""
+    """config/sweeps/device_rates.yaml: device timing on every point, with the controller's keys.
+
+    Its axes changed nothing while device timing stayed off (devices.ideal true).
+    """
     sweep, scenario = check_sweep(load_sweep(REPO / 'config' / 'sweeps' / 'device_rates.yaml'))
     assert scenario.overrides['simulator']['devices.ideal'] is False
     assert scenario.overrides['controller']['arm.command_rate_hz'] > 0.0
@@ -146,7 +148,7 @@ def test_bad_params_file_is_refused_naming_the_key_file_and_section(
 def test_bad_params_file_option_stops_uvms_sweep_before_any_point(
     tmp_path: Path, capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """uvms sweep --params-file with a name no node declares: exit 2, the file named."""
+    """`uvms sweep --params-file` with a name no node declares: exit 2, the file named."""
     write(tmp_path, TIMED, 'timed.yaml')
     sweep = write(tmp_path, SWEEP, 'sweep.yaml')
     bad = write(tmp_path, '/**/controller:\n  ros__parameters:\n    arm:\n      rate: 1.0\n',
