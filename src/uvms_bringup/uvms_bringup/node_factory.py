@@ -39,13 +39,12 @@ def make_node(
             msg = f'node {spec.name!r}: parameter file {path} does not exist'
             raise GraphError(msg)
         cli_args += ['--params-file', str(path)]
-    # Built in two steps so that a node whose __init__ fails half way (an invalid parameter)
-    # can still be destroyed: left alive, its rcl node keeps its /rosout publisher, and the
-    # next node of that name (the retry of uvms_bringup.declared, the real run) logs
-    # "Publisher already registered for node name".
-    node: Node = node_class.__new__(node_class)
+    # A node whose __init__ fails half way (an invalid parameter) has destroyed its entities
+    # by then (uvms_common.node_construction): left alive, its rcl node would keep its
+    # /rosout publisher, and the next node of that name (the retry of uvms_bringup.declared,
+    # the real run) would log "Publisher already registered for node name".
     try:
-        node.__init__(  # type: ignore[misc]
+        node: Node = node_class(
             namespace=namespace,
             context=context,
             cli_args=cli_args if len(cli_args) > 1 else None,
@@ -53,15 +52,6 @@ def make_node(
                                  for name, value in overrides.items()],
         )
     except Exception as exc:
-        _destroy_partial(node)
         msg = f'node {spec.name!r} could not start: {type(exc).__name__}: {exc}'
         raise GraphError(msg) from exc
     return node
-
-
-def _destroy_partial(node: Node) -> None:
-    """Destroy a node whose __init__ raised, as far as it was built."""
-    try:
-        node.destroy_node()
-    except Exception:  # the rcl node may not exist at all: nothing to free
-        pass

@@ -14,9 +14,11 @@ Python frame moved; pytest-timeout's signal never ran).
 :func:`destroyed_if_construction_fails` wraps a node class's ``__init__``: when it raises, the
 node's entities are destroyed in rclpy's order, then the exception goes on. Only rclpy's base
 ``Node.destroy_node`` runs, not the class's own override (which may expect a device or a file
-that the failed constructor never got). In a node process (``uvms_common.node_entry``) nothing
-is destroyed: that process ends at once after a failed build, without the middleware's
-teardown (``uvms_common.node_main``), so no collector ever gets to the node.
+that the failed constructor never got); nothing may use the node after that, its own
+``destroy_node`` included (its destroyed lifecycle state machine is then None). In a node
+process (``uvms_common.node_entry``) nothing is destroyed: that process ends at once after a
+failed build, without the middleware's teardown (``uvms_common.node_main``), so no collector
+ever gets to the node.
 """
 
 from __future__ import annotations
@@ -59,8 +61,11 @@ def destroy_half_built(node: Node) -> None:
         Node.destroy_node(node)
         # A lifecycle node's state machine holds the node's handle (and its transition
         # publisher); rclpy's LifecycleNode leaves it to the collector, so it goes here too.
+        # Used after that, the destroyed machine crashes the process (a SIGSEGV, measured:
+        # a node's own destroy_node reading its state): None makes it an AttributeError.
         state_machine = getattr(node, '_state_machine', None)
         if state_machine is not None:
             state_machine.destroy_when_not_in_use()
+            node._state_machine = None  # type: ignore[attr-defined]
     except Exception:  # an entity already gone: the exception that matters is the caller's
         pass
