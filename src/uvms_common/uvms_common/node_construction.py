@@ -15,21 +15,22 @@ Python frame moved; pytest-timeout's signal never ran).
 node's entities are destroyed in rclpy's order, then the exception goes on. Only rclpy's base
 ``Node.destroy_node`` runs, not the class's own override (which may expect a device or a file
 that the failed constructor never got); nothing may use the node after that, its own
-``destroy_node`` included (its destroyed lifecycle state machine is then None). In a node
-process (``uvms_common.node_entry``) nothing is destroyed: that process ends at once after a
-failed build, without the middleware's teardown (``uvms_common.node_main``), so no collector
-ever gets to the node.
+``destroy_node`` included (its destroyed lifecycle state machine is then None). Within
+:func:`kept_on_failure` nothing is destroyed: ``uvms_common.node_main`` builds a node
+process's node in it, since that process ends at once after a failed build, without the
+middleware's teardown (which has hung at stops), so no collector ever gets to the node.
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from rclpy.node import Node
 
-from uvms_common.node_entry import process_ends_after_main
+_kept_on_failure = False
 
 
 def destroyed_if_construction_fails(
@@ -47,15 +48,26 @@ def destroyed_if_construction_fails(
     return construct
 
 
+@contextmanager
+def kept_on_failure() -> Iterator[None]:
+    """Within the block a constructor that raises leaves its entities to the process's end."""
+    global _kept_on_failure
+    earlier, _kept_on_failure = _kept_on_failure, True
+    try:
+        yield
+    finally:
+        _kept_on_failure = earlier
+
+
 def destroy_half_built(node: Node) -> None:
     """Destroy what rclpy's ``Node.__init__`` created, if it got that far; never raises.
 
-    Not in a node process, which ends without the middleware's teardown.
+    Not within :func:`kept_on_failure`.
 
     ``Node.__init__`` creates its type description service last: without it the base
     constructor itself failed and rclpy has nothing of ours to free.
     """
-    if process_ends_after_main() or not hasattr(node, '_type_description_service'):
+    if _kept_on_failure or not hasattr(node, '_type_description_service'):
         return
     try:
         Node.destroy_node(node)

@@ -44,6 +44,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from uvms_common import process_stats
+from uvms_common.node_construction import kept_on_failure
 from uvms_common.node_entry import end_unbuilt, flush_output, process_ends_after_main
 from uvms_common.realtime import process_periods
 from uvms_common.ros_environment import ros_environment_defaults
@@ -356,9 +357,11 @@ def run_node(
         # Not interrupted by an exception: one raised into the model's or Numba's loading
         # (LLVM callbacks) leaves tracebacks. A stop ends a node process at once (issue 48:
         # under load a build took 4-26 s to end) until the build defers it (defer_stop_end).
-        building = (stop.ending(end_unbuilt) if process_ends_after_main()
-                    else contextlib.nullcontext())
-        with building:
+        ends = process_ends_after_main()
+        building = stop.ending(end_unbuilt) if ends else contextlib.nullcontext()
+        # A node that fails to build ends the process: its entities go with it.
+        keeping = kept_on_failure() if ends else contextlib.nullcontext()
+        with building, keeping:
             node = make_node()
         schedule_process(node)
         executor = make_executor()
