@@ -39,6 +39,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     plan.add_argument('--robot', required=True, metavar='NAME|PATH', help=ROBOT_HELP)
     plan.add_argument('--out', required=True, type=Path, metavar='DIR',
                       help='directory of the scenario files (created)')
+    plan.add_argument('--level', action='store_true',
+                      help='trim weight and buoyancy at every level and keep surge and sway '
+                           'below the Munk speed, by doublets (docs/identification.md: the '
+                           'vehicle still tilts while the controller reaches with the arm)')
     fit = sub.add_parser('fit', help='fit the hull to recordings of the experiments',
                          description='Fit the hull terms to recordings (IMU, DVL, joint states, '
                                      'thrusts; never the ground truth) and write '
@@ -55,13 +59,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _plan(args: argparse.Namespace) -> int:
-    from uvms_identify.known_terms import rigid_and_restoring, start_joints
+    from uvms_identify.known_terms import rigid_and_restoring, start_joints, trim_wrench
     from uvms_identify.plan import plan, write_plan
     from uvms_identify.robot_data import load_robot
 
     robot = load_robot(args.robot)
     inertia, restoring = rigid_and_restoring(robot)
-    experiments = plan(robot, inertia, restoring)
+    experiments = plan(robot, inertia, restoring,
+                       trim_wrench(robot) if args.level else None, level=args.level)
     joints = start_joints(robot, _joint_count(robot))
     reference = str(robot.files.directory) if '/' in args.robot else robot.name
     paths = write_plan(robot, experiments, args.out, reference, joints)

@@ -129,6 +129,19 @@ def rigid_and_restoring(robot: RobotData) -> tuple[FloatArray, FloatArray]:
     return inertia, restoring
 
 
+def trim_wrench(robot: RobotData) -> FloatArray:
+    """Static wrench of weight and buoyancy (6,) at level, the arm at its start pose.
+
+    G_b of eq. 8 with the robot folder's hull (N, N m, base_link_frd): the thrust that holds
+    the vehicle level and at its depth with nothing else acting.
+    """
+    full = model_with_hull(robot, dict(robot.hull))
+    q = np.zeros(full.n_dof)
+    q[6:] = start_joints(robot, full.n_joints)
+    wrench: FloatArray = np.asarray(full.gravity_body(q)[:6], float)
+    return wrench
+
+
 def net_buoyancy_n(robot: RobotData, hull_buoyancy: float) -> float:
     """Buoyancy of hull and links minus the weight (N), level, the arm at its start pose."""
     zero = model_with_hull(robot, ZERO_HULL)

@@ -11,9 +11,22 @@ a real ESC would (its lag included). The controller stays active (the safety sup
 its commands reach no thruster, and it keeps the arm where it can. What the robot records
 (IMU, DVL, depth, joint states, the thrusts sent) is what ``uvms identify fit`` reads.
 
-Per axis one experiment of ``DURATION_S``: steps of alternating sign and rising amplitude
-(steady speeds for the quadratic damping, each followed by the next or a free decay), a
-chirp about a static offset (+ then -), and a free decay at the end.
+Per axis one experiment of ``DURATION_S`` (``uvms_identify.plan_signals``): heave by
+doublets that return the vehicle to its start depth (steady speeds for the quadratic damping
+within the excursion bound) and a chirp; the others by steps and a chirp about a static
+offset; free decays between.
+
+**Level** (``level=True``, ``uvms identify plan --level``). Every level adds the **trim**:
+the thrusts whose wrench cancels the static wrench of weight and buoyancy at level with the
+arm at its start pose (the robot folder's model); without it the shipped BlueROV2 Heavy
+with the Alpha 5 at its start pose settles at 0.19 rad pitch with every thruster at 0 N.
+Surge and sway run as doublets below the speed where the hull's **Munk moment** (the added
+mass' (A_w - A_u) u w, resp. (A_w - A_v) v w, which turns the hull across the flow) outgrows
+the restoring moment of weight and buoyancy (k theta): ``MUNK_MARGIN`` of
+sqrt(k / (A_w - A_u)); above it the hull is statically unstable in pitch (roll). Not the
+default: the controller's arm, reaching for its world-fixed hold point while the vehicle
+moves, still tilts the vehicle past 0.35 rad (docs/identification.md, "Why the vehicle
+tumbles"), and the acceptance's fit identifies pitch less well without the old tumbling.
 """
 
 from __future__ import annotations
@@ -26,29 +39,35 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
+from uvms_identify.plan_signals import (
+    CHIRP_HZ,
+    DURATION_S,
+    HEAVE_CHIRP_HZ,
+    doublets,
+    steps_and_chirp,
+)
 from uvms_identify.regressor import AXES
 from uvms_identify.robot_data import RobotData
 
 FloatArray = NDArray[np.float64]
 
 THRUST_FRACTION = 0.8
-STEP_LEVELS = (0.3, -0.3, 0.6, -0.6, 1.0, -1.0, 0.45, -0.45)
-STEP_S = 2.5
-DECAY_S = 3.0
-CHIRP_S = 16.0
-CHIRP_OFFSET = 0.5
-CHIRP_AMPLITUDE = 0.4
-CHIRP_HZ = (0.1, 0.6)
-CHIRP_STEP_S = 0.2
-FINAL_DECAY_S = 4.0
-DURATION_S = len(STEP_LEVELS) * STEP_S + DECAY_S + CHIRP_S + FINAL_DECAY_S
 #: Largest expected excursion per axis (m, m, m, rad, rad, rad): heave within 1.2 m (the
 #: DVL keeps bottom lock and the vehicle the water), roll and pitch within 20 deg of level;
 #: surge and sway are bounded by the thrust (stated in the plan).
 MAX_EXCURSION = (math.inf, math.inf, 1.2, 0.35, 0.35, math.inf)
-#: Largest expected speed per axis (m/s, rad/s): yaw within 1 rad/s (the AHRS and the DVL's
-#: lever arm stay well behaved).
-MAX_SPEED = (math.inf, math.inf, math.inf, math.inf, math.inf, 1.0)
+#: Largest expected speed per axis (m/s, rad/s): heave within 0.45 m/s (full thrust, 0.73
+#: m/s, made the controller's arm, which chases its world-fixed hold point, diverge in the
+#: simulator: a joint rate over 50 rad/s after 8 s), yaw within 1 rad/s (the AHRS and the
+#: DVL's lever arm stay well behaved).
+MAX_SPEED = (math.inf, math.inf, 0.45, math.inf, math.inf, 1.0)
+#: Surge and sway at most this fraction of the speed where the Munk moment equals the
+#: restoring moment (module docstring).
+MUNK_MARGIN = 0.8
+#: Axes excited by doublets that return to the start (plan_signals.doublets); with
+#: ``level`` surge and sway too.
+DOUBLET_AXES = (2,)
+LEVEL_DOUBLET_AXES = (0, 1, 2)
 START_DEPTH_M = 2.5
 SEABED_DEPTH_M = 4.5
 #: What the recorder records: the robot's own sensors and commands; the ground truth
@@ -82,6 +101,8 @@ class Experiment:
         thrusts_n: Thrusts of each level (L, p) (N).
         excursion: Expected largest displacement on the axis (m or rad).
         top_speed: Expected largest speed on the axis (m/s or rad/s).
+        trimmed: Every level holds the trim of weight and buoyancy (``plan``'s trim_wrench).
+        doublets: Excited by ``plan_signals.doublets`` (else steps and a chirp).
     """
 
     axis: int
@@ -90,6 +111,8 @@ class Experiment:
     thrusts_n: FloatArray
     excursion: float
     top_speed: float
+    trimmed: bool = False
+    doublets: bool = False
 
     @property
     def name(self) -> str:
@@ -97,41 +120,43 @@ class Experiment:
         return f'identify_{AXES[self.axis]}'
 
 
-def axis_thrusts(robot: RobotData, axis: int) -> tuple[FloatArray, float]:
-    """Thrusts of a unit wrench on ``axis`` (p,) and the largest wrench within the limits."""
+def axis_thrusts(robot: RobotData, axis: int,
+                 trim_thrusts: FloatArray | None = None) -> tuple[FloatArray, float]:
+    """Thrusts of a unit wrench on ``axis`` (p,) and the largest wrench within the limits.
+
+    With ``trim_thrusts`` (p,) the largest wrench leaves each thruster room for its trim.
+    """
     wrench = np.zeros(6)
     wrench[axis] = 1.0
     unit_thrusts = np.linalg.pinv(robot.thrust_matrix) @ wrench
-    peak = float(np.max(np.abs(unit_thrusts) / robot.max_thrust_n))
-    return unit_thrusts, THRUST_FRACTION / peak
+    trim = np.zeros_like(unit_thrusts) if trim_thrusts is None else np.abs(trim_thrusts)
+    room = THRUST_FRACTION * robot.max_thrust_n - trim
+    used = np.abs(unit_thrusts) > 1e-9
+    return unit_thrusts, float(np.min(room[used] / np.abs(unit_thrusts[used])))
 
 
-def signal(maximum: float) -> tuple[FloatArray, FloatArray]:
-    """Level start times (s) and generalized forces of one experiment."""
-    times: list[float] = []
-    levels: list[float] = []
-    t = 0.0
-    for level in STEP_LEVELS:
-        times.append(t)
-        levels.append(level * maximum)
-        t += STEP_S
-    times.append(t)
-    levels.append(0.0)
-    t += DECAY_S
-    phase = 0.0
-    f0, f1 = CHIRP_HZ
-    steps = round(CHIRP_S / CHIRP_STEP_S)
-    for k in range(steps):
-        fraction = k / steps
-        frequency = f0 + (f1 - f0) * fraction
-        sign = 1.0 if fraction < 0.5 else -1.0
-        times.append(t)
-        levels.append(maximum * (sign * CHIRP_OFFSET + CHIRP_AMPLITUDE * math.sin(phase)))
-        phase += 2.0 * math.pi * frequency * CHIRP_STEP_S
-        t += CHIRP_STEP_S
-    times.append(t)
-    levels.append(0.0)
-    return np.array(times), np.array(levels)
+def trim_thrusts(robot: RobotData, trim_wrench: FloatArray) -> FloatArray:
+    """Least-norm thrusts (p,) of the trim wrench (6,) (heave, roll, pitch entries used)."""
+    wrench = np.zeros(6)
+    wrench[2:5] = np.asarray(trim_wrench, float)[2:5]
+    thrusts: FloatArray = np.linalg.pinv(robot.thrust_matrix) @ wrench
+    return thrusts
+
+
+def speed_limits(robot: RobotData, restoring: FloatArray) -> FloatArray:
+    """Largest planned speed per axis (6,): ``MAX_SPEED``, surge and sway below Munk's.
+
+    Surge: ``MUNK_MARGIN`` sqrt(k_pitch / (A_w - A_u)), sway: with k_roll and A_w - A_v (no
+    limit where the heave added mass is the smaller: the Munk moment then restores).
+    """
+    limits = np.array(MAX_SPEED, float)
+    added = robot.prior_theta()[:6]
+    for axis, tilt in ((0, 4), (1, 3)):
+        difference = float(added[2] - added[axis])
+        if difference > 0.0:
+            critical = math.sqrt(max(float(restoring[tilt]), 0.0) / difference)
+            limits[axis] = min(limits[axis], MUNK_MARGIN * critical)
+    return limits
 
 
 def expected_motion(robot: RobotData, axis: int, times_s: FloatArray, levels: FloatArray,
@@ -142,13 +167,14 @@ def expected_motion(robot: RobotData, axis: int, times_s: FloatArray, levels: Fl
     (0 for surge, sway, yaw; the hull's net buoyancy is assumed trimmed for heave).
     """
     prior = robot.prior_theta()
-    inertia = rigid_inertia + prior[axis]
-    linear, quadratic = prior[6 + axis], prior[12 + axis]
+    inertia = rigid_inertia + float(prior[axis])
+    linear, quadratic = float(prior[6 + axis]), float(prior[12 + axis])
     dt = 1e-3
+    grid = np.arange(0.0, DURATION_S, dt)
+    taus = levels[np.searchsorted(times_s, grid, side='right') - 1].tolist()
     x = v = 0.0
     excursion = top = 0.0
-    for t in np.arange(0.0, DURATION_S, dt):
-        tau = float(levels[np.searchsorted(times_s, t, side='right') - 1])
+    for tau in taus:
         v += dt * (tau - linear * v - quadratic * abs(v) * v - restoring * x) / inertia
         x += dt * v
         excursion = max(excursion, abs(x))
@@ -156,27 +182,38 @@ def expected_motion(robot: RobotData, axis: int, times_s: FloatArray, levels: Fl
     return excursion, top
 
 
-def plan(robot: RobotData, rigid_inertia: FloatArray, restoring: FloatArray) -> list[Experiment]:
+def plan(robot: RobotData, rigid_inertia: FloatArray, restoring: FloatArray,
+         trim_wrench: FloatArray | None = None, *, level: bool = False) -> list[Experiment]:
     """One experiment per axis.
 
     Args:
         robot: The robot folder.
         rigid_inertia: Diagonal of the rigid-body mass matrix at rest (6,) (kg, kg m^2).
         restoring: Restoring stiffness per axis (6,) (N/m, N m/rad): roll and pitch.
+        trim_wrench: Static wrench of weight and buoyancy at level (6,) (N, N m), added to
+            every level (``known_terms.trim_wrench``); none: no trim.
+        level: Surge and sway by doublets below the Munk speed (``speed_limits``), for a
+            robot whose arm is held while the plan runs (module docstring).
     """
+    trim = trim_thrusts(robot, np.zeros(6) if trim_wrench is None else trim_wrench)
+    limits = speed_limits(robot, restoring) if level else np.array(MAX_SPEED, float)
     experiments = []
     for axis in range(6):
-        unit_thrusts, maximum = axis_thrusts(robot, axis)
+        unit_thrusts, maximum = axis_thrusts(robot, axis, trim)
+        signal = (doublets if axis in (LEVEL_DOUBLET_AXES if level else DOUBLET_AXES)
+                  else steps_and_chirp)
         for _ in range(20):  # shrink the amplitude until the axis' limits hold
             times, levels = signal(maximum)
             excursion, top = expected_motion(robot, axis, times, levels,
                                              float(rigid_inertia[axis]), float(restoring[axis]))
-            ratio = max(excursion / MAX_EXCURSION[axis], top / MAX_SPEED[axis])
+            ratio = max(excursion / MAX_EXCURSION[axis], top / limits[axis])
             if ratio <= 1.0:
                 break
-            maximum *= 0.9 / ratio
-        experiments.append(Experiment(axis, times, levels, np.outer(levels, unit_thrusts),
-                                      excursion, top))
+            maximum *= (0.9 if ratio > 1.05 else 0.99) / ratio
+        experiments.append(Experiment(axis, times, levels,
+                                      np.outer(levels, unit_thrusts) + trim[None, :],
+                                      excursion, top, trim_wrench is not None,
+                                      signal is doublets))
     return experiments
 
 
@@ -199,14 +236,19 @@ def scenario(robot: RobotData, experiment: Experiment, robot_reference: str,
                                'at_s': round(float(t), 4)})
                 previous[index] = value
     peak = float(np.abs(experiment.levels).max())
+    trimmed = (', every level with the trim of weight and buoyancy at level'
+               if experiment.trimmed else '')
+    shape = (f'doublets back to the start and a chirp {HEAVE_CHIRP_HZ[0]:g}-'
+             f'{HEAVE_CHIRP_HZ[1]:g} Hz about zero' if experiment.doublets else
+             f'steps of alternating sign, a chirp {CHIRP_HZ[0]:g}-{CHIRP_HZ[1]:g} Hz about a '
+             'static offset')
     force_unit = 'N' if experiment.axis < 3 else 'N m'
     return {
         'name': experiment.name,
         'description': (
             f'uvms identify plan: {axis} of robot {robot.name}, open loop through the '
-            f'thrusters held (stuck) at planned thrusts: steps of alternating sign up to '
-            f'{peak:.3g} {force_unit}, a chirp {CHIRP_HZ[0]:g}-{CHIRP_HZ[1]:g} Hz about a '
-            f'static offset, free decays. Expected (robot folder model, axis alone): '
+            f'thrusters held (stuck) at planned thrusts up to {peak:.3g} {force_unit}: '
+            f'{shape}, free decays{trimmed}. Expected (robot folder model, axis alone): '
             f'excursion {experiment.excursion:.2f} {unit}, top speed '
             f'{experiment.top_speed:.2f} {unit}/s. Thrusts within {THRUST_FRACTION:.0%} of '
             "each thruster's limit."),
