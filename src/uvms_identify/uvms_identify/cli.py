@@ -33,9 +33,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                     'recordings. docs/identification.md')
     sub = parser.add_subparsers(dest='identify_command', metavar='plan|fit')
     plan = sub.add_parser('plan', help='write the experiments as scenario files',
-                          description='Write one scenario per vehicle axis (thrust steps, a '
-                                      'chirp about a static offset, free decays; at most 60 s '
-                                      'each), runnable with `uvms run` and `uvms launch`.')
+                          description='Write one scenario per vehicle axis (thrust steps '
+                                      'and a chirp about a static offset, heave by doublets, '
+                                      'free decays; at most 60 s each), runnable with `uvms '
+                                      'run` and `uvms launch`.')
     plan.add_argument('--robot', required=True, metavar='NAME|PATH', help=ROBOT_HELP)
     plan.add_argument('--out', required=True, type=Path, metavar='DIR',
                       help='directory of the scenario files (created)')
