@@ -393,8 +393,7 @@ def _with_params_files(scenario: Scenario | None, files: Sequence[str]) -> Scena
     if not files:
         return scenario
     from uvms_bringup.launch_helpers import graph_nodes, uses_estimator
-
-    from uvms_cli.params_files import apply_params_files
+    from uvms_sweep.params_files import apply_params_files
 
     specs = graph_nodes(record=False, estimator=uses_estimator(scenario))
     return apply_params_files(scenario, files, specs)

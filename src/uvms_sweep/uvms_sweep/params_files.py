@@ -1,9 +1,9 @@
 """ROS 2 parameter files over a scenario: ``--params-file``, and a sweep's ``params_files``.
 
-``uvms sweep``'s ``--params-file`` and a sweep file's ``params_files`` list (docs/sweeps.md)
-apply here, by the rules of ``uvms run --params-file`` (this module is ``uvms_cli.params_files``
-with a ``label`` naming the file in errors; it is here because uvms_sweep cannot import uvms_cli,
-which imports uvms_sweep: the two copies should become this one).
+``--params-file`` of ``uvms run``, ``uvms launch`` and ``uvms sweep``, and a sweep file's
+``params_files`` list (docs/sweeps.md), all apply here (a ``label`` names the file in errors).
+It lives in uvms_sweep, the lowest package that needs it and can hold it: uvms_cli imports
+uvms_sweep, not the other way, and uvms_bringup is at its size bound.
 
 A file is a ROS 2 parameter YAML (``node_name: ros__parameters: ...``), as ``ros2 run
 --ros-args --params-file`` takes it: a section applies to every node of the run whose fully

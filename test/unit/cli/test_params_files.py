@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 from rclpy.parameter import Parameter
 from uvms_bringup.launch_helpers import CONTROLLER, SIMULATOR, THRUSTER_ALLOCATOR
-from uvms_cli.params_files import apply_params_files, node_pattern
 from uvms_scenarios.scenario import Scenario, ScenarioError
+from uvms_sweep.params_files import apply_params_files, node_pattern
 
 SPECS = (SIMULATOR, CONTROLLER, THRUSTER_ALLOCATOR)
 DECLARED = {
