@@ -1,11 +1,11 @@
-"""``uvms identify plan``'s experiments keep the vehicle level: the trim, surge and sway.
+"""``uvms identify plan --level`` keeps the vehicle level: the trim, surge and sway.
 
 Until 2026-12-07 the plan's surge experiment on the shipped BlueROV2 Heavy tumbled the
 vehicle in the simulator alone (pitch 1.44 rad, roll 1.73 rad, the arm's joints swung over
 -4.3..4.6 rad): nothing trimmed the arm's weight (0.19 rad pitch with every thruster at 0 N),
 at 0.75 m/s the hull's Munk moment outgrew the restoring moment (statically unstable above
 0.36 m/s), and the controller's arm reaches for its world-fixed hold point when the vehicle
-moves. The plan now trims and stays below the Munk speed; the arm is the controller's
+moves. `--level` now trims and stays below the Munk speed; the arm is the controller's
 (docs/identification.md, "Why the vehicle tumbles"), so the surge and sway check is an
 expected failure until the controller holds the arm in joint space during a plan. The runs
 are lockstep; the ground truth (``/uvms/odometry``) is read for the checks only.

@@ -34,16 +34,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest='identify_command', metavar='plan|fit')
     plan = sub.add_parser('plan', help='write the experiments as scenario files',
                           description='Write one scenario per vehicle axis (thrust steps '
-                                      'and a chirp about a static offset, heave by doublets, '
-                                      'free decays; at most 60 s each), runnable with `uvms '
+                                      'and a chirp about a static offset, free decays; '
+                                      '--level: doublets; at most 60 s each), runnable with `uvms '
                                       'run` and `uvms launch`.')
     plan.add_argument('--robot', required=True, metavar='NAME|PATH', help=ROBOT_HELP)
     plan.add_argument('--out', required=True, type=Path, metavar='DIR',
                       help='directory of the scenario files (created)')
     plan.add_argument('--level', action='store_true',
-                      help='trim weight and buoyancy at every level and keep surge and sway '
-                           'below the Munk speed, by doublets (docs/identification.md: the '
-                           'vehicle still tilts while the controller reaches with the arm)')
+                      help='trim weight and buoyancy at every level, surge, sway and heave '
+                           'by doublets, surge and sway below the Munk speed '
+                           '(docs/identification.md: the vehicle still tilts while the '
+                           'controller reaches with the arm)')
     fit = sub.add_parser('fit', help='fit the hull to recordings of the experiments',
                          description='Fit the hull terms to recordings (IMU, DVL, joint states, '
                                      'thrusts; never the ground truth) and write '

@@ -2,19 +2,19 @@
 
 Two shapes, both scaled by the axis' largest force ``maximum`` (``uvms_identify.plan``):
 
-- ``steps_and_chirp`` (roll, pitch, yaw): steps of alternating sign and rising
+- ``steps_and_chirp`` (every axis; with ``level`` roll, pitch, yaw): steps of alternating
+  sign and rising
   amplitude (steady speeds at several levels for the quadratic damping, a sign change every
   step keeps the excursion small), a free decay, a chirp about a static offset (+ then -:
   the |v| v regressor is only consistent with an offset, arXiv 2204.04973; the chirp
   separates added mass from damping) and a final free decay.
-- ``doublets`` (surge, sway, heave): the excursion bound (the DVL's bottom lock) held the
-  old heave steps to 17 N and 0.22 m/s, where the quadratic damping is a third of the drag
-  and came out 28 % off through the twin stand. Doublets (+L for T, -L for 2 T, +L for T)
-  return to the start after each, so a large force fits in a small excursion: the vehicle
-  reaches several steady speeds within T (the time constant (m + A) / (2 d_q |v|) is about
-  0.3 s in heave and 0.4 s in surge at the planned speeds). A chirp about zero follows (an
-  offset would carry the vehicle away). In surge and sway the small excursion also keeps
-  the controller's arm, which reaches for its world-fixed hold point, from reaching far.
+- ``doublets`` (with ``level``: surge, sway, heave): the excursion bound (the DVL's bottom
+  lock) holds the heave steps to 17 N and 0.22 m/s, where the quadratic damping is a third
+  of the drag (through the twin stand it came out 28 % off). Doublets (+L for T, -L for
+  2 T, +L for T) return to the start after each, so a large force fits in a small
+  excursion: the vehicle reaches several steady speeds within T (the time constant
+  (m + A) / (2 d_q |v|) is about 0.3 s in heave and 0.4 s in surge at the planned speeds).
+  A chirp about zero follows (an offset would carry the vehicle away).
 """
 
 from __future__ import annotations

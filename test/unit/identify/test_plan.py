@@ -85,14 +85,16 @@ def test_surge_and_sway_stay_below_the_speed_where_the_munk_moment_tips_the_hull
         assert speed_limits(robot, restoring)[axis] == pytest.approx(0.8 * critical)
 
 
-def test_heave_reaches_the_speeds_of_its_quadratic_damping_within_its_excursion(
-        robot: RobotData, experiments: list[Experiment]) -> None:
-    """Heave at 0.4 m/s or faster (the old plan: 0.22 m/s) within the 1.2 m bound.
+def test_level_heave_reaches_the_speeds_of_its_quadratic_damping_within_its_excursion(
+        robot: RobotData, experiments: list[Experiment], level: list[Experiment]) -> None:
+    """``--level``'s heave at 0.4 m/s or faster (the default: 0.22 m/s) within the 1.2 m bound.
 
     At 0.4 m/s the shipped hull's quadratic drag (190 w^2 = 30 N) is 2.3 times its linear
     drag (33 w = 13 N); at 0.22 m/s only 1.3 times.
     """
-    heave = experiments[2]
+    assert experiments[2].top_speed < 0.25
+    heave = level[2]
+    assert heave.doublets
     assert heave.top_speed >= 0.4
     assert heave.excursion <= MAX_EXCURSION[2]
     prior = robot.prior_theta()
@@ -114,4 +116,4 @@ def test_every_experiment_is_at_most_60_s(experiments: list[Experiment]) -> None
     assert DURATION_S <= 60.0
     for experiment in experiments:
         assert float(experiment.times_s[-1]) < DURATION_S
-    assert [e.doublets for e in experiments] == [False, False, True, False, False, False]
+    assert not any(e.doublets or e.trimmed for e in experiments)
