@@ -85,7 +85,7 @@ from uvms_hardware.alpha5_component import (
 )
 from uvms_hardware.alpha5_core import Alpha5Core
 from uvms_hardware.alpha5_feedback import JointSample
-from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.bridge_node import DEVICE_TOPIC_QOS, BridgeNode, run_bridge
 from uvms_hardware.component import logger_log
 from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.reach_protocol import Mode
@@ -148,14 +148,14 @@ class Alpha5BridgeNode(BridgeNode):
         core = self.component.core
         assert core is not None
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._joint_pub = self.own(self.destroy_publisher,
-                                   self.create_publisher(JointState, 'joint_states', qos))
+        self._joint_pub = self.own(self.destroy_publisher, self.create_publisher(
+            JointState, 'joint_states', DEVICE_TOPIC_QOS))
         self.subscribe(ActuatorCommand, 'command/actuators', self._on_command, qos)
         self.own(self.destroy_service, self.create_service(Trigger, '~/reset_trip',
                                                            self._on_reset_trip))
         if core.arm.jaw is not None:
-            self._jaw_pub = self.own(self.destroy_publisher,
-                                     self.create_publisher(JointState, 'jaw_state', qos))
+            self._jaw_pub = self.own(self.destroy_publisher, self.create_publisher(
+                JointState, 'jaw_state', DEVICE_TOPIC_QOS))
             self.subscribe(Float64, 'command/jaw', self._on_jaw_command, qos)
         self._timer = self.device_timer(self.component.poll_period_s(), self._on_tick,
                                         then=self._ask)

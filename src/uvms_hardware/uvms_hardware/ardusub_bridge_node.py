@@ -54,7 +54,7 @@ from uvms_hardware.ardusub_component import SPECS, ArduSubComponent
 from uvms_hardware.ardusub_core import TELEMETRY_REQUEST_PERIOD_S, WATCHDOG_CHOICES
 from uvms_hardware.ardusub_link import ArduSubLink
 from uvms_hardware.ardusub_stamps import TelemetryStamper
-from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.bridge_node import DEVICE_TOPIC_QOS, BridgeNode, run_bridge
 from uvms_hardware.component import logger_log
 from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.errors import HardwareError
@@ -145,12 +145,12 @@ class ArduSubBridgeNode(BridgeNode):
         # never be mapped into the node's: arrival stamps, as /diagnostics then says.
         self.component.device_time = not self.get_parameter('use_sim_time').value
         self.component.configure()
-        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._imu = self.own(self.destroy_publisher, self.create_publisher(Imu, 'imu', qos))
+        self._imu = self.own(self.destroy_publisher, self.create_publisher(
+            Imu, 'imu', DEVICE_TOPIC_QOS))
         self._depth = self.own(self.destroy_publisher, self.create_publisher(
-            PoseWithCovarianceStamped, 'depth', qos))
+            PoseWithCovarianceStamped, 'depth', DEVICE_TOPIC_QOS))
         self._battery = self.own(self.destroy_publisher,
-                                 self.create_publisher(BatteryState, 'battery', qos))
+                                 self.create_publisher(BatteryState, 'battery', DEVICE_TOPIC_QOS))
         self.own(self.destroy_service, self.create_service(Trigger, '~/zero_depth', self._zero))
         self.device_timer(1.0 / float(self.values['override_rate_hz']), self._period,
                           then=self._write)

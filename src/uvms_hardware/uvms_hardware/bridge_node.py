@@ -41,6 +41,7 @@ from typing import Any, ClassVar, TypeVar
 
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import ERROR, WARN, DiagnosticsPublisher, Report
 from uvms_common.lifecycle import autostart, declare_autostart, guard_change_state, state_label
 from uvms_common.node_main import run_node
@@ -51,12 +52,19 @@ from uvms_common import direct_topics
 from uvms_hardware.device_clock import DeviceClock
 from uvms_hardware.errors import HardwareError
 
-__all__ = ['FAILURE', 'REFUSALS', 'SUCCESS', 'BridgeNode', 'run_bridge']
+__all__ = ['DEVICE_TOPIC_QOS', 'FAILURE', 'REFUSALS', 'SUCCESS', 'BridgeNode', 'run_bridge']
 
 SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
 ERROR_RETURN = TransitionCallbackReturn.ERROR
 #: What a device's check raises to refuse a transition: one line, no traceback.
 REFUSALS: tuple[type[Exception], ...] = (HardwareError, ValueError, OSError)
+#: A device topic's publisher (joint_states, imu, depth, dvl, wrench, ...): reliable, keep
+#: last 100. A reliable writer drops what its history no longer holds, acknowledged or not:
+#: with rclpy's depth 10 the recorder, at normal priority beside a SCHED_FIFO twin stand, lost
+#: whatever came while it was starved (a stand's surge run kept 120 of 383 DVL reports, issue
+#: 50). 100 is 2 s of the 50 Hz IMU, 0.2 s of a 500 Hz wrench; the commands' subscriptions
+#: stay at depth 10 (only the newest matters).
+DEVICE_TOPIC_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 B = TypeVar('B', bound='BridgeNode')
 

@@ -27,7 +27,6 @@ from __future__ import annotations
 from typing import Any
 
 from geometry_msgs.msg import TwistWithCovarianceStamped
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from uvms_common.clock_read import now_ns
 from uvms_common.diagnostics import ERROR, OK, WARN, Report
 from uvms_common.node_construction import destroyed_if_construction_fails
@@ -35,7 +34,7 @@ from uvms_common.parameter_declaration import declare_specs
 
 from uvms_description.robots import RobotParameter, robot_parameters
 from uvms_hardware import bridge_messages as bm
-from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.bridge_node import DEVICE_TOPIC_QOS, BridgeNode, run_bridge
 from uvms_hardware.component import logger_log
 from uvms_hardware.dvl_component import DEFAULT_PORT, SPECS, DvlBridgeError, DvlComponent
 from uvms_hardware.dvl_link import DvlLink
@@ -103,9 +102,8 @@ class DvlBridgeNode(BridgeNode):
     def configure_device(self) -> None:
         """Connect (refused when no DVL answers), make the publisher and the drain timer."""
         self.component.configure()
-        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._dvl = self.own(self.destroy_publisher,
-                             self.create_publisher(TwistWithCovarianceStamped, 'dvl', qos))
+        self._dvl = self.own(self.destroy_publisher, self.create_publisher(
+            TwistWithCovarianceStamped, 'dvl', DEVICE_TOPIC_QOS))
         self.device_timer(DRAIN_PERIOD_S, self._drain)
         address = self.component.address
         assert address is not None

@@ -30,7 +30,6 @@ from typing import Any
 
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_srvs.srv import Trigger
 from uvms_common.cdr_codecs import MessageCodec, PayloadWriter
 from uvms_common.clock_read import now_ns
@@ -39,7 +38,7 @@ from uvms_common.direct_topics import active_bus
 from uvms_common.node_construction import destroyed_if_construction_fails
 
 from uvms_hardware.bridge_messages import stamp
-from uvms_hardware.bridge_node import BridgeNode, run_bridge
+from uvms_hardware.bridge_node import DEVICE_TOPIC_QOS, BridgeNode, run_bridge
 from uvms_hardware.component import logger_log
 from uvms_hardware.device_clock import stop_requested
 from uvms_hardware.hardware_config import HardwareConfigError, NetFtHardware, load_netft
@@ -108,9 +107,8 @@ class NetFtBridgeNode(BridgeNode):
     def configure_device(self) -> None:
         """The component's configure; then the wrench publisher, ~/bias and the poll timer."""
         self.component.configure()
-        qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self._wrench_pub = self.own(self.destroy_publisher,
-                                    self.create_publisher(WrenchStamped, 'wrench', qos))
+        self._wrench_pub = self.own(self.destroy_publisher, self.create_publisher(
+            WrenchStamped, 'wrench', DEVICE_TOPIC_QOS))
         self._payload = (PayloadWriter(MessageCodec(WrenchStamped, {
             'header.frame_id': FT_SENSOR_LINK}), ['wrench']) if active_bus() else None)
         self.own(self.destroy_service, self.create_service(Trigger, '~/bias', self._on_bias))
