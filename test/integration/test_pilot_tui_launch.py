@@ -28,6 +28,8 @@ pytestmark = pytest.mark.skipif(shutil.which('tmux') is None,
                                 reason='tmux is not installed (apt-get install tmux)')
 
 REPO = Path(__file__).resolve().parents[2]
+#: The pilot's zero after the last key the test sent (s): see the assertion.
+ZERO_AFTER_LAST_KEY_S = 1.0
 #: paper_uvms: pilot.max_vehicle_speed_m_s surge 0.3 m/s, the first gear 25 %.
 SURGE_GEAR1_M_S = 0.075
 #: A motion-only task of the t key: a 2 cm half circle over 20 s from wherever X_d is.
@@ -164,9 +166,10 @@ def test_keys_move_the_launched_robot_and_release_holds_it(pilot: Tmux,
 
     The pilot asks for the first gear's 0.075 m/s; the vehicle follows the controller's
     rate-limited reference (0.049-0.060 m/s seen at the end of the 3 s on a loaded machine).
-    Let go: the pilot's zero within 0.5 s, the controller in hold within 1.5 s (the deadman's
-    0.3 s after the zero), the vehicle under 5 mm/s within 2 s (0.27-0.43 s, 0.28-0.87 s and
-    0.52-0.96 s seen at load averages of 12-38 on 2 cores; the zero 0.84 s once at load 38).
+    Let go: the pilot's zero within 1 s of the last key sent (0.3 s of it the pilot's own), the
+    controller in hold within 1.5 s (the deadman's 0.3 s after the zero), the vehicle under
+    5 mm/s within 2 s (0.27-0.43 s, 0.28-0.87 s and 0.52-0.96 s seen at load averages of
+    12-38 on 2 cores; the zero 0.84 s once at load 38, 0.62 s in a CI run).
     """
     screen = pilot.wait_for('depth ', 10.0)
     with observed.lock:
@@ -198,7 +201,11 @@ def test_keys_move_the_launched_robot_and_release_holds_it(pilot: Tmux,
     assert sum(u != 0.0 for u in asked) >= 0.8 * len(asked), asked
     assert SURGE_GEAR1_M_S / 2 < peak_u < SURGE_GEAR1_M_S * 1.1
     assert after[-1][2] - x_start > 0.1
-    assert zero_at is not None and zero_at - last_key < 0.5
+    # The pilot's own part is 0.3 s (REPEAT_HOLD_S and a 20 Hz tick); the rest is the path
+    # from tmux send-keys to the TUI, at normal priority beside the graph's SCHED_FIFO
+    # processes, which take most of the 2 cores: 0.62 s in the CI of 2026-12-07, 0.84 s
+    # once at load 38.
+    assert zero_at is not None and zero_at - last_key < ZERO_AFTER_LAST_KEY_S
     assert hold_at is not None and hold_at - last_key < 1.5
     assert stopped_at is not None and stopped_at - last_key < 2.0
     assert all(math.isfinite(u) for _, u, _ in after)
