@@ -25,6 +25,7 @@ import time
 from typing import Any
 
 from rclpy.exceptions import ParameterException
+from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_hardware.errors import HardwareError
 from uvms_model.nav_sensors import DepthReading, DvlReading, ImuReading, Reading
@@ -125,13 +126,19 @@ class InProcessTwins:
 class SimulatorWithTwins(SimulatorNode):
     """The ``simulator`` node serving the robot's devices as protocol twins in its process."""
 
+    @destroyed_if_construction_fails
     def __init__(self, **kwargs: Any) -> None:
         cli_args = list(kwargs.pop('cli_args', None) or []) + device_topic_remaps()
         self.twins: InProcessTwins | None = None
         self._end_marked_s: float | None = None
-        super().__init__(plant_side=self._build_twins, cli_args=cli_args, **kwargs)
-        assert self.twins is not None
-        self._diagnostics.add('twins', self.twins.stand.report)
+        try:
+            super().__init__(plant_side=self._build_twins, cli_args=cli_args, **kwargs)
+            assert self.twins is not None
+            self._diagnostics.add('twins', self.twins.stand.report)
+        except BaseException:
+            if self.twins is not None:  # a refused parameter after the twins were serving
+                self.twins.stand.stop()
+            raise
 
     def _build_twins(self, node: SimulatorNode) -> InProcessTwins:
         """The stand on this node's robot, with its ``twins.`` parameters."""
