@@ -288,7 +288,7 @@ def file_parameters(path: Path, node_name: str, namespace: str) -> dict[str, Any
     values: dict[str, Any] = {}
     for key in keys:
         section = data.get(key, {}) or {}
-        values.update(_flatten(section.get('ros__parameters', {}) or {}))
+        values.update(flat_parameters(section.get('ros__parameters', {}) or {}))
     return values
 
 
@@ -299,12 +299,12 @@ def parameters_file_text(values_by_node: Mapping[str, Mapping[str, Any]]) -> str
     return yaml.safe_dump(document, sort_keys=True)
 
 
-def _flatten(section: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
-    """Nested parameter mappings to dotted names."""
+def flat_parameters(section: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
+    """Nested parameter mappings to dotted names, as rcl reads them."""
     flat: dict[str, Any] = {}
     for key, value in section.items():
         if isinstance(value, Mapping):
-            flat.update(_flatten(value, f'{prefix}{key}.'))
+            flat.update(flat_parameters(value, f'{prefix}{key}.'))
         else:
             flat[f'{prefix}{key}'] = value
     return flat

@@ -31,7 +31,12 @@ from typing import Any
 import yaml
 from rclpy.parameter import Parameter
 from uvms_bringup.declared import TYPE_NAMES, as_declared_type, declared_parameters
-from uvms_bringup.launch_helpers import DEFAULT_NAMESPACE, RECORDER, NodeSpec
+from uvms_bringup.launch_helpers import (
+    DEFAULT_NAMESPACE,
+    RECORDER,
+    NodeSpec,
+    flat_parameters,
+)
 from uvms_scenarios.scenario import ParameterValue, Scenario, ScenarioError
 
 #: The simulator's parameter that the scenario's ``seed`` sets (``Scenario.node_overrides``).
@@ -88,7 +93,7 @@ def read_params_file(
         if not isinstance(values, dict):
             msg = f'{label}: section {key!r} has no ros__parameters mapping'
             raise ScenarioError(msg)
-        sections.append((str(key), _flatten(values)))
+        sections.append((str(key), flat_parameters(values)))
     return sections
 
 
@@ -179,13 +184,3 @@ def _typed(label: str, key: str, name: str, value: Any,
         raise ScenarioError(msg)
     return value  # type: ignore[no-any-return]
 
-
-def _flatten(section: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
-    """Nested parameter mappings to dotted names, as rcl reads them."""
-    flat: dict[str, Any] = {}
-    for key, value in section.items():
-        if isinstance(value, Mapping):
-            flat.update(_flatten(value, f'{prefix}{key}.'))
-        else:
-            flat[f'{prefix}{key}'] = value
-    return flat

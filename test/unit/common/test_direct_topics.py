@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
-import pytest
 from uvms_common.direct_topics import Bus, DirectSubscription, LoopTimer
 
 from uvms_common import direct_topics
@@ -39,15 +37,6 @@ class FakeNode:
     def resolve_topic_name(self, topic: str) -> str:
         """As ``rclpy.node.Node.resolve_topic_name``."""
         return topic if topic.startswith('/') else f'/uvms/{topic}'
-
-
-@pytest.fixture
-def bus() -> Iterator[Bus]:
-    """An installed bus, uninstalled after the test."""
-    installed = Bus()
-    direct_topics.install(installed)
-    yield installed
-    direct_topics.uninstall()
 
 
 def test_without_a_bus_a_node_subscribes_on_dds() -> None:
