@@ -43,11 +43,11 @@ from typing import Any
 from uvms_bringup.declared import CHECK_DOMAIN_ID
 from uvms_common.node_main import StopEvent
 from uvms_run.bars import PointBar
-from uvms_scenarios.scenario import Scenario
+from uvms_scenarios.scenario import Scenario, load_scenario
 
 from uvms_sweep.maps import draw_figures
 from uvms_sweep.stop_flag import point_task, ray_error_line, start_stop_flag
-from uvms_sweep.sweep_file import Sweep, SweepPoint
+from uvms_sweep.sweep_file import Sweep, SweepPoint, overrides_set_over
 from uvms_sweep.table import outcome_row, read_table, write_table
 
 #: ROS_DOMAIN_IDs handed to running points, first to last: 215-231 (Fast DDS's default port
@@ -245,8 +245,7 @@ def run_sweep(
         TableError: DIR/points.csv belongs to a sweep over other axes.
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    duration_s = sweep.duration_s if sweep.duration_s is not None else scenario.duration_s
-    points = sweep.points(scenario.name, duration_s, scenario.seed)
+    points = sweep_points(sweep, scenario)
     rows = read_table(out_dir, sweep)
     if sweep.path.is_file():
         shutil.copyfile(sweep.path, out_dir / 'sweep.yaml')
@@ -329,6 +328,17 @@ def _dispatch(
     finally:
         if stop_flag is not None:
             ray.kill(stop_flag)
+
+
+def sweep_points(sweep: Sweep, scenario: Scenario) -> list[SweepPoint]:
+    """The sweep's points over its base scenario, keyed with what is set over the file.
+
+    The parameter files and ``--ideal-devices`` are in ``scenario.overrides`` over the
+    scenario file's own; what they change is part of each point's key (``point_id``).
+    """
+    duration_s = sweep.duration_s if sweep.duration_s is not None else scenario.duration_s
+    set_over = overrides_set_over(load_scenario(scenario.path).overrides, scenario.overrides)
+    return sweep.points(scenario.name, duration_s, scenario.seed, set_over)
 
 
 def point_request(

@@ -143,13 +143,16 @@ class Sweep:
     metrics: tuple[str, ...]
     params_files: tuple[Path, ...] = ()
 
-    def points(self, scenario_name: str, duration_s: float, default_seed: int) -> list[SweepPoint]:
+    def points(self, scenario_name: str, duration_s: float, default_seed: int,
+               set_over: Mapping[str, Mapping[str, Any]] | None = None) -> list[SweepPoint]:
         """Every point of the grid, seeds innermost, in axis order (first axis slowest).
 
         Args:
             scenario_name: Name of the base scenario (part of each point's key).
             duration_s: Simulated duration of each run (s, part of the key).
             default_seed: Seed when the sweep lists none (the scenario's).
+            set_over: What the parameter files and ``--ideal-devices`` set over the base
+                scenario's own parameters (``overrides_set_over``; part of the key).
         """
         seeds = self.seeds or (default_seed,)
         grid = itertools.product(*(range(len(axis.values)) for axis in self.axes))
@@ -157,21 +160,46 @@ class Sweep:
         for index in grid:
             values = {axis.name: axis.values[i] for axis, i in zip(self.axes, index, strict=True)}
             for seed in seeds:
-                key = point_id(scenario_name, duration_s, seed, values)
+                key = point_id(scenario_name, duration_s, seed, values, set_over)
                 points.append(SweepPoint(key, tuple(index), values, seed))
         return points
 
 
 def point_id(
-    scenario_name: str, duration_s: float, seed: int, values: Mapping[str, ParameterValue]
+    scenario_name: str, duration_s: float, seed: int, values: Mapping[str, ParameterValue],
+    set_over: Mapping[str, Mapping[str, Any]] | None = None,
 ) -> str:
-    """Key of a point: 12 hex digits of SHA-256 over scenario, duration, seed and values."""
-    text = json.dumps(
-        {'scenario': scenario_name, 'duration_s': float(duration_s), 'seed': int(seed),
-         'values': dict(values)},
-        sort_keys=True,
-    )
+    """Key of a point: 12 hex digits of SHA-256 over scenario, duration, seed and values.
+
+    ``set_over`` (node to parameter to value: what parameter files and ``--ideal-devices`` set
+    over the base scenario's own parameters) is in the key when it sets anything, so a run
+    with other files or flags into the same ``--out`` runs its points again; a sweep without
+    them keeps the keys it always had.
+    """
+    key: dict[str, Any] = {'scenario': scenario_name, 'duration_s': float(duration_s),
+                           'seed': int(seed), 'values': dict(values)}
+    if set_over:
+        key['set_over'] = {node: dict(params) for node, params in set_over.items()}
+    text = json.dumps(key, sort_keys=True)
     return hashlib.sha256(text.encode('utf-8')).hexdigest()[:12]
+
+
+def overrides_set_over(
+    own: Mapping[str, Mapping[str, Any]], overrides: Mapping[str, Mapping[str, Any]]
+) -> dict[str, dict[str, Any]]:
+    """The parameters of ``overrides`` that the scenario file's ``own`` does not set so.
+
+    Both map node to parameter to value; the result holds only nodes with such a parameter.
+    """
+    missing = object()
+    set_over = {}
+    for node, values in overrides.items():
+        theirs = own.get(node, {})
+        changed = {name: value for name, value in values.items()
+                   if theirs.get(name, missing) != value}
+        if changed:
+            set_over[node] = changed
+    return set_over
 
 
 def load_sweep(path: str | Path) -> Sweep:

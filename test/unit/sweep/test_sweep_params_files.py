@@ -9,13 +9,15 @@ the sweep file's key or the option's file.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pytest
 from uvms_bringup.declared import declared_parameters
 from uvms_scenarios.scenario import ScenarioError
-from uvms_sweep.engine import point_request
+from uvms_sweep.engine import point_request, sweep_points
+from uvms_sweep.ideal_devices import with_ideal_devices
 from uvms_sweep.sweep_file import SweepError, load_sweep
 from uvms_sweep.validate import check_sweep
 
@@ -91,6 +93,32 @@ def test_params_file_option_applies_after_the_sweep_files(tmp_path: Path) -> Non
     again = write(tmp_path, TIMED.replace('false', 'true'), 'ideal.yaml')
     _, scenario = check_sweep(load_sweep(write(tmp_path, SWEEP, 'sweep.yaml')), [again])
     assert scenario.overrides['simulator']['devices.ideal'] is True
+
+
+def test_a_points_key_holds_what_the_files_and_ideal_devices_set(tmp_path: Path) -> None:
+    """Other parameter files or --ideal-devices: other keys, so a resume runs the points again.
+
+    A sweep without either keeps the keys it always had (its done points stay done).
+    """
+    write(tmp_path, TIMED, 'timed.yaml')
+    plain_text = SWEEP.replace(
+        'params_files: [timed.yaml, robots/bluerov2_alpha5/controller_device_timing.yaml]\n', '')
+    plain, plain_scenario = check_sweep(load_sweep(write(tmp_path, plain_text, 'plain.yaml')))
+    timed, timed_scenario = check_sweep(load_sweep(write(tmp_path, SWEEP, 'sweep.yaml')))
+    faster = write(tmp_path, TIMED + '      arm_commands:\n        rate_hz: 100.0\n',
+                   'faster.yaml')
+    _, faster_scenario = check_sweep(load_sweep(tmp_path / 'sweep.yaml'), [faster])
+    ideal_scenario = replace(plain_scenario,
+                             overrides=with_ideal_devices(plain_scenario.overrides))
+
+    def keys(sweep: Any, scenario: Any) -> list[str]:
+        return [point.point_id for point in sweep_points(sweep, scenario)]
+
+    unchanged = [p.point_id for p in plain.points(plain_scenario.name, 0.5, plain_scenario.seed)]
+    assert keys(plain, plain_scenario) == unchanged
+    runs = [keys(plain, plain_scenario), keys(timed, timed_scenario),
+            keys(timed, faster_scenario), keys(plain, ideal_scenario)]
+    assert len({key for run in runs for key in run}) == 4 * len(unchanged)
 
 
 def test_shipped_device_rates_sweep_runs_with_device_timing() -> None:
