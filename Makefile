@@ -15,8 +15,9 @@ BIN := $(VENV)/bin
 
 .PHONY: demo test test-py312 setup clean sweeps
 
-#: The shipped sweeps whose maps docs/results.md shows (config/sweeps/NAME.yaml).
-SWEEPS ?= stiffness_model_error noise_filter current
+#: The shipped sweeps whose maps docs/results.md and docs/hardware.md show
+#: (config/sweeps/NAME.yaml).
+SWEEPS ?= stiffness_model_error noise_filter current device_rates
 SWEEP_WORKERS ?= 2
 
 setup: $(VENV)/.interfaces $(VENV)/.kernels
@@ -67,7 +68,8 @@ demo: setup
 	$(BIN)/uvms report $(OUT)/$(SCENARIO).mcap
 
 # Every shipped sweep from scratch into docs/sweeps/NAME (points.csv, figures/*.png), on a
-# local Ray inside the loopback-only network namespace; about 15 min on 2 cores.
+# local Ray inside the loopback-only network namespace; about 30 min on 2 cores (device_rates
+# about half of it).
 sweeps: setup
 	for name in $(SWEEPS); do \
 	  rm -rf docs/sweeps/$$name && \
