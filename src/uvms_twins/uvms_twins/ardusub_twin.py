@@ -58,6 +58,8 @@ from pymavlink import mavutil  # type: ignore[import-untyped]
 from uvms_hardware.address import LOOPBACK
 from uvms_hardware.ardusub_watchdog import ANNOUNCE_NAME, ScriptSettings, WatchdogScript
 
+from uvms_twins.periodic_task import next_run_s
+
 MAV = mavutil.mavlink
 #: ArduSub's custom_mode of MANUAL (ArduSub/mode.h).
 MODE_MANUAL = 19
@@ -283,7 +285,7 @@ class ArduSubTwin:
             if msg is not None and msg.get_type() != 'BAD_DATA':
                 self._handle(msg, now_s)
             if now_s >= self._next_rc_s:
-                self._next_rc_s = max(self._next_rc_s + self._rc_period_s, now_s)
+                self._next_rc_s = next_run_s(self._next_rc_s, now_s, self._rc_period_s)
                 self._read_rc(now_s)
             if now_s >= next_heartbeat_s:
                 next_heartbeat_s = now_s + 1.0

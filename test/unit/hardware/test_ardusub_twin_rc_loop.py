@@ -8,11 +8,13 @@ bridge sends at (issue 49: the twin used to apply each override at once).
 
 from __future__ import annotations
 
+import itertools
 import statistics
 import time
 
 from test_mavlink_twin import gcs, override, wait
 from uvms_twins.ardusub_twin import RC_READ_HZ, ArduSubTwin
+from uvms_twins.periodic_task import next_run_s
 
 #: The bridge's override rate (ardusub_bridge ``override_rate_hz`` default).
 BRIDGE_RATE_HZ = 60.0
@@ -74,3 +76,23 @@ def test_the_watchdog_script_keeps_driving_at_the_bridges_rate_through_the_50_hz
             time.sleep(0.001)
         conn.close()
     assert lowest >= 1690, f'an output went to {lowest} us while the bridge was commanding'
+
+
+def test_a_read_that_ran_late_is_not_caught_up_with_reads_back_to_back() -> None:
+    """As AP_Scheduler: a late RC read runs once; the next is a period after it, not at once.
+
+    The twin's loop polls every 2 ms at most; a thread that got no CPU for 70 ms (a busy
+    machine) then finds three reads missed. Before, it read again at once (reads 0 ms apart).
+    """
+    period = 1.0 / RC_READ_HZ
+    assert next_run_s(1.0, 1.0015, period) == 1.0 + period  # on time: the grid is kept
+    reads, due = [], 0.0
+    polls = [k * 0.002 for k in range(200)]
+    polls = [t for t in polls if not 0.1 < t < 0.17] + [0.17 + k * 0.002 for k in range(3)]
+    for now in sorted(set(polls)):
+        if now >= due:
+            reads.append(now)
+            due = next_run_s(due, now, period)
+    spacings = [b - a for a, b in itertools.pairwise(reads)]
+    assert min(spacings) > period - 0.0025, f'reads {min(spacings) * 1e3:.1f} ms apart'
+    assert max(spacings) < 0.1, 'the reads went on after the stall'
