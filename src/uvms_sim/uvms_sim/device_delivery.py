@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from uvms_sim.device_timing import CommandHold, DeviceTiming, SampleHold
+from uvms_sim.device_timing import CommandHold, DeviceTiming, SampleHold, StaggeredHold
 from uvms_sim.plant import Observation
 
 
@@ -22,9 +22,14 @@ class DeviceDelivery:
     """Sensors sampled, delayed and held; commands latched at the devices' rates."""
 
     def __init__(self, devices: DeviceTiming, seed: int) -> None:
+        joints = devices['joint_states']
+        #: One joint at a time over each round (a polled bus), made at the first observation.
+        self._staggered = joints.staggered and joints.rate_hz > 0.0
+        self._stagger_hold: StaggeredHold | None = None
+        self._joint_seed = seed + 1
+        self._joint_timing = joints
         self._joint_hold: SampleHold[Observation] | None = (
-            None if devices['joint_states'].ideal
-            else SampleHold(devices['joint_states'], seed + 1))
+            None if joints.ideal or self._staggered else SampleHold(joints, seed + 1))
         self._wrench_hold: SampleHold[Observation] | None = (
             None if devices['wrench'].ideal else SampleHold(devices['wrench'], seed + 2))
         self._thrust_hold: CommandHold[Any] | None = (
@@ -40,15 +45,26 @@ class DeviceDelivery:
         Each held signal is its newest delivered sample (uvms_sim.device_timing), stamped
         with the state's time; the ground truth (odometry, ee_pose, contact) stays current.
         """
-        if self._joint_hold is None and self._wrench_hold is None:
+        if self._joint_hold is None and self._wrench_hold is None and not self._staggered:
             return seen
-        joints = seen if self._joint_hold is None else self._joint_hold.at(
-            seen.t_ns, lambda: seen)
         wrench = seen if self._wrench_hold is None else self._wrench_hold.at(
             seen.t_ns, lambda: seen)
         q, w = seen.q.copy(), seen.w.copy()
-        q[6:], w[6:] = joints.q[6:6 + n_joints], joints.w[6:6 + n_joints]
-        return replace(seen, q=q, w=w, joint_torques=joints.joint_torques,
+        if self._staggered:
+            if self._stagger_hold is None:
+                self._stagger_hold = StaggeredHold(self._joint_timing, n_joints, self._joint_seed)
+            arm_q, arm_w, arm_tau = self._stagger_hold.at(
+                seen.t_ns, seen.q[6:6 + n_joints].tolist(), seen.w[6:6 + n_joints].tolist(),
+                seen.joint_torques[:n_joints].tolist())
+            q[6:6 + n_joints], w[6:6 + n_joints] = arm_q, arm_w
+            joint_torques = seen.joint_torques.copy()
+            joint_torques[:n_joints] = arm_tau
+        else:
+            joints = seen if self._joint_hold is None else self._joint_hold.at(
+                seen.t_ns, lambda: seen)
+            q[6:], w[6:] = joints.q[6:6 + n_joints], joints.w[6:6 + n_joints]
+            joint_torques = joints.joint_torques
+        return replace(seen, q=q, w=w, joint_torques=joint_torques,
                        sensor_force=wrench.sensor_force, sensor_torque=wrench.sensor_torque)
 
     def commands(self, t_ns: int, thrusts: Any, torques: Any) -> tuple[Any, Any]:

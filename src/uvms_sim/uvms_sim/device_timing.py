@@ -11,6 +11,10 @@ it by default (``devices.ideal`` false):
   so lockstep runs stay deterministic and the sensor noise draws are untouched), and held in
   between: every state publishes the newest delivered sample, stamped with the state's time
   as the lockstep exchange needs.
+- ``StaggeredHold``: the arm's joints as a polled bus gives them (``devices.joint_states.
+  staggered``): one joint at a time, evenly over each 1/rate round, the round delivered its
+  latency after its last joint, so a joint_states message holds positions of different ages
+  (the Alpha 5 bridge publishes one once every joint answered afresh).
 - ``CommandHold``: a command latched at the device's own rate (ArduSub's 50 Hz RC loop, the
   arm bus's command slots) and held between latches.
 
@@ -49,11 +53,14 @@ class SignalTiming:
             (sensors) or every plant step (commands).
         latency_s: From a sample to its delivery (s); 0 none.
         jitter_s: Half width of the uniform spread of the latency (s), at most the latency.
+        staggered: Joint states only: the joints sampled one at a time over each round
+            (``StaggeredHold``), not all at each sample; meaningless at rate 0.
     """
 
     rate_hz: float = 0.0
     latency_s: float = 0.0
     jitter_s: float = 0.0
+    staggered: bool = False
 
     @property
     def ideal(self) -> bool:
@@ -107,7 +114,8 @@ class DeviceTiming:
                 msg = (f"parameter 'devices.{name}.jitter_s' = {jitter:g}: above "
                        f'devices.{name}.latency_s = {latency:g} (a delivery before its sample)')
                 raise SimParameterError(msg)
-            signals[name] = SignalTiming(rate, latency, jitter)
+            staggered = bool(values.get(f'devices.{name}.staggered', False))
+            signals[name] = SignalTiming(rate, latency, jitter, staggered)
         return cls(signals, seed)
 
     def summary(self) -> str:
@@ -120,8 +128,24 @@ class DeviceTiming:
                 continue
             rate = f'{timing.rate_hz:g} Hz' if timing.rate_hz > 0.0 else 'every state'
             late = (f' +{timing.latency_s * 1e3:g} ms' if timing.latency_s > 0.0 else '')
-            parts.append(f'{name} {rate}{late}')
+            one_at_a_time = ' one joint at a time' if timing.staggered else ''
+            parts.append(f'{name} {rate}{late}{one_at_a_time}')
         return 'device timing: ' + ', '.join(parts)
+
+
+class LatencyDraws:
+    """A signal's latencies (ns): its latency, jittered uniformly by a generator of its own."""
+
+    def __init__(self, timing: SignalTiming, seed: int = 0) -> None:
+        self._latency_ns = round(timing.latency_s * 1e9)
+        self._jitter_ns = round(timing.jitter_s * 1e9)
+        self._rng = np.random.default_rng(seed) if self._jitter_ns > 0 else None
+
+    def __call__(self) -> int:
+        """The next sample's latency (ns)."""
+        if self._rng is None:
+            return self._latency_ns
+        return self._latency_ns + round(float(self._rng.uniform(-1.0, 1.0)) * self._jitter_ns)
 
 
 class SampleHold(Generic[T]):
@@ -138,9 +162,7 @@ class SampleHold(Generic[T]):
 
     def __init__(self, timing: SignalTiming, seed: int = 0) -> None:
         self._period_ns = timing.period_ns
-        self._latency_ns = round(timing.latency_s * 1e9)
-        self._jitter_ns = round(timing.jitter_s * 1e9)
-        self._rng = np.random.default_rng(seed) if self._jitter_ns > 0 else None
+        self._latency = LatencyDraws(timing, seed)
         self._next_sample_ns: int | None = None
         self._samples = 0
         self._pending: deque[tuple[int, int, T]] = deque()
@@ -178,10 +200,62 @@ class SampleHold(Generic[T]):
         """Time of the held sample (ns), None before the first."""
         return None if self._held is None else self._held[0]
 
-    def _latency(self) -> int:
-        if self._rng is None:
-            return self._latency_ns
-        return self._latency_ns + round(float(self._rng.uniform(-1.0, 1.0)) * self._jitter_ns)
+
+class StaggeredHold:
+    """The arm's joints as a polled bus gives them: one at a time, each round delivered whole.
+
+    Joint j of a round is sampled at the first state at or after ``start + j * period / n``
+    (its device answered then); the round, each joint at its own instant, is delivered at the
+    first state at or after its last joint's sample plus the latency (jittered as
+    ``SampleHold``'s), and held until the next round is. Before the first delivery the
+    joints as sampled at the first state (the bridge's first reading).
+
+    Args:
+        timing: The joint states' timing (rate above 0).
+        n_joints: Number of arm joints.
+        seed: Seed of the latency jitter draws.
+
+    >>> hold = StaggeredHold(SignalTiming(rate_hz=100.0), 2)
+    >>> [hold.at(t * 1_000_000, [t, t], [0, 0], [0, 0])[0] for t in range(0, 18, 2)]
+    [[0, 0], [0, 0], [0, 0], [0, 6], [0, 6], [0, 6], [0, 6], [0, 6], [10, 16]]
+    """
+
+    def __init__(self, timing: SignalTiming, n_joints: int, seed: int = 0) -> None:
+        self._period_ns = timing.period_ns
+        self._n = n_joints
+        self._latency = LatencyDraws(timing, seed)
+        self._round_start_ns: int | None = None
+        self._next = 0  # the joint asked next
+        self._round: list[list[float]] = [[0.0] * n_joints for _ in range(3)]
+        self._pending: deque[tuple[int, list[list[float]]]] = deque()
+        self._held: list[list[float]] | None = None
+
+    def at(self, t_ns: int, q: list[float], w: list[float],
+           tau: list[float]) -> list[list[float]]:
+        """[positions, velocities, efforts] of the joints as delivered at state time t_ns.
+
+        ``q``, ``w`` and ``tau`` are the joints' values now (n each).
+        """
+        if self._round_start_ns is None:
+            self._round_start_ns = t_ns
+            self._held = [list(q), list(w), list(tau)]
+        while self._next < self._n and t_ns >= self._due_ns(self._next):
+            j = self._next
+            self._round[0][j], self._round[1][j], self._round[2][j] = q[j], w[j], tau[j]
+            self._next += 1
+            if self._next == self._n:  # the round's last answer: on its way
+                self._pending.append((t_ns + self._latency(),
+                                      [list(values) for values in self._round]))
+                self._next = 0
+                self._round_start_ns += self._period_ns
+        while self._pending and self._pending[0][0] <= t_ns:
+            self._held = self._pending.popleft()[1]
+        assert self._held is not None
+        return self._held
+
+    def _due_ns(self, joint: int) -> int:
+        assert self._round_start_ns is not None
+        return self._round_start_ns + (joint * self._period_ns) // self._n
 
 
 class CommandHold(Generic[T]):

@@ -226,6 +226,12 @@ def _device_specs() -> tuple[ParameterSpec, ...]:
                 f'devices.{name}.rate_hz', 0.0,
                 f'Rate at which {_SIGNAL_TEXT[name]} is sampled (Hz), held between samples; '
                 '0: with every state.', 0.0, 100000.0))
+        if name == 'joint_states':
+            specs.append(ParameterSpec(
+                'devices.joint_states.staggered', False,
+                'The arm joints sampled one at a time, evenly over each 1/rate_hz round, the '
+                'round delivered whole after its last joint (a polled bus answers one device '
+                'at a time); false: every joint at each sample.'))
         specs.append(ParameterSpec(
             f'devices.{name}.latency_s', 0.0,
             f'Latency of {_SIGNAL_TEXT[name]} from the sample to its delivery (s), delivered '

@@ -4,10 +4,20 @@ from __future__ import annotations
 
 import itertools
 
+import numpy as np
 import pytest
-from uvms_sim.device_timing import CommandHold, DeviceTiming, SampleHold, SignalTiming
+from uvms_model.contact import ContactState
+from uvms_sim.device_delivery import DeviceDelivery
+from uvms_sim.device_timing import (
+    CommandHold,
+    DeviceTiming,
+    SampleHold,
+    SignalTiming,
+    StaggeredHold,
+)
 from uvms_sim.errors import SimParameterError
 from uvms_sim.parameters import SIMULATOR_PARAMETERS, SPECS_BY_NAME, SimulatorSettings
+from uvms_sim.plant import Observation
 
 from uvms_description.robots import robot_parameters
 
@@ -46,6 +56,38 @@ def test_jittered_latency_is_deterministic_per_seed_and_within_its_band() -> Non
     assert _deliveries(timing, seed=3) != _deliveries(timing, seed=4)
     ages = [t - s for t, s in _deliveries(timing, seed=3) if t > 20_000_000]
     assert min(ages) >= 500_000
+
+
+def test_staggered_joints_are_each_sampled_at_their_turn_and_delivered_as_a_round() -> None:
+    """A polled bus: joint j answers j/n of a round after joint 0; the round arrives whole.
+
+    Four joints at 43.5 Hz (23 ms rounds), 2 ms after the round's last answer: every
+    delivered round holds four sampling instants 5.75 ms apart (on the 2 ms state grid), and
+    no value is delivered before its round's last joint was sampled plus the latency.
+    """
+    timing = SignalTiming(rate_hz=43.5, latency_s=0.002, staggered=True)
+    hold = StaggeredHold(timing, 4)
+    rounds = []
+    for t in range(0, 1_000_000_001, STATE_NS):
+        times = hold.at(t, [t] * 4, [0.0] * 4, [0.0] * 4)[0]
+        if not rounds or times != rounds[-1][1]:
+            rounds.append((t, times))
+    assert 42 <= len(rounds) - 1 <= 44  # 43.5 rounds a second (the first: the start-up value)
+    for arrived, times in rounds[1:]:
+        spread = [b - a for a, b in itertools.pairwise(times)]
+        assert all(4_000_000 <= d <= 8_000_000 for d in spread), spread
+        assert arrived - times[-1] >= 2_000_000
+        assert times[-1] - times[0] < round(1e9 / 43.5)
+
+
+def test_staggered_joint_states_through_the_simulators_parameters() -> None:
+    """devices.joint_states.staggered: declared false, read into the joint states' timing."""
+    assert SPECS_BY_NAME['devices.joint_states.staggered'].default is False
+    values = {**DEFAULTS, 'devices.joint_states.rate_hz': 43.5,
+              'devices.joint_states.staggered': True}
+    timing = DeviceTiming.from_values(values)
+    assert timing['joint_states'].staggered
+    assert 'one joint at a time' in timing.summary()
 
 
 def test_thrusts_change_only_in_ardusubs_50_hz_rc_loop() -> None:
@@ -97,3 +139,26 @@ def test_bluerov2_alpha5_declares_device_timing_and_the_paper_robot_none() -> No
          'devices.ideal': False})  # what a scenario's devices.ideal false applies
     assert not timing.ideal
     assert timing['wrench'].latency_s == pytest.approx(288e-6)
+
+
+def test_the_simulators_observation_carries_each_joint_from_its_own_turn() -> None:
+    """DeviceDelivery, staggered: the arm's values of a state come from four instants.
+
+    The vehicle's coordinates and the wrist sensor stay those of the state.
+    """
+    values = {**DEFAULTS, 'devices.joint_states.rate_hz': 43.5,
+              'devices.joint_states.staggered': True}
+    delivery = DeviceDelivery(DeviceTiming.from_values(values), seed=0)
+    contact = ContactState(False, np.zeros(3), 0.0, 1.0, 0.0)
+    seen = None
+    for t in range(0, 100_000_001, STATE_NS):
+        now = np.full(10, float(t))
+        seen = delivery.observation(Observation(
+            t, now.copy(), now.copy(), np.full(4, float(t)), {}, contact,
+            np.full(3, float(t)), np.zeros(3)), 4)
+    assert seen is not None
+    assert seen.q[:6].tolist() == [100_000_000.0] * 6  # the vehicle: the state's own
+    assert seen.sensor_force.tolist() == [100_000_000.0] * 3
+    arm = seen.q[6:].tolist()
+    assert arm == seen.w[6:].tolist() == seen.joint_torques.tolist()
+    assert len(set(arm)) == 4 and max(arm) < 100_000_000.0
