@@ -57,6 +57,10 @@ STAND_PARAMETERS: dict[str, tuple[Any, str]] = {
                               'assumed: a DVL without lock still answers its pings)'),
     'arm_servo_bandwidth_rad_s': (SERVO_BANDWIDTH_RAD_S, "Bandwidth of the arm devices' own "
                                   'speed loop in Velocity mode (rad/s; plant_side.ArmServo)'),
+    'alpha5_bus': (False, "The Alpha 5 twin keeps the arm's half-duplex RS-485 line at "
+                          'arm.serial_baud (uvms_twins.rs485_bus): every frame and answer takes '
+                          "its time; with the bridge's bus_schedule (docs/hardware.md, 'The "
+                          "Alpha 5 bus'). Off: every frame answered and applied at once"),
     'dvl_altitude_m': (1.85, 'Altitude the DVL twin reports when the reading has none (m)'),
     'ardusub_bridge.connection': ('udpout:127.0.0.1:14551', 'Where the ArduSub bridge '
                                   'connects (the twin listens there)'),
@@ -119,7 +123,8 @@ class TwinStand:
         if link.kind != 'udp':
             raise AddressError(f'alpha5_bridge.connection = {link}: the Alpha 5 twin serves '
                                'UDP only (a serial bridge needs the real arm)')
-        self.arm = Alpha5Twin(arm, host=link.target, port=link.number, clock=plant_clock_s)
+        self.arm = Alpha5Twin(arm, host=link.target, port=link.number, clock=plant_clock_s,
+                              bus=bool(v['alpha5_bus']))
         host, port = parse_host_port(str(v['netft_bridge.connection']), load_netft(robot).port)
         self.netft = NetFtTwin(host=host, port=port, rate_hz=float(v['netft_rate_hz']))
         self.connections = {name: str(v[f'{name}.connection'])

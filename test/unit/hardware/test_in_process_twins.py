@@ -202,3 +202,19 @@ def test_no_command_until_the_bridges_drive_then_torques_in_the_plants_order(
     assert torques[PLANT_JOINTS.index('joint_3')] == pytest.approx(expected)
     assert all(math.isfinite(t) for t in torques)
 
+
+
+@pytest.mark.parametrize('bus', [False, True])
+def test_the_stands_alpha5_bus_switch_gives_the_arm_twin_its_line(bus: bool) -> None:
+    """``alpha5_bus`` (``twins.alpha5_bus`` on the simulator): the arm twin's RS-485 line.
+
+    On, the twin keeps the line at the robot's baud; off (the default), it answers every
+    frame at once.
+    """
+    stand = TwinStand(ROBOT, {**PORTS, 'alpha5_bus': bus}, lambda: 0.0, lambda line: None)
+    try:
+        assert (stand.arm.line is not None) is bus
+        if bus:
+            assert stand.arm.line.baud == load_alpha5(ROBOT).serial_baud
+    finally:
+        stand.stop()
