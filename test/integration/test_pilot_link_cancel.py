@@ -2,11 +2,15 @@
 
 Seen in CI under load: key t sent the goal, the controller already ran the task, and key c
 came before the pilot had the goal's acceptance; the pilot then said 'press c again' and
-cancelled nothing. A cancel asked then is now kept and sent with the acceptance.
+cancelled nothing. A cancel asked then is now kept and sent with the acceptance. Seen in a
+soak (2026-12-07): the acceptance came on the executor's thread between the key's look at the
+goal and its keeping of the cancel, which was then never sent; the two now decide under one
+lock.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterator
 from concurrent.futures import Future
 from pathlib import Path
@@ -101,3 +105,36 @@ def test_a_cancel_after_the_acceptance_goes_at_once(link: tuple[PilotLink, FakeT
     pilot.cancel_task()
     assert tasks.cancelled == [handle]
     assert pilot.live.note == 'cancel: asked'
+
+
+class AcceptedWhileLooked:
+    """A goal on its way, accepted on another thread just as the input loop looks at it.
+
+    That is the race's window; the look waits up to 0.5 s for the acceptance to be taken.
+    """
+
+    def __init__(self, tasks: FakeTasks, handle: Any) -> None:
+        self.tasks, self.handle = tasks, handle
+        self.thread: threading.Thread | None = None
+
+    def __getattr__(self, name: str) -> Any:
+        if name == 'cancel_goal_async' and self.thread is None:
+            self.thread = threading.Thread(target=self.tasks.goal_future.set_result,
+                                           args=(self.handle,))
+            self.thread.start()
+            self.thread.join(0.5)  # done at once unless the link makes it wait its turn
+        raise AttributeError(name)
+
+
+def test_a_cancel_whose_goal_is_accepted_while_it_is_asked_is_sent(
+        link: tuple[PilotLink, FakeTasks]) -> None:
+    """Key c and the acceptance at the same moment, on two threads: the cancel goes out."""
+    pilot, tasks = link
+    pilot.start_task()
+    handle = accepted_handle()
+    racing = AcceptedWhileLooked(tasks, handle)
+    pilot._goal = racing
+    pilot.cancel_task()
+    assert racing.thread is not None
+    racing.thread.join(5.0)
+    assert tasks.cancelled == [handle]

@@ -95,6 +95,9 @@ class PilotLink:
         self._goal: Any = None
         #: A cancel asked while the goal's acceptance was still on its way: sent on acceptance.
         self._cancel_on_accept = False
+        #: The input loop's cancel and the executor's acceptance decide under it, so that an
+        #: acceptance between the cancel's look and its note cannot lose the cancel.
+        self._goal_lock = threading.Lock()
         self._task_name = ''  # the running task's, on its feedback lines
 
     def _update(self, **changes: Any) -> None:
@@ -190,14 +193,17 @@ class PilotLink:
         from uvms_tasks.goals import TaskOutcome
 
         handle = future.result()
+        with self._goal_lock:
+            cancel, self._cancel_on_accept = self._cancel_on_accept, False
+            if not handle.accepted:
+                self._goal, self._queue = None, []
+            else:
+                self._goal = handle
         if not handle.accepted:
-            self._goal, self._queue, self._cancel_on_accept = None, [], False
             self._update(task=TaskOutcome(task.name, int(handle.status), rejected=True).describe())
             return
-        self._goal = handle
         self._tasks.result_async(handle).add_done_callback(lambda f: self._on_result(task, f))
-        if self._cancel_on_accept:
-            self._cancel_on_accept = False
+        if cancel:
             self._tasks.cancel_async(handle)
             self.note('cancel: asked')
 
@@ -206,7 +212,8 @@ class PilotLink:
 
         response = future.result()
         outcome = TaskOutcome(task.name, int(response.status), response.result)
-        self._goal = None
+        with self._goal_lock:
+            self._goal = None
         self._update(task=outcome.describe())
         if outcome.succeeded and self._queue:
             self._send_next()
@@ -215,16 +222,19 @@ class PilotLink:
 
     def cancel_task(self) -> None:
         """Cancel the running task (the controller backs the arm off as on any cancel)."""
-        self._queue = []
-        if self._goal is None:
+        with self._goal_lock:
+            self._queue = []
+            goal = self._goal
+            # Sent, its acceptance not yet here: the acceptance sends the cancel.
+            waiting = goal is not None and not hasattr(goal, 'cancel_goal_async')
+            self._cancel_on_accept = self._cancel_on_accept or waiting
+        if goal is None:
             self.note('no task to cancel')
-            return
-        if not hasattr(self._goal, 'cancel_goal_async'):  # sent, its acceptance not yet here
-            self._cancel_on_accept = True
+        elif waiting:
             self.note('cancel: asked, sent once the goal is accepted')
-            return
-        self._tasks.cancel_async(self._goal)
-        self.note('cancel: asked')
+        else:
+            self._tasks.cancel_async(goal)
+            self.note('cancel: asked')
 
     # ------------------------------------------------------------------ in
 
