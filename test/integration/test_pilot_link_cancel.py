@@ -2,10 +2,12 @@
 
 Seen in CI under load: key t sent the goal, the controller already ran the task, and key c
 came before the pilot had the goal's acceptance; the pilot then said 'press c again' and
-cancelled nothing. A cancel asked then is now kept and sent with the acceptance. Seen in a
-soak (2026-12-07): the acceptance came on the executor's thread between the key's look at the
-goal and its keeping of the cancel, which was then never sent; the two now decide under one
-lock.
+cancelled nothing. A cancel asked then is now kept and sent with the acceptance. The key's
+look at the goal and the acceptance run on two threads; they now decide under one lock, or an
+acceptance between the look and the keeping of the cancel would lose it (the last test makes
+that happen). A soak of test_pilot_tui_launch (2026-12-07) showed the lost cancel's screen
+twice in 60 runs, once after the lock: there the acceptance itself never reached the pilot
+while the goal ran (its feedback did), which the lock cannot help (docs/piloting.md).
 """
 
 from __future__ import annotations
