@@ -13,6 +13,7 @@ while the goal ran (its feedback did), which the lock cannot help (docs/piloting
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Iterator
 from concurrent.futures import Future
 from pathlib import Path
@@ -22,6 +23,7 @@ from typing import Any
 import pytest
 import rclpy
 from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from uvms_pilot.link import PilotLink
@@ -33,9 +35,11 @@ class FakeTasks:
     def __init__(self) -> None:
         self.goal_future: Future[Any] = Future()
         self.cancelled: list[Any] = []
+        self.sent_on: str | None = None  # the thread that sent the goal
 
     def send_goal_async(self, goal: Any, feedback: Any) -> Future[Any]:
         """The goal's acceptance, set by the test."""
+        self.sent_on = threading.current_thread().name
         return self.goal_future
 
     def result_async(self, handle: Any) -> Future[Any]:
@@ -66,18 +70,29 @@ require_contact: false
 
 
 @pytest.fixture
-def link(tmp_path: Path) -> Iterator[tuple[PilotLink, FakeTasks]]:
-    """A pilot link on a node of its own context with a task file, its task client faked."""
+def link(tmp_path: Path) -> Iterator[tuple[PilotLink, FakeTasks, SingleThreadedExecutor]]:
+    """A pilot link on a node of its own context with a task file, its task client faked.
+
+    The executor is the test's to spin: the link sends its requests on the executor's thread.
+    """
     context = Context()
     rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     node = Node('pilot_link_test', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
     (tmp_path / 'task.yaml').write_text(TASK)
     pilot = PilotLink(node, 'base_link_frd', task_file=tmp_path / 'task.yaml')
     tasks = FakeTasks()
     pilot._tasks = tasks  # type: ignore[assignment]
-    yield pilot, tasks
+    yield pilot, tasks, executor
+    executor.shutdown(timeout_sec=1.0)
     node.destroy_node()
     rclpy.try_shutdown(context=context)
+
+
+def turn(executor: SingleThreadedExecutor) -> None:
+    """What the link asked of the executor's thread, done (one spin)."""
+    executor.spin_once(timeout_sec=1.0)
 
 
 def accepted_handle() -> Any:
@@ -86,10 +101,11 @@ def accepted_handle() -> Any:
 
 
 def test_a_cancel_before_the_acceptance_is_sent_with_it(
-        link: tuple[PilotLink, FakeTasks]) -> None:
+        link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
     """Key c while the goal is on its way: 'cancel: asked', the cancel sent on acceptance."""
-    pilot, tasks = link
+    pilot, tasks, executor = link
     pilot.start_task()
+    turn(executor)
     pilot.cancel_task()
     assert 'cancel: asked' in (pilot.live.note or '')
     assert tasks.cancelled == []
@@ -98,13 +114,16 @@ def test_a_cancel_before_the_acceptance_is_sent_with_it(
     assert tasks.cancelled == [handle]
 
 
-def test_a_cancel_after_the_acceptance_goes_at_once(link: tuple[PilotLink, FakeTasks]) -> None:
+def test_a_cancel_after_the_acceptance_goes_at_once(
+        link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
     """Key c once accepted: the cancel goes out then, once."""
-    pilot, tasks = link
+    pilot, tasks, executor = link
     pilot.start_task()
+    turn(executor)
     handle = accepted_handle()
     tasks.goal_future.set_result(handle)
     pilot.cancel_task()
+    turn(executor)
     assert tasks.cancelled == [handle]
     assert pilot.live.note == 'cancel: asked'
 
@@ -129,10 +148,11 @@ class AcceptedWhileLooked:
 
 
 def test_a_cancel_whose_goal_is_accepted_while_it_is_asked_is_sent(
-        link: tuple[PilotLink, FakeTasks]) -> None:
+        link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
     """Key c and the acceptance at the same moment, on two threads: the cancel goes out."""
-    pilot, tasks = link
+    pilot, tasks, executor = link
     pilot.start_task()
+    turn(executor)
     handle = accepted_handle()
     racing = AcceptedWhileLooked(tasks, handle)
     pilot._goal = racing
@@ -140,3 +160,31 @@ def test_a_cancel_whose_goal_is_accepted_while_it_is_asked_is_sent(
     assert racing.thread is not None
     racing.thread.join(5.0)
     assert tasks.cancelled == [handle]
+
+
+def test_the_goal_goes_out_on_the_executors_thread(
+        link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
+    """Key t on the input loop's thread; the goal is sent on the executor's.
+
+    rclpy's ActionClient registers a goal's answer after sending it: an answer the executor
+    takes in between is dropped, and the goal runs with the pilot never told it was accepted
+    (twice in 60 soak runs of test_pilot_tui_launch, 2026-12-07).
+    """
+    pilot, tasks, executor = link
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set():
+            executor.spin_once(timeout_sec=0.05)
+
+    spinner = threading.Thread(target=spin, name='executor')
+    spinner.start()
+    try:
+        pilot.start_task()
+        deadline = time.monotonic() + 5.0
+        while tasks.sent_on is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+    finally:
+        stop.set()
+        spinner.join(5.0)
+    assert tasks.sent_on == 'executor'

@@ -3,6 +3,8 @@
 ``PilotLink`` lives on a node in the graph's namespace (/uvms) that an executor spins in a
 thread of its own; the input loop calls ``publish``/``hold``/``start_task``/``cancel_task``
 from its thread, and reads ``live`` (the latest state, replaced whole, never half-written).
+The task's goal and cancel requests go out on the executor's thread (rclpy's ActionClient
+is not safe to call from another one).
 Topics and services: docs/piloting.md and the pilot interface contract (issue 51).
 """
 
@@ -10,6 +12,8 @@ from __future__ import annotations
 
 import dataclasses
 import threading
+from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -99,6 +103,12 @@ class PilotLink:
         #: acceptance between the cancel's look and its note cannot lose the cancel.
         self._goal_lock = threading.Lock()
         self._task_name = ''  # the running task's, on its feedback lines
+        #: The action client's calls, made on the executor's thread: rclpy's ActionClient
+        #: registers a goal's (or a cancel's) answer only after sending its request, so an
+        #: answer taken by the executor in between is dropped ("Ignoring unexpected goal
+        #: response") and the goal runs with the pilot never told it was accepted.
+        self._for_executor: deque[Callable[[], Any]] = deque()
+        self._wake_executor = node.create_guard_condition(self._run_for_executor)
 
     def _update(self, **changes: Any) -> None:
         with self._live_lock:  # the executor's thread and the input loop's both write
@@ -107,6 +117,15 @@ class PilotLink:
     def note(self, text: str) -> None:
         """Show one line of what just happened (an answer, a refusal)."""
         self._update(note=text)
+
+    def _on_executor_thread(self, job: Callable[[], Any]) -> None:
+        """Run ``job`` on the executor's thread, soon (the input loop's way to the client)."""
+        self._for_executor.append(job)
+        self._wake_executor.trigger()
+
+    def _run_for_executor(self) -> None:
+        while self._for_executor:
+            self._for_executor.popleft()()
 
     # ------------------------------------------------------------------ out
 
@@ -168,18 +187,21 @@ class PilotLink:
         except TaskFileError as exc:
             self.note(f'task file refused: {exc}')
             return
-        self._send_next()
+        self._on_executor_thread(self._send_next)
 
     def _send_next(self) -> None:
         from uvms_tasks.goals import describe_task, goal_from_task
 
-        task = self._queue.pop(0)
+        with self._goal_lock:
+            if not self._queue:
+                return  # cancelled before it went out
+            task = self._queue.pop(0)
+            self._goal = task
         state = self._tasks.latest_state
         start = None if state is None else (state.desired_position.x,
                                             state.desired_position.y,
                                             state.desired_position.z)
         self._update(task=f'sending {describe_task(task)}')
-        self._goal = task
         self._task_name = task.name
         future = self._tasks.send_goal_async(goal_from_task(task, start), self._on_feedback)
         future.add_done_callback(lambda f: self._on_answer(task, f))
@@ -233,7 +255,7 @@ class PilotLink:
         elif waiting:
             self.note('cancel: asked, sent once the goal is accepted')
         else:
-            self._tasks.cancel_async(goal)
+            self._on_executor_thread(lambda: self._tasks.cancel_async(goal))
             self.note('cancel: asked')
 
     # ------------------------------------------------------------------ in
