@@ -4,10 +4,12 @@ Seen in CI under load: key t sent the goal, the controller already ran the task,
 came before the pilot had the goal's acceptance; the pilot then said 'press c again' and
 cancelled nothing. A cancel asked then is now kept and sent with the acceptance. The key's
 look at the goal and the acceptance run on two threads; they now decide under one lock, or an
-acceptance between the look and the keeping of the cancel would lose it (the last test makes
-that happen). A soak of test_pilot_tui_launch (2026-12-07) showed the lost cancel's screen
-twice in 60 runs, once after the lock: there the acceptance itself never reached the pilot
-while the goal ran (its feedback did), which the lock cannot help (docs/piloting.md).
+acceptance between the look and the keeping of the cancel would lose it (a test makes that
+happen). A soak of test_pilot_tui_launch (2026-12-07) showed the lost cancel's screen twice
+in 60 runs, once after the lock: the acceptance itself never reached the pilot while the goal
+ran, because rclpy's ActionClient, called from the input loop's thread, can drop the answer
+to a goal it has sent but not yet registered; the pilot now sends on the executor's thread
+(the last test; docs/piloting.md).
 """
 
 from __future__ import annotations
