@@ -190,3 +190,22 @@ def test_the_goal_goes_out_on_the_executors_thread(
         stop.set()
         spinner.join(5.0)
     assert tasks.sent_on == 'executor'
+
+
+def test_a_task_that_cannot_be_sent_is_said_and_the_pilot_goes_on(
+        link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor], tmp_path: Path) -> None:
+    """A half circle from the held point with no controller state yet: not sent, said why.
+
+    The goal is made on the executor's thread; its error is shown, not raised into the spin,
+    and key t works again.
+    """
+    pilot, tasks, executor = link
+    (tmp_path / 'task.yaml').write_text(
+        'name: from_here\nhalf_circle: {radius_m: 0.03, duration_s: 8.0}\n'
+        'normal: [1.0, 0.0, 0.0]\nforce_n: 5.0\n')
+    pilot.start_task()
+    turn(executor)
+    assert tasks.sent_on is None
+    assert 'not sent' in (pilot.live.task or '') and 'X0' in (pilot.live.task or '')
+    pilot.start_task()
+    assert pilot.live.note != 'a task is running: c cancels it'

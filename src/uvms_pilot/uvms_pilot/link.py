@@ -190,6 +190,7 @@ class PilotLink:
         self._on_executor_thread(self._send_next)
 
     def _send_next(self) -> None:
+        from uvms_tasks.errors import TaskError
         from uvms_tasks.goals import describe_task, goal_from_task
 
         with self._goal_lock:
@@ -201,9 +202,16 @@ class PilotLink:
         start = None if state is None else (state.desired_position.x,
                                             state.desired_position.y,
                                             state.desired_position.z)
+        try:
+            goal = goal_from_task(task, start)
+        except TaskError as exc:  # on the executor's thread: said on screen, not raised
+            with self._goal_lock:
+                self._goal, self._queue, self._cancel_on_accept = None, [], False
+            self._update(task=f'not sent: {exc}')
+            return
         self._update(task=f'sending {describe_task(task)}')
         self._task_name = task.name
-        future = self._tasks.send_goal_async(goal_from_task(task, start), self._on_feedback)
+        future = self._tasks.send_goal_async(goal, self._on_feedback)
         future.add_done_callback(lambda f: self._on_answer(task, f))
 
     def _on_feedback(self, feedback: Any) -> None:
