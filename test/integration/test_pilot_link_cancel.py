@@ -28,6 +28,7 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from test_pilot_tui import spin_in_thread
 from uvms_pilot.link import PilotLink
 
 
@@ -37,11 +38,11 @@ class FakeTasks:
     def __init__(self) -> None:
         self.goal_future: Future[Any] = Future()
         self.cancelled: list[Any] = []
-        self.sent_on: str | None = None  # the thread that sent the goal
+        self.sent_on: threading.Thread | None = None  # the thread that sent the goal
 
     def send_goal_async(self, goal: Any, feedback: Any) -> Future[Any]:
         """The goal's acceptance, set by the test."""
-        self.sent_on = threading.current_thread().name
+        self.sent_on = threading.current_thread()
         return self.goal_future
 
     def result_async(self, handle: Any) -> Future[Any]:
@@ -97,6 +98,15 @@ def turn(executor: SingleThreadedExecutor) -> None:
     executor.spin_once(timeout_sec=1.0)
 
 
+def task_sent(link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]
+              ) -> tuple[PilotLink, FakeTasks, SingleThreadedExecutor]:
+    """Key t pressed and its goal sent (its acceptance not yet come)."""
+    pilot, _, executor = link
+    pilot.start_task()
+    turn(executor)
+    return link
+
+
 def accepted_handle() -> Any:
     """A goal handle as rclpy's, accepted."""
     return SimpleNamespace(accepted=True, cancel_goal_async=lambda: None, status=2)
@@ -105,9 +115,7 @@ def accepted_handle() -> Any:
 def test_a_cancel_before_the_acceptance_is_sent_with_it(
         link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
     """Key c while the goal is on its way: 'cancel: asked', the cancel sent on acceptance."""
-    pilot, tasks, executor = link
-    pilot.start_task()
-    turn(executor)
+    pilot, tasks, _ = task_sent(link)
     pilot.cancel_task()
     assert 'cancel: asked' in (pilot.live.note or '')
     assert tasks.cancelled == []
@@ -119,9 +127,7 @@ def test_a_cancel_before_the_acceptance_is_sent_with_it(
 def test_a_cancel_after_the_acceptance_goes_at_once(
         link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
     """Key c once accepted: the cancel goes out then, once."""
-    pilot, tasks, executor = link
-    pilot.start_task()
-    turn(executor)
+    pilot, tasks, executor = task_sent(link)
     handle = accepted_handle()
     tasks.goal_future.set_result(handle)
     pilot.cancel_task()
@@ -152,9 +158,7 @@ class AcceptedWhileLooked:
 def test_a_cancel_whose_goal_is_accepted_while_it_is_asked_is_sent(
         link: tuple[PilotLink, FakeTasks, SingleThreadedExecutor]) -> None:
     """Key c and the acceptance at the same moment, on two threads: the cancel goes out."""
-    pilot, tasks, executor = link
-    pilot.start_task()
-    turn(executor)
+    pilot, tasks, _ = task_sent(link)
     handle = accepted_handle()
     racing = AcceptedWhileLooked(tasks, handle)
     pilot._goal = racing
@@ -173,23 +177,15 @@ def test_the_goal_goes_out_on_the_executors_thread(
     (twice in 60 soak runs of test_pilot_tui_launch, 2026-12-07).
     """
     pilot, tasks, executor = link
-    stop = threading.Event()
-
-    def spin() -> None:
-        while not stop.is_set():
-            executor.spin_once(timeout_sec=0.05)
-
-    spinner = threading.Thread(target=spin, name='executor')
-    spinner.start()
+    end = spin_in_thread(executor)
     try:
         pilot.start_task()
         deadline = time.monotonic() + 5.0
         while tasks.sent_on is None and time.monotonic() < deadline:
             time.sleep(0.01)
     finally:
-        stop.set()
-        spinner.join(5.0)
-    assert tasks.sent_on == 'executor'
+        end()
+    assert tasks.sent_on is not None and tasks.sent_on is not threading.current_thread()
 
 
 def test_a_task_that_cannot_be_sent_is_said_and_the_pilot_goes_on(

@@ -4,8 +4,8 @@ One object per simulator holds the holds of ``uvms_sim.device_timing`` that the 
 timing asks for (None where a signal is ideal, so that an ideal run takes exactly the
 idealized path)::
 
-    delivery = DeviceDelivery(devices, seed)
-    out.update(delivery.observation(seen, n_joints))          # joint states, wrench as delivered
+    delivery = DeviceDelivery(devices, seed, n_joints)
+    out.update(delivery.observation(seen))          # joint states, wrench as delivered
     thrusts, torques = delivery.commands(t_ns, thrusts, torques)  # as the devices apply them
 """
 
@@ -21,15 +21,16 @@ from uvms_sim.plant import Observation
 class DeviceDelivery:
     """Sensors sampled, delayed and held; commands latched at the devices' rates."""
 
-    def __init__(self, devices: DeviceTiming, seed: int) -> None:
+    def __init__(self, devices: DeviceTiming, seed: int, n_joints: int) -> None:
+        self._n = n_joints
         joints = devices['joint_states']
-        #: One joint at a time over each round (a polled bus), made at the first observation.
-        self._staggered = joints.staggered and joints.rate_hz > 0.0
-        self._stagger_hold: StaggeredHold | None = None
-        self._joint_seed = seed + 1
-        self._joint_timing = joints
+        #: One joint at a time over each round (a polled bus): joint_states.staggered.
+        self._stagger_hold: StaggeredHold | None = (
+            StaggeredHold(joints, n_joints, seed + 1)
+            if joints.staggered and joints.rate_hz > 0.0 else None)
         self._joint_hold: SampleHold[Observation] | None = (
-            None if joints.ideal or self._staggered else SampleHold(joints, seed + 1))
+            None if joints.ideal or self._stagger_hold is not None
+            else SampleHold(joints, seed + 1))
         self._wrench_hold: SampleHold[Observation] | None = (
             None if devices['wrench'].ideal else SampleHold(devices['wrench'], seed + 2))
         self._thrust_hold: CommandHold[Any] | None = (
@@ -39,21 +40,21 @@ class DeviceDelivery:
             None if devices['arm_commands'].rate_hz == 0.0
             else CommandHold(devices['arm_commands'].rate_hz))
 
-    def observation(self, seen: Observation, n_joints: int) -> Observation:
+    def observation(self, seen: Observation) -> Observation:
         """The observation with joint states and wrench as the devices deliver them at t_k.
 
         Each held signal is its newest delivered sample (uvms_sim.device_timing), stamped
         with the state's time; the ground truth (odometry, ee_pose, contact) stays current.
         """
-        if self._joint_hold is None and self._wrench_hold is None and not self._staggered:
+        stagger = self._stagger_hold
+        if self._joint_hold is None and self._wrench_hold is None and stagger is None:
             return seen
+        n_joints = self._n
         wrench = seen if self._wrench_hold is None else self._wrench_hold.at(
             seen.t_ns, lambda: seen)
         q, w = seen.q.copy(), seen.w.copy()
-        if self._staggered:
-            if self._stagger_hold is None:
-                self._stagger_hold = StaggeredHold(self._joint_timing, n_joints, self._joint_seed)
-            arm_q, arm_w, arm_tau = self._stagger_hold.at(
+        if stagger is not None:
+            arm_q, arm_w, arm_tau = stagger.at(
                 seen.t_ns, seen.q[6:6 + n_joints].tolist(), seen.w[6:6 + n_joints].tolist(),
                 seen.joint_torques[:n_joints].tolist())
             q[6:6 + n_joints], w[6:6 + n_joints] = arm_q, arm_w

@@ -148,7 +148,7 @@ class SimulatorNode(StartupHold):
                             else NavigationTopics(*navigation_args) if self._plant_side is None
                             else PlantSideNavigation(self._plant_side, *navigation_args))
         # Device timing (uvms_sim.device_delivery): an ideal run takes exactly today's path.
-        self._devices = DeviceDelivery(devices, params.sensor.seed)
+        self._devices = DeviceDelivery(devices, params.sensor.seed, self._plant.n_joints)
         self._messages = raw_conversions.RawStateMessages(self._plant.joint_names)
         self._parents = conversions.frame_parents(self._plant.model.frame_names)
 
@@ -377,7 +377,7 @@ class SimulatorNode(StartupHold):
         ground_truth_due = self._published % self._settings.publishes_per_ground_truth == 0
         seen = self._plant.observe(all_frames=tf_due)
         out = self._messages
-        delivered = self._devices.observation(seen, self._plant.n_joints)
+        delivered = self._devices.observation(seen)
         out.update(delivered, ground_truth=ground_truth_due)
         if self._plant_side is not None:
             self._plant_side.observe(delivered)

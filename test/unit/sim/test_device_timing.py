@@ -148,14 +148,14 @@ def test_the_simulators_observation_carries_each_joint_from_its_own_turn() -> No
     """
     values = {**DEFAULTS, 'devices.joint_states.rate_hz': 43.5,
               'devices.joint_states.staggered': True}
-    delivery = DeviceDelivery(DeviceTiming.from_values(values), seed=0)
+    delivery = DeviceDelivery(DeviceTiming.from_values(values), seed=0, n_joints=4)
     contact = ContactState(False, np.zeros(3), 0.0, 1.0, 0.0)
     seen = None
     for t in range(0, 100_000_001, STATE_NS):
         now = np.full(10, float(t))
         seen = delivery.observation(Observation(
             t, now.copy(), now.copy(), np.full(4, float(t)), {}, contact,
-            np.full(3, float(t)), np.zeros(3)), 4)
+            np.full(3, float(t)), np.zeros(3)))
     assert seen is not None
     assert seen.q[:6].tolist() == [100_000_000.0] * 6  # the vehicle: the state's own
     assert seen.sensor_force.tolist() == [100_000_000.0] * 3
