@@ -108,4 +108,4 @@ def test_thruster_outputs_left_in_passthrough_are_a_problem(
 def test_an_unknown_hardware_file_is_bad_usage(capsys: pytest.CaptureFixture[str]) -> None:
     """A typo in the file name: status 2 and the shipped files listed."""
     assert main(['check', 'pool']) == 2
-    assert 'shipped: bluerov2_pool, twin' in capsys.readouterr().err
+    assert 'shipped: bluerov2_pool, twin, twin_alpha5_bus' in capsys.readouterr().err

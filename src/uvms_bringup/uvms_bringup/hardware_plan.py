@@ -2,7 +2,9 @@
 
 A hardware file (``config/hardware/*.yaml``) names each bridge's connection as that bridge's
 parameters; ``twins: true`` starts the protocol twins where the bridges connect, fed by the
-simulator. The same file with the pool's addresses and ``twins: false`` drives the robot::
+simulator, and ``twins: {alpha5_bus: true}`` starts them with settings of the stand
+(``uvms_twins.twin_stand.checked_settings``). The same file with the pool's addresses and
+``twins: false`` drives the robot::
 
     twins: true
     bridges:
@@ -67,12 +69,14 @@ class HardwarePlan:
         twins_in_simulator: With twins: True serves them in the simulator's process
             (``uvms_twins.simulator_with_twins``: no /plant topics, no process of their
             own), False in the ``hardware_twins`` node beside it (``--twins-apart``).
+        twin_settings: The stand's settings the file sets (``twins:`` as a mapping).
     """
 
     path: Path
     twins: bool
     bridges: dict[str, dict[str, Any]] = field(default_factory=dict)
     twins_in_simulator: bool = True
+    twin_settings: dict[str, Any] = field(default_factory=dict)
 
     def simulator_remaps(self) -> list[tuple[str, str]]:
         """``--ros-args -r`` rules moving the simulator's device-side topics under /plant."""
@@ -81,9 +85,9 @@ class HardwarePlan:
         return [(topic, f'{PLANT_NAMESPACE}/{topic}') for topic in PLANT_TOPICS]
 
     def twin_parameters(self) -> dict[str, Any]:
-        """The twins node's parameters: each twin where its bridge connects."""
-        return {f'{name}.connection': self.bridges[name][CONNECTION_PARAMETER[name]]
-                for name in self.bridges}
+        """The twins node's parameters: each twin where its bridge connects, the settings."""
+        return {**{f'{name}.connection': self.bridges[name][CONNECTION_PARAMETER[name]]
+                   for name in self.bridges}, **self.twin_settings}
 
 
 def hardware_file_path(name_or_path: str, config: Path) -> Path:
@@ -120,8 +124,12 @@ def load_hardware_plan(path: Path) -> HardwarePlan:
         raise HardwareFileError(f'{path}: unknown keys {sorted(unknown)}; '
                                 'expected twins: and bridges:')
     twins = document.get('twins', False)
+    settings: dict[str, Any] = {}
+    if isinstance(twins, Mapping):  # the stand's names and types: the twins check them
+        settings, twins = dict(twins), True
     if not isinstance(twins, bool):
-        raise HardwareFileError(f'{path}: twins = {twins!r}: expected true or false')
+        raise HardwareFileError(f'{path}: twins = {twins!r}: expected true, false or a '
+                                "mapping of the stand's settings")
     bridges = document.get('bridges') or {}
     if not isinstance(bridges, Mapping):
         raise HardwareFileError(f'{path}: bridges: expected a mapping of bridge names')
@@ -144,7 +152,7 @@ def load_hardware_plan(path: Path) -> HardwarePlan:
         plan[name] = parameters
     if not plan:
         raise HardwareFileError(f'{path}: bridges: names no bridge')
-    return HardwarePlan(path, twins, plan)
+    return HardwarePlan(path, twins, plan, twin_settings=settings)
 
 
 def hardware_scenario(scenario: Scenario, plan: HardwarePlan) -> Scenario:

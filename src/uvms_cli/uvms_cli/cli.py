@@ -317,11 +317,9 @@ def _launch(args: argparse.Namespace, stop: StopEvent) -> int:
         scenario = _with_params_files(scenario, args.params_file)
         hardware = None
         if args.hardware is not None:
-            from uvms_bringup.hardware_plan import hardware_file_path, load_hardware_plan
-            from uvms_bringup.launch_helpers import config_dir
+            from uvms_cli.hardware import launch_plan
 
-            hardware = load_hardware_plan(hardware_file_path(args.hardware, config_dir()))
-            hardware = replace(hardware, twins_in_simulator=not args.twins_apart)
+            hardware = launch_plan(args.hardware, twins_apart=args.twins_apart)
         if args.twins_apart and not (hardware is not None and hardware.twins):
             raise ValueError('--twins-apart needs --hardware twin: no twins to run apart')
         compose = args.compose or ('robot' if hardware is not None else None)
@@ -401,7 +399,6 @@ def _with_params_files(scenario: Scenario | None, files: Sequence[str]) -> Scena
 
 def _with_ideal_devices(scenario: Scenario | None) -> Scenario:
     """The scenario (a blank one if None) with ``--ideal-devices``' values over its own."""
-    from dataclasses import replace
     from pathlib import Path
 
     from uvms_scenarios.scenario import Scenario

@@ -28,8 +28,14 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import replace
 
-from uvms_bringup.hardware_plan import HardwareFileError, hardware_file_path, load_hardware_plan
+from uvms_bringup.hardware_plan import (
+    HardwareFileError,
+    HardwarePlan,
+    hardware_file_path,
+    load_hardware_plan,
+)
 from uvms_bringup.launch_helpers import config_dir
 from uvms_hardware.ardusub_restore import restore_ardusub
 from uvms_hardware.errors import HardwareError
@@ -40,6 +46,25 @@ EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
 CONTROLLER_SETTLE_S = 0.5
 #: The ardusub_bridge's default ``mavlink_url``.
 DEFAULT_MAVLINK_URL = 'udpout:127.0.0.1:14550'
+
+
+def launch_plan(name_or_path: str, twins_apart: bool) -> HardwarePlan:
+    """``uvms launch --hardware twin|FILE [--twins-apart]``: the file read and checked.
+
+    The stand's settings (``twins:`` as a mapping) are checked by the twins' own names and
+    types (``uvms_twins.twin_stand.checked_settings``): a misspelt one would otherwise reach
+    the twins as a ROS parameter they do not declare, and be ignored.
+
+    Raises:
+        ValueError: The file, or a setting of the stand, is wrong (named).
+    """
+    plan = load_hardware_plan(hardware_file_path(name_or_path, config_dir()))
+    plan = replace(plan, twins_in_simulator=not twins_apart)
+    if plan.twin_settings:
+        from uvms_twins.twin_stand import checked_settings
+
+        plan = replace(plan, twin_settings=checked_settings(plan.twin_settings, str(plan.path)))
+    return plan
 
 
 def main(argv: Sequence[str] | None = None) -> int:

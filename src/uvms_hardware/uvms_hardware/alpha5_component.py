@@ -263,6 +263,7 @@ class Alpha5Component(HardwareComponent):
         self._urgent = b''
         if core is not None and link is not None:
             link.send(core.neutral_frames())  # every joint stops first, whatever follows
+            self.log('info', core.ages.line())
             settings = core.restore_settings(self.modes_before)
             problems = self._confirm(settings)
             core.stop_driving()

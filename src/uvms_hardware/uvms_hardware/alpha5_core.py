@@ -46,7 +46,7 @@ from collections.abc import Mapping, Sequence
 
 from uvms_hardware import reach_protocol as rp
 from uvms_hardware.alpha5_checks import Setting, describe, unit_of
-from uvms_hardware.alpha5_feedback import DeviceFeedback, JointSample
+from uvms_hardware.alpha5_feedback import DeviceFeedback, JointSample, SampleAges
 from uvms_hardware.hardware_config import Alpha5Hardware, Drive
 from uvms_hardware.reach_protocol import Mode, PacketId
 from uvms_hardware.watchdog import CommandWatchdog
@@ -113,6 +113,8 @@ class Alpha5Core:
         self._driving = False
         self._last_hold_s = -math.inf
         self._given_s = [-math.inf] * len(arm.joints)
+        #: How old the answers in the joint states given were (`next_joint_state`).
+        self.ages = SampleAges()
         self.rejected_commands = 0
         self.last_rejection = ''
         self.jaw_watchdog = CommandWatchdog(watchdog_timeout_s)
@@ -387,6 +389,7 @@ class Alpha5Core:
         if not all(math.isfinite(x) for x in positions + velocities):
             return None
         self._given_s = [v.oldest_s for v in values]
+        self.ages.add(t_s, self._given_s)
         return JointSample([d.joint_name for d in drives], positions, velocities,
                            min(self._given_s))
 
@@ -413,7 +416,8 @@ class Alpha5Core:
             **({'jaw_watchdog_trips': self.jaw_watchdog.trips,
                 'jaw_holding_velocity_0': self.jaw_holding} if self.jaw else {}),
             'rejected_commands': self.rejected_commands, 'silent_joints': ' '.join(silent),
-            'overspeed': self.overspeed,
+            'overspeed': self.overspeed, 'joint_states_given': self.ages.given,
+            **self.ages.figures_ms(),
             **{f'hardware_status.{k}': v for k, v in status.items()}}
         problems = [f'tripped: {self.overspeed}'] if self.overspeed else []
         if silent:

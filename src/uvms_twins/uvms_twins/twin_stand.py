@@ -70,6 +70,37 @@ STAND_PARAMETERS: dict[str, tuple[Any, str]] = {
 }
 
 
+def checked_settings(settings: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """A hardware file's ``twins:`` mapping: each a setting of the stand, of its default's type.
+
+    Args:
+        settings: Setting name -> value (``alpha5_bus: true``).
+        where: What to name in an error (the hardware file).
+
+    Returns:
+        The settings, an integer given for a float setting made a float.
+
+    Raises:
+        ValueError: An unknown setting (the known ones listed), a connection (the bridges'
+            section of the file sets those), or a value of another type than its default's.
+    """
+    known = {name: default for name, (default, _) in STAND_PARAMETERS.items()
+             if not name.endswith('.connection')}
+    out: dict[str, Any] = {}
+    for name, value in settings.items():
+        if name not in known:
+            raise ValueError(f'{where}: twins.{name}: not a setting of the stand; known: '
+                             f'{", ".join(sorted(known))} (connections are the bridges\' '
+                             'own, under bridges:)')
+        default = known[name]
+        numeric = (isinstance(default, float) and isinstance(value, int)
+                   and not isinstance(value, bool))
+        if type(value) is not type(default) and not numeric:
+            raise ValueError(f'{where}: twins.{name} = {value!r}: expected a '
+                             f'{type(default).__name__} (default {default!r})')
+        out[name] = float(value) if numeric else value
+    return out
+
 def ardusub_listen_address(url: str) -> tuple[str, int]:
     """The address the twin listens on for a bridge's ``udpout:HOST:PORT``.
 

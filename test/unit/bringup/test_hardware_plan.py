@@ -46,7 +46,7 @@ def test_the_pool_file_refuses_until_its_placeholder_is_set() -> None:
 
 def test_an_unknown_file_lists_the_shipped_ones() -> None:
     """A typo in --hardware answers with the files there are."""
-    with pytest.raises(HardwareFileError, match='shipped: bluerov2_pool, twin'):
+    with pytest.raises(HardwareFileError, match='shipped: bluerov2_pool, twin, twin_alpha5_bus'):
         hardware_file_path('twins', CONFIG)
 
 
@@ -125,3 +125,20 @@ def test_the_scenario_on_hardware_runs_the_controller_on_the_estimate() -> None:
     assert changed.overrides['simulator']['world.seabed_depth_m'] == 2.0
     assert changed.overrides['simulator']['devices.ideal'] is True  # the twins keep the timing
     assert 'state_source' not in scenario.overrides.get('controller', {})
+
+
+def test_twin_settings_reach_the_stand_in_the_simulator_or_in_its_own_node() -> None:
+    """twins: {alpha5_bus: true}: the stand's setting, where the twins serve; the bridge's own.
+
+    The shipped ``twin_alpha5_bus`` file keeps the arm's RS-485 line in the twin and has the
+    bridge schedule it (docs/hardware.md, "The Alpha 5 bus").
+    """
+    plan = load_hardware_plan(hardware_file_path('twin_alpha5_bus', CONFIG))
+    assert plan.twins and plan.twin_settings == {'alpha5_bus': True}
+    assert plan.bridges['alpha5_bridge']['bus_schedule'] is True
+    nodes = hardware_nodes(graph_nodes(record=True, mission=True, estimator=True), plan)
+    assert hardware_parameters(nodes, plan)['simulator']['twins.alpha5_bus'] is True
+    apart = replace(plan, twins_in_simulator=False)
+    nodes = hardware_nodes(graph_nodes(record=True, mission=True, estimator=True), apart)
+    assert hardware_parameters(nodes, apart)['hardware_twins']['alpha5_bus'] is True
+

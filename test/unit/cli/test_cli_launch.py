@@ -150,3 +150,34 @@ def test_twins_apart_with_the_twin_stand_runs_them_in_their_own_process(
     assert cli.main(['launch', 'bluerov2_alpha5_contact', '--hardware', 'twin',
                      '--twins-apart']) == 0
     assert launched['hardware'].twins and not launched['hardware'].twins_in_simulator
+
+
+@pytest.mark.parametrize(('twins', 'said'), [
+    ('{alpha5_buss: true}', 'twins.alpha5_buss: not a setting of the stand; known: '),
+    ('{alpha5_bridge.connection: "udp:127.0.0.1:1"}', 'twins.alpha5_bridge.connection: not a'),
+    ('{alpha5_bus: 1}', 'twins.alpha5_bus = 1: expected a bool'),
+])
+def test_a_twin_setting_the_stand_does_not_have_is_refused_naming_it(
+    launched: dict[str, Any], capsys: pytest.CaptureFixture[str], tmp_path: Path,
+    twins: str, said: str
+) -> None:
+    """A misspelt or mistyped ``twins:`` setting: exit 2 naming it, nothing launched.
+
+    Unchecked, a ROS parameter of that name would be ignored and the stand run without it.
+    """
+    stand = tmp_path / 'stand.yaml'
+    stand.write_text((config_dir() / 'hardware' / 'twin.yaml').read_text().replace(
+        'twins: true', f'twins: {twins}'))
+    assert cli.main(['launch', 'bluerov2_alpha5_contact', '--hardware', str(stand)]) == 2
+    assert not launched
+    assert said in capsys.readouterr().err
+
+
+def test_twin_settings_reach_the_launch_checked(launched: dict[str, Any], tmp_path: Path
+                                                ) -> None:
+    """twins: {alpha5_bus: true, netft_rate_hz: 1000}: the launch gets them, 1000 as 1000.0."""
+    stand = tmp_path / 'stand.yaml'
+    stand.write_text((config_dir() / 'hardware' / 'twin.yaml').read_text().replace(
+        'twins: true', 'twins: {alpha5_bus: true, netft_rate_hz: 1000}'))
+    assert cli.main(['launch', 'bluerov2_alpha5_contact', '--hardware', str(stand)]) == 0
+    assert launched['hardware'].twin_settings == {'alpha5_bus': True, 'netft_rate_hz': 1000.0}

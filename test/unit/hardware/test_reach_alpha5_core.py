@@ -237,3 +237,21 @@ def test_a_joint_state_is_stamped_with_its_oldest_answer() -> None:
     sample = core.next_joint_state(1.008)
     assert sample is not None and sample.oldest_answer_s == 1.0
     assert sample.names == ['joint_1', 'joint_2', 'joint_3', 'joint_4']
+
+
+def test_the_report_says_how_old_the_answers_of_a_joint_state_were() -> None:
+    """Answers at 1.000-1.006 s given at 1.008 s: oldest 8 ms, newest 2 ms, one given.
+
+    A polled bus answers the joints one after another: what the controller is told is this
+    old before it even leaves the bridge (docs/hardware.md, "The Alpha 5 bus").
+    """
+    core = Alpha5Core(ARM)
+    assert core.report(0.0)[2]['joint_states_given'] == 0
+    for t_s, device_id in ((1.0, 5), (1.002, 4), (1.004, 3), (1.006, 2)):
+        core.receive(rp.encode_position(device_id, 0.5) + rp.encode_velocity(device_id, 0.0),
+                     t_s)
+    assert core.next_joint_state(1.008) is not None
+    values = core.report(1.008)[2]
+    assert values['joint_states_given'] == 1
+    assert values['joint_state_age_oldest_ms_p50'] == pytest.approx(8.0)
+    assert values['joint_state_age_newest_ms_p50'] == pytest.approx(2.0)
