@@ -398,7 +398,8 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
         try:
             self._pilot_before_step(t_ns)
             result, events = self.supervisor.step(
-                t, np.concatenate((eta, positions)), np.concatenate((nu, velocities)), force)
+                t, np.concatenate((eta, positions)), np.concatenate((nu, velocities)), force,
+                inputs[2].stamp_ns * 1e-9 if inputs[2] is not None else None)
         except ControlInputError as error:
             self.get_logger().error(f'control step failed, holding: {error}',
                                     throttle_duration_sec=1.0)

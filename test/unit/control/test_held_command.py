@@ -52,6 +52,32 @@ def test_a_quadratic_is_predicted_exactly() -> None:
     assert predicted[:3] == pytest.approx(signal[:3])  # no noise estimate yet: measured force
 
 
+
+def test_a_sensor_on_its_own_clock_is_predicted_from_its_stamps_to_the_step() -> None:
+    """Steps that get no new sample, one or two (as on the twin stand): exact at step + h.
+
+    The Net F/T streams on its own clock, so a 500 Hz control step finds 0, 1 or 2 new
+    samples, 1.4-11 ms old (measured on the twin stand). Each step passes the newest sample
+    with its stamp and the step's time; the prediction is for h after the step. Taken at the
+    step's time instead (as before), a repeated sample reads as a flat force and a skipped
+    one as a jump: the prediction is then wrong by newtons (asserted too).
+    """
+    def f(t: float) -> float:
+        return 3e3 * t * t + 5.0 * t + 1.0
+
+    rng = np.random.default_rng(5)
+    stamped, at_step = HeldCommandForce(H), HeldCommandForce(H)
+    errors_stamped, errors_at_step = [], []
+    for k in range(8, 400):
+        now = k * DT + 0.0013
+        newest = (k - int(rng.choice([1, 2, 3], p=[0.3, 0.45, 0.25]))) * DT  # 0-2 new
+        value = (f(newest), 0.0, 0.0)
+        errors_stamped.append(stamped.update(newest, value, now)[0] - f(now + H))
+        errors_at_step.append(at_step.update(now, value)[0] - f(now + H))
+    assert np.abs(errors_stamped[10:]).max() < 1e-6
+    assert np.abs(errors_at_step[10:]).max() > 1.0
+
+
 def test_a_contact_onset_is_not_taken_for_noise() -> None:
     """F = K max(x - x_w, 0) at constant speed: once past the kink, the ramp is exact.
 

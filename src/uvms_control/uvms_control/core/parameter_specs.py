@@ -63,9 +63,10 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'arm.force_latency_s', 0.0,
-        "Age of the wrist force when the controller steps (s): the sensor's latency as the "
-        'controller sees it (the simulator with device timing: one state, 0.002 s). Used only '
-        'when arm.command_rate_hz is above 0.',
+        "Age of the wrist force beyond its stamp (s): the sensor's latency as the controller "
+        'sees it (the simulator with device timing: one state, 0.002 s; a sensor stamping its '
+        "samples with its own clock: its event-to-output latency). The samples' age at the "
+        'step is added as measured. Used only when arm.command_rate_hz is above 0.',
         0.0, 1.0,
     ),
 ]

@@ -209,10 +209,7 @@ class UnifiedForceController:
         return result
 
     def reset(self) -> None:
-        """Forget the start time, posture, task and the integral and filter states.
-
-        The next step holds the end effector where it is (the hold point of activation).
-        """
+        """Forget start time, posture, task and states: the next step holds where it is."""
         self._t0: float | None = None
         self._t_prev = 0.0
         self._q0 = np.zeros(self._n_dof)
@@ -246,7 +243,8 @@ class UnifiedForceController:
         return self._t0
 
     def step_from_sensors(
-        self, t: float, q: npt.ArrayLike, w: npt.ArrayLike, f_sensor: npt.ArrayLike
+        self, t: float, q: npt.ArrayLike, w: npt.ArrayLike, f_sensor: npt.ArrayLike,
+        f_t: float | None = None
     ) -> ControllerResult:
         """Step from what the robot measures: body velocities and the wrist-sensor force.
 
@@ -256,6 +254,7 @@ class UnifiedForceController:
             w: quasi-velocities (6 + n,) (vehicle twist in base_link_frd, joint rates), eq. 4.
             f_sensor: force the end effector exerts on the environment, in ft_sensor_link
                 (axes of ee_link) (N).
+            f_t: when f_sensor was sampled (s; None: t), for ``held_command``.
 
         Raises:
             ControlInputError: for non-finite or wrongly sized inputs or a singular attitude.
@@ -267,7 +266,7 @@ class UnifiedForceController:
             terms = self.model.task_space_terms(q, w=w)
         except ModelError as error:
             raise ControlInputError(str(error)) from error
-        return self._step(t, q, terms, terms.rot_ned_from_ee.dot(f_sensor))
+        return self._step(t, q, terms, terms.rot_ned_from_ee.dot(f_sensor), f_t)
 
     def step(
         self, t: float, q: npt.ArrayLike, q_dot: npt.ArrayLike, f_e_ned: npt.ArrayLike
@@ -290,11 +289,10 @@ class UnifiedForceController:
             terms = self.model.task_space_terms(q, q_dot)
         except ModelError as error:
             raise ControlInputError(str(error)) from error
-        return self._step(t, q, terms, f_e)
+        return self._step(t, q, terms, f_e, None)
 
-    def _step(
-        self, t: float, q: FloatArray, terms: TaskSpaceTerms, F_e: FloatArray
-    ) -> ControllerResult:
+    def _step(self, t: float, q: FloatArray, terms: TaskSpaceTerms, F_e: FloatArray,
+              f_t: float | None) -> ControllerResult:
         """One step from the model's terms; 3-vectors in plain floats, 9-vectors in numpy."""
         if not math.isfinite(t):
             raise ControlInputError(f'time t = {t} s must be finite')
@@ -359,7 +357,7 @@ class UnifiedForceController:
         (mu0, p0, g0), (mu1, p1, g1), (mu2, p2, g2) = M_hat.dot(V).tolist()
         z0, z1, z2 = zeta_hat.tolist()
         e0, e1, e2 = (f0, f1, f2) if self._held_force is None else self._held_force.update(
-            t, (f0, f1, f2))  # held_command: the wall's force over the held command's slot
+            t if f_t is None else f_t, (f0, f1, f2), t)  # held_command: over the held slot
         c0, c1, c2 = z0 + e0, z1 + e1, z2 + e2
         # F_IP = M̂ U + ζ̂ + F_e (eq. 29); F_H = (I - S) F_p + S F_f + ζ̂ + F_e (eq. 35).
         (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = self._I_minus_S

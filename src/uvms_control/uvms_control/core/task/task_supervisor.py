@@ -253,12 +253,12 @@ class TaskSupervisor:
         self.controller.task.hold()
         return events
 
-    def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike,
-             f_sensor: npt.ArrayLike) -> tuple[ControllerResult, list[TaskEvent]]:
+    def step(self, t: float, q: npt.ArrayLike, w: npt.ArrayLike, f_sensor: npt.ArrayLike,
+             f_t: float | None = None) -> tuple[ControllerResult, list[TaskEvent]]:
         """One control step at t (s) from the sensors (``step_from_sensors``) and its events."""
         dt = 0.0 if self._t_last is None else min(max(t - self._t_last, 0.0), MAX_MOTION_STEP_S)
         events = self._take_pending() + self._before_step(t, dt)
-        result = self.controller.step_from_sensors(t, q, w, f_sensor)
+        result = self.controller.step_from_sensors(t, q, w, f_sensor, f_t)
         self._last = result
         self._t_last = t
         events += self._after_step(t, dt, result, np.asarray(f_sensor, dtype=np.float64))
