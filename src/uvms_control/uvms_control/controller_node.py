@@ -7,23 +7,22 @@ Subscribes ``joint_states``, ``odometry``, ``wrench`` and ``controller/target_po
 lockstep`` computes once the three inputs with one stamp have arrived and stamps the
 command alike; ``timer`` computes at ``control_rate_hz`` of the steady clock on the latest
 inputs; ``odometry`` computes on each vehicle state (``odometry/filtered`` on the estimate)
-with the latest joint states and wrench, stamped with the state's stamp. Rejected inputs
-are logged; stale inputs (older than ``watchdog_timeout_s``, or a gap that long between two
-steps) give a zero command, logged once, and end a running task
-INPUTS_STALE; so does a thruster allocator that is not active (its ``transition_event``,
-``node_safety.AllocatorWatch``). Control resumes holding the position measured then.
+with the latest joint states and wrench, stamped with the state's stamp. Rejected inputs are
+logged; stale inputs (older than ``watchdog_timeout_s``, or a gap that long between two steps)
+give a zero command, logged once, and end a running task INPUTS_STALE; so does an inactive
+thruster allocator (``node_safety.AllocatorWatch``). Control resumes holding where it is.
 
 A managed node (``autostart``: it activates itself unless false): configure builds the model
 and the controller; activate resets the task supervisor (no target, no queued goal) and holds
 the end effector where it is at the first step; deactivate ends running and queued tasks
 INACTIVE and commands zero generalized force, in answer to every lockstep stamp (so the
 exchange never stalls) or at the control rate. Gains, the contact threshold, null-space gains
-and ``safety.*`` change at run time (``set_parameters``, checked whole first, then ramped
-in); the rest is read-only. No exception escapes a callback (``controller_safety``).
-``/diagnostics`` reports rates, input ages, rejections, faults, the allocator's state, the
-lifecycle state, the task and any safety limit reached. A person pilots through
-``pilot/vehicle_twist``, ``pilot/ee_twist`` and ``pilot/jaw``, with the owner on
-``controller/mode`` and ``controller/hold`` to stop (``controller_pilot``, docs/piloting.md).
+and ``safety.*`` change at run time (checked whole, then ramped in); the rest is read-only.
+No exception escapes a callback (``controller_safety``). ``/diagnostics``: rates, input ages,
+rejections, faults, allocator and lifecycle state, the task, any safety limit reached. A
+person pilots through ``pilot/vehicle_twist``, ``pilot/ee_twist`` and ``pilot/jaw``, the owner
+on ``controller/mode``, ``controller/hold`` to stop (``controller_pilot``, docs/piloting.md).
+``arm.hold_in_joint_space`` holds the arm's joints while no task runs (``joint_hold``).
 """
 
 from __future__ import annotations
@@ -67,6 +66,7 @@ from uvms_control.core.parameter_specs import (
 from uvms_control.core.parameters import ControllerParameters, topic_for, validate_node_parameters
 from uvms_control.core.pilot.supervisor import PilotedSupervisor
 from uvms_control.core.task.contact_task import TaskCode, TaskGoalError
+from uvms_control.core.task.joint_hold import joint_hold_from
 from uvms_control.core.task.task_supervisor import TaskSupervisor
 from uvms_control.node_safety import AllocatorWatch, FaultLog, guarded
 from uvms_control.pending_stamps import Input, PendingStamps
@@ -158,7 +158,8 @@ class ControllerNode(ControllerReports, ControllerSafety, ControllerPilot, Lifec
                 gains, model, 1.0 / float(node['control_rate_hz']),
                 held_slot_horizon_s(float(node['arm.command_rate_hz']),
                                     float(node['arm.force_latency_s'])))
-            self.supervisor = PilotedSupervisor(self.core, safety_limits(self._safety))
+            self.supervisor = PilotedSupervisor(self.core, safety_limits(self._safety),
+                                                joint_hold_from(node))
             self._configure_topics(node, model.joint_names)
             self._configure_pilot()
             self._watch_allocator(str(node['allocator_node']))

@@ -62,6 +62,18 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         0.0, 10000.0,
     ),
     ParameterSpec(
+        'arm.hold_in_joint_space', False,
+        "While no task runs, hold the arm's joints where they are (a joint PD on the model's "
+        'bias, core/task/joint_hold.py) and command the vehicle nothing, instead of holding the '
+        'end effector in map_ned: for experiments whose thrusts are planned (uvms identify '
+        'plan), where the arm reaching for a world-fixed point tilts the vehicle. Off: the '
+        "paper's hold.",
+    ),
+    ParameterSpec('arm.joint_hold_kp', 20.0, 'Joint stiffness of the joint hold (N m/rad).',
+                  0.0, 1000.0),
+    ParameterSpec('arm.joint_hold_kd', 2.0, 'Joint damping of the joint hold (N m s/rad).',
+                  0.0, 1000.0),
+    ParameterSpec(
         'arm.force_latency_s', 0.0,
         "Age of the wrist force beyond its stamp (s): the sensor's latency as the controller "
         'sees it (the simulator with device timing: one state, 0.002 s; a sensor stamping its '
