@@ -240,8 +240,8 @@ def scenario(robot: RobotData, experiment: Experiment, robot_reference: str,
                                'at_s': round(float(t), 4)})
                 previous[index] = value
     peak = float(np.abs(experiment.levels).max())
-    trimmed = (', every level with the trim of weight and buoyancy at level'
-               if experiment.trimmed else '')
+    trimmed = (', every level with the trim of weight and buoyancy at level, the arm held in '
+               'joint space' if experiment.trimmed else '')
     shape = (f'doublets back to the start and a chirp {HEAVE_CHIRP_HZ[0]:g}-'
              f'{HEAVE_CHIRP_HZ[1]:g} Hz about zero' if experiment.doublets else
              f'steps of alternating sign, a chirp {CHIRP_HZ[0]:g}-{CHIRP_HZ[1]:g} Hz about a '
@@ -269,6 +269,9 @@ def scenario(robot: RobotData, experiment: Experiment, robot_reference: str,
         },
         # The stuck thrusters are the experiment, not a fault: detection would only flag them.
         'thruster_allocator': {'fault_detection': {'enabled': False}},
+        # Level: the arm held where it is, not reaching for a world-fixed point as the vehicle
+        # moves (its weight and reactions tilt the vehicle: core/task/joint_hold.py).
+        **({'controller': {'arm': {'hold_in_joint_space': True}}} if experiment.trimmed else {}),
         'recorder': {'topics': list(RECORDED_TOPICS)},
         'faults': {'thrusters': faults},
     }

@@ -51,15 +51,15 @@ def pushed(joint_hold: JointHold | None) -> tuple[PushedLoop, float]:
 
 
 def test_the_joints_stay_where_they_were_while_the_vehicle_is_pushed() -> None:
-    """Pushed 2 s forward: the joints within 0.05 rad, no breach, the vehicle rows zero.
+    """Pushed 2 s forward: the joints within 0.01 rad, no breach, the vehicle rows zero.
 
     The end-effector hold of the paper (the default) swings the arm after the receding point
     until the tracking limit stops it in the safe hold (asserted too, so the test shows the
     difference it makes).
     """
-    held, excursion = pushed(JointHold(kp=20.0, kd=2.0))
+    held, excursion = pushed(JointHold(frequency_hz=2.0, damping_ratio=1.0))
     assert held.q[0] > 0.1  # the vehicle did move
-    assert excursion < 0.05
+    assert excursion < 0.01
     assert held.supervisor.state == SupervisorState.HOLD and held.supervisor.breach is None
     assert np.all(held.last.tau_b[:6] == 0.0)
     reaching, excursion = pushed(None)
@@ -68,7 +68,7 @@ def test_the_joints_stay_where_they_were_while_the_vehicle_is_pushed() -> None:
 
 def test_a_task_releases_the_hold_and_the_next_hold_begins_where_the_joints_are() -> None:
     """A goal runs the task law; after it the joints are held where the goal left them."""
-    hold = JointHold(kp=20.0, kd=2.0)
+    hold = JointHold(frequency_hz=2.0, damping_ratio=1.0)
     loop = PushedLoop(hold)
     loop.wall_x = 1.7771
     loop.run(0.2)
@@ -82,6 +82,7 @@ def test_a_task_releases_the_hold_and_the_next_hold_begins_where_the_joints_are(
 def test_the_node_parameters_make_the_hold(on: bool, expected: tuple[float, float] | None
                                            ) -> None:
     """arm.hold_in_joint_space with its gains; off: None, the paper's hold."""
-    hold = joint_hold_from({'arm.hold_in_joint_space': on, 'arm.joint_hold_kp': 5.0,
-                            'arm.joint_hold_kd': 0.5})
-    assert (None if hold is None else (hold.kp, hold.kd)) == expected
+    hold = joint_hold_from({'arm.hold_in_joint_space': on, 'arm.joint_hold_frequency_hz': 5.0,
+                            'arm.joint_hold_damping_ratio': 0.5})
+    assert (None if hold is None else (hold.omega_rad_s / (2 * np.pi), hold.damping_ratio)) \
+        == pytest.approx(expected)

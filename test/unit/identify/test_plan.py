@@ -15,6 +15,7 @@ from uvms_identify.plan import (
     THRUST_FRACTION,
     Experiment,
     plan,
+    scenario,
     speed_limits,
 )
 from uvms_identify.plan_signals import DURATION_S, doublets
@@ -117,3 +118,18 @@ def test_every_experiment_is_at_most_60_s(experiments: list[Experiment]) -> None
     for experiment in experiments:
         assert float(experiment.times_s[-1]) < DURATION_S
     assert not any(e.doublets or e.trimmed for e in experiments)
+
+
+def test_level_scenarios_hold_the_arm_in_joint_space(robot: RobotData, level: list[Experiment],
+                                                     experiments: list[Experiment]) -> None:
+    """--level: the controller holds the arm's joints (not reaching for a world-fixed point).
+
+    The arm chasing its hold point as the vehicle moves was what still tilted the level plan's
+    surge and sway (docs/identification.md, "Why the vehicle tumbles"). The default plan keeps
+    the paper's hold.
+    """
+    joints = np.zeros(4)  # the arm's start pose does not matter here
+    for experiment in level:
+        data = scenario(robot, experiment, ROBOT, joints)
+        assert data['controller'] == {'arm': {'hold_in_joint_space': True}}
+    assert all('controller' not in scenario(robot, e, ROBOT, joints) for e in experiments)

@@ -63,16 +63,17 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
     ),
     ParameterSpec(
         'arm.hold_in_joint_space', False,
-        "While no task runs, hold the arm's joints where they are (a joint PD on the model's "
-        'bias, core/task/joint_hold.py) and command the vehicle nothing, instead of holding the '
-        'end effector in map_ned: for experiments whose thrusts are planned (uvms identify '
-        'plan), where the arm reaching for a world-fixed point tilts the vehicle. Off: the '
-        "paper's hold.",
+        "While no task runs, hold the arm's joints where they are (computed torque on the "
+        "model's arm, core/task/joint_hold.py) and command the vehicle nothing, instead of "
+        'holding the end effector in map_ned: for experiments whose thrusts are planned '
+        '(uvms identify plan), where the arm reaching for a world-fixed point tilts the '
+        "vehicle. Off: the paper's hold.",
     ),
-    ParameterSpec('arm.joint_hold_kp', 20.0, 'Joint stiffness of the joint hold (N m/rad).',
-                  0.0, 1000.0),
-    ParameterSpec('arm.joint_hold_kd', 2.0, 'Joint damping of the joint hold (N m s/rad).',
-                  0.0, 1000.0),
+    ParameterSpec('arm.joint_hold_frequency_hz', 2.0,
+                  "Natural frequency of the joint hold on every joint (Hz): computed torque on "
+                  "the arm's mass matrix", 0.01, 50.0),
+    ParameterSpec('arm.joint_hold_damping_ratio', 1.0,
+                  'Damping ratio of the joint hold (1: critically damped)', 0.01, 10.0),
     ParameterSpec(
         'arm.force_latency_s', 0.0,
         "Age of the wrist force beyond its stamp (s): the sensor's latency as the controller "

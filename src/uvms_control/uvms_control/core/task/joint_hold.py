@@ -5,16 +5,18 @@ when something else moves the vehicle (an identification plan's planned thrusts,
 docs/identification.md "Why the vehicle tumbles") the arm reaches for the world-fixed point,
 its shifting weight and reaction torques tilt the vehicle, past the tracking limit into the
 retreat and the safe hold. With ``arm.hold_in_joint_space`` the controller instead holds each
-joint where it was when the hold began, by a joint PD on the model's bias (the joint rows of
-C_b w + D_b w + G_b of eq. 8, so the arm's weight and buoyancy, its Coriolis and drag terms
-are cancelled and the PD only corrects the rest):
+joint where it was when the hold began, by computed torque on the model (eq. 8's arm rows: the
+arm's mass matrix M_a, the joint rows of the bias C_b w + D_b w + G_b, so the arm's weight and
+buoyancy, its Coriolis and drag terms are cancelled and the PD only corrects the rest):
 
-    tau_j = K_p (q_hold - q) - K_d q_dot + bias_j(q, w)
+    tau_j = M_a (w_n^2 (q_hold - q) - 2 zeta w_n q_dot) + bias_j(q, w)
 
-and commands the vehicle nothing (its rows zero: the plan's thrusts are the experiment). The
-hold point follows the end effector meanwhile, so the task-space checks (the tracking limit)
-see no error; a task sent starts from where the arm is, and the next hold begins where the
-task left the joints.
+(a plain joint PD diverged on the Alpha 5 in 11 ms: its wrist's inertia is so small that
+any useful damping gain is unstable at a 2 ms period; scaled by M_a the loop is the same
+second-order one on every joint), and commands the vehicle nothing (its rows zero: the plan's
+thrusts are the experiment). The hold point follows the end effector meanwhile, so the
+task-space checks (the tracking limit) see no error; a task sent starts from where the arm
+is, and the next hold begins where the task left the joints.
 """
 
 from __future__ import annotations
@@ -34,32 +36,37 @@ __all__ = ['JointHold', 'joint_hold_from', 'joint_hold_torque']
 
 
 def joint_hold_torque(q_hold: FloatArray, q_arm: FloatArray, q_arm_dot: FloatArray,
-                      bias_arm: FloatArray, kp: float, kd: float) -> FloatArray:
-    """Joint torques (N m) holding the arm at ``q_hold`` (rad): PD plus the model's bias (eq. 8).
+                      mass_arm: FloatArray, bias_arm: FloatArray, omega_rad_s: float,
+                      damping_ratio: float) -> FloatArray:
+    """Joint torques (N m) holding the arm at ``q_hold`` (rad): computed torque (eq. 8).
 
-    >>> joint_hold_torque(np.array([1.0]), np.array([0.9]), np.array([0.5]), np.array([2.0]),
-    ...                   20.0, 2.0).round(6)
-    array([3.])
+    >>> joint_hold_torque(np.array([1.0]), np.array([0.9]), np.array([0.5]), np.eye(1) * 0.5,
+    ...                   np.array([2.0]), 10.0, 1.0).round(6)
+    array([2.])
     """
-    return kp * (q_hold - q_arm) - kd * q_arm_dot + bias_arm
+    acceleration = omega_rad_s ** 2 * (q_hold - q_arm) - 2.0 * damping_ratio * omega_rad_s \
+        * q_arm_dot
+    return mass_arm @ acceleration + bias_arm
 
 
 class JointHold:
     """The joint-space hold of the arm: where it holds, and the torques that hold it there.
 
     Args:
-        kp: Joint stiffness (N m/rad), every joint.
-        kd: Joint damping (N m s/rad), every joint.
+        frequency_hz: The hold's natural frequency on every joint (Hz).
+        damping_ratio: Its damping ratio (1: critically damped).
 
     Raises:
-        ControlParameterError: A negative or non-finite gain.
+        ControlParameterError: A frequency or damping ratio not above 0, or not finite.
     """
 
-    def __init__(self, kp: float, kd: float) -> None:
-        for name, value in (('arm.joint_hold_kp', kp), ('arm.joint_hold_kd', kd)):
-            if not (np.isfinite(value) and value >= 0.0):
-                raise ControlParameterError(name, value, '[0, inf)')
-        self.kp, self.kd = float(kp), float(kd)
+    def __init__(self, frequency_hz: float, damping_ratio: float) -> None:
+        for name, value in (('arm.joint_hold_frequency_hz', frequency_hz),
+                            ('arm.joint_hold_damping_ratio', damping_ratio)):
+            if not (np.isfinite(value) and value > 0.0):
+                raise ControlParameterError(name, value, '(0, inf)')
+        self.omega_rad_s = 2.0 * np.pi * float(frequency_hz)
+        self.damping_ratio = float(damping_ratio)
         #: The joint positions held (rad); None until the next hold begins.
         self.q_hold: FloatArray | None = None
 
@@ -81,7 +88,9 @@ class JointHold:
             self.q_hold = q_arr[6:].copy()
         tau_b = np.zeros(q_arr.size)
         tau_b[6:] = joint_hold_torque(self.q_hold, q_arr[6:], w_arr[6:],
-                                      model.bias_body(q_arr, w_arr)[6:], self.kp, self.kd)
+                                      model.mass_matrix_body(q_arr)[6:, 6:],
+                                      model.bias_body(q_arr, w_arr)[6:], self.omega_rad_s,
+                                      self.damping_ratio)
         return tau_b
 
 
@@ -89,4 +98,5 @@ def joint_hold_from(node: Mapping[str, Any]) -> JointHold | None:
     """The controller node's ``arm.hold_in_joint_space`` and gains: a hold, or None (off)."""
     if not node['arm.hold_in_joint_space']:
         return None
-    return JointHold(float(node['arm.joint_hold_kp']), float(node['arm.joint_hold_kd']))
+    return JointHold(float(node['arm.joint_hold_frequency_hz']),
+                     float(node['arm.joint_hold_damping_ratio']))
