@@ -67,7 +67,7 @@ CONTROLLER_NODE_PARAMETER_SPECS: list[ParameterSpec] = [
         "model's arm, core/task/joint_hold.py) and command the vehicle nothing, instead of "
         'holding the end effector in map_ned: for experiments whose thrusts are planned '
         '(uvms identify plan), where the arm reaching for a world-fixed point tilts the '
-        "vehicle. Off: the paper's hold.",
+        "vehicle. A pilot's twists move nothing while it holds. Off: the paper's hold.",
     ),
     ParameterSpec('arm.joint_hold_frequency_hz', 2.0,
                   "Natural frequency of the joint hold on every joint (Hz): computed torque on "

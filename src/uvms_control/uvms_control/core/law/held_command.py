@@ -168,6 +168,7 @@ def third_difference(times_s: tuple[float, ...], values: tuple[float, ...]) -> f
     spacing = (t3 - t0) / 3.0
     return 6.0 * spacing ** 3 * divided
 
+
 def prediction_weight(noise_sd: float, noise_gain: float, tolerance_n: float) -> float:
     """Weight g of the predicted increment: 1 / (1 + (G sigma / e)^2).
 
