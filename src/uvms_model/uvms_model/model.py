@@ -150,20 +150,25 @@ class UvmsModel:
         q = self._check_q(q)
         return self.dynamics.mass(q.tolist()[6:])
 
-    def bias_body(
-        self, q: ArrayLike, w: ArrayLike, current_ned: ArrayLike | None = None
-    ) -> FloatArray:
-        """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (6 + n,) of eq. 8: M_b w_dot + bias = tau_b.
+    def bias_body(self, q: ArrayLike, w: ArrayLike,
+                  current_ned: ArrayLike | None = None) -> FloatArray:
+        """C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (6 + n,) of eq. 8 (`mass_and_bias_body`)."""
+        return self.mass_and_bias_body(q, w, current_ned)[1]
 
-        With ``current_ned`` (the water's velocity v_c in map_ned, m/s) the drag and the added
-        mass's terms are those of the relative velocity nu_r = nu - nu_c, and the bias holds
-        the current's term -M_A nu_c_dot (Fossen 2011, sec. 8.3; ``uvms_model.relative_flow``).
+    def mass_and_bias_body(self, q: ArrayLike, w: ArrayLike, current_ned: ArrayLike | None = None
+                           ) -> tuple[FloatArray, FloatArray]:
+        """M_b (6 + n, 6 + n) and C_b(q_m, w) w + D_b(q_m, w) w + G_b(q) (6 + n,) of eq. 8.
+
+        One pass; M_b w_dot + bias = tau_b. With ``current_ned`` (the water's velocity v_c in
+        map_ned, m/s) the drag and the added mass's terms are those of the relative velocity
+        nu_r = nu - nu_c, and the bias holds the current's term -M_A nu_c_dot (Fossen 2011,
+        sec. 8.3; ``uvms_model.relative_flow``).
         """
         q_list = self._check_q(q).tolist()
         w = _vector('w', w, self.n_dof)
         rot = rotation(q_list[3], q_list[4], q_list[5])
         current = self._current_body(rot, current_ned)
-        return self.dynamics.mass_and_bias(q_list[6:], w, self._gravity_body(rot), current)[1]
+        return self.dynamics.mass_and_bias(q_list[6:], w, self._gravity_body(rot), current)
 
     def _current_body(self, rot: Sequence[float], current_ned: ArrayLike | None) -> Vec3 | None:
         """R^T v_c (base_link_frd) of a current in map_ned, or None (still water)."""
@@ -180,14 +185,9 @@ class UvmsModel:
         w = _vector('w', w, self.n_dof)
         return 0.5 * float(w @ self.mass_matrix_body(q) @ w)
 
-    def forward_dynamics(
-        self,
-        q: ArrayLike,
-        w: ArrayLike,
-        tau_b: ArrayLike,
-        f_ee_ned: ArrayLike | None = None,
-        current_ned: ArrayLike | None = None,
-    ) -> FloatArray:
+    def forward_dynamics(self, q: ArrayLike, w: ArrayLike, tau_b: ArrayLike,
+                         f_ee_ned: ArrayLike | None = None,
+                         current_ned: ArrayLike | None = None) -> FloatArray:
         """Quasi-accelerations w_dot (6 + n,) from eq. 8: M_b w_dot = tau_b + J_w^T f - bias.
 
         Args:

@@ -86,11 +86,10 @@ class JointHold:
         w_arr = np.asarray(w, dtype=np.float64)
         if self.q_hold is None:
             self.q_hold = q_arr[6:].copy()
+        mass, bias = model.mass_and_bias_body(q_arr, w_arr)  # one pass of eq. 8's terms
         tau_b = np.zeros(q_arr.size)
-        tau_b[6:] = joint_hold_torque(self.q_hold, q_arr[6:], w_arr[6:],
-                                      model.mass_matrix_body(q_arr)[6:, 6:],
-                                      model.bias_body(q_arr, w_arr)[6:], self.omega_rad_s,
-                                      self.damping_ratio)
+        tau_b[6:] = joint_hold_torque(self.q_hold, q_arr[6:], w_arr[6:], mass[6:, 6:],
+                                      bias[6:], self.omega_rad_s, self.damping_ratio)
         return tau_b
 
 
