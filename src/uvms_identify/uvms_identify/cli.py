@@ -34,15 +34,16 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest='identify_command', metavar='plan|fit')
     plan = sub.add_parser('plan', help='write the experiments as scenario files',
                           description='Write one scenario per vehicle axis (thrust steps '
-                                      'and a chirp about a static offset, free decays; '
-                                      '--level: doublets; at most 60 s each), runnable with `uvms '
-                                      'run` and `uvms launch`.')
+                                      'and a chirp about a static offset, free decays; heave '
+                                      'by doublets, trimmed, the arm held; --level: surge and '
+                                      'sway too; at most 60 s each), runnable with `uvms run` '
+                                      'and `uvms launch`.')
     plan.add_argument('--robot', required=True, metavar='NAME|PATH', help=ROBOT_HELP)
     plan.add_argument('--out', required=True, type=Path, metavar='DIR',
                       help='directory of the scenario files (created)')
     plan.add_argument('--level', action='store_true',
-                      help='trim weight and buoyancy at every level, surge, sway and heave '
-                           'by doublets, surge and sway below the Munk speed '
+                      help='trim weight and buoyancy in every experiment, hold the arm in '
+                           'joint space, surge and sway by doublets below the Munk speed '
                            '(docs/identification.md: the vehicle still tilts while the '
                            'controller reaches with the arm)')
     fit = sub.add_parser('fit', help='fit the hull to recordings of the experiments',
@@ -67,8 +68,7 @@ def _plan(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     inertia, restoring = rigid_and_restoring(robot)
-    experiments = plan(robot, inertia, restoring,
-                       trim_wrench(robot) if args.level else None, level=args.level)
+    experiments = plan(robot, inertia, restoring, trim_wrench(robot), level=args.level)
     joints = start_joints(robot, _joint_count(robot))
     reference = str(robot.files.directory) if '/' in args.robot else robot.name
     paths = write_plan(robot, experiments, args.out, reference, joints)

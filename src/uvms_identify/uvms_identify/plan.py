@@ -12,10 +12,12 @@ its commands reach no thruster, and it keeps the arm where it can. What the robo
 (IMU, DVL, depth, joint states, the thrusts sent) is what ``uvms identify fit`` reads.
 
 Per axis one experiment of ``DURATION_S`` (``uvms_identify.plan_signals``): steps and a
-chirp about a static offset, free decays between; with ``level`` surge, sway and heave by
+chirp about a static offset, free decays between; heave (with ``level`` surge and sway too) by
 doublets that return the vehicle to its start (steady speeds for the quadratic damping
-within a small excursion: heave at 0.45 m/s within its 1.2 m bound, where the steps reach
-0.22 m/s) and a chirp.
+within a small excursion: heave at 0.45 m/s within its 1.2 m bound, where the steps reached
+0.22 m/s, too slow to tell |w| w from w through the twin stand: -28 %) and a chirp. An
+experiment by doublets is **trimmed** and holds the arm in joint space, as ``level`` does
+(below): the default plan's heave is the level plan's.
 
 **Level** (``level=True``, ``uvms identify plan --level``). Every level adds the **trim**:
 the thrusts whose wrench cancels the static wrench of weight and buoyancy at level with the
@@ -29,8 +31,9 @@ sqrt(k / (A_w - A_u)); above it the hull is statically unstable in pitch (roll).
 default: the controller's arm, reaching for its world-fixed hold point while the vehicle
 moves, still tilts the vehicle past 0.35 rad (docs/identification.md, "Why the vehicle
 tumbles"), the acceptance's fit identifies pitch less well without the old tumbling, and the
-doublet heave alone with the default's other experiments moved the fit's surge added mass
-to -18 % (a tumbling heave run, deterministic in lockstep; with the trim -6 %).
+doublet heave without the trim and the joint hold, with the default's other experiments,
+moved the fit's surge added mass to -18 % (a tumbling heave run, deterministic in lockstep;
+trimmed and held, as now, -6.0 % and pitch within 0.17 rad).
 """
 
 from __future__ import annotations
@@ -68,9 +71,9 @@ MAX_SPEED = (math.inf, math.inf, 0.45, math.inf, math.inf, 1.0)
 #: Surge and sway at most this fraction of the speed where the Munk moment equals the
 #: restoring moment (module docstring).
 MUNK_MARGIN = 0.8
-#: Axes excited by doublets that return to the start (plan_signals.doublets): with
-#: ``level`` surge, sway and heave; by default none (the steps and chirp of the old plan).
-DOUBLET_AXES: tuple[int, ...] = ()
+#: Axes excited by doublets that return to the start (plan_signals.doublets), trimmed and
+#: with the arm held: by default heave, with ``level`` surge, sway and heave.
+DOUBLET_AXES = (2,)
 LEVEL_DOUBLET_AXES = (0, 1, 2)
 START_DEPTH_M = 2.5
 SEABED_DEPTH_M = 4.5
@@ -194,18 +197,20 @@ def plan(robot: RobotData, rigid_inertia: FloatArray, restoring: FloatArray,
         robot: The robot folder.
         rigid_inertia: Diagonal of the rigid-body mass matrix at rest (6,) (kg, kg m^2).
         restoring: Restoring stiffness per axis (6,) (N/m, N m/rad): roll and pitch.
-        trim_wrench: Static wrench of weight and buoyancy at level (6,) (N, N m), added to
-            every level (``known_terms.trim_wrench``); none: no trim.
-        level: Surge and sway by doublets below the Munk speed (``speed_limits``), for a
-            robot whose arm is held while the plan runs (module docstring).
+        trim_wrench: Static wrench of weight and buoyancy at level (6,) (N, N m)
+            (``known_terms.trim_wrench``), added to every level of a trimmed experiment: with
+            ``level`` all, else those by doublets; none: no trim.
+        level: Surge and sway by doublets below the Munk speed (``speed_limits``), every
+            experiment trimmed, the arm held in joint space (module docstring).
     """
-    trim = trim_thrusts(robot, np.zeros(6) if trim_wrench is None else trim_wrench)
     limits = speed_limits(robot, restoring) if level else np.array(MAX_SPEED, float)
+    doublet_axes = LEVEL_DOUBLET_AXES if level else DOUBLET_AXES
     experiments = []
     for axis in range(6):
+        trimmed = trim_wrench is not None and (level or axis in doublet_axes)
+        trim = trim_thrusts(robot, trim_wrench if trimmed else np.zeros(6))
         unit_thrusts, maximum = axis_thrusts(robot, axis, trim)
-        signal = (doublets if axis in (LEVEL_DOUBLET_AXES if level else DOUBLET_AXES)
-                  else steps_and_chirp)
+        signal = doublets if axis in doublet_axes else steps_and_chirp
         for _ in range(20):  # shrink the amplitude until the axis' limits hold
             times, levels = signal(maximum)
             excursion, top = expected_motion(robot, axis, times, levels,
@@ -216,8 +221,7 @@ def plan(robot: RobotData, rigid_inertia: FloatArray, restoring: FloatArray,
             maximum *= (0.9 if ratio > 1.05 else 0.99) / ratio
         experiments.append(Experiment(axis, times, levels,
                                       np.outer(levels, unit_thrusts) + trim[None, :],
-                                      excursion, top, trim_wrench is not None,
-                                      signal is doublets))
+                                      excursion, top, trimmed, signal is doublets))
     return experiments
 
 
