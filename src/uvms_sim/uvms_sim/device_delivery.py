@@ -38,7 +38,7 @@ class DeviceDelivery:
             else CommandHold(devices['thrusts'].rate_hz))
         self._torque_hold: CommandHold[Any] | None = (
             None if devices['arm_commands'].rate_hz == 0.0
-            else CommandHold(devices['arm_commands'].rate_hz))
+            else CommandHold(devices['arm_commands'].rate_hz, devices['arm_commands'].latency_s))
 
     def observation(self, seen: Observation) -> Observation:
         """The observation with joint states and wrench as the devices deliver them at t_k.

@@ -100,8 +100,8 @@ class DeviceTiming:
         ``devices.ideal`` true gives every signal the ideal timing.
 
         Raises:
-            SimParameterError: A jitter above its latency, or a command latency (commands
-                have only a rate), naming the parameter.
+            SimParameterError: A jitter above its latency, or a command latency not below
+                one slot of its rate, naming the parameter.
         """
         if values['devices.ideal']:
             return cls({name: SignalTiming() for name in (*SENSORS, *COMMANDS)}, seed)
@@ -113,6 +113,10 @@ class DeviceTiming:
             if jitter > latency:
                 msg = (f"parameter 'devices.{name}.jitter_s' = {jitter:g}: above "
                        f'devices.{name}.latency_s = {latency:g} (a delivery before its sample)')
+                raise SimParameterError(msg)
+            if name in COMMANDS and latency > 0.0 and not latency * rate < 1.0:
+                msg = (f"parameter 'devices.{name}.latency_s' = {latency:g}: not below one "
+                       f'slot of devices.{name}.rate_hz = {rate:g} (a command would be lost)')
                 raise SimParameterError(msg)
             staggered = bool(values.get(f'devices.{name}.staggered', False))
             signals[name] = SignalTiming(rate, latency, jitter, staggered)
@@ -263,23 +267,33 @@ class CommandHold(Generic[T]):
 
     Args:
         rate_hz: Applications per second; 0 applies every command at once.
+        latency_s: From a slot's latch to the command acting (s), below one slot: the slot's
+            frames still on the line. The first command acts at once.
 
     >>> hold = CommandHold(50.0)
     >>> [hold.at(t_ms * 1_000_000, t_ms) for t_ms in (0, 1, 19, 20, 21, 39, 40)]
     [0, 0, 0, 20, 20, 20, 40]
+    >>> late = CommandHold(50.0, 0.005)
+    >>> [late.at(t_ms * 1_000_000, t_ms) for t_ms in (0, 1, 20, 24, 25, 40, 45)]
+    [0, 0, 0, 0, 20, 20, 40]
     """
 
-    def __init__(self, rate_hz: float) -> None:
+    def __init__(self, rate_hz: float, latency_s: float = 0.0) -> None:
         self._period_ns = round(1e9 / rate_hz) if rate_hz > 0.0 else 0
+        self._latency_ns = round(latency_s * 1e9)
         self._next_ns: int | None = None
+        self._latched: T | None = None
+        self._due_ns = 0
         self._held: T | None = None
 
     def at(self, t_ns: int, command: T) -> T:
         """The command the device applies at plant time ``t_ns`` given the latest ``command``."""
         if self._period_ns == 0:
             return command
-        if self._next_ns is None or t_ns >= self._next_ns or self._held is None:
-            self._held = command
-            slot = t_ns // self._period_ns
-            self._next_ns = (slot + 1) * self._period_ns
+        if self._next_ns is None or t_ns >= self._next_ns:
+            self._latched, self._due_ns = command, t_ns + self._latency_ns
+            self._next_ns = (t_ns // self._period_ns + 1) * self._period_ns
+        if self._latched is not None and (t_ns >= self._due_ns or self._held is None):
+            self._held, self._latched = self._latched, None
+        assert self._held is not None
         return self._held

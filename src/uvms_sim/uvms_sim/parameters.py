@@ -248,6 +248,9 @@ def _device_specs() -> tuple[ParameterSpec, ...]:
         'devices.arm_commands.rate_hz', 0.0,
         "Rate at which the arm applies joint torque commands (Hz), held in between (the "
         "arm bus's command slots); 0: each command at once.", 0.0, 100000.0))
+    specs.append(ParameterSpec(
+        'devices.arm_commands.latency_s', 0.0, 'From a command slot to its torques acting (s), '
+        "below one slot: the slot's frames on the line; 0: at the slot.", 0.0, 1.0))
     return tuple(specs)
 
 

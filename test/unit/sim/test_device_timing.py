@@ -101,6 +101,30 @@ def test_thrusts_change_only_in_ardusubs_50_hz_rc_loop() -> None:
     assert all(t % 20_000_000 == 0 for t in changes)
 
 
+def test_arm_commands_act_their_latency_after_each_slot() -> None:
+    """devices.arm_commands.latency_s: each slot's command acts that late, held until the next.
+
+    The Alpha 5 bus sends a slot's four CURRENT frames one after another (0.87 ms each) from
+    the robot loop's next 2 ms turn: the stand's joints get them 1-5.5 ms after the slot.
+    """
+    values = {**DEFAULTS, 'devices.arm_commands.rate_hz': 77.0,
+              'devices.arm_commands.latency_s': 0.0035}
+    timing = DeviceTiming.from_values(values)['arm_commands']
+    assert '77 Hz +3.5 ms' in DeviceTiming.from_values(values).summary()
+    hold: CommandHold[int] = CommandHold(timing.rate_hz, timing.latency_s)
+    plant_ns = range(0, 1_000_000_001, 1_000_000)  # 1 kHz plant, the command is its time
+    applied = [hold.at(t, t) for t in plant_ns]
+    changes = [(t, now) for t, (before, now) in zip(plant_ns[1:], itertools.pairwise(applied),
+                                                    strict=True) if before != now]
+    assert len(changes) in (76, 77)
+    slot_ns = 1e9 / 77.0
+    for t, latched in changes:
+        assert 3_500_000 <= t - latched < 4_500_000  # the latency, on the plant's grid
+        assert latched % slot_ns < 1_000_000  # latched at the slot's first plant step
+    with pytest.raises(SimParameterError, match=r'devices\.arm_commands\.latency_s'):
+        DeviceTiming.from_values({**values, 'devices.arm_commands.latency_s': 0.013})
+
+
 def test_ideal_devices_override_the_robots_timing() -> None:
     """devices.ideal true gives ideal devices whatever the robot declares."""
     values = {**DEFAULTS, 'devices.thrusts.rate_hz': 50.0,
