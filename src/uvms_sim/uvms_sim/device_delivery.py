@@ -36,9 +36,10 @@ class DeviceDelivery:
         self._thrust_hold: CommandHold[Any] | None = (
             None if devices['thrusts'].rate_hz == 0.0
             else CommandHold(devices['thrusts'].rate_hz))
+        arm = devices['arm_commands']
         self._torque_hold: CommandHold[Any] | None = (
-            None if devices['arm_commands'].rate_hz == 0.0
-            else CommandHold(devices['arm_commands'].rate_hz, devices['arm_commands'].latency_s))
+            None if arm.rate_hz == 0.0
+            else CommandHold(arm.rate_hz, arm.latency_s, arm.frame_s))
 
     def observation(self, seen: Observation) -> Observation:
         """The observation with joint states and wrench as the devices deliver them at t_k.

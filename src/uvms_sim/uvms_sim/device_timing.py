@@ -55,12 +55,15 @@ class SignalTiming:
         jitter_s: Half width of the uniform spread of the latency (s), at most the latency.
         staggered: Joint states only: the joints sampled one at a time over each round
             (``StaggeredHold``), not all at each sample; meaningless at rate 0.
+        frame_s: Arm commands only: joint j's torque acts j frames after the first's (a
+            bus sends a slot's frames in turn).
     """
 
     rate_hz: float = 0.0
     latency_s: float = 0.0
     jitter_s: float = 0.0
     staggered: bool = False
+    frame_s: float = 0.0
 
     @property
     def ideal(self) -> bool:
@@ -114,12 +117,15 @@ class DeviceTiming:
                 msg = (f"parameter 'devices.{name}.jitter_s' = {jitter:g}: above "
                        f'devices.{name}.latency_s = {latency:g} (a delivery before its sample)')
                 raise SimParameterError(msg)
-            if name in COMMANDS and latency > 0.0 and not latency * rate < 1.0:
-                msg = (f"parameter 'devices.{name}.latency_s' = {latency:g}: not below one "
-                       f'slot of devices.{name}.rate_hz = {rate:g} (a command would be lost)')
+            frame = float(values.get(f'devices.{name}.frame_s', 0.0))
+            if name in COMMANDS and latency + 3 * frame > 0.0 and not (
+                    (latency + 3 * frame) * rate < 1.0):
+                msg = (f"parameter 'devices.{name}.latency_s' = {latency:g} (with frame_s = "
+                       f'{frame:g}, four joints): not below one slot of devices.{name}.rate_hz '
+                       f'= {rate:g} (a command would be lost)')
                 raise SimParameterError(msg)
             staggered = bool(values.get(f'devices.{name}.staggered', False))
-            signals[name] = SignalTiming(rate, latency, jitter, staggered)
+            signals[name] = SignalTiming(rate, latency, jitter, staggered, frame)
         return cls(signals, seed)
 
     def summary(self) -> str:
@@ -132,6 +138,7 @@ class DeviceTiming:
                 continue
             rate = f'{timing.rate_hz:g} Hz' if timing.rate_hz > 0.0 else 'every state'
             late = (f' +{timing.latency_s * 1e3:g} ms' if timing.latency_s > 0.0 else '')
+            late += (f' +{timing.frame_s * 1e3:g} ms a joint' if timing.frame_s > 0.0 else '')
             one_at_a_time = ' one joint at a time' if timing.staggered else ''
             parts.append(f'{name} {rate}{late}{one_at_a_time}')
         return 'device timing: ' + ', '.join(parts)
@@ -269,6 +276,8 @@ class CommandHold(Generic[T]):
         rate_hz: Applications per second; 0 applies every command at once.
         latency_s: From a slot's latch to the command acting (s), below one slot: the slot's
             frames still on the line. The first command acts at once.
+        frame_s: Element j of a command (a sequence) acts j x ``frame_s`` after element 0 (a
+            bus sends the joints' frames in turn); 0: all together.
 
     >>> hold = CommandHold(50.0)
     >>> [hold.at(t_ms * 1_000_000, t_ms) for t_ms in (0, 1, 19, 20, 21, 39, 40)]
@@ -276,11 +285,15 @@ class CommandHold(Generic[T]):
     >>> late = CommandHold(50.0, 0.005)
     >>> [late.at(t_ms * 1_000_000, t_ms) for t_ms in (0, 1, 20, 24, 25, 40, 45)]
     [0, 0, 0, 0, 20, 20, 40]
+    >>> turns = CommandHold(50.0, 0.001, 0.002)
+    >>> [turns.at(t_ms * 1_000_000, [t_ms] * 3) for t_ms in (0, 20, 21, 23, 25)]
+    [[0, 0, 0], [0, 0, 0], [20, 0, 0], [20, 20, 0], [20, 20, 20]]
     """
 
-    def __init__(self, rate_hz: float, latency_s: float = 0.0) -> None:
+    def __init__(self, rate_hz: float, latency_s: float = 0.0, frame_s: float = 0.0) -> None:
         self._period_ns = round(1e9 / rate_hz) if rate_hz > 0.0 else 0
         self._latency_ns = round(latency_s * 1e9)
+        self._frame_ns = round(frame_s * 1e9)
         self._next_ns: int | None = None
         self._latched: T | None = None
         self._due_ns = 0
@@ -293,7 +306,19 @@ class CommandHold(Generic[T]):
         if self._next_ns is None or t_ns >= self._next_ns:
             self._latched, self._due_ns = command, t_ns + self._latency_ns
             self._next_ns = (t_ns // self._period_ns + 1) * self._period_ns
-        if self._latched is not None and (t_ns >= self._due_ns or self._held is None):
-            self._held, self._latched = self._latched, None
+        if self._latched is not None:
+            if self._held is None or (t_ns >= self._due_ns and self._frame_ns == 0):
+                self._held, self._latched = self._latched, None
+            elif self._frame_ns > 0 and t_ns >= self._due_ns:
+                self._held = self._frames_acting(t_ns, self._latched, self._held)
         assert self._held is not None
         return self._held
+
+    def _frames_acting(self, t_ns: int, latched: T, held: T) -> T:
+        """``held`` with the elements of ``latched`` whose frames have arrived by ``t_ns``."""
+        arrived = (t_ns - self._due_ns) // self._frame_ns + 1
+        new, old = list(latched), list(held)  # type: ignore[call-overload]
+        if arrived >= len(new):
+            self._latched = None
+        mixed = new[:arrived] + old[arrived:]
+        return np.array(mixed) if isinstance(latched, np.ndarray) else mixed  # type: ignore[return-value]

@@ -240,17 +240,19 @@ def _device_specs() -> tuple[ParameterSpec, ...]:
             f'devices.{name}.jitter_s', 0.0,
             f'Half width of the uniform spread of devices.{name}.latency_s (s), at most it.',
             0.0, 10.0))
+    for name, what in (('thrusts', 'the vehicle applies thrust commands (Hz), held in '
+                                   'between (ArduSub: its 50 Hz RC loop)'),
+                       ('arm_commands', 'the arm applies joint torque commands (Hz), held in '
+                                        "between (the arm bus's command slots)")):
+        specs.append(ParameterSpec(f'devices.{name}.rate_hz', 0.0,
+                                   f'Rate at which {what}; 0: each command at once.',
+                                   0.0, 100000.0))
     specs.append(ParameterSpec(
-        'devices.thrusts.rate_hz', 0.0,
-        'Rate at which the vehicle applies thrust commands (Hz), held in between (ArduSub: '
-        'its 50 Hz RC loop); 0: each command at once.', 0.0, 100000.0))
+        'devices.arm_commands.latency_s', 0.0, "From a command slot to the first joint's torque "
+        "acting (s), below a slot: the host's turn, its frame on the line; 0: none.", 0.0, 1.0))
     specs.append(ParameterSpec(
-        'devices.arm_commands.rate_hz', 0.0,
-        "Rate at which the arm applies joint torque commands (Hz), held in between (the "
-        "arm bus's command slots); 0: each command at once.", 0.0, 100000.0))
-    specs.append(ParameterSpec(
-        'devices.arm_commands.latency_s', 0.0, 'From a command slot to its torques acting (s), '
-        "below one slot: the slot's frames on the line; 0: at the slot.", 0.0, 1.0))
+        'devices.arm_commands.frame_s', 0.0, "One joint's command frame on the line (s): joint "
+        'j acts j frames after the first (a bus sends them in turn); 0: all at once.', 0.0, 1.0))
     return tuple(specs)
 
 

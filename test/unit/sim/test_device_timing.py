@@ -125,6 +125,29 @@ def test_arm_commands_act_their_latency_after_each_slot() -> None:
         DeviceTiming.from_values({**values, 'devices.arm_commands.latency_s': 0.013})
 
 
+def test_each_joints_command_acts_when_its_frame_has_crossed_the_line() -> None:
+    """devices.arm_commands.frame_s: joint j's torque acts j frames after joint 0's, in order.
+
+    The bus sends a slot's CURRENT frames one after another (0.87 ms each at 115200 baud).
+    """
+    values = {**DEFAULTS, 'devices.arm_commands.rate_hz': 77.0,
+              'devices.arm_commands.latency_s': 0.002, 'devices.arm_commands.frame_s': 0.001}
+    timing = DeviceTiming.from_values(values)
+    assert '77 Hz +2 ms +1 ms a joint' in timing.summary()
+    arm = timing['arm_commands']
+    hold: CommandHold[np.ndarray] = CommandHold(arm.rate_hz, arm.latency_s, arm.frame_s)
+    first_acting = {}
+    for t in range(0, 30_000_001, 500_000):  # 2 kHz plant, every command its time (ms)
+        applied = hold.at(t, np.full(4, t / 1e6))
+        for joint, value in enumerate(applied):
+            first_acting.setdefault((joint, float(value)), t / 1e6)
+    slot_ms = 1e3 / 77.0  # the second slot's latch is the plant step at or after it
+    latched = min(v for (_, v) in first_acting if v >= slot_ms)
+    assert [first_acting[(j, latched)] - latched for j in range(4)] == [2.0, 3.0, 4.0, 5.0]
+    with pytest.raises(SimParameterError, match=r'devices\.arm_commands\.latency_s'):
+        DeviceTiming.from_values({**values, 'devices.arm_commands.frame_s': 0.004})
+
+
 def test_ideal_devices_override_the_robots_timing() -> None:
     """devices.ideal true gives ideal devices whatever the robot declares."""
     values = {**DEFAULTS, 'devices.thrusts.rate_hz': 50.0,
