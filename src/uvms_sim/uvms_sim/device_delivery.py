@@ -14,12 +14,24 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from uvms_sim.device_timing import CommandHold, DeviceTiming, SampleHold, StaggeredHold
+from uvms_sim.device_timing import (
+    CommandHold,
+    DeviceTiming,
+    SampleHold,
+    StaggeredHold,
+    late_command_message,
+)
+from uvms_sim.errors import SimParameterError
 from uvms_sim.plant import Observation
 
 
 class DeviceDelivery:
-    """Sensors sampled, delayed and held; commands latched at the devices' rates."""
+    """Sensors sampled, delayed and held; commands latched at the devices' rates.
+
+    Raises:
+        SimParameterError: The arm's last joint's command (``latency_s`` and ``frame_s`` of
+            ``arm_commands``, ``n_joints`` frames) would act a slot or more after its latch.
+    """
 
     def __init__(self, devices: DeviceTiming, seed: int, n_joints: int) -> None:
         self._n = n_joints
@@ -37,6 +49,10 @@ class DeviceDelivery:
             None if devices['thrusts'].rate_hz == 0.0
             else CommandHold(devices['thrusts'].rate_hz))
         arm = devices['arm_commands']
+        last_joint_s = arm.latency_s + (n_joints - 1) * arm.frame_s
+        if arm.frame_s > 0.0 and not last_joint_s * arm.rate_hz < 1.0:
+            raise SimParameterError(late_command_message('arm_commands', last_joint_s,
+                                                         arm.rate_hz))
         self._torque_hold: CommandHold[Any] | None = (
             None if arm.rate_hz == 0.0
             else CommandHold(arm.rate_hz, arm.latency_s, arm.frame_s))

@@ -117,13 +117,9 @@ class DeviceTiming:
                 msg = (f"parameter 'devices.{name}.jitter_s' = {jitter:g}: above "
                        f'devices.{name}.latency_s = {latency:g} (a delivery before its sample)')
                 raise SimParameterError(msg)
+            if name in COMMANDS and latency > 0.0 and not latency * rate < 1.0:
+                raise SimParameterError(late_command_message(name, latency, rate))
             frame = float(values.get(f'devices.{name}.frame_s', 0.0))
-            if name in COMMANDS and latency + 3 * frame > 0.0 and not (
-                    (latency + 3 * frame) * rate < 1.0):
-                msg = (f"parameter 'devices.{name}.latency_s' = {latency:g} (with frame_s = "
-                       f'{frame:g}, four joints): not below one slot of devices.{name}.rate_hz '
-                       f'= {rate:g} (a command would be lost)')
-                raise SimParameterError(msg)
             staggered = bool(values.get(f'devices.{name}.staggered', False))
             signals[name] = SignalTiming(rate, latency, jitter, staggered, frame)
         return cls(signals, seed)
@@ -267,6 +263,13 @@ class StaggeredHold:
     def _due_ns(self, joint: int) -> int:
         assert self._round_start_ns is not None
         return self._round_start_ns + (joint * self._period_ns) // self._n
+
+
+def late_command_message(name: str, latency_s: float, rate_hz: float) -> str:
+    """Why a command latency (its last joint's, with ``frame_s``) of a slot or more is refused."""
+    return (f"parameter 'devices.{name}.latency_s' = {latency_s:g} (its last joint's, with "
+            f'frame_s): not below one slot of devices.{name}.rate_hz = {rate_hz:g} (a '
+            'command would be lost)')
 
 
 class CommandHold(Generic[T]):

@@ -144,8 +144,10 @@ def test_each_joints_command_acts_when_its_frame_has_crossed_the_line() -> None:
     slot_ms = 1e3 / 77.0  # the second slot's latch is the plant step at or after it
     latched = min(v for (_, v) in first_acting if v >= slot_ms)
     assert [first_acting[(j, latched)] - latched for j in range(4)] == [2.0, 3.0, 4.0, 5.0]
-    with pytest.raises(SimParameterError, match=r'devices\.arm_commands\.latency_s'):
-        DeviceTiming.from_values({**values, 'devices.arm_commands.frame_s': 0.004})
+    too_late = DeviceTiming.from_values({**values, 'devices.arm_commands.frame_s': 0.004})
+    with pytest.raises(SimParameterError, match=r"devices\.arm_commands\.latency_s' = 0\.014"):
+        DeviceDelivery(too_late, 0, 4)  # the fourth joint 2 + 3 x 4 ms after the slot
+    DeviceDelivery(too_late, 0, 3)  # three joints: 10 ms, within the 13 ms slot
 
 
 def test_ideal_devices_override_the_robots_timing() -> None:
