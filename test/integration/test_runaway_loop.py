@@ -48,6 +48,9 @@ while True:
 BEAT = """
 import os, signal, time
 signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # as a node's StopEvent does
+# Its own handler, as StopEvent installs one: started from a background job, SIGINT comes
+# ignored (bash's asynchronous commands), and the stand-in then never closed.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 os.sched_setaffinity(0, {0})
 try:
     while True:
