@@ -60,7 +60,7 @@ class NoWaiting:
         def checked(sock: socket.socket, *args: Any, **kwargs: Any) -> Any:
             if self._checking() and sock.gettimeout() != 0.0:
                 raise WaitedError(f'socket.{name} on a blocking socket '
-                             f'(timeout {sock.gettimeout()})')
+                                  f'(timeout {sock.gettimeout()})')
             return method(sock, *args, **kwargs)
         return checked
 
