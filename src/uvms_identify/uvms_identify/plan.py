@@ -205,10 +205,12 @@ def plan(robot: RobotData, rigid_inertia: FloatArray, restoring: FloatArray,
     """
     limits = speed_limits(robot, restoring) if level else np.array(MAX_SPEED, float)
     doublet_axes = LEVEL_DOUBLET_AXES if level else DOUBLET_AXES
+    untrimmed = np.zeros(robot.thrust_matrix.shape[1])
+    full_trim = untrimmed if trim_wrench is None else trim_thrusts(robot, trim_wrench)
     experiments = []
     for axis in range(6):
         trimmed = trim_wrench is not None and (level or axis in doublet_axes)
-        trim = trim_thrusts(robot, trim_wrench if trimmed else np.zeros(6))
+        trim = full_trim if trimmed else untrimmed
         unit_thrusts, maximum = axis_thrusts(robot, axis, trim)
         signal = doublets if axis in doublet_axes else steps_and_chirp
         for _ in range(20):  # shrink the amplitude until the axis' limits hold

@@ -313,15 +313,19 @@ class CommandHold(Generic[T]):
             if self._held is None or (t_ns >= self._due_ns and self._frame_ns == 0):
                 self._held, self._latched = self._latched, None
             elif self._frame_ns > 0 and t_ns >= self._due_ns:
-                self._held = self._frames_acting(t_ns, self._latched, self._held)
+                arrived = (t_ns - self._due_ns) // self._frame_ns + 1
+                self._held = first_elements_of(self._latched, self._held, arrived)
+                if arrived >= len(self._held):  # type: ignore[arg-type]
+                    self._latched = None
         assert self._held is not None
         return self._held
 
-    def _frames_acting(self, t_ns: int, latched: T, held: T) -> T:
-        """``held`` with the elements of ``latched`` whose frames have arrived by ``t_ns``."""
-        arrived = (t_ns - self._due_ns) // self._frame_ns + 1
-        new, old = list(latched), list(held)  # type: ignore[call-overload]
-        if arrived >= len(new):
-            self._latched = None
-        mixed = new[:arrived] + old[arrived:]
-        return np.array(mixed) if isinstance(latched, np.ndarray) else mixed  # type: ignore[return-value]
+
+def first_elements_of(new: T, old: T, count: int) -> T:
+    """``old`` with its first ``count`` elements from ``new`` (a list or a numpy array).
+
+    >>> first_elements_of([1, 2, 3], [0, 0, 0], 2)
+    [1, 2, 0]
+    """
+    mixed = list(new)[:count] + list(old)[count:]  # type: ignore[call-overload]
+    return np.array(mixed) if isinstance(new, np.ndarray) else mixed  # type: ignore[return-value]
