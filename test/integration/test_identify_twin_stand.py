@@ -66,11 +66,13 @@ def test_the_twin_stand_recordings_recover_the_hull(tmp_path: Path,
     result = identify(recordings, load_robot(ROBOT), predict=False)
     truth = load_robot(str(folder)).prior_theta()
     shipped = load_robot(ROBOT).prior_theta()
+    # What the recordings lost (left out of the fit), for a failure's message.
+    lost = f'gaps left out: {result.gaps_s}'
     for name in CHECKED:
         j = PARAMETER_NAMES.index(name)
-        assert result.fit.identified(j), (name, result.fit.status[j])
+        assert result.fit.identified(j), (name, result.fit.status[j], lost)
         assert abs(result.fit.theta[j] - truth[j]) <= TOLERANCE * abs(truth[j]), (
-            name, result.fit.theta[j], truth[j])
+            name, result.fit.theta[j], truth[j], lost)
         # The altered hull reached the simulator behind the twins: nearer it than the shipped.
         assert abs(result.fit.theta[j] - truth[j]) < abs(result.fit.theta[j] - shipped[j]), (
-            name, result.fit.theta[j], truth[j], shipped[j])
+            name, result.fit.theta[j], truth[j], shipped[j], lost)

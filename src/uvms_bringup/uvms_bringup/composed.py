@@ -108,7 +108,7 @@ def compose_plans(plans: Sequence[NodeProcessSpec], composition: str,
         elif plan not in grouped:
             out.append(NodeProcessSpec(plan.spec, f'{plan.spec.executable}-{len(out) + 1}',
                                        plan.command, plan.parameters_file, plan.outcome_file,
-                                       plan.rt_priority))
+                                       plan.rt_priority, plan.nice))
     return out
 
 

@@ -56,6 +56,7 @@ from uvms_bringup.launch_layout import (
     composed_nodes,
     describe_scheduling,
     launch_scheduling,
+    node_niceness,
     node_scheduling,
 )
 from uvms_bringup.processes import (
@@ -199,7 +200,8 @@ def plan_launch(
                                   remaps if spec is SIMULATOR else (), asks)]
         plans.append(NodeProcessSpec(spec, f'{spec.executable}-{len(plans) + 1}',
                                      tuple(command), generated,
-                                     rt_priority=asks.priority if asks is not None else 0))
+                                     rt_priority=asks.priority if asks is not None else 0,
+                                     nice=node_niceness(spec, scheduling)))
     if compose is not None:
         from uvms_bringup.composed import COMPOSED, compose_plans
 

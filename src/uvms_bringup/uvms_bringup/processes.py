@@ -77,6 +77,8 @@ class NodeProcessSpec:
             (``uvms_tasks.mission_outcome``), if anywhere.
         rt_priority: SCHED_FIFO priority the process starts with (set between fork and
             exec, so its imports and every thread it starts have it); 0: normal.
+        nice: Niceness it starts with (set the same way; refused, it keeps 0): below 0 a
+            normal process gets a larger share of what the SCHED_FIFO loops leave.
     """
 
     spec: NodeSpec
@@ -85,6 +87,7 @@ class NodeProcessSpec:
     parameters_file: Path | None = None
     outcome_file: Path | None = None
     rt_priority: int = 0
+    nice: int = 0
 
 
 @dataclass
@@ -169,7 +172,7 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the child between 
         _PRCTL(_PR_SET_PDEATHSIG, _SIGTERM)
 
 
-def _child_setup(rt_priority: int) -> Callable[[], None]:
+def _child_setup(rt_priority: int, nice: int = 0) -> Callable[[], None]:
     """What the child runs between fork and exec: stops held, die with the launcher, priority.
 
     SIGINT is blocked (the mask survives exec and the ROS wheels' re-exec) until the node
@@ -193,6 +196,11 @@ def _child_setup(rt_priority: int) -> Callable[[], None]:
                 pass
             try:
                 os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(rt_priority))
+            except OSError:
+                pass
+        if nice:
+            try:
+                os.setpriority(os.PRIO_PROCESS, 0, nice)
             except OSError:
                 pass
     return setup
@@ -298,7 +306,8 @@ class Launcher:
             try:
                 popen = subprocess.Popen(
                     plan.command, env=self._env, stdin=subprocess.DEVNULL, stdout=pipe,
-                    stderr=pipe, process_group=0, preexec_fn=_child_setup(plan.rt_priority),
+                    stderr=pipe, process_group=0,
+                    preexec_fn=_child_setup(plan.rt_priority, plan.nice),
                 )
             except OSError as exc:
                 self.stop()

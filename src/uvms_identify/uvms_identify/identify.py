@@ -54,6 +54,8 @@ class Identification:
         joint_friction: Per arm joint, viscous and Coulomb friction (empty without joint
             torques recorded).
         joint_names: The arm's joints, in the model's order.
+        gaps_s: Per signal, the time of the recordings in its gaps (s): left out of the fit
+            with the smoothing window around each (``uvms_identify.recording``).
     """
 
     robot: RobotData
@@ -68,6 +70,7 @@ class Identification:
     thrust: ThrustPath | None = None
     joint_friction: list[Term] = field(default_factory=list)
     joint_names: list[str] = field(default_factory=list)
+    gaps_s: dict[str, float] = field(default_factory=dict)
 
 
 def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
@@ -87,8 +90,11 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
     knowns: list[FloatArray] = []
     arm_knowns: list[FloatArray] = []
     phis: list[FloatArray] = []
+    gaps_s: dict[str, float] = {}
     for path in paths:
         series = read_series(path, robot, velocity=velocity)
+        for what, seconds in series.gaps_s.items():
+            gaps_s[what] = gaps_s.get(what, 0.0) + seconds
         if series.joints.shape[1] != model.n_joints:
             raise IdentifyError(f'{path}: {series.joints.shape[1]} joints recorded, robot '
                                 f'{robot.name} has {model.n_joints}')
@@ -110,8 +116,11 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
             arm_knowns.append(everything[:, 6:])
             phis.append(hull_regressor(train.nu, train.nu_dot, train.gravity_body))
     if not knowns:
-        raise IdentifyError('no stretch of the recordings has a measured velocity for '
-                            f'{MIN_SEGMENT_S:g} s (the DVL never kept bottom lock)')
+        lost = ', '.join(f'{what} {seconds:.1f} s' for what, seconds in gaps_s.items())
+        raise IdentifyError('no stretch of the recordings has every signal measured for '
+                            f'{MIN_SEGMENT_S:g} s (time in gaps: {lost or "none"}; a DVL '
+                            'without bottom lock, or messages lost on the way to the '
+                            'recording)')
     phi = np.concatenate(phis)
     known_all = np.concatenate(knowns)
     # Rows weighted as the hull's fit weighs them (its residual per axis at the recorded
@@ -147,7 +156,7 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
             names)
     result = Identification(robot, list(paths), fit, prior, training, held_out,
                             delay_s=thrust.delay_s, thrust=thrust, joint_friction=friction,
-                            joint_names=names)
+                            joint_names=names, gaps_s=gaps_s)
     if predict:
         excited = excited_axes(held_out)
         for horizon in HORIZONS_S:

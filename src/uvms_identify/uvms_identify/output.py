@@ -169,6 +169,9 @@ def write_report(result: Identification, out: Path, figures: list[Path]) -> Path
              f'{100 * (1 - 0.3):.0f} % of each), condition number {fit.condition_number:.3g} '
              "(column-normalized). Prior and comparison: the robot folder's "
              f'{robot.files.hydrodynamics}.', '',
+             'Gaps left out (with the smoothing window around each): '
+             + (', '.join(f'{what} {seconds:.1f} s' for what, seconds in result.gaps_s.items())
+                or 'none') + '.', '',
              f'Thrust delay: {1000 * result.delay_s:+.0f} ms: the recorded thrusts fit best as '
              'acting this much later (negative: earlier) than stamped; searched over '
              '-40..+80 ms with the thrusters\' gain and lag and the terms ("Actuators" below); '

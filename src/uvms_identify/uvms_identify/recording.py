@@ -9,7 +9,7 @@ Times are the messages' header stamps.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +42,15 @@ GROUND_TRUTH = ('/uvms/odometry', '/uvms/contact')
 MIN_DURATION_S = 5.0
 MIN_SPEED = 0.01  # m/s or rad/s: below it on every axis the vehicle did not move
 MIN_THRUST_STD_N = 0.1  # N: a thrust that varies less excites nothing
-MAX_GAP_S = 0.3  # s: the velocity topic silent longer is a gap (a DVL without bottom lock)
+#: Longest time between two messages that is not a gap (s). The velocity: a DVL reports at
+#: 2-15 Hz by altitude; a longer silence is a lost bottom lock.
+MAX_VELOCITY_INTERVAL_S = 0.6
+#: The IMU, the joint states and the thrusts sent (at 50-500 Hz): a longer silence is
+#: messages lost (a recorder that fell behind keeps bursts of them out). Interpolated across,
+#: such a hole smooths the accelerations the thrusts are balanced against and biases the
+#: added mass low: twin stand recordings that lost 0.05-0.3 s bursts of their IMU put the yaw
+#: added mass at 0 (0.28 kg m^2 from the same runs with every message, truth 0.30).
+MAX_SAMPLE_INTERVAL_S = 0.2
 MIN_SEGMENT_S = 2.0  # s: shorter stretches between gaps are left out
 
 
@@ -60,10 +68,13 @@ class Series:
         tau: Thrust wrench in base_link_frd (N, 6) (N, N m).
         thrusts: The thrusts (N, p) (N).
         depth_m: Depth (N,) (m), NaN without a depth topic.
-        valid: Where the velocity is measured (N,): False within the smoothing window of a
-            gap of the velocity topic (a DVL without bottom lock).
+        valid: Where every signal is measured (N,): False within the smoothing window of a
+            gap of the velocity topic (a DVL without bottom lock) or of the IMU, the joint
+            states or the thrusts (messages lost on the way to the recording).
         joint_torques: The arm's torques commanded (``command/actuators``) (N, n) (N m),
             smoothed as the rest; (N, 0) when the recording holds none.
+        gaps_s: Per signal with gaps (its name as in the refusals), the time of the grid
+            in them (s).
     """
 
     source: Path
@@ -80,12 +91,26 @@ class Series:
     depth_m: FloatArray
     valid: NDArray[np.bool_]
     joint_torques: FloatArray
+    gaps_s: dict[str, float] = field(default_factory=dict)
 
     def window(self, mask: NDArray[np.bool_]) -> Series:
         """The samples where ``mask`` holds."""
         return Series(self.source, *(getattr(self, f)[mask] for f in (
             't_s', 'nu', 'nu_dot', 'rpy', 'gravity_body', 'joints', 'joint_rates',
-            'joint_accelerations', 'tau', 'thrusts', 'depth_m', 'valid', 'joint_torques')))
+            'joint_accelerations', 'tau', 'thrusts', 'depth_m', 'valid', 'joint_torques')),
+            gaps_s=self.gaps_s)
+
+
+def gap_mask(sample_t_s: FloatArray, grid_s: FloatArray,
+             max_interval_s: float) -> NDArray[np.bool_]:
+    """The grid points in a gap (N,).
+
+    A gap: two consecutive samples (times ``sample_t_s``) farther apart than
+    ``max_interval_s``.
+    """
+    after = np.clip(np.searchsorted(sample_t_s, grid_s, side='right'), 1, sample_t_s.size - 1)
+    result: NDArray[np.bool_] = sample_t_s[after] - sample_t_s[after - 1] > max_interval_s
+    return result
 
 
 def _stamp(message: object) -> float:
@@ -220,17 +245,20 @@ def read_series(path: str | Path, robot: RobotData, *, velocity: str = 'dvl',
     depth = (resample(*series['/depth'], grid)[:, 0] if '/depth' in series
              else np.full(grid.size, np.nan))
     trim = round(window_s / dt)
-    # A gap of the velocity topic (no bottom lock) spoils the smoothing a window around it.
-    nearest = np.minimum(np.abs(grid - velocity_t[np.clip(
-        np.searchsorted(velocity_t, grid), 0, velocity_t.size - 1)]), np.abs(grid - velocity_t[
-            np.clip(np.searchsorted(velocity_t, grid) - 1, 0, velocity_t.size - 1)]))
-    gap = nearest > MAX_GAP_S
+    # A gap of any signal spoils the smoothing a window around it.
+    gaps = {VELOCITY_TOPICS[velocity][1]: gap_mask(velocity_t, grid, MAX_VELOCITY_INTERVAL_S),
+            REQUIRED['/imu']: gap_mask(imu_t, grid, MAX_SAMPLE_INTERVAL_S),
+            REQUIRED['/joint_states']: gap_mask(joint_t, grid, MAX_SAMPLE_INTERVAL_S),
+            REQUIRED['/command/actuators']: gap_mask(thrust_t, grid, MAX_SAMPLE_INTERVAL_S)}
+    gap = np.logical_or.reduce(list(gaps.values()))
     valid = ~(np.convolve(gap.astype(float), np.ones(2 * trim + 1), mode='same') > 0.0)
     keep = slice(trim, grid.size - trim)
+    gaps_s = {what: float(np.count_nonzero(mask[keep])) * dt for what, mask in gaps.items()
+              if mask[keep].any()}
     result = Series(path, grid - grid[0], nu, nu_dot, euler_zyx(rotations),
                     rotations[:, 2, :], joints, joint_rates, joint_accelerations,
                     thrusts @ robot.thrust_matrix.T, thrusts, depth, valid,
-                    joint_torques).window(
+                    joint_torques, gaps_s).window(
                         np.isin(np.arange(grid.size), np.arange(grid.size)[keep]))
     if float(np.abs(result.nu).max()) < MIN_SPEED:
         raise IdentifyError(f'{path}: no excitation: the vehicle never moved faster than '

@@ -1,4 +1,8 @@
-"""The sensor bridges run SCHED_FIFO below the control loop; the actuator bridges at its level."""
+"""The sensor bridges run SCHED_FIFO below the control loop; the actuator bridges at its level.
+
+Beside loops at SCHED_FIFO the recorder starts at a lower niceness: a normal process that takes
+what the loops leave before other work.
+"""
 
 from __future__ import annotations
 
@@ -12,7 +16,7 @@ from uvms_bringup.hardware_plan import (
     load_hardware_plan,
 )
 from uvms_bringup.launch_helpers import resolve_scenario_path
-from uvms_bringup.launch_layout import describe_scheduling, sensor_priority
+from uvms_bringup.launch_layout import RECORDER_NICE, describe_scheduling, sensor_priority
 from uvms_bringup.launcher import plan_launch
 from uvms_bringup.processes import NodeProcessSpec
 from uvms_common.scheduling import Scheduling
@@ -60,7 +64,7 @@ def test_the_launch_line_names_the_sensor_bridges_priority(tmp_path: Path) -> No
     """One group per priority on the launch line, the loop's first."""
     scheduling = Scheduling(50)
     line = describe_scheduling(scheduling, twin_plans(tmp_path, scheduling).values())
-    assert line.endswith('; dvl_bridge, netft_bridge: SCHED_FIFO 40')
+    assert line.endswith('; dvl_bridge, netft_bridge: SCHED_FIFO 40; recorder: nice -10')
     assert line.startswith('; ardusub_bridge, alpha5_bridge')
     assert ': SCHED_FIFO 50; ' in line
 
@@ -85,3 +89,12 @@ def test_without_priorities_the_sensor_bridges_ask_for_nothing_either(tmp_path: 
 def test_a_sensor_bridge_is_never_at_or_above_the_loop(loop: int, sensor: int) -> None:
     """10 below; one below a low loop priority; normal scheduling below the loop's 1."""
     assert sensor_priority(loop) == sensor
+
+
+def test_beside_fifo_loops_the_recorder_starts_nicer_and_the_line_says_so(tmp_path: Path) -> None:
+    """The recorder at nice -10, every other process at 0; with --no-rt the recorder at 0 too."""
+    plans = twin_plans(tmp_path, Scheduling(50), twins=True)
+    assert plans['recorder'].nice == RECORDER_NICE < 0
+    assert plans['recorder'].rt_priority == 0  # a normal process still
+    assert all(plan.nice == 0 for name, plan in plans.items() if name != 'recorder')
+    assert twin_plans(tmp_path, Scheduling())['recorder'].nice == 0

@@ -3,7 +3,8 @@
 The robot folder's own model (uvms_model, the simulator's) is stepped with a known hull and
 known thrusts, the arm held by a joint PD; IMU (orientation, rates), DVL (velocity at its
 mounting point in dvl_link), depth, joint states and the thrusts sent are written to an MCAP
-with the stack's recorder, noise free. ``topics`` leaves any out.
+with the stack's recorder, noise free. ``topics`` leaves any out; ``holes_s`` leaves a topic's
+messages out over stretches of time, as a recorder that fell behind does.
 """
 
 from __future__ import annotations
@@ -65,8 +66,13 @@ def simulate(robot: RobotData, hull: dict[str, Any], t: np.ndarray,
 
 
 def write(path: Path, robot: RobotData, t: np.ndarray, thrusts: np.ndarray,
-          states: dict[str, np.ndarray], topics: tuple[str, ...] = tuple(TOPICS)) -> Path:
-    """Write the robot's own topics of a simulated run to ``path``."""
+          states: dict[str, np.ndarray], topics: tuple[str, ...] = tuple(TOPICS),
+          holes_s: dict[str, list[tuple[float, float]]] | None = None) -> Path:
+    """Write the robot's own topics of a simulated run to ``path``.
+
+    ``holes_s``: per topic, the (start, end) times (s) whose messages are left out.
+    """
+    holes = holes_s or {}
     ts = uvms_typestore()
     T = ts.types
     Time, Header = T['builtin_interfaces/msg/Time'], T['std_msgs/msg/Header']
@@ -76,6 +82,8 @@ def write(path: Path, robot: RobotData, t: np.ndarray, thrusts: np.ndarray,
         recorder.add_topic(topic, TOPICS[topic])
 
     def put(topic: str, msg: Any, stamp_ns: int) -> None:
+        if any(start <= stamp_ns * 1e-9 < end for start, end in holes.get(topic, ())):
+            return
         if topic in topics:
             recorder.write(topic, bytes(ts.serialize_cdr(msg, msg.__msgtype__)), stamp_ns)
 
