@@ -6,7 +6,7 @@ import sys
 from collections.abc import Iterable
 from dataclasses import replace
 
-from uvms_common.scheduling import Scheduling, fifo_refusal
+from uvms_common.scheduling import Scheduling, fifo_refusal, may_lower_niceness
 
 from uvms_bringup.launch_helpers import (
     HARDWARE_BRIDGES,
@@ -75,10 +75,12 @@ def node_scheduling(spec: NodeSpec, scheduling: Scheduling | None,
 def node_niceness(spec: NodeSpec, scheduling: Scheduling | None) -> int:
     """The niceness a node's process starts with, 0 but for the recorder's.
 
-    ``RECORDER_NICE`` for the recorder beside loops at SCHED_FIFO: whoever may ask for that
-    may lower a niceness too.
+    ``RECORDER_NICE`` for the recorder beside loops at SCHED_FIFO, where this user may
+    lower a niceness (CAP_SYS_NICE or RLIMIT_NICE); elsewhere 0, and the launch line does not
+    name it.
     """
-    if spec is RECORDER and scheduling is not None and scheduling.priority > 0:
+    if (spec is RECORDER and scheduling is not None and scheduling.priority > 0
+            and may_lower_niceness(RECORDER_NICE)):
         return RECORDER_NICE
     return 0
 

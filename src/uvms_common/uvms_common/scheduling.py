@@ -146,6 +146,17 @@ def has_sys_nice() -> bool | None:
     return None
 
 
+def may_lower_niceness(nice: int) -> bool:
+    """Whether a process of this user may start at niceness ``nice`` (below 0).
+
+    CAP_SYS_NICE, or a soft RLIMIT_NICE of at least 20 - nice (setrlimit(2)).
+    """
+    if has_sys_nice():
+        return True
+    limit = resource.getrlimit(resource.RLIMIT_NICE)[0]
+    return limit == resource.RLIM_INFINITY or limit >= 20 - nice
+
+
 def rtprio_limit() -> str:
     """This process's soft RLIMIT_RTPRIO, worded (``0``, ``98``, ``unlimited``)."""
     rtprio = resource.getrlimit(resource.RLIMIT_RTPRIO)[0]

@@ -22,6 +22,8 @@ from uvms_bringup.processes import NodeProcessSpec
 from uvms_common.scheduling import Scheduling
 from uvms_scenarios.scenario import load_scenario
 
+from uvms_bringup import launch_layout
+
 CONFIG = Path(__file__).resolve().parents[3] / 'config'
 
 
@@ -60,8 +62,10 @@ def test_sensor_bridges_start_and_ask_10_below_the_control_loop(tmp_path: Path) 
         assert (plans[name].rt_priority, asked_priority(plans[name])) == (0, None)
 
 
-def test_the_launch_line_names_the_sensor_bridges_priority(tmp_path: Path) -> None:
-    """One group per priority on the launch line, the loop's first."""
+def test_the_launch_line_names_the_sensor_bridges_priority(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """One group per priority on the launch line, the loop's first; the recorder's niceness."""
+    monkeypatch.setattr(launch_layout, 'may_lower_niceness', lambda nice: True)
     scheduling = Scheduling(50)
     line = describe_scheduling(scheduling, twin_plans(tmp_path, scheduling).values())
     assert line.endswith('; dvl_bridge, netft_bridge: SCHED_FIFO 40; recorder: nice -10')
@@ -91,10 +95,22 @@ def test_a_sensor_bridge_is_never_at_or_above_the_loop(loop: int, sensor: int) -
     assert sensor_priority(loop) == sensor
 
 
-def test_beside_fifo_loops_the_recorder_starts_nicer_and_the_line_says_so(tmp_path: Path) -> None:
+def test_beside_fifo_loops_the_recorder_starts_nicer(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The recorder at nice -10, every other process at 0; with --no-rt the recorder at 0 too."""
+    monkeypatch.setattr(launch_layout, 'may_lower_niceness', lambda nice: True)
     plans = twin_plans(tmp_path, Scheduling(50), twins=True)
     assert plans['recorder'].nice == RECORDER_NICE < 0
     assert plans['recorder'].rt_priority == 0  # a normal process still
     assert all(plan.nice == 0 for name, plan in plans.items() if name != 'recorder')
     assert twin_plans(tmp_path, Scheduling())['recorder'].nice == 0
+
+
+def test_where_niceness_is_refused_the_recorder_starts_at_0_and_the_line_is_silent(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """SCHED_FIFO allowed (RLIMIT_RTPRIO) but not a lower niceness (RLIMIT_NICE): no claim."""
+    monkeypatch.setattr(launch_layout, 'may_lower_niceness', lambda nice: False)
+    scheduling = Scheduling(50)
+    plans = twin_plans(tmp_path, scheduling)
+    assert plans['recorder'].nice == 0
+    assert 'nice' not in describe_scheduling(scheduling, plans.values())

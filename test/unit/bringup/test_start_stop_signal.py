@@ -9,7 +9,6 @@ into a launch: the launcher's SIGINT reached a child before its interpreter had 
 from __future__ import annotations
 
 import os
-import resource
 import signal
 import subprocess
 import sys
@@ -18,7 +17,7 @@ from pathlib import Path
 
 import pytest
 from uvms_bringup.processes import _child_setup
-from uvms_common.scheduling import has_sys_nice
+from uvms_common.scheduling import may_lower_niceness
 
 #: A node module: waits for its stop (as run_node does), then returns.
 _NODE = """
@@ -90,7 +89,7 @@ def test_a_stop_during_a_slow_import_ends_the_node_at_once(tmp_path: Path) -> No
 
 def test_a_child_starts_at_the_niceness_asked_for_or_at_0_where_refused() -> None:
     """``_child_setup(0, -5)``: the child's niceness -5 where this user may lower it, else 0."""
-    allowed = has_sys_nice() or resource.getrlimit(resource.RLIMIT_NICE)[0] >= 25
+    allowed = may_lower_niceness(-5)
     child = subprocess.run([sys.executable, '-c', 'import os; print(os.nice(0))'],
                            capture_output=True, text=True, timeout=60, check=True,
                            preexec_fn=_child_setup(0, -5))
