@@ -18,7 +18,7 @@ this tree in turn instead: the before/after of a change to the robot process, si
 
 For each real-time factor (``--real-time-factors``, default 1.0 and 0.5) it runs the three
 layouts in turn, ``--pairs`` times, to the scenario's end, and reads the launch's own closing
-cost table (``uvms_bringup.launch_costs``: CPU in % of one core per process from the first
+cost table (``uvms_common.process_costs``: CPU in % of one core per process from the first
 simulated step, missed periods of the loop processes) instead of measuring anew. It prints
 one row per run (outcome, contacts from the recording, robot-side CPU, the twin stand's CPU
 per process, the missed share of each loop process) and per factor the robot-side

@@ -17,9 +17,9 @@ from mcap.reader import make_reader
 from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
-from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import RECORDER
 from uvms_bringup.processes import Launcher
+from uvms_common.process_costs import CostWatch
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_scenarios.scenario import load_scenario
 from uvms_tasks.mission_outcome import EXIT_MISSION_FAILED

@@ -18,10 +18,10 @@ import time
 from pathlib import Path
 
 import pytest
-from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import RECORDER, NodeSpec
 from uvms_bringup.launcher import run_launch
 from uvms_bringup.processes import EXIT_FAILURE, Launcher, NodeProcessSpec
+from uvms_common.process_costs import CostWatch
 from uvms_common.scheduling import LOOP_RTTIME_S, fifo_refusal
 
 #: The guard must end a spinning loop within this long after it starts spinning (s).

@@ -19,6 +19,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from uvms_common.process_costs import CostWatch
 from uvms_common.ros_environment import ros_environment_defaults
 from uvms_common.scheduling import DEFAULT_RT_PRIORITY, Scheduling
 from uvms_hardware.stop_report import ENV as STOP_REPORT_ENV
@@ -34,7 +35,6 @@ from uvms_bringup.hardware_plan import (
     hardware_parameters,
     hardware_scenario,
 )
-from uvms_bringup.launch_costs import CostWatch
 from uvms_bringup.launch_helpers import (
     DEFAULT_NAMESPACE,
     MISSION,

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 from uvms_bringup.composed import COMPOSED, LOOP_FLAG, node_groups
-from uvms_bringup.launch_costs import CostWatch, cpu_seconds
 from uvms_bringup.launch_helpers import resolve_scenario_path
 from uvms_bringup.launcher import plan_launch
+from uvms_common.process_costs import CostWatch, cpu_seconds
 from uvms_common.scheduling import Scheduling
 from uvms_scenarios.scenario import load_scenario
 
