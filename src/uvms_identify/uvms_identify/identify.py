@@ -20,7 +20,7 @@ from uvms_identify.errors import IdentifyError
 from uvms_identify.fit import HullFit, fit_hull
 from uvms_identify.known_terms import ZERO_HULL, known_forces, model_with_hull
 from uvms_identify.predict import horizon_errors
-from uvms_identify.recording import MIN_SEGMENT_S, Series, read_series, segments
+from uvms_identify.recording import MIN_SEGMENT_S, Series, gaps_text, read_series, segments
 from uvms_identify.regressor import hull_regressor
 from uvms_identify.robot_data import RobotData
 
@@ -116,9 +116,8 @@ def identify(paths: list[Path], robot: RobotData, *, velocity: str = 'dvl',
             arm_knowns.append(everything[:, 6:])
             phis.append(hull_regressor(train.nu, train.nu_dot, train.gravity_body))
     if not knowns:
-        lost = ', '.join(f'{what} {seconds:.1f} s' for what, seconds in gaps_s.items())
         raise IdentifyError('no stretch of the recordings has every signal measured for '
-                            f'{MIN_SEGMENT_S:g} s (time in gaps: {lost or "none"}; a DVL '
+                            f'{MIN_SEGMENT_S:g} s (time in gaps: {gaps_text(gaps_s)}; a DVL '
                             'without bottom lock, or messages lost on the way to the '
                             'recording)')
     phi = np.concatenate(phis)

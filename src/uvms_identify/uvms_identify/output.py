@@ -16,6 +16,7 @@ from uvms_identify.actuator_output import report_lines
 from uvms_identify.identify import HORIZONS_S, Identification, driven
 from uvms_identify.known_terms import ZERO_HULL, model_with_hull, net_buoyancy_n
 from uvms_identify.predict import simulate
+from uvms_identify.recording import gaps_text
 from uvms_identify.regressor import (
     ADDED_MASS,
     AXES,
@@ -170,8 +171,7 @@ def write_report(result: Identification, out: Path, figures: list[Path]) -> Path
              "(column-normalized). Prior and comparison: the robot folder's "
              f'{robot.files.hydrodynamics}.', '',
              'Gaps left out (with the smoothing window around each): '
-             + (', '.join(f'{what} {seconds:.1f} s' for what, seconds in result.gaps_s.items())
-                or 'none') + '.', '',
+             f'{gaps_text(result.gaps_s)}.', '',
              f'Thrust delay: {1000 * result.delay_s:+.0f} ms: the recorded thrusts fit best as '
              'acting this much later (negative: earlier) than stamped; searched over '
              '-40..+80 ms with the thrusters\' gain and lag and the terms ("Actuators" below); '

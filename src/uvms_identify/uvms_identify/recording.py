@@ -101,6 +101,11 @@ class Series:
             gaps_s=self.gaps_s)
 
 
+def gaps_text(gaps_s: dict[str, float]) -> str:
+    """The time in gaps per signal, worded: ``IMU (attitude, rates) 1.6 s, ...`` or ``none``."""
+    return ', '.join(f'{what} {seconds:.1f} s' for what, seconds in gaps_s.items()) or 'none'
+
+
 def gap_mask(sample_t_s: FloatArray, grid_s: FloatArray,
              max_interval_s: float) -> NDArray[np.bool_]:
     """The grid points in a gap (N,).
