@@ -17,6 +17,7 @@ from geometry_msgs.msg import WrenchStamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
+from uvms_common.scheduling import Scheduling, apply_scheduling
 from uvms_hardware.netft_bridge_node import NetFtBridgeNode
 from uvms_twins.netft_twin import NetFtTwin
 
@@ -24,6 +25,9 @@ IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
 RATE_HZ = 200.0
 PERIOD_S = 1.0 / RATE_HZ
 HERE = str(Path(__file__).parent)
+#: The twin's SCHED_FIFO priority: above the busy loops and the bridge (normal), as a box's own
+#: processor is.
+TWIN_RT_PRIORITY = 10
 
 
 class CountingTwin(NetFtTwin):
@@ -32,6 +36,8 @@ class CountingTwin(NetFtTwin):
     def __init__(self) -> None:
         super().__init__(port=0, rate_hz=RATE_HZ, clock=time.time, http_port=0)
         self.stream_starts: list[float] = []
+        #: (sample time, how late its record left) (s) of each record sent.
+        self.lateness: list[tuple[float, float]] = []
 
     def handle(self, datagram: bytes, sender: tuple[str, int]) -> None:
         """Note each stream's start."""
@@ -42,17 +48,25 @@ class CountingTwin(NetFtTwin):
 
     def _record(self) -> bytes:
         self._counts = (self._sample, len(self.stream_starts), 0, 0, 0, 0)
+        sampled_s = self._stream_start_s + self._sample * self.period_s
+        self.lateness.append((sampled_s, self.clock() - sampled_s))
         return super()._record()
 
 
 def serve_twin() -> None:
-    """In its own process (a box is not starved by our host): ports out, stream starts at EOF."""
+    """The twin in its own process, at SCHED_FIFO where allowed.
+
+    A box's timing is its own hardware's, which our host's load does not reach. Ports out;
+    stream starts and lateness at EOF.
+    """
+    outcome = apply_scheduling(Scheduling(priority=TWIN_RT_PRIORITY))
     twin = CountingTwin()
     twin.start()
-    print(json.dumps([twin.port, twin.http_port]), flush=True)
+    print(json.dumps([twin.port, twin.http_port, outcome.refused or ', '.join(outcome.applied)]),
+          flush=True)
     sys.stdin.read()
     twin.stop()
-    print(json.dumps(twin.stream_starts), flush=True)
+    print(json.dumps({'starts': twin.stream_starts, 'lateness': twin.lateness}), flush=True)
 
 
 @pytest.fixture
@@ -70,13 +84,15 @@ def busy_loops() -> Iterator[None]:
 def test_netft_stamps_are_the_boxs_sample_times_under_two_busy_loops(busy_loops: None) -> None:
     """Records one period apart (not one stamp per poll); each within 2 ms of its sample time.
 
-    The twin runs in a process of its own, as the box is a device of its own.
+    The twin runs in a process of its own, as the box is a device of its own; the bridge at
+    normal priority beside the busy loops.
     """
     twin = subprocess.Popen([sys.executable, '-c', f'import sys; sys.path.insert(0, {HERE!r}); '
                              'import test_netft_device_time as t; t.serve_twin()'],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     assert twin.stdin is not None and twin.stdout is not None
-    port, http_port = json.loads(twin.stdout.readline())
+    port, http_port, twin_scheduling = json.loads(twin.stdout.readline())
+    print(f'twin: {twin_scheduling}')
     context = Context()
     rclpy.init(args=[], context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -98,13 +114,15 @@ def test_netft_stamps_are_the_boxs_sample_times_under_two_busy_loops(busy_loops:
         core = bridge.core
         assert core is not None
         print(f'bridge: {core.records} records, {core.lost} lost, {core.stream_restarts} new '
-              f'streams, {core.stale_episodes} stale; received {len(received)}')
+              f'streams, {core.stale_episodes} stale; received {len(received)}; box clock '
+              f'{core.clock.report()}')
     finally:
         executor.shutdown()
         bridge.destroy_node()
         rclpy.try_shutdown(context=context)
-        stream_starts, _ = twin.communicate(timeout=10.0)
-    starts = json.loads(stream_starts)
+        twin_out, _ = twin.communicate(timeout=10.0)
+    starts = json.loads(twin_out)['starts']
+    lateness = json.loads(twin_out)['lateness']
     samples = []
     for msg in received:
         sample = round(msg.wrench.force.x * 1e6)
@@ -131,11 +149,22 @@ def test_netft_stamps_are_the_boxs_sample_times_under_two_busy_loops(busy_loops:
     near = [step for step in steps_s if abs(step - PERIOD_S) < 0.00005]
     assert abs(statistics.median(steps_s) - PERIOD_S) < 0.001 * PERIOD_S
     assert len(near) >= 0.95 * len(steps_s)
-    # The twin runs in this process: under the busy loops its own sends come late (its
-    # scheduling, which no stamp can know: medians of 0.16-1.3 ms and 99th percentiles of 2-4
-    # ms seen in suite runs), so the claim is the issue's 2 ms on the median (arrival stamps:
-    # median 6.9 ms late, and 0 ms apart within a poll, which the spacing checks refuse).
+    # The claim is the issue's 2 ms on the median (arrival stamps: median 6.9 ms late, and 0 ms
+    # apart within a poll, which the spacing checks refuse). One fresh-clone CI run (stop 58)
+    # saw 2.54 ms, with the fit on the polls' times and the twin at normal priority beside the
+    # loops (its lateness then unrecorded); the fit now rests on the kernel's arrival stamps,
+    # and the twin's own lateness, which no stamp can see, is printed below.
     errors_sorted = sorted(abs(e) for e in errors_s)
     p99_s = errors_sorted[int(0.99 * (len(errors_sorted) - 1))]
     print(f'netft |stamp error| p99 {p99_s * 1e3:.3f} ms')
+    # How late the twin's own records left, the least of each 0.1 s (what the bridge's
+    # minimum-delay estimate rests on): no stamp can be better than these.
+    settled_from_s = settled[0][3]
+    floors: dict[int, float] = {}
+    for sampled_s, late_s in lateness:
+        if sampled_s >= settled_from_s:
+            key = int((sampled_s - settled_from_s) / 0.1)
+            floors[key] = min(floors.get(key, late_s), late_s)
+    print(f'twin: its records left late by at least {statistics.median(floors.values()) * 1e3:.3f}'
+          f' ms (median of 0.1 s), at most {max(floors.values()) * 1e3:.3f} ms')
     assert statistics.median(errors_sorted) < 0.002

@@ -1,4 +1,4 @@
-"""When each UDP datagram of a pymavlink connection reached the host: the kernel's time of it.
+"""When each UDP datagram reached the host: the kernel's time of it.
 
 A bridge reads its socket once per period, so a message read at a poll may have arrived up to a
 period earlier; with a periodic sender (ArduPilot's 50 Hz streams) and a periodic poll (60 Hz)
@@ -10,6 +10,9 @@ simulated)::
     arrival = DatagramArrival.attach(conn)     # None: not a UDP connection, or not Linux
     msg = conn.recv_match(blocking=False)
     arrival_s = arrival.last_s if arrival else None
+
+A plain socket (the Net F/T link) asks with ``stamp_arrivals(sock)`` and reads the stamp from
+``recvmsg``'s ancillary data with ``kernel_arrival_s(ancillary)``.
 
 The connection's ``recv`` is replaced by one that does what pymavlink's ``mavudp.recv`` does
 (the same datagram, the same bookkeeping of its peers) and keeps the kernel's time of it.
@@ -30,6 +33,29 @@ SO_TIMESTAMPNS = 35
 #: Largest UDP datagram pymavlink reads (``mavutil.UDP_MAX_PACKET_LEN``).
 UDP_MAX_PACKET_LEN = 65535
 _TIMESPEC = struct.Struct('@qq')
+#: Ancillary buffer ``recvmsg`` needs for the stamp.
+ANCILLARY_SIZE = socket.CMSG_SPACE(_TIMESPEC.size)
+
+
+def stamp_arrivals(sock: socket.socket) -> bool:
+    """Ask the kernel to stamp each datagram's arrival; False where it cannot (not Linux)."""
+    if not sys.platform.startswith('linux'):
+        return False
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
+    except OSError:
+        return False
+    return True
+
+
+def kernel_arrival_s(ancillary: list[tuple[int, int, bytes]]) -> float | None:
+    """The kernel's arrival stamp in ``recvmsg``'s ancillary data (s since the epoch), or None."""
+    for level, kind, payload in ancillary:
+        if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS and \
+                len(payload) >= _TIMESPEC.size:
+            seconds, nanoseconds = _TIMESPEC.unpack(payload[:_TIMESPEC.size])
+            return seconds + nanoseconds * 1e-9
+    return None
 
 
 class DatagramArrival:
@@ -44,12 +70,8 @@ class DatagramArrival:
     def attach(cls, conn: Any) -> DatagramArrival | None:
         """Stamp ``conn``'s datagrams on arrival; None where that cannot be done."""
         port = getattr(conn, 'port', None)
-        if not sys.platform.startswith('linux') or not isinstance(port, socket.socket) \
-                or port.type != socket.SOCK_DGRAM or not hasattr(conn, 'udp_server'):
-            return None
-        try:
-            port.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
-        except OSError:
+        if not isinstance(port, socket.socket) or port.type != socket.SOCK_DGRAM \
+                or not hasattr(conn, 'udp_server') or not stamp_arrivals(port):
             return None
         arrival = cls(conn)
         conn.recv = arrival.recv
@@ -59,17 +81,14 @@ class DatagramArrival:
         """Read one datagram as ``mavudp.recv`` does, keeping its arrival in ``last_s``."""
         conn = self.conn
         try:
-            data, ancillary, _, address = conn.port.recvmsg(
-                UDP_MAX_PACKET_LEN, socket.CMSG_SPACE(_TIMESPEC.size))
+            data, ancillary, _, address = conn.port.recvmsg(UDP_MAX_PACKET_LEN, ANCILLARY_SIZE)
         except OSError as exc:
             if exc.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.ECONNREFUSED):
                 return ''
             raise
-        for level, kind, payload in ancillary:
-            if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS and \
-                    len(payload) >= _TIMESPEC.size:
-                seconds, nanoseconds = _TIMESPEC.unpack(payload[:_TIMESPEC.size])
-                self.last_s = seconds + nanoseconds * 1e-9
+        arrival_s = kernel_arrival_s(ancillary)
+        if arrival_s is not None:
+            self.last_s = arrival_s
         if conn.udp_server:
             conn.clients.add(address)
             conn.clients_last_alive[address] = time.time()

@@ -248,14 +248,17 @@ class NetFtComponent(HardwareComponent):
         self._records = ()
         if core is None or link is None or not self.active:
             return
-        datagrams = link.read_datagrams()
+        stamped = link.read_stamped()
+        # Read after the socket: every record had arrived by then (a delay never negative).
+        local_s, wall_s = self.local_clock(), time.time()
+        datagrams = [datagram for datagram, _ in stamped]
+        # Each datagram's age on the kernel's clock (CLOCK_REALTIME) taken back from local_s.
+        ages_s = [None if arrival_s is None else wall_s - arrival_s for _, arrival_s in stamped]
         if latency_probe.enabled():  # each record's RDT sequence, for bench_twin_latency
             for datagram in datagrams:
                 latency_probe.note('ftrx', 0, int.from_bytes(datagram[:4], 'big'))
-        # Read after the socket: every record had arrived by then (a delay never negative).
-        local_s = self.local_clock()
         bad = core.bad_datagrams
-        self._records = tuple(core.receive_all(datagrams, now_s, local_s))
+        self._records = tuple(core.receive_all(datagrams, now_s, local_s, ages_s))
         if self._records:
             self._latest = self._records[-1][1]
         if core.bad_datagrams > bad and self._bad_throttle(now_s):

@@ -3,15 +3,18 @@
 Per poll of the socket::
 
     core = NetFtCore(counts_per_force=1e6, counts_per_torque=1e6, rdt_rate_hz=500.0)
-    for stamp_s, (force, torque) in core.receive_all(datagrams, t_s, local_s): ...
+    for stamp_s, (force, torque) in core.receive_all(datagrams, t_s, local_s, ages_s): ...
     core.bias()                            # the present reading becomes zero
     core.stale(t_s)                        # no record for timeout_s: nothing is published
 
 ``t_s`` is the steady clock (staleness), ``local_s`` the clock stamps are in, both read when
 the poll began. Each record is stamped when the box sampled it: record n of the stream (its
 rdt_sequence, unwrapped past 2^32) at n / ``rdt_rate_hz`` on the box's clock, mapped into
-``local_s`` through the offset and skew of `uvms_hardware.device_time` (the newest record of
-each poll against the poll's time), so the records of one poll lie one record period apart,
+``local_s`` through the offset and skew of `uvms_hardware.device_time`, fitted on each poll's
+earliest (arrival - sample time), the arrival the kernel's stamp of the datagram (``ages_s``:
+how long before ``local_s`` each arrived); where the kernel gives none, the newest record
+against the poll's time, which a poll in phase with the box's records leaves up to one
+record period late. So the records of one poll lie one record period apart,
 and a lost record (a sequence gap) advances time as the box did. A sequence that runs back by
 more than `REORDER_RECORDS` is a new stream (the box restarted it): the clock is estimated
 again. Without ``rdt_rate_hz``, or while the box's clock and ``local_s`` visibly run at
@@ -115,18 +118,37 @@ class NetFtCore:
         taken = self._take(datagram, t_s)
         return None if taken is None else taken[1]
 
-    def receive_all(self, datagrams: Sequence[bytes], t_s: float, local_s: float
+    def receive_all(self, datagrams: Sequence[bytes], t_s: float, local_s: float,
+                    ages_s: Sequence[float | None] | None = None
                     ) -> list[tuple[float, Wrench]]:
-        """(stamp s on the local clock, wrench) of each good record of one poll, in order."""
-        taken = [t for t in (self._take(d, t_s) for d in datagrams) if t is not None]
+        """(stamp s on the local clock, wrench) of each good record of one poll, in order.
+
+        ``ages_s``: how long before ``local_s`` each datagram arrived (s, the kernel's stamp;
+        None where it gave none). The box's clock is then fitted on the poll's earliest
+        (arrival - sample time), else on the newest record against ``local_s``.
+        """
+        ages = ages_s if ages_s is not None else [None] * len(datagrams)
+        if len(ages) != len(datagrams):
+            raise ValueError(f'{len(ages)} arrival ages for {len(datagrams)} datagrams')
+        taken: list[tuple[int, Wrench, float | None]] = []
+        for datagram, age_s in zip(datagrams, ages, strict=True):
+            record = self._take(datagram, t_s)
+            if record is not None:
+                taken.append((*record, age_s))
         if not taken or self.rdt_rate_hz is None:
-            return [(local_s, wrench) for _, wrench in taken]
+            return [(local_s, wrench) for _, wrench, _ in taken]
         period_s = 1.0 / self.rdt_rate_hz
-        self.clock.add(max(index for index, _ in taken) * period_s, local_s)
+        arrivals = [(local_s - max(0.0, age_s) - index * period_s, index)
+                    for index, _, age_s in taken if age_s is not None]
+        if arrivals:
+            delay_s, index = min(arrivals)
+            self.clock.add(index * period_s, index * period_s + delay_s)
+        else:
+            self.clock.add(max(index for index, _, _ in taken) * period_s, local_s)
         if not self.clock.rates_agree:
-            return [(local_s, wrench) for _, wrench in taken]
+            return [(local_s, wrench) for _, wrench, _ in taken]
         return [(self.clock.to_local(index * period_s) or local_s, wrench)
-                for index, wrench in taken]
+                for index, wrench, _ in taken]
 
     def _index_of(self, sequence: int) -> int:
         """The record's place in the stream: its sequence unwrapped past 2^32."""

@@ -4,6 +4,8 @@
 loopback (nothing binds beyond it unless the user's address says so); ``serial:DEVICE[:BAUD]``
 opens a serial port with pyserial, 8N1, 115200 baud unless given. ``read`` returns whatever
 arrived (b'' if nothing), so a bridge polls its link once per period without threads.
+``UdpLink.read_stamped`` also gives each datagram's arrival, the kernel's time of it (Linux's
+``SO_TIMESTAMPNS``), which a poll that comes late does not move.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import NamedTuple, Protocol
 
 from uvms_hardware import latency_probe
 from uvms_hardware.address import LOOPBACK, parse_host_port
+from uvms_hardware.datagram_arrival import ANCILLARY_SIZE, kernel_arrival_s, stamp_arrivals
 from uvms_hardware.errors import AddressError, HardwareError
 
 DEFAULT_BAUD = 115200
@@ -69,6 +72,8 @@ class UdpLink:
         loopback = host == LOOPBACK or host == 'localhost'
         self._socket.bind((LOOPBACK if loopback else '', 0))
         self._socket.setblocking(False)
+        #: Whether the kernel stamps each datagram's arrival (Linux).
+        self.stamped = stamp_arrivals(self._socket)
         #: Sends the peer refused (ICMP port unreachable: nothing listens there).
         self.refused = 0
 
@@ -86,17 +91,25 @@ class UdpLink:
 
     def read_datagrams(self) -> list[bytes]:
         """Every datagram waiting from the peer, one bytes each (others are dropped)."""
+        return [data for data, _ in self.read_stamped()]
+
+    def read_stamped(self) -> list[tuple[bytes, float | None]]:
+        """Every datagram waiting from the peer with its arrival, in order.
+
+        The arrival is the kernel's stamp (s since the epoch, on CLOCK_REALTIME), None where
+        it gives none.
+        """
         datagrams = []
         while True:
             try:
-                data, sender = self._socket.recvfrom(4096)
+                data, ancillary, _, sender = self._socket.recvmsg(4096, ANCILLARY_SIZE)
             except (BlockingIOError, InterruptedError):
                 break
             except ConnectionRefusedError:
                 self.refused += 1
                 continue
             if sender[1] == self._peer[1]:
-                datagrams.append(data)
+                datagrams.append((data, kernel_arrival_s(ancillary)))
         if datagrams:
             latency_probe.note('rx', self._peer[1], len(datagrams))
         return datagrams

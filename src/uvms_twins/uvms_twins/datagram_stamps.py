@@ -10,25 +10,11 @@ from __future__ import annotations
 
 import math
 import socket
-import struct
 import time
 
+from uvms_hardware.datagram_arrival import ANCILLARY_SIZE, kernel_arrival_s, stamp_arrivals
+
 __all__ = ['receive_stamped', 'stamp_arrivals']
-
-#: The kernel's arrival stamp of a datagram (Linux; None elsewhere: the thread's clock).
-_SO_TIMESTAMPNS: int | None = getattr(socket, 'SO_TIMESTAMPNS', None)
-
-
-def stamp_arrivals(sock: socket.socket) -> bool:
-    """Ask the kernel to stamp each datagram's arrival (SO_TIMESTAMPNS); False: not here."""
-    option = _SO_TIMESTAMPNS
-    if option is None:
-        return False
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, option, 1)
-    except OSError:
-        return False
-    return True
 
 
 def _wall_minus_steady_s() -> float:
@@ -55,10 +41,8 @@ def receive_stamped(sock: socket.socket, stamped: bool,
     if not stamped:
         datagram, sender = sock.recvfrom(4096)
         return datagram, sender, now_s
-    datagram, ancillary, _, sender = sock.recvmsg(4096, 64)
-    for level, kind, data in ancillary:
-        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
-            seconds, nanoseconds = struct.unpack('qq', data[:16])
-            wall_s = seconds + nanoseconds * 1e-9
-            return datagram, sender, min(now_s, wall_s - _wall_minus_steady_s())
-    return datagram, sender, now_s
+    datagram, ancillary, _, sender = sock.recvmsg(4096, ANCILLARY_SIZE)
+    wall_s = kernel_arrival_s(ancillary)
+    if wall_s is None:
+        return datagram, sender, now_s
+    return datagram, sender, min(now_s, wall_s - _wall_minus_steady_s())

@@ -140,3 +140,39 @@ def test_a_wrong_rdt_rate_is_reported_and_stamps_fall_back_to_the_polls() -> Non
     level, message, values = core.report(3999 * 0.005)
     assert level == 1 and 'rdt_rate_hz 500' in message and values['clock_rates_agree'] is False
     assert samples[0][0] == pytest.approx(3.0 + 3999 * 0.005)
+
+
+def test_arrival_stamps_take_out_the_phase_of_polls_in_step_with_the_box() -> None:
+    """Polls at the box's 500 Hz, each 1.5 ms after a sample; records on the wire 0.05 ms.
+
+    With each datagram's arrival (the kernel's stamp) the records are stamped 0.05 ms after
+    they were sampled; with the polls' times alone, the phase stays in every stamp (1.5 ms),
+    since no poll ever comes sooner after a record.
+    """
+    zero = (0, 0, 0, 0, 0, 0)
+    period_s, phase_s, wire_s = 0.002, 0.0015, 0.00005
+    errors: dict[str, float] = {}
+    for kind in ('arrivals', 'polls'):
+        core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=500.0)
+        for k in range(1, 3000):  # 6 s: the window full
+            poll_s = 40.0 + k * period_s + phase_s
+            ages = [phase_s - wire_s] if kind == 'arrivals' else None
+            ((stamp_s, _),) = core.receive_all([datagram(k, zero)], poll_s, poll_s, ages)
+        errors[kind] = stamp_s - (40.0 + k * period_s)
+    assert errors['arrivals'] == pytest.approx(wire_s, abs=1e-6)
+    assert errors['polls'] == pytest.approx(phase_s, abs=1e-6)
+
+
+def test_the_earliest_arrival_of_a_poll_sets_the_box_clock() -> None:
+    """A poll of three records, the middle one delayed least: its delay is the offset."""
+    core = NetFtCore(1e6, 1e6, rot_link_from_sensor=IDENTITY, rdt_rate_hz=1000.0)
+    zero = (0, 0, 0, 0, 0, 0)
+    # Records 10, 11, 12 sampled at 0.010, 0.011, 0.012 on the box, arrived 3, 0.2, 1 ms later;
+    # the poll at 20.02 (the box's 0 at 20.0 on ours).
+    arrivals = [20.013, 20.0112, 20.013]
+    ages = [20.02 - a for a in arrivals]
+    stamps = [t for t, _ in core.receive_all([datagram(k, zero) for k in (10, 11, 12)],
+                                             0.0, 20.02, ages)]
+    assert stamps == pytest.approx([20.0102, 20.0112, 20.0122], abs=1e-9)
+    with pytest.raises(ValueError, match='2 arrival ages for 3 datagrams'):
+        core.receive_all([datagram(k, zero) for k in (13, 14, 15)], 0.0, 20.03, ages[:2])

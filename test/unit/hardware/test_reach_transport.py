@@ -47,3 +47,27 @@ def test_udp_link_binds_loopback_and_reads_only_its_peer() -> None:
             assert link.read() == b'answer'
         finally:
             link.close()
+
+
+def test_udp_link_gives_each_datagram_the_kernels_arrival_not_the_read() -> None:
+    """Read 50 ms after they came, two datagrams carry the times they were sent, in order."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as peer:
+        peer.bind(('127.0.0.1', 0))
+        link = UdpLink('127.0.0.1', peer.getsockname()[1])
+        try:
+            assert link.stamped  # Linux, which the project runs on
+            address = link._socket.getsockname()
+            sent = []
+            for payload in (b'first', b'second'):
+                before_s = time.time()
+                peer.sendto(payload, address)
+                sent.append((before_s, time.time()))
+                time.sleep(0.01)
+            time.sleep(0.05)
+            read_s = time.time()
+            stamped = link.read_stamped()
+        finally:
+            link.close()
+    assert [data for data, _ in stamped] == [b'first', b'second']
+    for (_, arrival_s), (before_s, after_s) in zip(stamped, sent, strict=True):
+        assert arrival_s is not None and before_s <= arrival_s <= after_s < read_s - 0.04
