@@ -249,10 +249,13 @@ class NetFtComponent(HardwareComponent):
         if core is None or link is None or not self.active:
             return
         stamped = link.read_stamped()
-        # Read after the socket: every record had arrived by then (a delay never negative).
-        local_s, wall_s = self.local_clock(), time.time()
+        # Both read after the socket: every record had arrived by then. The kernel's clock
+        # (CLOCK_REALTIME) first: each datagram's age is taken back from local_s, read later,
+        # so a pause between the two reads makes an arrival later than it was, never earlier
+        # (an earlier one would pull the minimum-delay fit below every true delay).
+        wall_s = time.time()
+        local_s = self.local_clock()
         datagrams = [datagram for datagram, _ in stamped]
-        # Each datagram's age on the kernel's clock (CLOCK_REALTIME) taken back from local_s.
         ages_s = [None if arrival_s is None else wall_s - arrival_s for _, arrival_s in stamped]
         if latency_probe.enabled():  # each record's RDT sequence, for bench_twin_latency
             for datagram in datagrams:

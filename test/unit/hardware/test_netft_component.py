@@ -134,3 +134,40 @@ def test_no_calibration_refuses_configure(twin: NetFtTwin) -> None:
                            log=lambda level, text: None)
     with pytest.raises(NetFtBridgeError, match='never assumed'):
         netft.configure()
+
+
+class CountingTwin(NetFtTwin):
+    """A twin on the wall clock whose Fx counts are the record's sample number."""
+
+    def _record(self) -> bytes:
+        self._counts = (self._sample, 0, 0, 0, 0, 0)
+        return super()._record()
+
+
+def test_a_pause_between_the_clock_reads_never_stamps_a_record_before_its_sample() -> None:
+    """The local clock paused 5 ms around its reading (a preempted thread): stamps not early.
+
+    The kernel's arrival is moved onto the local clock by the two clocks' readings; a pause
+    between them must make an arrival late (which the minimum-delay fit passes over), never
+    early (which it would take, stamping every later record before its sample).
+    """
+    def paused_clock() -> float:
+        time.sleep(0.005)
+        now_s = time.time()
+        time.sleep(0.005)
+        return now_s
+
+    with CountingTwin(port=0, rate_hz=200.0, clock=time.time) as twin:
+        netft = NetFtComponent(settings(twin.port), local_clock=paused_clock,
+                               log=lambda level, text: None)
+        netft.configure()
+        netft.activate()
+        try:
+            records = read_until(netft, lambda: netft.core is not None
+                                 and netft.core.records >= 60)
+            early_s = [twin.sample_time_s(round(force[0] * rdt.DEFAULT_COUNTS_PER_FORCE))
+                       - stamp_s for stamp_s, (force, _) in records]
+        finally:
+            netft.put_back()
+            netft.release()
+    assert len(early_s) >= 50 and max(early_s) < 0.0005, max(early_s)
