@@ -7,14 +7,14 @@ Per poll of the socket::
     core.bias()                            # the present reading becomes zero
     core.stale(t_s)                        # no record for timeout_s: nothing is published
 
-``t_s`` is the steady clock (staleness), ``local_s`` the clock stamps are in, both read when
-the poll began. Each record is stamped when the box sampled it: record n of the stream (its
-rdt_sequence, unwrapped past 2^32) at n / ``rdt_rate_hz`` on the box's clock, mapped into
-``local_s`` through the offset and skew of `uvms_hardware.device_time`, fitted on each poll's
-earliest (arrival - sample time), the arrival the kernel's stamp of the datagram (``ages_s``:
-how long before ``local_s`` each arrived); where the kernel gives none, the newest record
-against the poll's time, which a poll in phase with the box's records leaves up to one
-record period late. So the records of one poll lie one record period apart,
+``t_s`` is the steady clock (staleness), ``local_s`` the clock stamps are in, both read at
+the poll, after the socket. Each record is stamped when the box sampled it: record n of the
+stream (its rdt_sequence, unwrapped past 2^32) at n / ``rdt_rate_hz`` on the box's clock,
+mapped into ``local_s`` through the offset and skew of `uvms_hardware.device_time`. These are
+fitted on each poll's earliest (arrival - sample time), the arrival being the kernel's stamp
+of the datagram (``ages_s``: how long before ``local_s`` each arrived); where the kernel
+gives none, on the newest record against the poll's time, which polls in step with the box
+leave up to one record period late. So the records of one poll lie one record period apart,
 and a lost record (a sequence gap) advances time as the box did. A sequence that runs back by
 more than `REORDER_RECORDS` is a new stream (the box restarted it): the clock is estimated
 again. Without ``rdt_rate_hz``, or while the box's clock and ``local_s`` visibly run at
