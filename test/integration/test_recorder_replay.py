@@ -24,7 +24,8 @@ from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import JointState
 from uvms_recording.mcap_reader import open_recording
 from uvms_recording.mcap_writer import McapRecorder
-from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
+from uvms_recording.recorded_topics import DEFAULT_TOPICS
+from uvms_recording.recorder_node import RecorderNode
 from uvms_recording.replay import ReplayNode, ReplayOptions
 from uvms_run.graph import build_graph, run_graph
 from uvms_scenarios.scenario import load_scenario

@@ -271,7 +271,7 @@ def node_parameters(
         # The goals the run sends, so that replay can re-run the controller on them too.
         values['run.mission'] = mission_file_text(scenario) if scenario is not None else ''
         if uses_estimator(scenario) and 'topics' not in values:
-            from uvms_recording.recorder_node import DEFAULT_TOPICS  # rclpy: only when needed
+            from uvms_recording.recorded_topics import DEFAULT_TOPICS  # rclpy: only when needed
 
             values['topics'] = [*DEFAULT_TOPICS, *NAVIGATION_TOPICS]
     return values

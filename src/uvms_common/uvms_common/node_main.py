@@ -317,6 +317,7 @@ def run_node(
     finished: Callable[[N], bool] | None = None,
     close_output: Callable[[N], None] | None = None,
     taken: Callable[[N], int] | None = None,
+    executor_kind: str | None = None,
 ) -> int:
     """Build a node and spin it until SIGINT/SIGTERM; return the process exit status.
 
@@ -332,6 +333,8 @@ def run_node(
             (``TeardownDeadline``).
         taken: A count of what the node took (the recorder's messages): after a clean stop
             the executor spins on while it grows (``drain_taken``), before ``close_output``.
+        executor_kind: ``events`` or ``single`` (``make_executor``); None: ``UVMS_EXECUTOR``
+            or ``events``.
 
     Returns:
         0 after ``finished``, a signal or an external shutdown, each ending in a clean
@@ -364,7 +367,7 @@ def run_node(
         with building, keeping:
             node = make_node()
         schedule_process(node)
-        executor = make_executor()
+        executor = make_executor(executor_kind)
         executor.add_node(node)
         built = node
         with profiled(logger_name):

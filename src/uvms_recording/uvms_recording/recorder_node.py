@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import atexit
 import functools
-import importlib
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,130 +16,44 @@ from rcl_interfaces.msg import (
     IntegerRange,
     ParameterDescriptor,
 )
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from uvms_common.diagnostics import OK, WARN, DiagnosticsPublisher, RateMeter, Report
 from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 from uvms_common.stop_event import defer_stop_end
 
+from uvms_recording.batched_take import TakenInBatches, log_times_on_clock, take_raw
 from uvms_recording.errors import RecordingError
-from uvms_recording.mcap_writer import (
-    DEFAULT_CHUNK_SIZE,
-    McapRecorder,
-    QosDescription,
-    run_metadata,
-)
-from uvms_recording.typestore import InterfaceError, normalize_type_name
-
-#: The graph's topics as 'name:type' (DESIGN.md); relative names resolve in the node's
-#: namespace (/uvms by default), /clock, /tf and /tf_static are absolute.
-DEFAULT_TOPICS = (
-    '/clock:rosgraph_msgs/msg/Clock',
-    'joint_states:sensor_msgs/msg/JointState',
-    'odometry:nav_msgs/msg/Odometry',
-    'wrench:geometry_msgs/msg/WrenchStamped',
-    'ee_pose:geometry_msgs/msg/PoseStamped',
-    'contact:uvms_msgs/msg/ContactState',
-    'command/generalized_force:uvms_msgs/msg/GeneralizedForce',
-    'controller/state:uvms_msgs/msg/ControllerState',
-    'controller/task_record:uvms_msgs/msg/ContactTaskRecord',
-    'controller/mode:std_msgs/msg/String',
-    'command/actuators:uvms_msgs/msg/ActuatorCommand',
-    'thrusters/state:uvms_msgs/msg/ThrusterState',
-    'thrusters/health:uvms_msgs/msg/ThrusterHealth',
-    '/tf:tf2_msgs/msg/TFMessage',
-    '/tf_static:tf2_msgs/msg/TFMessage',
-    '/robot_description:std_msgs/msg/String',
-    'markers:visualization_msgs/msg/MarkerArray',
-    'ocean/current:geometry_msgs/msg/TwistStamped',
+from uvms_recording.mcap_writer import DEFAULT_CHUNK_SIZE, McapRecorder, run_metadata
+from uvms_recording.recorded_topics import (
+    DEFAULT_TOPICS,
+    SUBSCRIPTION_DEPTH,
+    message_class,
+    parse_topic_spec,
+    publisher_qos,
+    subscription_qos,
 )
 
 COMPRESSIONS = ('zstd', 'lz4', 'none')
-#: Depth of the recorder's subscriptions: lockstep publishes in bursts faster than real time.
-SUBSCRIPTION_DEPTH = 1000
-
-
-def parse_topic_spec(spec: str) -> tuple[str, str]:
-    """Split a 'topic:pkg/msg/Type' entry of the `topics` parameter.
-
-    Raises:
-        RecordingError: The entry is not 'topic:type' with a valid type name.
-
-    """
-    topic, separator, type_name = spec.rpartition(':')
-    if not separator or not topic or not type_name:
-        msg = f"parameter 'topics': entry {spec!r} is not 'topic:pkg/msg/Type'"
-        raise RecordingError(msg)
-    try:
-        return topic, normalize_type_name(type_name)
-    except InterfaceError as error:
-        msg = f"parameter 'topics': entry {spec!r}: {error}"
-        raise RecordingError(msg) from None
-
-
-def message_class(type_name: str) -> type[Any]:
-    """The Python message class of 'pkg/msg/Type', imported from its message package.
-
-    Raises:
-        RecordingError: The package or the type cannot be imported.
-
-    """
-    package, _, name = normalize_type_name(type_name).split('/')
-    try:
-        module = importlib.import_module(f'{package}.msg')
-        return getattr(module, name)  # type: ignore[no-any-return]
-    except (ImportError, AttributeError):
-        msg = f'message type {type_name!r} cannot be imported (is package {package!r} built?)'
-        raise RecordingError(msg) from None
-
-
-def publisher_qos(topic: str) -> QosDescription:
-    """QoS the graph's publishers offer on a topic, as tf2_ros and our nodes publish.
-
-    /tf_static and /robot_description are latched (reliable, transient local, depth 1, as
-    tf2_ros and robot_state_publisher offer them), /tf reliable with depth 100; every other
-    graph publisher is reliable, volatile, keep last 10 (rclpy's default).
-    """
-    if topic.endswith(('/tf_static', '/robot_description')):
-        return QosDescription(durability='transient_local', depth=1)
-    if topic.endswith('/tf'):
-        return QosDescription(depth=100)
-    return QosDescription()
-
-
-def subscription_qos(topic: str) -> QoSProfile:
-    """QoS of the recorder's subscription, compatible with the publisher and deep enough.
-
-    /clock is subscribed best effort as rclpy's own time source does, which matches a
-    reliable or a best-effort /clock publisher alike.
-    """
-    offered = publisher_qos(topic)
-    if offered.durability == 'transient_local':
-        return QoSProfile(
-            history=HistoryPolicy.KEEP_LAST,
-            depth=offered.depth,
-            reliability=ReliabilityPolicy.RELIABLE,
-            durability=DurabilityPolicy.TRANSIENT_LOCAL,
-        )
-    reliability = (ReliabilityPolicy.BEST_EFFORT if topic == '/clock'
-                   else ReliabilityPolicy.RELIABLE)
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST,
-        depth=SUBSCRIPTION_DEPTH,
-        reliability=reliability,
-        durability=DurabilityPolicy.VOLATILE,
-    )
+#: Default period of the batches (s): 25 messages of a 500 Hz topic, a fortieth of its queue.
+DEFAULT_TAKE_PERIOD_S = 0.05
 
 
 class RecorderNode(Node):
     """Records every graph topic, raw, into the MCAP file of parameter `output_path`.
 
-    Log times are the node clock's now (ns): simulated time under use_sim_time (lockstep,
-    from 0), the Unix epoch otherwise. `close()` (also run by `destroy_node()`) writes the
-    file's summary; until then the file is readable up to its last complete chunk.
+    Log times are the node clock's time at each message's arrival (ns): simulated time under
+    use_sim_time (lockstep, from 0), the Unix epoch otherwise. `close()` (also run by
+    `destroy_node()`) writes the file's summary; until then the file is readable up to its
+    last complete chunk.
+
+    The subscriptions are taken in batches every ``take_period_s`` by the node itself where
+    the executor honours callback groups (the recorder's own process spins a
+    SingleThreadedExecutor), and one message at a time by their callbacks where it does not
+    (the EventsExecutor): ``uvms_recording.batched_take``.
     """
 
     @destroyed_if_construction_fails
@@ -188,6 +101,17 @@ class RecorderNode(Node):
                 'bounds what a crash loses',
                 read_only=True,
                 floating_point_range=[FloatingPointRange(from_value=0.001, to_value=3600.0,
+                                                         step=0.0)],
+            ),
+        ).value
+        take_period_s = self.declare_parameter(
+            'take_period_s', DEFAULT_TAKE_PERIOD_S,
+            ParameterDescriptor(
+                description="Period of taking every subscription's waiting messages in one "
+                f'batch (s, steady clock); each subscription holds {SUBSCRIPTION_DEPTH}, so '
+                'keep it under that many periods of the fastest topic',
+                read_only=True,
+                floating_point_range=[FloatingPointRange(from_value=0.001, to_value=1.0,
                                                          step=0.0)],
             ),
         ).value
@@ -248,6 +172,8 @@ class RecorderNode(Node):
         )
         self._subscriptions_by_topic: dict[str, Any] = {}
         self._lock = threading.Lock()
+        self._take_lock = threading.Lock()  # one batch at a time: the executor's or close()'s
+        batches = TakenInBatches()
         # Closed at exit whatever happens: a stop signal that interrupts the node's start-up
         # after this point (run_node) leaves no node to close, yet the file gets its summary.
         atexit.register(self._close_at_exit)
@@ -263,6 +189,7 @@ class RecorderNode(Node):
                     self._on_clock if resolved == '/clock'
                     else functools.partial(self._on_message, resolved),
                     subscription_qos(resolved),
+                    callback_group=batches,
                     raw=True,
                 )
             if '/clock' in self._subscriptions_by_topic:
@@ -273,6 +200,9 @@ class RecorderNode(Node):
             self._recorder.close()
             raise
         self._dropped = 0
+        self._full_batches = 0
+        self.create_timer(take_period_s, self.take_batch,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._meters = (RateMeter(), RateMeter())  # messages written, dropped
         self._diagnostics = DiagnosticsPublisher(self)
         self._diagnostics.add('recording', self._report)
@@ -296,16 +226,25 @@ class RecorderNode(Node):
         # /clock stamp under use_sim_time (what ROSClock.now() returns then), else the
         # system clock.
         source = self._clock_source
-        log_time_ns = source.last_ns if source.ros_time_is_active else time.time_ns()
+        self._write(topic, data, source.last_ns if source.ros_time_is_active
+                    else time.time_ns())
+
+    def _write(self, topic: str, data: bytes, log_time_ns: int) -> None:
+        self._write_all(topic, ((data, log_time_ns),))
+
+    def _write_all(self, topic: str, messages: Iterable[tuple[bytes, int]]) -> None:
+        """Write ``(cdr bytes, log time ns)`` of one topic; count them dropped once closed."""
         with self._lock:
-            if self._recorder.closed:
-                self._dropped += 1
-                return
-            try:
-                self._recorder.write(topic, data, log_time_ns)
-            except RecordingError as error:
-                self._dropped += 1
-                self.get_logger().error(str(error), throttle_duration_sec=5.0)
+            write = self._recorder.write
+            for data, log_time_ns in messages:
+                if self._recorder.closed:
+                    self._dropped += 1
+                    continue
+                try:
+                    write(topic, data, log_time_ns)
+                except RecordingError as error:
+                    self._dropped += 1
+                    self.get_logger().error(str(error), throttle_duration_sec=5.0)
 
     def _report(self) -> Report:
         """/diagnostics: file, messages written and their rate, dropped (WARN while dropping)."""
@@ -313,36 +252,77 @@ class RecorderNode(Node):
         written = self._recorder.message_count
         values = {'file': str(self._recorder.path), 'messages_written': written,
                   'write_rate_hz': self._meters[0].rate_hz(written, now_ns),
-                  'dropped': self._dropped}
+                  'dropped': self._dropped, 'full_queues': self._full_batches}
         if self._meters[1].rate_hz(self._dropped, now_ns):
             return Report(WARN, 'dropping messages', values)
+        if self._full_batches:
+            return Report(WARN, 'a subscription queue was full: messages may be lost', values)
         return Report(OK, 'closed' if self._recorder.closed else 'recording', values)
 
     def taken(self) -> int:
         """Messages taken so far, written or dropped (what a stop drains: ``run_node``)."""
         return self._recorder.message_count + self._dropped
 
+    def take_batch(self) -> int:
+        """Write what every subscription holds, /clock first; return how many.
+
+        Each message is logged at the node clock's time of its arrival: its reception time
+        on the wall clock, the last /clock stamp received before it under use_sim_time
+        (``batched_take.log_times_on_clock``). At most each subscription's depth.
+        """
+        with self._take_lock:
+            source = self._clock_source
+            on_sim_time = source.ros_time_is_active
+            before_ns = source.last_ns
+            clock_received: list[int] = []
+            clock_stamps: list[int] = []
+            taken = 0
+            clock = self._subscriptions_by_topic.get('/clock')
+            if clock is not None:
+                for data, received_ns in self._take('/clock', clock):
+                    source.raw_clock_callback(data)
+                    clock_received.append(received_ns)
+                    clock_stamps.append(source.last_ns)
+                    self._write('/clock', data, source.last_ns if on_sim_time else received_ns)
+                    taken += 1
+            for topic, subscription in self._subscriptions_by_topic.items():
+                if subscription is clock:
+                    continue
+                batch = self._take(topic, subscription)
+                received = [received_ns for _, received_ns in batch]
+                if not on_sim_time:
+                    log_times = received
+                elif clock is not None:
+                    log_times = log_times_on_clock(received, clock_received, clock_stamps,
+                                                   before_ns)
+                else:  # the time source's own /clock subscription sets the clock
+                    log_times = [source.last_ns] * len(batch)
+                self._write_all(topic, zip((data for data, _ in batch), log_times,
+                                           strict=True))
+                taken += len(batch)
+            return taken
+
+    def _take(self, topic: str, subscription: Any) -> list[tuple[bytes, int]]:
+        """One subscription's waiting messages; a full queue is warned about (it may drop)."""
+        if self._recorder.closed:
+            return []
+        batch = take_raw(subscription, SUBSCRIPTION_DEPTH)
+        if len(batch) == SUBSCRIPTION_DEPTH:
+            self._full_batches += 1
+            self.get_logger().warning(
+                f'{topic}: {SUBSCRIPTION_DEPTH} messages in one batch, its whole queue: '
+                'messages may have been lost; lower take_period_s',
+                throttle_duration_sec=5.0)
+        return batch
+
     def take_pending(self) -> int:
         """Write what the middleware still holds for the subscriptions; return how many.
 
         A recorder behind on a busy machine has messages in its subscriptions' queues that
-        its executor has not taken yet: measured, the controller's one task record among
-        them when the stop's drain ended (``run_node``). Taken here straight from each
-        subscription, /clock first so that the others' log times are its latest; at most
-        each subscription's depth.
+        it has not taken yet: measured, the controller's one task record among them when
+        the stop's drain ended (``run_node``). One batch (``take_batch``).
         """
-        taken = 0
-        for topic, subscription in self._subscriptions_by_topic.items():
-            write = self._on_clock if topic == '/clock' else functools.partial(
-                self._on_message, topic)
-            while not self._recorder.closed:
-                with subscription.handle:
-                    message = subscription.handle.take_message(subscription.msg_type, True)
-                if message is None:
-                    break
-                write(message[0])
-                taken += 1
-        return taken
+        return self.take_batch()
 
     def close(self) -> None:
         """Take what is still pending, write the file's summary and close it (idempotent).
@@ -376,12 +356,14 @@ class RecorderNode(Node):
 def main(args: Sequence[str] | None = None) -> None:
     """Run the recorder until SIGINT or SIGTERM, then close the MCAP file cleanly.
 
-    What had arrived before the stop is taken first (up to 1 s). The file is closed before
-    the middleware teardown, whose hang then costs nothing: the process ends itself after a
-    grace period (``uvms_common.node_main.run_node``).
+    Spun by a SingleThreadedExecutor, which leaves the subscriptions to the node's batches
+    (``take_batch``). What had arrived before the stop is taken first (up to 1 s). The file
+    is closed before the middleware teardown, whose hang then costs nothing: the process ends
+    itself after a grace period (``uvms_common.node_main.run_node``).
     """
     sys.exit(run_node(RecorderNode, args, 'recorder', (RecordingError, ParameterException),
-                      close_output=RecorderNode.close, taken=RecorderNode.taken))
+                      close_output=RecorderNode.close, taken=RecorderNode.taken,
+                      executor_kind='single'))
 
 if __name__ == '__main__':
     main()

@@ -32,7 +32,7 @@ from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_recording.errors import RecordingError, ReplayError
 from uvms_recording.mcap_reader import McapRecording, RecordedMessage, open_recording
 from uvms_recording.mcap_writer import QosDescription
-from uvms_recording.recorder_node import message_class
+from uvms_recording.recorded_topics import message_class
 from uvms_recording.rerun import ReplayStopped, rerun_controller
 
 #: Longest single wait between two checks that the replay should go on (s).

@@ -28,7 +28,7 @@ from uvms_common.node_construction import destroyed_if_construction_fails
 
 from uvms_recording.errors import ReplayError
 from uvms_recording.mcap_reader import McapRecording
-from uvms_recording.recorder_node import message_class
+from uvms_recording.recorded_topics import message_class
 from uvms_recording.typestore import uvms_typestore
 
 GENERALIZED_FORCE = 'uvms_msgs/msg/GeneralizedForce'

@@ -31,7 +31,7 @@ from uvms_common.node_construction import destroyed_if_construction_fails
 from uvms_common.node_main import run_node
 from uvms_common.raw_clock import take_clock_raw
 from uvms_recording.errors import RecordingError
-from uvms_recording.recorder_node import (
+from uvms_recording.recorded_topics import (
     DEFAULT_TOPICS,
     message_class,
     parse_topic_spec,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import rclpy
@@ -13,7 +14,7 @@ from geometry_msgs.msg import TransformStamped, WrenchStamped
 from mcap.reader import make_reader
 from rclpy.context import Context
 from rclpy.exceptions import ParameterException
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -22,10 +23,12 @@ from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
+from uvms_common.node_main import make_executor
 from uvms_recording.errors import RecordingError
 from uvms_recording.mcap_reader import open_recording
 from uvms_recording.mcap_writer import RUN_METADATA_NAME
-from uvms_recording.recorder_node import DEFAULT_TOPICS, RecorderNode
+from uvms_recording.recorded_topics import DEFAULT_TOPICS
+from uvms_recording.recorder_node import RecorderNode
 
 from uvms_msgs.msg import ContactTaskRecord, ControllerState
 
@@ -286,3 +289,82 @@ def test_messages_not_yet_taken_at_the_stop_are_in_the_file(context: Context,
     assert topics.count('/uvms/controller/task_record') == 1
     assert topics.count('/uvms/joint_states') == 5
 
+
+def _wait_matched(*publishers: Any) -> None:
+    deadline = time.monotonic() + 10.0
+    while any(p.get_subscription_count() == 0 for p in publishers):
+        assert time.monotonic() < deadline, 'the recorder never matched'
+        time.sleep(0.01)
+
+
+def _spin_for(executor: Executor, seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        executor.spin_once(timeout_sec=0.01)
+
+
+def test_a_batch_logs_each_message_at_the_clock_of_its_arrival(context: Context,
+                                                               tmp_path: Path) -> None:
+    """A wrench that arrived between clocks 5 s and 6 s is logged at 5 s, taken after both."""
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path, use_sim_time=True)
+    talker = Node('talker', namespace='/uvms', context=context)
+    clock = talker.create_publisher(Clock, '/clock', 10)
+    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    _wait_matched(clock, wrench)
+    clock.publish(Clock(clock=Time(sec=5)))
+    time.sleep(0.05)
+    wrench.publish(WrenchStamped())
+    time.sleep(0.05)
+    clock.publish(Clock(clock=Time(sec=6)))
+    time.sleep(0.2)  # all three arrived; nothing spun, nothing taken yet
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(recorder)
+    _spin_for(executor, 0.3)  # a batch or more
+    recorder.destroy_node()
+    times = {(m.topic, m.log_time_ns) for m in open_recording(path).messages()}
+    assert times == {('/clock', 5_000_000_000), ('/uvms/wrench', 5_000_000_000),
+                     ('/clock', 6_000_000_000)}
+
+
+def test_on_the_wall_clock_a_message_is_logged_at_its_arrival(context: Context,
+                                                              tmp_path: Path) -> None:
+    """Taken 0.3 s after it arrived, a message is still logged at its arrival."""
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path)
+    talker = Node('talker', namespace='/uvms', context=context)
+    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    _wait_matched(wrench)
+    sent_ns = time.time_ns()
+    wrench.publish(WrenchStamped())
+    time.sleep(0.3)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(recorder)
+    _spin_for(executor, 0.3)
+    recorder.destroy_node()
+    (message,) = list(open_recording(path).messages())
+    assert 0 <= message.log_time_ns - sent_ns < 100_000_000
+
+
+@pytest.mark.parametrize('kind', ['single', 'events'])
+def test_every_message_is_recorded_whichever_executor_spins_the_recorder(
+        context: Context, tmp_path: Path, kind: str) -> None:
+    """Batches (SingleThreadedExecutor) or callbacks (EventsExecutor): 300 of 300, in order."""
+    path = tmp_path / 'run.mcap'
+    recorder = _recorder(context, path)
+    talker = Node('talker', namespace='/uvms', context=context)
+    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    _wait_matched(wrench)
+    executor = make_executor(kind, context=context)
+    executor.add_node(recorder)
+    for k in range(300):
+        sent = WrenchStamped()
+        sent.wrench.force.x = float(k)
+        wrench.publish(sent)
+        executor.spin_once(timeout_sec=0.001)
+    _spin_for(executor, 0.5)
+    executor.remove_node(recorder)
+    recorder.destroy_node()
+    forces = [deserialize_message(m.data, WrenchStamped).wrench.force.x
+              for m in open_recording(path).messages()]
+    assert forces == [float(k) for k in range(300)]
