@@ -29,7 +29,10 @@ holds on a loaded machine, unlike the microseconds themselves):
   ``np.flatnonzero`` per call (before) vs. found once per curve (``t200_curve``);
 - ``device clock estimate``: one arrival of a 500 Hz stream taken and ``rates_agree`` asked
   (as the Net F/T bridge does each record) with the rate history's convex hull built at each
-  ask (before) vs. once per finished block (``device_time``).
+  ask (before) vs. once per finished block (``device_time``);
+- ``device clock stamp``: one record of a 500 Hz stream (the Net F/T's) taken and stamped
+  with the envelope fitted anew at each new minimum of the filling bucket (before) vs. only
+  when a finished bucket comes or goes (``device_time``: the filling one is not in the fit).
 
 The pairs are checked to give the same values first. It asserts nothing else. Usage::
 
@@ -167,13 +170,36 @@ def period_pairs() -> dict[str, tuple[Callable[[], object], Callable[[], object]
 
     for _ in range(5000):
         assert rates_agree_before() == arrival(1).rates_agree
+
+    class RefitAtEveryMinimum(DeviceClockEstimator):
+        """Before: the envelope fitted anew at each new minimum of the filling bucket."""
+
+        def add(self, device_s: float, arrival_s: float) -> None:
+            buckets = len(self._buckets)
+            super().add(device_s, arrival_s)
+            self._dirty = self._dirty or len(self._buckets) == buckets
+
+    stamped = [RefitAtEveryMinimum(5.0, 0.1, 0.1), DeviceClockEstimator(5.0, 0.1, 0.1)]
+    records = [0, 0]
+
+    def stamp_record(which: int) -> float | None:
+        """A Net F/T record at 500 Hz taken and stamped (``netft_core``'s estimator)."""
+        records[which] += 1
+        device_s = records[which] / 500.0
+        delay_s = 0.0002 + 0.001 * ((records[which] * 7919) % 101) / 101.0
+        stamped[which].add(device_s, device_s + 3.0 + delay_s)
+        return stamped[which].to_local(device_s)
+
+    for _ in range(5000):
+        assert stamp_record(0) == stamp_record(1)
     return {'device clock': (lambda: steady.now().nanoseconds * 1e-9, device.now_s),
             'node clock': (lambda: ros.now().nanoseconds, lambda: now_ns(ros)),
             'odometry covariances': (covariances_before, covariances_after),
             'actuators to 2 bridges': (deserialize_each, deserialize_once),
             't200 pwm x8': (lambda: [old_pwm_from_thrust(curve, t, 15.8) for t in thrusts],
                             lambda: [curve.pwm_from_thrust(t, 15.8) for t in thrusts]),
-            'device clock estimate': (rates_agree_before, lambda: arrival(1).rates_agree)}
+            'device clock estimate': (rates_agree_before, lambda: arrival(1).rates_agree),
+            'device clock stamp': (lambda: stamp_record(0), lambda: stamp_record(1))}
 
 
 def main() -> None:
