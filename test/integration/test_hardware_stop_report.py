@@ -67,7 +67,7 @@ def test_ctrl_c_on_a_twin_launch_says_what_each_bridge_put_back(tmp_path: Path) 
     for bridge, said in BRIDGE_LINES.items():
         # Each bridge's own logger, in the robot process (the default) or a process of its own.
         assert any(f'[uvms.{bridge}]: ' in line and said in line for line in lines), \
-            (bridge, text[-4000:])
+            '\n'.join([bridge, *(line for line in lines if bridge in line)])
     last = lines[-1]
     assert last.startswith('uvms launch: interrupted; every node stopped; put back: '
                            'ardusub_bridge: thrusters neutral (1500 us), disarmed'), last
