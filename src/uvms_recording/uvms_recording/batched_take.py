@@ -2,10 +2,11 @@
 
 A recorder process receives a few thousand messages a second at the twin stand (the wrench,
 odometry, commands and states at the control rate). Dispatched one by one by an executor,
-each costs 30-40 us of the recorder's thread before the 5 us of writing it (measured with
-the EventsExecutor: 12.8 % of a core at 3500 messages a second, the SingleThreadedExecutor
-43 %). Taken from each subscription in a batch at 20 Hz, straight from the middleware's
-queue (``take_message``), the same stream costs 4-5 % (bench/bench_recorder.py).
+each costs the recorder's thread several times the 5 us of writing it. Taken from each
+subscription in a batch at 20 Hz, straight from the middleware's queue (``take_message``),
+a stream of 3500 messages a second costs the recorder's process (its middleware threads
+included) 10-11 % of a core against 17-18 % one EventsExecutor callback at a time: 0.58x
+(bench/bench_recorder.py).
 
 ``TakenInBatches`` is the callback group that keeps the subscriptions out of an executor
 that honours callback groups (rclpy's SingleThreadedExecutor and MultiThreadedExecutor:
