@@ -276,15 +276,16 @@ class RecorderNode(Node):
             before_ns = source.last_ns
             clock_received: list[int] = []
             clock_stamps: list[int] = []
-            taken = 0
             clock = self._subscriptions_by_topic.get('/clock')
-            if clock is not None:
-                for data, received_ns in self._take('/clock', clock):
-                    source.raw_clock_callback(data)
-                    clock_received.append(received_ns)
-                    clock_stamps.append(source.last_ns)
-                    self._write('/clock', data, source.last_ns if on_sim_time else received_ns)
-                    taken += 1
+            clocks = [] if clock is None else self._take('/clock', clock)
+            for data, received_ns in clocks:
+                source.raw_clock_callback(data)
+                clock_received.append(received_ns)
+                clock_stamps.append(source.last_ns)
+            self._write_all('/clock', zip((data for data, _ in clocks),
+                                          clock_stamps if on_sim_time else clock_received,
+                                          strict=True))
+            taken = len(clocks)
             for topic, subscription in self._subscriptions_by_topic.items():
                 if subscription is clock:
                     continue

@@ -56,6 +56,20 @@ def _spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool],
         executor.spin_once(timeout_sec=0.01)
 
 
+def _wait_matched(*publishers: Any) -> None:
+    deadline = time.monotonic() + 10.0
+    while any(p.get_subscription_count() == 0 for p in publishers):
+        assert time.monotonic() < deadline, 'the recorder never matched'
+        time.sleep(0.01)
+
+
+def _clock_and_wrench(context: Context) -> tuple[Any, Any]:
+    """A talker's /clock and wrench publishers."""
+    talker = Node('talker', namespace='/uvms', context=context)
+    return (talker.create_publisher(Clock, '/clock', 10),
+            talker.create_publisher(WrenchStamped, 'wrench', 10))
+
+
 def _joint_state(k: int) -> JointState:
     return JointState(name=['joint_1', 'joint_2', 'joint_3'],
                       position=[0.1 * k, 0.2, 0.3], velocity=[0.0, 0.0, 0.0],
@@ -137,9 +151,7 @@ def test_log_time_is_the_simulated_clock_under_use_sim_time(context: Context,
     """With use_sim_time, a message's log time is the last /clock the recorder received."""
     path = tmp_path / 'run.mcap'
     recorder = _recorder(context, path, use_sim_time=True)
-    talker = Node('talker', namespace='/uvms', context=context)
-    clock = talker.create_publisher(Clock, '/clock', 10)
-    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    clock, wrench = _clock_and_wrench(context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(recorder)
     clock.publish(Clock(clock=Time(sec=5, nanosec=250)))
@@ -276,10 +288,7 @@ def test_messages_not_yet_taken_at_the_stop_are_in_the_file(context: Context,
     talker = Node('talker', namespace='/uvms', context=context)
     records = talker.create_publisher(ContactTaskRecord, 'controller/task_record', 10)
     joint_states = talker.create_publisher(JointState, 'joint_states', 10)
-    deadline = time.monotonic() + 10.0
-    while records.get_subscription_count() == 0 or joint_states.get_subscription_count() == 0:
-        assert time.monotonic() < deadline, 'the recorder never matched'
-        time.sleep(0.01)
+    _wait_matched(records, joint_states)
     records.publish(_task_record(150.0))
     for k in range(5):
         joint_states.publish(_joint_state(k))
@@ -288,13 +297,6 @@ def test_messages_not_yet_taken_at_the_stop_are_in_the_file(context: Context,
     topics = [message.topic for message in open_recording(path).messages()]
     assert topics.count('/uvms/controller/task_record') == 1
     assert topics.count('/uvms/joint_states') == 5
-
-
-def _wait_matched(*publishers: Any) -> None:
-    deadline = time.monotonic() + 10.0
-    while any(p.get_subscription_count() == 0 for p in publishers):
-        assert time.monotonic() < deadline, 'the recorder never matched'
-        time.sleep(0.01)
 
 
 def _spin_for(executor: Executor, seconds: float) -> None:
@@ -308,9 +310,7 @@ def test_a_batch_logs_each_message_at_the_clock_of_its_arrival(context: Context,
     """A wrench that arrived between clocks 5 s and 6 s is logged at 5 s, taken after both."""
     path = tmp_path / 'run.mcap'
     recorder = _recorder(context, path, use_sim_time=True)
-    talker = Node('talker', namespace='/uvms', context=context)
-    clock = talker.create_publisher(Clock, '/clock', 10)
-    wrench = talker.create_publisher(WrenchStamped, 'wrench', 10)
+    clock, wrench = _clock_and_wrench(context)
     _wait_matched(clock, wrench)
     clock.publish(Clock(clock=Time(sec=5)))
     time.sleep(0.05)
